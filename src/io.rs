@@ -1,0 +1,290 @@
+//! Report output: atomic files and directories, CSV tables through polars, the run manifest.
+//!
+//! A run writes into a hidden sibling directory `reports/.<name>.tmp-<pid>` and renames it to
+//! `reports/<name>` only when every table, figure and the manifest are written
+//! ([`ReportDir::commit`]). A failed or killed run therefore never leaves a half-written report,
+//! and an earlier complete report stays in place until the new one replaces it. Single files
+//! (datasets, redrawn figures) go through [`write_atomic`]: temp file + rename.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use polars::prelude::*;
+use serde::Serialize;
+use sha2::{Digest, Sha256};
+
+use crate::error::{Error, Result};
+
+/// Writes a file atomically: a temporary sibling, then rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))?;
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    std::fs::write(&tmp, bytes).map_err(|e| Error::write(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        Error::write(path, e)
+    })
+}
+
+/// SHA-256 of bytes, hex.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    let digest = Sha256::digest(bytes);
+    digest.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// A report directory under construction.
+#[derive(Debug)]
+pub struct ReportDir {
+    final_path: PathBuf,
+    tmp_path: PathBuf,
+    files: Vec<String>,
+    committed: bool,
+}
+
+impl ReportDir {
+    /// Starts `root/<name>` in a temporary sibling directory.
+    pub fn create(root: &Path, name: &str) -> Result<Self> {
+        std::fs::create_dir_all(root).map_err(|e| Error::write(root, e))?;
+        let tmp_path = root.join(format!(".{name}.tmp-{}", std::process::id()));
+        if tmp_path.exists() {
+            std::fs::remove_dir_all(&tmp_path).map_err(|e| Error::write(&tmp_path, e))?;
+        }
+        std::fs::create_dir(&tmp_path).map_err(|e| Error::write(&tmp_path, e))?;
+        Ok(ReportDir { final_path: root.join(name), tmp_path, files: Vec::new(), committed: false })
+    }
+
+    /// Where files are written until commit.
+    pub fn path(&self) -> &Path {
+        &self.tmp_path
+    }
+
+    /// The directory the report will have after commit.
+    pub fn final_path(&self) -> &Path {
+        &self.final_path
+    }
+
+    /// Files written so far (relative names, in order).
+    pub fn files(&self) -> &[String] {
+        &self.files
+    }
+
+    /// Writes raw bytes to `name`.
+    pub fn write_bytes(&mut self, name: &str, bytes: &[u8]) -> Result<()> {
+        let p = self.tmp_path.join(name);
+        std::fs::write(&p, bytes).map_err(|e| Error::write(&p, e))?;
+        self.files.push(name.to_string());
+        Ok(())
+    }
+
+    /// Writes a table as CSV (`name` without extension).
+    pub fn write_table(&mut self, name: &str, df: &mut DataFrame) -> Result<()> {
+        let bytes = table_to_csv(df)?;
+        self.write_bytes(&format!("{name}.csv"), &bytes)
+    }
+
+    /// Records files written by someone else into the directory (figures).
+    pub fn record(&mut self, names: impl IntoIterator<Item = String>) {
+        self.files.extend(names);
+    }
+
+    /// Renames the temporary directory into place, replacing an earlier report.
+    pub fn commit(mut self) -> Result<PathBuf> {
+        let old = self.final_path.with_file_name(format!(
+            ".{}.old-{}",
+            self.final_path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+            std::process::id()
+        ));
+        let had_old = self.final_path.exists();
+        if had_old {
+            std::fs::rename(&self.final_path, &old).map_err(|e| Error::write(&self.final_path, e))?;
+        }
+        if let Err(e) = std::fs::rename(&self.tmp_path, &self.final_path) {
+            if had_old {
+                let _ = std::fs::rename(&old, &self.final_path);
+            }
+            return Err(Error::write(&self.final_path, e));
+        }
+        if had_old {
+            let _ = std::fs::remove_dir_all(&old);
+        }
+        self.committed = true;
+        Ok(self.final_path.clone())
+    }
+}
+
+impl Drop for ReportDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.tmp_path);
+        }
+    }
+}
+
+/// Formats a table as CSV bytes.
+pub fn table_to_csv(df: &mut DataFrame) -> Result<Vec<u8>> {
+    let mut buf = Vec::new();
+    CsvWriter::new(&mut buf)
+        .finish(df)
+        .map_err(|e| Error::numerical("formatting a CSV table", e.to_string()))?;
+    Ok(buf)
+}
+
+/// Builds a table from named columns.
+pub fn table(columns: Vec<Column>) -> Result<DataFrame> {
+    DataFrame::new_infer_height(columns).map_err(|e| Error::numerical("building a table", e.to_string()))
+}
+
+/// A float column.
+pub fn fcol(name: &str, values: Vec<f64>) -> Column {
+    Column::new(name.into(), values)
+}
+
+/// A text column.
+pub fn scol(name: &str, values: Vec<String>) -> Column {
+    Column::new(name.into(), values)
+}
+
+/// Reads a report table (types inferred from the whole file).
+pub fn read_table(path: &Path) -> Result<DataFrame> {
+    if !path.is_file() {
+        return Err(Error::read(path, std::io::Error::new(std::io::ErrorKind::NotFound, "no such table")));
+    }
+    CsvReadOptions::default()
+        .with_has_header(true)
+        .with_infer_schema_length(None)
+        .try_into_reader_with_file_path(Some(path.to_path_buf()))
+        .and_then(|r| r.finish())
+        .map_err(|e| Error::data_file(path, "file", format!("not a readable CSV table: {e}")))
+}
+
+/// A float column of a report table (integers are converted).
+pub fn col_f64(df: &DataFrame, path: &Path, name: &str) -> Result<Vec<f64>> {
+    let col = df.column(name).map_err(|_| Error::data_file(path, "header", format!("missing column `{name}`")))?;
+    let cast = col
+        .cast(&DataType::Float64)
+        .map_err(|e| Error::data_file(path, format!("column {name}"), format!("not numeric: {e}")))?;
+    let ca = cast.f64().map_err(|e| Error::data_file(path, format!("column {name}"), e.to_string()))?;
+    ca.iter()
+        .enumerate()
+        .map(|(i, v)| v.ok_or_else(|| Error::data_row(path, i, name, "cell is empty")))
+        .collect()
+}
+
+/// A text column of a report table.
+pub fn col_str(df: &DataFrame, path: &Path, name: &str) -> Result<Vec<String>> {
+    let col = df.column(name).map_err(|_| Error::data_file(path, "header", format!("missing column `{name}`")))?;
+    let cast = col
+        .cast(&DataType::String)
+        .map_err(|e| Error::data_file(path, format!("column {name}"), e.to_string()))?;
+    let ca = cast.str().map_err(|e| Error::data_file(path, format!("column {name}"), e.to_string()))?;
+    Ok(ca.iter().map(|v| v.unwrap_or("").to_string()).collect())
+}
+
+/// One input file of a run.
+#[derive(Debug, Clone, Serialize)]
+pub struct InputFile {
+    /// Path as given in the study.
+    pub path: String,
+    /// SHA-256 of its bytes.
+    pub sha256: String,
+    /// Size in bytes.
+    pub bytes: u64,
+}
+
+impl InputFile {
+    /// Hashes a file.
+    pub fn hash(path: &Path) -> Result<Self> {
+        let bytes = std::fs::read(path).map_err(|e| Error::read(path, e))?;
+        Ok(InputFile { path: path.display().to_string(), sha256: sha256_hex(&bytes), bytes: bytes.len() as u64 })
+    }
+}
+
+/// `manifest.json` of a run.
+#[derive(Debug, Clone, Serialize)]
+pub struct Manifest {
+    /// Crate version.
+    pub partlife_version: String,
+    /// Study name (file stem).
+    pub study: String,
+    /// Study file path.
+    pub study_file: String,
+    /// The study file verbatim.
+    pub study_toml: String,
+    /// The study with every default filled in.
+    pub study_resolved: serde_json::Value,
+    /// Input files with hashes (the study file first).
+    pub inputs: Vec<InputFile>,
+    /// Seed of all random draws.
+    pub seed: u64,
+    /// Worker threads (rayon).
+    pub threads: usize,
+    /// Git revision of the working tree the study lives in, when known.
+    pub git_revision: Option<String>,
+    /// True when that working tree had uncommitted changes.
+    pub git_dirty: Option<bool>,
+    /// Start time, seconds since the Unix epoch.
+    pub started_unix_s: u64,
+    /// Wall time of the run (s).
+    pub wall_time_s: f64,
+    /// Model evaluations by model name.
+    pub evaluations: BTreeMap<String, u64>,
+    /// Failed evaluations (θ and message).
+    pub failures: Vec<String>,
+    /// Files of the report, relative to its directory.
+    pub outputs: Vec<String>,
+}
+
+/// Git revision and dirtiness of the repository containing `dir`, when git is available.
+pub fn git_state(dir: &Path) -> (Option<String>, Option<bool>) {
+    let run = |args: &[&str]| {
+        std::process::Command::new("git")
+            .arg("-C")
+            .arg(dir)
+            .args(args)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    let rev = run(&["rev-parse", "HEAD"]);
+    let dirty = rev.as_ref().and_then(|_| run(&["status", "--porcelain"])).map(|s| !s.is_empty());
+    (rev, dirty)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uncommitted_report_leaves_nothing_and_commit_replaces() {
+        let root = tempfile::tempdir().unwrap();
+        {
+            let mut r = ReportDir::create(root.path(), "x").unwrap();
+            r.write_bytes("a.txt", b"1").unwrap();
+        } // dropped without commit
+        assert_eq!(std::fs::read_dir(root.path()).unwrap().count(), 0);
+        let mut r = ReportDir::create(root.path(), "x").unwrap();
+        r.write_bytes("a.txt", b"1").unwrap();
+        r.commit().unwrap();
+        let mut r = ReportDir::create(root.path(), "x").unwrap();
+        r.write_bytes("b.txt", b"2").unwrap();
+        r.commit().unwrap();
+        let names: Vec<_> = std::fs::read_dir(root.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("x")]);
+        assert!(root.path().join("x/b.txt").exists() && !root.path().join("x/a.txt").exists());
+    }
+
+    #[test]
+    fn tables_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut df = table(vec![fcol("x", vec![1.0, 2.5]), scol("s", vec!["a".into(), "b,c".into()])]).unwrap();
+        let p = dir.path().join("t.csv");
+        write_atomic(&p, &table_to_csv(&mut df).unwrap()).unwrap();
+        let back = read_table(&p).unwrap();
+        assert_eq!(col_f64(&back, &p, "x").unwrap(), vec![1.0, 2.5]);
+        assert_eq!(col_str(&back, &p, "s").unwrap(), vec!["a".to_string(), "b,c".to_string()]);
+        assert!(col_f64(&back, &p, "nope").is_err());
+    }
+}

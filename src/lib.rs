@@ -1,0 +1,68 @@
+//! # partlife
+//!
+//! How long do ceramic particles survive in a concentrated-solar-power plant, and how sure are
+//! we? partlife turns single-particle crush tests into breaking probabilities under repeated
+//! impacts, following the COMPASsCO₂ deliverable D2.4 §6, with every assumption an explicit,
+//! documented option.
+//!
+//! ## Data flow
+//!
+//! ```text
+//! datasets/*.csv ───────┐
+//! studies/<name>.toml ──┴► study::load + validate ─► Study (materials, options, seed)
+//!                                                     │
+//!          contact (Hertz) ─► σ̄ at break ─► weibull (ASTM C1239 MLE, pivotal bounds)
+//!                                                     │
+//!          lifetime::LifetimeChain: θ = (m, σ_θ, η, V) ↦ (F_max, σ̄, P_N…)  [Simulator]
+//!                                                     │
+//!     io::ReportDir ─► reports/<name>/{manifest.json, *.csv} ─► report::render ─► *.svg *.png *.pdf
+//! ```
+//!
+//! ## The seam: model vs method
+//!
+//! Physical models implement [`model::Simulator`] over a [`params::ParamSpace`]; methods
+//! (Monte Carlo, least squares, MCMC, experiment design, discrepancy) only see that trait.
+//! Implementers today: [`lifetime::LifetimeChain`], [`testfns::Ishigami`].
+//!
+//! ## Module map
+//!
+//! | module | what |
+//! |---|---|
+//! | [`error`] | the error enum; bad input (exit 2) vs run failure (exit 1) |
+//! | [`params`] | `Param`, `Prior`, `ParamSpace`: bounds, truncated priors, unit-cube maps |
+//! | [`model`] | `Simulator`, `OutputSpec` |
+//! | [`testfns`] | analytic simulators (Ishigami) |
+//! | [`contact`] | Hertz: contact size, surface stresses, average tensile stress (explicit domain), crush, impact with η |
+//! | [`weibull`] | ASTM C1239 MLE, unbiasing, pivotal and Fisher bounds, probability plot, size scaling |
+//! | [`lifetime`] | p(V), P_N without underflow, impacts per year, the chain as a Simulator |
+//! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation |
+//! | [`synth`] | the documented generator of the synthetic crush datasets |
+//! | [`study`] | TOML study schema (unknown keys rejected), validation, dispatch |
+//! | [`runner`] | runs a lifetime study into its tables |
+//! | [`io`] | atomic report directories, CSV tables, manifest |
+//! | [`report`] | figures from tables only: SVG (plotters) → PNG (resvg) and vector PDF (svg2pdf) |
+//! | [`bench`] | the speed figures the issues ask for |
+//!
+//! ## Conventions
+//!
+//! SI units inside, always; CSV headers carry their unit (`diameter_m`, `sigma_bar_pa`); plots
+//! label theirs. Every stochastic path takes an explicit seed and parallel work is split into
+//! seeded blocks collected in order, so results do not depend on the thread count.
+#![warn(missing_docs)]
+
+pub mod bench;
+pub mod contact;
+pub mod data;
+pub mod error;
+pub mod io;
+pub mod lifetime;
+pub mod model;
+pub mod params;
+pub mod report;
+pub mod runner;
+pub mod study;
+pub mod synth;
+pub mod testfns;
+pub mod weibull;
+
+pub use error::{Error, Result};

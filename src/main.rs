@@ -1,0 +1,153 @@
+//! `partlife` command line: a thin layer over the library.
+//!
+//! Exit codes: 0 success, 1 run failure, 2 bad input (file, row/key and rule in the message).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+
+/// partlife: lifetime of ceramic particles in CSP plants, from crush tests to breaking
+/// probabilities under repeated impacts, with uncertainty.
+#[derive(Debug, Parser)]
+#[command(name = "partlife", version, about, long_about = None)]
+struct Cli {
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run a study file; writes reports/<study name>/ (tables, figures, manifest.json).
+    Run {
+        /// Study file, e.g. studies/lifetime.toml.
+        study: PathBuf,
+        /// Root directory of the reports.
+        #[arg(long, default_value = "reports")]
+        reports_dir: PathBuf,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Redraw the figures of a report from its tables (no simulation).
+    Report {
+        /// Report name (the study file's stem), e.g. lifetime.
+        name: String,
+        /// Root directory of the reports.
+        #[arg(long, default_value = "reports")]
+        reports_dir: PathBuf,
+    },
+    /// Dataset tools.
+    Datasets {
+        #[command(subcommand)]
+        command: DatasetsCommand,
+    },
+    /// Measure the speed figures (evaluations per second, fit time, study wall time).
+    Bench {
+        /// Also time this study end to end.
+        #[arg(long)]
+        study: Option<PathBuf>,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum DatasetsCommand {
+    /// Regenerate the synthetic crush datasets from the committed generator settings.
+    Synth {
+        /// Generator settings.
+        #[arg(long, default_value = "datasets/synth_crush.toml")]
+        settings: PathBuf,
+        /// Output directory (default: the settings file's directory).
+        #[arg(long)]
+        out_dir: Option<PathBuf>,
+    },
+    /// Validate dataset files (crush CSV or Table 1) and summarise them.
+    Check {
+        /// Files to check.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            let bad_input = e.chain().any(|c| c.downcast_ref::<partlife::Error>().is_some_and(|pe| pe.is_bad_input()));
+            ExitCode::from(if bad_input { 2 } else { 1 })
+        }
+    }
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    if let Some(n) = cli.threads {
+        rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("setting the thread count")?;
+    }
+    match cli.command {
+        Command::Run { study, reports_dir, quiet } => {
+            let opts = partlife::runner::RunOptions { reports_root: reports_dir, progress: !quiet };
+            let summary = partlife::runner::run_file(&study, &opts)?;
+            for line in &summary.headlines {
+                println!("{line}");
+            }
+            println!("wrote {} in {:.2} s", summary.report_dir.display(), summary.wall_time_s);
+        }
+        Command::Report { name, reports_dir } => {
+            let dir = reports_dir.join(&name);
+            let rendered = partlife::report::redraw(&dir)?;
+            println!("redrew {} files in {}", rendered.files.len(), dir.display());
+        }
+        Command::Datasets { command: DatasetsCommand::Synth { settings, out_dir } } => {
+            let s = partlife::synth::SynthSettings::load(&settings)?;
+            let out = out_dir.unwrap_or_else(|| settings.parent().map(|p| p.to_path_buf()).unwrap_or_default());
+            for sum in partlife::synth::synthesize(&s, &out)? {
+                println!(
+                    "{}: {} particles, d = {:.0}–{:.0} µm, median F(0.8–1.0 mm) = {:.1} N, r(F, d) = {:.3} (p = {:.3})",
+                    sum.path.display(),
+                    sum.count,
+                    sum.diameter_range.0 * 1e6,
+                    sum.diameter_range.1 * 1e6,
+                    sum.median_force_08_10mm,
+                    sum.force_diameter_r,
+                    sum.force_diameter_p
+                );
+            }
+        }
+        Command::Datasets { command: DatasetsCommand::Check { files } } => {
+            for f in files {
+                match partlife::data::check_file(&f)? {
+                    partlife::data::CheckedFile::Crush(d) => {
+                        let dd = d.diameters();
+                        let ff = d.forces();
+                        println!(
+                            "{}: crush data, material \"{}\", {} particles, d = {:.0}–{:.0} µm, F = {:.1}–{:.1} N: ok",
+                            f.display(),
+                            d.material(),
+                            d.records.len(),
+                            dd.iter().cloned().fold(f64::MAX, f64::min) * 1e6,
+                            dd.iter().cloned().fold(f64::MIN, f64::max) * 1e6,
+                            ff.iter().cloned().fold(f64::MAX, f64::min),
+                            ff.iter().cloned().fold(f64::MIN, f64::max)
+                        );
+                    }
+                    partlife::data::CheckedFile::Table1(rows) => {
+                        println!("{}: Table 1, {} rows: ok", f.display(), rows.len());
+                    }
+                }
+            }
+        }
+        Command::Bench { study } => {
+            println!("machine: {} threads available to rayon", rayon::current_num_threads());
+            for fig in partlife::bench::run_all(study.as_deref())? {
+                println!("{}: {:.4e} {} (goal {})", fig.what, fig.value, fig.unit, fig.goal);
+            }
+        }
+    }
+    Ok(())
+}

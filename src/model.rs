@@ -1,0 +1,70 @@
+//! The seam between physical models and the methods that drive them.
+//!
+//! Every physical model is a black box θ ↦ y for Monte Carlo, least squares, MCMC, experiment
+//! design and the discrepancy workflow. Those methods see only a [`Simulator`]: its
+//! [`ParamSpace`] (names, units, bounds, priors of θ), its [`OutputSpec`]s (names and units of
+//! y) and `simulate`. They never see contact, FE or DEM types.
+//!
+//! Error contract for the methods that drive a simulator:
+//! * θ out of bounds → the caller treats it as `−∞` log prior without simulating;
+//! * a simulator `Err` → recorded with θ in the run's failures list;
+//! * a non-finite output is a bug → [`Error::Numerical`] (see [`check_outputs`]).
+//!
+//! Implementers: [`crate::lifetime::LifetimeChain`] and the analytic
+//! [`crate::testfns::Ishigami`]; later the crush FE and the tube-bank DEM.
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::params::ParamSpace;
+
+/// Name and unit of one model output.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OutputSpec {
+    /// Output name (`p_break_7300`).
+    pub name: String,
+    /// Unit (`N`, `Pa`, `-`).
+    pub unit: String,
+}
+
+impl OutputSpec {
+    /// Convenience constructor.
+    pub fn new(name: impl Into<String>, unit: impl Into<String>) -> Self {
+        OutputSpec { name: name.into(), unit: unit.into() }
+    }
+}
+
+/// A deterministic model θ ↦ y.
+pub trait Simulator: Sync {
+    /// Names, units, bounds and priors of θ.
+    fn space(&self) -> &ParamSpace;
+    /// Names and units of y, in order.
+    fn outputs(&self) -> &[OutputSpec];
+    /// One evaluation. Must be deterministic for a given θ.
+    fn simulate(&self, theta: &[f64]) -> Result<Vec<f64>>;
+    /// Many evaluations, in parallel with rayon; results are in the order of `thetas` whatever
+    /// the thread count.
+    fn simulate_batch(&self, thetas: &[Vec<f64>]) -> Vec<Result<Vec<f64>>> {
+        thetas.par_iter().map(|t| self.simulate(t)).collect()
+    }
+}
+
+/// Fails with [`Error::Numerical`] if any output is not finite, naming the output and θ.
+pub fn check_outputs(model: &str, specs: &[OutputSpec], theta: &[f64], y: &[f64]) -> Result<()> {
+    for (s, v) in specs.iter().zip(y) {
+        if !v.is_finite() {
+            return Err(Error::numerical(
+                model,
+                format!("output {} = {v} at θ = {theta:?}", s.name),
+            ));
+        }
+    }
+    if specs.len() != y.len() {
+        return Err(Error::numerical(
+            model,
+            format!("{} outputs declared, {} returned", specs.len(), y.len()),
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,567 @@
+//! Runs a study into its report directory: tables, figures (drawn from the tables only) and
+//! `manifest.json`, written to a temporary directory and renamed into place at the end.
+//!
+//! A lifetime study ([`run_lifetime`]) does, per material:
+//! 1. read and validate the crush data;
+//! 2. Hertz contact at the force at break with R = d/2 → a, p0, σ_max, σ̄ (`particles.csv`);
+//! 3. Weibull MLE of σ̄, C1239 unbiasing and pivotal bounds, Fisher (log-Wald) bounds
+//!    (`weibull_fits.csv`), probability-plot points and the CDF with its pivotal band;
+//! 4. power-law trend of σ̄ with diameter (`size_trend.csv`);
+//! 5. the radial stress profile of the median particle (`stress_profile*.csv`);
+//! 6. the [`LifetimeChain`] over the velocity grid through `Simulator::simulate_batch`
+//!    (`impact_curves.csv`, `breakage_curves.csv`) and the force–time history at the reference
+//!    velocity (`force_time.csv`);
+//! 7. breaking probability after each horizon at the reference velocity, with the pivotal band
+//!    propagated from the joint (m, σ_θ) draws (`lifetime_summary.csv`).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+
+use crate::contact::{ContactStress, Hertz, Sphere};
+use crate::data::{CrushData, read_crush};
+use crate::error::{Error, Result};
+use crate::io::{InputFile, Manifest, ReportDir, fcol, git_state, scol, table};
+use crate::lifetime::{LifetimeChain, breakage_from_hazard, impacts_in, theta};
+use crate::model::Simulator;
+use crate::study::{LifetimeStudy, LoadedStudy, ShapeEstimate, Study};
+use crate::synth::{median, pearson};
+use crate::weibull::{FisherBounds, PivotalBounds, Weibull, WeibullFit, fisher_bounds, fit_mle, probability_plot, simulate_pivotal, sorted_quantile};
+
+/// What a run produced, for the CLI to print.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    /// The committed report directory.
+    pub report_dir: PathBuf,
+    /// Wall time (s).
+    pub wall_time_s: f64,
+    /// One line per material with its headline numbers.
+    pub headlines: Vec<String>,
+}
+
+/// Options of a run that are not part of the study.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// Root of the report directories (`reports`).
+    pub reports_root: PathBuf,
+    /// Show a progress bar on stderr when it is a terminal.
+    pub progress: bool,
+}
+
+/// Runs a loaded study.
+pub fn run(study: &LoadedStudy, opts: &RunOptions) -> Result<RunSummary> {
+    match &study.study {
+        Study::Lifetime(s) => run_lifetime(study, s, opts),
+    }
+}
+
+/// Per-material results needed by several tables.
+struct MaterialRun {
+    key: String,
+    label: String,
+    data: CrushData,
+    sigma_bar: Vec<f64>,
+    fit: WeibullFit,
+    pivotal: PivotalBounds,
+    fisher: FisherBounds,
+    strength: Weibull,
+    draws: Vec<Weibull>,
+    chain: LifetimeChain,
+}
+
+fn progress_bar(len: u64, show: bool) -> ProgressBar {
+    let target = if show { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
+    let pb = ProgressBar::with_draw_target(Some(len), target);
+    if let Ok(style) = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}") {
+        pb.set_style(style);
+    }
+    pb
+}
+
+/// Seed of the pivotal simulation for sample size n (depends on the study seed and n only).
+fn pivotal_seed(seed: u64, n: usize) -> u64 {
+    seed ^ (n as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+}
+
+/// Runs a lifetime study.
+pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) -> Result<RunSummary> {
+    let start = Instant::now();
+    let started_unix_s = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0);
+    let pb = progress_bar(s.material.len() as u64 * 3 + 2, opts.progress);
+
+    // 1. Inputs first: every bad-input error happens before anything is written.
+    let mut inputs = vec![InputFile::hash(&loaded.path)?];
+    let mut datasets = Vec::new();
+    for m in &s.material {
+        let path = loaded.resolve(&m.data);
+        pb.set_message(format!("reading {}", path.display()));
+        let data = read_crush(&path)?;
+        inputs.push(InputFile::hash(&path)?);
+        datasets.push(data);
+    }
+
+    // 2–3. Contact at break, Weibull fits, pivotal bounds.
+    let mut evaluations: BTreeMap<String, u64> = BTreeMap::new();
+    let mut runs = Vec::new();
+    for (m, data) in s.material.iter().zip(datasets) {
+        pb.set_message(format!("{}: contact stresses and Weibull fit", m.label));
+        let sigma_bar = data
+            .records
+            .iter()
+            .map(|r| {
+                let hertz = Hertz::sphere_on_flat(&m.elastic, &s.contact.platen, 0.5 * r.diameter_m);
+                ContactStress::new(hertz, s.contact.averaging, 0.5 * r.diameter_m)
+                    .at_force(r.crush_force_n)
+                    .map(|c| c.mean_tensile)
+            })
+            .collect::<Result<Vec<f64>>>()?;
+        let fit = fit_mle(&sigma_bar).map_err(|e| {
+            Error::data_file(&data.path, "all rows", format!("Weibull fit of the average tensile stress failed: {e}"))
+        })?;
+        pb.inc(1);
+        let piv = simulate_pivotal(fit.n, s.weibull.pivotal_samples, pivotal_seed(s.seed, fit.n))?;
+        *evaluations.entry("weibull_pivotal_fits".into()).or_default() += s.weibull.pivotal_samples as u64;
+        let pivotal = piv.bounds(&fit, s.weibull.confidence)?;
+        let fisher = fisher_bounds(&fit, &sigma_bar, s.weibull.confidence)?;
+        let shape = match s.weibull.shape_estimate {
+            ShapeEstimate::Mle => fit.mle.shape,
+            ShapeEstimate::Unbiased => pivotal.shape_unbiased,
+        };
+        let strength = Weibull::new(shape, fit.mle.scale)?;
+        let draws = piv.draws(&fit);
+        pb.inc(1);
+        let diameter = m.impact_diameter_m.unwrap_or_else(|| median(&data.diameters()));
+        let sphere = Sphere { diameter, density: m.density_kg_m3, elastic: m.elastic };
+        let chain = LifetimeChain::new(
+            sphere,
+            s.impact.target,
+            s.contact.averaging,
+            &s.impact.impact_counts,
+            (strength, s.impact.energy_fraction, s.impact.reference_velocity_m_s),
+        )?;
+        runs.push(MaterialRun {
+            key: m.key.clone(),
+            label: m.label.clone(),
+            data,
+            sigma_bar,
+            fit,
+            pivotal,
+            fisher,
+            strength,
+            draws,
+            chain,
+        });
+    }
+
+    // Tables into a temporary report directory.
+    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    write_particles(&mut dir, &runs)?;
+    write_weibull(&mut dir, &runs, s)?;
+    write_size_trend(&mut dir, &runs)?;
+    write_stress_profile(&mut dir, &runs, s)?;
+    let mut failures = Vec::new();
+    pb.set_message("impact and breakage curves");
+    for n in write_curves(&mut dir, &runs, s, &mut failures)? {
+        *evaluations.entry("lifetime_chain".into()).or_default() += n;
+        pb.inc(1);
+    }
+    write_force_time(&mut dir, &runs, s)?;
+    let headlines = write_summary(&mut dir, &runs, s)?;
+    pb.inc(1);
+
+    // Figures from the tables just written.
+    pb.set_message("figures");
+    let rendered = crate::report::render(dir.path(), s.figures.width_cm)?;
+    dir.record(rendered.files);
+    for (fig, n) in rendered.legend_hidden.iter().filter(|(_, n)| *n > 0) {
+        failures.push(format!("figure {fig}: its legend hides {n} data samples (no free corner)"));
+    }
+    pb.inc(1);
+
+    let (git_revision, git_dirty) = git_state(loaded.path.parent().unwrap_or(Path::new(".")));
+    let mut outputs = dir.files().to_vec();
+    outputs.push("manifest.json".into());
+    let manifest = Manifest {
+        partlife_version: env!("CARGO_PKG_VERSION").into(),
+        study: loaded.name.clone(),
+        study_file: loaded.path.display().to_string(),
+        study_toml: loaded.text.clone(),
+        study_resolved: serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?,
+        inputs,
+        seed: s.seed,
+        threads: rayon::current_num_threads(),
+        git_revision,
+        git_dirty,
+        started_unix_s,
+        wall_time_s: start.elapsed().as_secs_f64(),
+        evaluations,
+        failures,
+        outputs,
+    };
+    let json = serde_json::to_vec_pretty(&manifest).map_err(|e| Error::numerical("manifest", e.to_string()))?;
+    dir.write_bytes("manifest.json", &json)?;
+    let report_dir = dir.commit()?;
+    pb.finish_and_clear();
+    Ok(RunSummary { report_dir, wall_time_s: start.elapsed().as_secs_f64(), headlines })
+}
+
+fn repeat(s: &str, n: usize) -> Vec<String> {
+    vec![s.to_string(); n]
+}
+
+fn write_particles(dir: &mut ReportDir, runs: &[MaterialRun]) -> Result<()> {
+    let rows: Vec<(&MaterialRun, &crate::data::CrushRecord, f64)> = runs
+        .iter()
+        .flat_map(|run| run.data.records.iter().zip(&run.sigma_bar).map(move |(r, sb)| (run, r, *sb)))
+        .collect();
+    let text = |f: &dyn Fn(&(&MaterialRun, &crate::data::CrushRecord, f64)) -> String| rows.iter().map(f).collect::<Vec<_>>();
+    let num = |f: &dyn Fn(&(&MaterialRun, &crate::data::CrushRecord, f64)) -> f64| rows.iter().map(f).collect::<Vec<_>>();
+    let mut df = table(vec![
+        scol("material_key", text(&|r| r.0.key.clone())),
+        scol("material", text(&|r| r.0.label.clone())),
+        scol("id", text(&|r| r.1.id.clone())),
+        fcol("diameter_m", num(&|r| r.1.diameter_m)),
+        fcol("crush_force_n", num(&|r| r.1.crush_force_n)),
+        fcol("roundness", num(&|r| r.1.roundness.unwrap_or(f64::NAN))),
+        fcol("sphericity", num(&|r| r.1.sphericity.unwrap_or(f64::NAN))),
+        fcol("temperature_c", num(&|r| r.1.temperature_c.unwrap_or(f64::NAN))),
+        fcol("sigma_bar_pa", num(&|r| r.2)),
+    ])?;
+    dir.write_table("particles", &mut df)
+}
+
+fn write_weibull(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -> Result<()> {
+    let n = runs.len();
+    let get = |f: &dyn Fn(&MaterialRun) -> f64| runs.iter().map(f).collect::<Vec<f64>>();
+    let mut fits = table(vec![
+        scol("material_key", runs.iter().map(|r| r.key.clone()).collect()),
+        scol("material", runs.iter().map(|r| r.label.clone()).collect()),
+        fcol("n", get(&|r| r.fit.n as f64)),
+        fcol("shape_mle", get(&|r| r.fit.mle.shape)),
+        fcol("unbiasing_factor", get(&|r| r.pivotal.unbiasing_factor)),
+        fcol("shape_unbiased", get(&|r| r.pivotal.shape_unbiased)),
+        fcol("shape_used", get(&|r| r.strength.shape)),
+        fcol("scale_pa", get(&|r| r.fit.mle.scale)),
+        fcol("confidence", get(&|r| r.pivotal.confidence)),
+        fcol("shape_lower", get(&|r| r.pivotal.shape.0)),
+        fcol("shape_upper", get(&|r| r.pivotal.shape.1)),
+        fcol("scale_lower_pa", get(&|r| r.pivotal.scale.0)),
+        fcol("scale_upper_pa", get(&|r| r.pivotal.scale.1)),
+        scol("bound_method", repeat("pivotal Monte Carlo (Thoman-Bain-Antle, ASTM C1239)", n)),
+        fcol("fisher_shape_se", get(&|r| r.fisher.shape_se)),
+        fcol("fisher_scale_se_pa", get(&|r| r.fisher.scale_se)),
+        fcol("fisher_shape_lower", get(&|r| r.fisher.shape.0)),
+        fcol("fisher_shape_upper", get(&|r| r.fisher.shape.1)),
+        fcol("fisher_scale_lower_pa", get(&|r| r.fisher.scale.0)),
+        fcol("fisher_scale_upper_pa", get(&|r| r.fisher.scale.1)),
+        fcol("log_likelihood", get(&|r| r.fit.log_likelihood)),
+        scol("stress_measure", repeat(&s.contact.averaging.describe(), n)),
+    ])?;
+    dir.write_table("weibull_fits", &mut fits)?;
+
+    // Probability-plot points.
+    let (mut k, mut l, mut x, mut f) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for r in runs {
+        for (xi, fi) in probability_plot(&r.sigma_bar) {
+            k.push(r.key.clone());
+            l.push(r.label.clone());
+            x.push(xi);
+            f.push(fi);
+        }
+    }
+    let mut pts = table(vec![scol("material_key", k), scol("material", l), fcol("sigma_bar_pa", x), fcol("cdf_rank", f)])?;
+    dir.write_table("weibull_points", &mut pts)?;
+
+    // CDF curve with the pivotal band, on a common stress grid.
+    let lo = 0.0;
+    let hi = runs.iter().flat_map(|r| r.sigma_bar.iter()).cloned().fold(f64::MIN, f64::max) * 1.25;
+    let grid: Vec<f64> = (0..201).map(|i| lo + (hi - lo) * i as f64 / 200.0).collect();
+    let a = 0.5 * (1.0 - s.weibull.confidence);
+    let (mut k, mut l, mut x, mut c, mut cl, mut cu) = (vec![], vec![], vec![], vec![], vec![], vec![]);
+    for r in runs {
+        let band: Vec<(f64, f64)> = grid
+            .par_iter()
+            .map(|&sig| {
+                let mut v: Vec<f64> = r.draws.iter().map(|w| w.cdf(sig)).collect();
+                v.sort_by(f64::total_cmp);
+                (sorted_quantile(&v, a), sorted_quantile(&v, 1.0 - a))
+            })
+            .collect();
+        for (&sig, b) in grid.iter().zip(band) {
+            k.push(r.key.clone());
+            l.push(r.label.clone());
+            x.push(sig);
+            c.push(r.strength.cdf(sig));
+            cl.push(b.0);
+            cu.push(b.1);
+        }
+    }
+    let mut cdf = table(vec![
+        scol("material_key", k),
+        scol("material", l),
+        fcol("sigma_pa", x),
+        fcol("cdf", c),
+        fcol("cdf_lower", cl),
+        fcol("cdf_upper", cu),
+    ])?;
+    dir.write_table("weibull_cdf", &mut cdf)
+}
+
+fn write_size_trend(dir: &mut ReportDir, runs: &[MaterialRun]) -> Result<()> {
+    let mut rows: Vec<[f64; 7]> = Vec::new();
+    for r in runs {
+        let x: Vec<f64> = r.data.diameters().iter().map(|d| d.ln()).collect();
+        let y: Vec<f64> = r.sigma_bar.iter().map(|s| s.ln()).collect();
+        let n = x.len() as f64;
+        let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+        let sxx: f64 = x.iter().map(|v| (v - mx).powi(2)).sum();
+        let sxy: f64 = x.iter().zip(&y).map(|(a, b)| (a - mx) * (b - my)).sum();
+        let b = sxy / sxx;
+        let c = my - b * mx;
+        let rss: f64 = x.iter().zip(&y).map(|(a, v)| (v - c - b * a).powi(2)).sum();
+        let se = (rss / (n - 2.0) / sxx).sqrt();
+        let (r_xy, p) = pearson(&x, &y);
+        let d = r.data.diameters();
+        rows.push([b, se, c, r_xy, p, d.iter().cloned().fold(f64::MAX, f64::min), d.iter().cloned().fold(f64::MIN, f64::max)]);
+    }
+    let col = |i: usize| rows.iter().map(|r| r[i]).collect::<Vec<f64>>();
+    let mut df = table(vec![
+        scol("material_key", runs.iter().map(|r| r.key.clone()).collect()),
+        scol("material", runs.iter().map(|r| r.label.clone()).collect()),
+        fcol("exponent", col(0)),
+        fcol("exponent_se", col(1)),
+        fcol("ln_prefactor", col(2)),
+        fcol("pearson_r_log", col(3)),
+        fcol("p_value", col(4)),
+        fcol("diameter_min_m", col(5)),
+        fcol("diameter_max_m", col(6)),
+    ])?;
+    dir.write_table("size_trend", &mut df)
+}
+
+fn write_stress_profile(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -> Result<()> {
+    let (mut k, mut l, mut id, mut rr, mut ra, mut sr) = (vec![], vec![], vec![], vec![], vec![], vec![]);
+    let mut summary: Vec<(String, String, String, [f64; 7])> = Vec::new();
+    for r in runs {
+        // The particle whose σ̄ at break is the median (lower middle for even N).
+        let mut idx: Vec<usize> = (0..r.sigma_bar.len()).collect();
+        idx.sort_by(|&a, &b| r.sigma_bar[a].total_cmp(&r.sigma_bar[b]));
+        let i = idx[(idx.len() - 1) / 2];
+        let rec = &r.data.records[i];
+        let radius = 0.5 * rec.diameter_m;
+        let hertz = Hertz::sphere_on_flat(&r.chain.sphere().elastic, &s.contact.platen, radius);
+        let cs = ContactStress::new(hertz, s.contact.averaging, radius);
+        let state = cs.at_force(rec.crush_force_n)?;
+        let a = state.radius;
+        let l_out = s.contact.averaging.outer_limit(a, radius);
+        let r_max = (1.5 * l_out).max(3.0 * a);
+        for j in 0..=400 {
+            let rv = r_max * j as f64 / 400.0;
+            k.push(r.key.clone());
+            l.push(r.label.clone());
+            id.push(rec.id.clone());
+            rr.push(rv);
+            ra.push(rv / a);
+            sr.push(cs.radial_stress_at(rec.crush_force_n, rv));
+        }
+        summary.push((
+            r.key.clone(),
+            r.label.clone(),
+            rec.id.clone(),
+            [rec.diameter_m, rec.crush_force_n, a, state.peak_pressure, state.mean_tensile, cs.zone.s0 * a, l_out],
+        ));
+    }
+    let mut df = table(vec![
+        scol("material_key", k),
+        scol("material", l),
+        scol("particle_id", id),
+        fcol("r_m", rr),
+        fcol("r_over_a", ra),
+        fcol("sigma_r_pa", sr),
+    ])?;
+    dir.write_table("stress_profile", &mut df)?;
+    let col = |i: usize| summary.iter().map(|s| s.3[i]).collect::<Vec<f64>>();
+    let mut df = table(vec![
+        scol("material_key", summary.iter().map(|s| s.0.clone()).collect()),
+        scol("material", summary.iter().map(|s| s.1.clone()).collect()),
+        scol("particle_id", summary.iter().map(|s| s.2.clone()).collect()),
+        fcol("diameter_m", col(0)),
+        fcol("crush_force_n", col(1)),
+        fcol("contact_radius_m", col(2)),
+        fcol("peak_pressure_pa", col(3)),
+        fcol("sigma_bar_pa", col(4)),
+        fcol("domain_start_m", col(5)),
+        fcol("domain_end_m", col(6)),
+    ])?;
+    dir.write_table("stress_profile_summary", &mut df)
+}
+
+/// Impact and breakage curves of every material over the velocity grid, through the
+/// Simulator interface; returns the number of evaluations per material.
+fn write_curves(
+    dir: &mut ReportDir,
+    runs: &[MaterialRun],
+    s: &LifetimeStudy,
+    failures: &mut Vec<String>,
+) -> Result<Vec<u64>> {
+    let np = s.impact.velocity_points;
+    let velocities: Vec<f64> = (0..np).map(|i| s.impact.velocity_max_m_s * i as f64 / (np - 1) as f64).collect();
+    let (mut ik, mut il, mut iv, mut ifm, mut isb, mut itc, mut ip) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut bk, mut bl, mut bv, mut bn, mut bp) = (vec![], vec![], vec![], vec![], vec![]);
+    let mut evaluations = Vec::new();
+    for run in runs {
+        let nominal = run.chain.space().nominal();
+        let thetas: Vec<Vec<f64>> = velocities
+            .iter()
+            .map(|&v| {
+                let mut t = nominal.clone();
+                t[theta::VELOCITY] = v;
+                t
+            })
+            .collect();
+        let results = run.chain.simulate_batch(&thetas);
+        evaluations.push(thetas.len() as u64);
+        let impact = run.chain.impact(s.impact.energy_fraction);
+        let mut ok = Vec::new();
+        for (t, r) in thetas.iter().zip(results) {
+            match r {
+                Ok(y) => ok.push((t[theta::VELOCITY], y)),
+                Err(e) => failures.push(format!("{}: θ = {t:?}: {e}", run.key)),
+            }
+        }
+        if ok.is_empty() {
+            return Err(Error::numerical("impact curves", format!("every evaluation failed for {}", run.key)));
+        }
+        for (v, y) in &ok {
+            ik.push(run.key.clone());
+            il.push(run.label.clone());
+            iv.push(*v);
+            ifm.push(y[0]);
+            isb.push(y[1]);
+            itc.push(if *v > 0.0 { impact.contact_time(*v) } else { f64::NAN });
+            ip.push(-(-run.strength.cumulative_hazard(y[1])).exp_m1());
+        }
+        for (ci, &c) in run.chain.counts().iter().enumerate() {
+            for (v, y) in &ok {
+                bk.push(run.key.clone());
+                bl.push(run.label.clone());
+                bv.push(*v);
+                bn.push(c);
+                bp.push(y[2 + ci]);
+            }
+        }
+    }
+    let mut df = table(vec![
+        scol("material_key", ik),
+        scol("material", il),
+        fcol("velocity_m_s", iv),
+        fcol("f_max_n", ifm),
+        fcol("sigma_bar_pa", isb),
+        fcol("contact_time_s", itc),
+        fcol("p_single", ip),
+    ])?;
+    dir.write_table("impact_curves", &mut df)?;
+    let mut df = table(vec![
+        scol("material_key", bk),
+        scol("material", bl),
+        fcol("velocity_m_s", bv),
+        fcol("impacts", bn),
+        fcol("p_break", bp),
+    ])?;
+    dir.write_table("breakage_curves", &mut df)?;
+    Ok(evaluations)
+}
+
+fn write_force_time(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -> Result<()> {
+    let v = s.impact.reference_velocity_m_s;
+    let (mut k, mut l, mut vv, mut t, mut f, mut j) = (vec![], vec![], vec![], vec![], vec![], vec![]);
+    for r in runs {
+        let impact = r.chain.impact(s.impact.energy_fraction);
+        for smp in impact.force_history(v, 301)? {
+            k.push(r.key.clone());
+            l.push(r.label.clone());
+            vv.push(v);
+            t.push(smp.time);
+            f.push(smp.force);
+            j.push(smp.impulse);
+        }
+    }
+    let n = t.len();
+    let mut df = table(vec![
+        scol("material_key", k),
+        scol("material", l),
+        fcol("velocity_m_s", vv),
+        fcol("time_s", t),
+        fcol("force_n", f),
+        fcol("impulse_n_s", j),
+        fcol("energy_fraction", vec![s.impact.energy_fraction; n]),
+    ])?;
+    dir.write_table("force_time", &mut df)
+}
+
+fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -> Result<Vec<String>> {
+    let v = s.impact.reference_velocity_m_s;
+    let a = 0.5 * (1.0 - s.weibull.confidence);
+    let (mut k, mut l, mut vv, mut yy, mut nn, mut p, mut pl, mut pu) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let mut headlines = Vec::new();
+    for r in runs {
+        let mut th = r.chain.space().nominal();
+        th[theta::VELOCITY] = v;
+        let life = r.chain.lifetime_at(&th)?;
+        let sigma = life.load.at_velocity(v)?.mean_tensile;
+        let mut line = format!(
+            "{}: N = {}, m = {:.2} (MLE {:.2}, {:.0} % bounds {:.2}–{:.2}), σ_θ = {:.0} MPa; at {v} m/s:",
+            r.label,
+            r.fit.n,
+            r.strength.shape,
+            r.fit.mle.shape,
+            100.0 * s.weibull.confidence,
+            r.pivotal.shape.0,
+            r.pivotal.shape.1,
+            r.fit.mle.scale / 1e6
+        );
+        for &years in &s.impact.years {
+            let n = impacts_in(years, s.impact.impacts_per_year);
+            let point = breakage_from_hazard(r.strength.cumulative_hazard(sigma), n);
+            let mut band: Vec<f64> = r.draws.iter().map(|w| breakage_from_hazard(w.cumulative_hazard(sigma), n)).collect();
+            band.sort_by(f64::total_cmp);
+            let (lo, hi) = (sorted_quantile(&band, a), sorted_quantile(&band, 1.0 - a));
+            k.push(r.key.clone());
+            l.push(r.label.clone());
+            vv.push(v);
+            yy.push(years);
+            nn.push(n);
+            p.push(point);
+            pl.push(lo);
+            pu.push(hi);
+            line.push_str(&format!(" P({years} yr) = {point:.2e} [{lo:.1e}, {hi:.1e}]"));
+        }
+        headlines.push(line);
+    }
+    let m = p.len();
+    let mut df = table(vec![
+        scol("material_key", k),
+        scol("material", l),
+        fcol("velocity_m_s", vv),
+        fcol("years", yy),
+        fcol("impacts", nn),
+        fcol("p_break", p),
+        fcol("p_break_lower", pl),
+        fcol("p_break_upper", pu),
+        fcol("confidence", vec![s.weibull.confidence; m]),
+    ])?;
+    dir.write_table("lifetime_summary", &mut df)?;
+    Ok(headlines)
+}
+
+/// Convenience for callers that only have a path.
+pub fn run_file(path: &Path, opts: &RunOptions) -> Result<RunSummary> {
+    let loaded = crate::study::load(path)?;
+    run(&loaded, opts)
+}

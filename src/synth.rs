@@ -1,0 +1,408 @@
+//! Generator of the synthetic crush datasets (`partlife datasets synth`).
+//!
+//! The measured crush data of the deliverable's project are not public. This generator makes
+//! stand-ins from committed settings (`datasets/synth_crush.toml`) and a fixed seed. Its
+//! "nature" is deliberately richer than the deliverable's lifetime model, so that later
+//! workflows have hidden effects to discover:
+//!
+//! 1. **Roundness sets the contact curvature.** A particle of diameter d touches the platen
+//!    with a radius of curvature R_c = ρ·d/2, ρ = roundness^q (q = `curvature_exponent`; q = 1
+//!    follows Wadell's definition of roundness as the mean corner radius over the inscribed
+//!    radius). The deliverable's model assumes R_c = d/2.
+//! 2. **Strength has a size effect.** The strength of each particle is a Weibull draw with
+//!    modulus m (`strength_shape`) and scale σ_0 (d/d_ref)^(−α) (`size_exponent` α).
+//! 3. **Break criterion.** The particle breaks when the maximum surface tension of the Hertz
+//!    contact with its true curvature, σ_r(a) = (1 − 2ν) p0/3, reaches its strength:
+//!    F = π³ R_c² p0³ / (6 E*²) with p0 = 3σ/(1 − 2ν).
+//! 4. **Measurement.** Diameter, roundness and sphericity are measured with Gaussian errors and
+//!    rounded to the instrument resolution; the force has a relative Gaussian error.
+//!
+//! Sphericity is recorded but has no effect in this nature (a null covariate).
+//!
+//! The settings are the generator's truth. They are documented in `datasets/README.md` and
+//! never read by fitting code: the lifetime chain reads only the CSV files.
+//!
+//! Randomness: one ChaCha8 stream per material (stream = material index), draws in a fixed
+//! order per particle, so the files are byte-identical for the same settings
+//! (`tests/datasets.rs` regenerates and compares).
+
+use std::path::{Path, PathBuf};
+
+use polars::prelude::*;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Beta, Distribution, Normal};
+use serde::{Deserialize, Serialize};
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+use crate::contact::{Elastic, effective_modulus};
+use crate::data::{CRUSH_COLUMNS, CrushRecord};
+use crate::error::{Error, Result};
+use crate::io::write_atomic;
+use crate::weibull::Weibull;
+
+/// Generator settings (the file `datasets/synth_crush.toml`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SynthSettings {
+    /// Seed of all random draws.
+    pub seed: u64,
+    /// Platen material of the crush test.
+    pub platen: Elastic,
+    /// One entry per output file.
+    pub material: Vec<SynthMaterial>,
+}
+
+/// Settings of one synthetic material.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SynthMaterial {
+    /// Output file name, relative to the output directory.
+    pub file: String,
+    /// Material label written to every row.
+    pub label: String,
+    /// Particle id prefix (`BL` → `BL-001`).
+    pub id_prefix: String,
+    /// Number of particles.
+    pub count: usize,
+    /// Test temperature written to every row (°C).
+    pub temperature_c: f64,
+    /// Particle elastic constants.
+    pub elastic: Elastic,
+    /// Diameter distribution: normal truncated to [min, max] (m).
+    pub diameter: TruncatedNormal,
+    /// True roundness distribution (beta with this mean and sd).
+    pub roundness: MeanSd,
+    /// True sphericity distribution (beta with this mean and sd).
+    pub sphericity: MeanSd,
+    /// The hidden physics.
+    pub nature: Nature,
+    /// Measurement errors and resolutions.
+    pub measurement: Measurement,
+}
+
+/// A normal distribution truncated to [min, max].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TruncatedNormal {
+    /// Mean of the untruncated normal.
+    pub mean: f64,
+    /// Standard deviation of the untruncated normal.
+    pub sd: f64,
+    /// Lower truncation.
+    pub min: f64,
+    /// Upper truncation.
+    pub max: f64,
+}
+
+/// Mean and standard deviation of a beta distribution on (0, 1).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeanSd {
+    /// Mean, in (0, 1).
+    pub mean: f64,
+    /// Standard deviation, with sd² < mean (1 − mean).
+    pub sd: f64,
+}
+
+/// The generator's hidden physics (its "truth").
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Nature {
+    /// Weibull modulus m of the true strength.
+    pub strength_shape: f64,
+    /// Weibull scale σ_0 (Pa) of the true strength (maximum surface tension at break) at d_ref.
+    pub strength_scale_pa: f64,
+    /// Reference diameter d_ref (m) of the size effect.
+    pub reference_diameter_m: f64,
+    /// Size-effect exponent α in σ_0 (d/d_ref)^(−α).
+    pub size_exponent: f64,
+    /// Exponent q in ρ = roundness^q, R_c = ρ d/2.
+    pub curvature_exponent: f64,
+}
+
+/// Measurement model.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Measurement {
+    /// Relative standard deviation of the force reading.
+    pub force_rel_sd: f64,
+    /// Force resolution (N).
+    pub force_resolution_n: f64,
+    /// Standard deviation of the diameter reading (m).
+    pub diameter_sd_m: f64,
+    /// Diameter resolution (m).
+    pub diameter_resolution_m: f64,
+    /// Standard deviation of the roundness and sphericity readings.
+    pub shape_sd: f64,
+    /// Roundness and sphericity resolution.
+    pub shape_resolution: f64,
+}
+
+/// One generated particle: the measured record and the hidden truth behind it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SynthParticle {
+    /// What is written to the CSV.
+    pub record: CrushRecord,
+    /// True diameter (m).
+    pub diameter_true: f64,
+    /// True roundness.
+    pub roundness_true: f64,
+    /// True strength (Pa).
+    pub strength_pa: f64,
+    /// True force at break (N).
+    pub force_true: f64,
+}
+
+fn bad(file: &str, key: String, rule: String) -> Error {
+    Error::config(file, key, rule)
+}
+
+impl SynthSettings {
+    /// Reads and validates the settings file (unknown keys rejected).
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
+        let s: SynthSettings = crate::study::parse_toml(path, &text)?;
+        s.validate(&path.display().to_string())?;
+        Ok(s)
+    }
+
+    /// Checks every setting; `file` names the settings file in messages.
+    pub fn validate(&self, file: &str) -> Result<()> {
+        self.platen.validate("platen").map_err(|e| relabel(e, file))?;
+        if self.material.is_empty() {
+            return Err(bad(file, "material".into(), "at least one [[material]] is required".into()));
+        }
+        for (i, m) in self.material.iter().enumerate() {
+            let k = |s: &str| format!("material[{i}].{s}");
+            m.elastic.validate(&k("elastic")).map_err(|e| relabel(e, file))?;
+            if m.count < 2 {
+                return Err(bad(file, k("count"), format!("must be ≥ 2 (got {})", m.count)));
+            }
+            let d = m.diameter;
+            if !(d.min > 0.0 && d.min < d.max && d.sd > 0.0 && d.mean.is_finite()) {
+                return Err(bad(file, k("diameter"), format!("needs 0 < min < max and sd > 0 (got {d:?})")));
+            }
+            for (name, ms) in [("roundness", m.roundness), ("sphericity", m.sphericity)] {
+                if !(ms.mean > 0.0 && ms.mean < 1.0 && ms.sd > 0.0 && ms.sd * ms.sd < ms.mean * (1.0 - ms.mean)) {
+                    return Err(bad(file, k(name), format!("needs 0 < mean < 1 and 0 < sd² < mean(1 − mean) (got {ms:?})")));
+                }
+            }
+            let n = m.nature;
+            if !(n.strength_shape > 0.0 && n.strength_scale_pa > 0.0 && n.reference_diameter_m > 0.0) {
+                return Err(bad(file, k("nature"), format!("strength shape, scale and reference diameter must be > 0 (got {n:?})")));
+            }
+            let ms = m.measurement;
+            if [ms.force_rel_sd, ms.force_resolution_n, ms.diameter_sd_m, ms.diameter_resolution_m, ms.shape_sd, ms.shape_resolution]
+                .iter()
+                .any(|v| !(v.is_finite() && *v >= 0.0))
+            {
+                return Err(bad(file, k("measurement"), format!("errors and resolutions must be ≥ 0 (got {ms:?})")));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn relabel(e: Error, file: &str) -> Error {
+    match e {
+        Error::Config { key, rule, .. } => Error::Config { file: file.into(), key, rule },
+        other => other,
+    }
+}
+
+fn beta(ms: MeanSd) -> Result<Beta<f64>> {
+    let nu = ms.mean * (1.0 - ms.mean) / (ms.sd * ms.sd) - 1.0;
+    Beta::new(ms.mean * nu, (1.0 - ms.mean) * nu)
+        .map_err(|e| Error::numerical("beta distribution", format!("{ms:?}: {e}")))
+}
+
+fn round_to(x: f64, step: f64) -> f64 {
+    if step > 0.0 { (x / step).round() * step } else { x }
+}
+
+/// Decimal places needed to print a resolution exactly (1e-6 → 6, 0.01 → 2).
+fn decimals(step: f64) -> usize {
+    if step <= 0.0 {
+        return 9;
+    }
+    (0..12).find(|&k| ((step * 10f64.powi(k as i32)).round() - step * 10f64.powi(k as i32)).abs() < 1e-9).unwrap_or(12)
+}
+
+/// Generates the particles of material `index` of the settings.
+pub fn generate(settings: &SynthSettings, index: usize) -> Result<Vec<SynthParticle>> {
+    let m = &settings.material[index];
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    rng.set_stream(index as u64);
+    let normal = |sd: f64| Normal::new(0.0, sd).map_err(|e| Error::numerical("normal distribution", e.to_string()));
+    let std_normal = normal(1.0)?;
+    let round_dist = beta(m.roundness)?;
+    let spher_dist = beta(m.sphericity)?;
+    let e_star = effective_modulus(&m.elastic, &settings.platen);
+    let nu = m.elastic.poisson_ratio;
+    let meas = m.measurement;
+    let mut out = Vec::with_capacity(m.count);
+    for i in 0..m.count {
+        // Fixed draw order per particle: diameter (rejection), roundness, sphericity, strength,
+        // then the four measurement errors.
+        let d = loop {
+            let x = m.diameter.mean + m.diameter.sd * std_normal.sample(&mut rng);
+            if x >= m.diameter.min && x <= m.diameter.max {
+                break x;
+            }
+        };
+        let roundness = round_dist.sample(&mut rng);
+        let sphericity = spher_dist.sample(&mut rng);
+        let n = m.nature;
+        let scale = n.strength_scale_pa * (d / n.reference_diameter_m).powf(-n.size_exponent);
+        let strength = Weibull::new(n.strength_shape, scale)?.sample(&mut rng);
+        let rc = roundness.powf(n.curvature_exponent) * 0.5 * d;
+        let p0 = 3.0 * strength / (1.0 - 2.0 * nu);
+        let force = std::f64::consts::PI.powi(3) * rc * rc * p0.powi(3) / (6.0 * e_star * e_star);
+        let e_f = std_normal.sample(&mut rng);
+        let e_d = std_normal.sample(&mut rng);
+        let e_r = std_normal.sample(&mut rng);
+        let e_s = std_normal.sample(&mut rng);
+        let shape = |x: f64, e: f64| round_to((x + meas.shape_sd * e).clamp(meas.shape_resolution.max(1e-3), 1.0), meas.shape_resolution);
+        out.push(SynthParticle {
+            record: CrushRecord {
+                id: format!("{}-{:03}", m.id_prefix, i + 1),
+                material: m.label.clone(),
+                diameter_m: round_to(d + meas.diameter_sd_m * e_d, meas.diameter_resolution_m),
+                crush_force_n: round_to(force * (1.0 + meas.force_rel_sd * e_f), meas.force_resolution_n),
+                roundness: Some(shape(roundness, e_r)),
+                sphericity: Some(shape(sphericity, e_s)),
+                temperature_c: Some(m.temperature_c),
+            },
+            diameter_true: d,
+            roundness_true: roundness,
+            strength_pa: strength,
+            force_true: force,
+        });
+    }
+    Ok(out)
+}
+
+/// Writes crush records as CSV (columns of [`CRUSH_COLUMNS`]), numbers printed at the
+/// measurement resolution, atomically.
+pub fn write_crush_csv(path: &Path, records: &[CrushRecord], meas: &Measurement) -> Result<()> {
+    let fmt = |v: Option<f64>, step: f64| v.map(|x| format!("{:.*}", decimals(step), x)).unwrap_or_default();
+    let cols: Vec<Vec<String>> = vec![
+        records.iter().map(|r| r.id.clone()).collect(),
+        records.iter().map(|r| r.material.clone()).collect(),
+        records.iter().map(|r| fmt(Some(r.diameter_m), meas.diameter_resolution_m)).collect(),
+        records.iter().map(|r| fmt(Some(r.crush_force_n), meas.force_resolution_n)).collect(),
+        records.iter().map(|r| fmt(r.roundness, meas.shape_resolution)).collect(),
+        records.iter().map(|r| fmt(r.sphericity, meas.shape_resolution)).collect(),
+        records.iter().map(|r| fmt(r.temperature_c, 1.0)).collect(),
+    ];
+    let columns: Vec<Column> = CRUSH_COLUMNS
+        .iter()
+        .zip(cols)
+        .map(|(name, values)| Column::new((*name).into(), values))
+        .collect();
+    let mut df = DataFrame::new_infer_height(columns).map_err(|e| Error::numerical("building crush table", e.to_string()))?;
+    let mut buf = Vec::new();
+    CsvWriter::new(&mut buf)
+        .finish(&mut df)
+        .map_err(|e| Error::numerical("formatting crush table", e.to_string()))?;
+    write_atomic(path, &buf)
+}
+
+/// Summary statistics of one generated file, printed by `partlife datasets synth` and quoted in
+/// `datasets/README.md`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SynthSummary {
+    /// File written.
+    pub path: PathBuf,
+    /// Number of particles.
+    pub count: usize,
+    /// Smallest and largest measured diameter (m).
+    pub diameter_range: (f64, f64),
+    /// Median force of the particles with 0.8 mm ≤ d ≤ 1.0 mm (N).
+    pub median_force_08_10mm: f64,
+    /// Pearson correlation of force with diameter.
+    pub force_diameter_r: f64,
+    /// Two-sided p-value of that correlation (Student t, n − 2 dof).
+    pub force_diameter_p: f64,
+}
+
+/// Pearson correlation and its two-sided p-value.
+pub fn pearson(x: &[f64], y: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (a, b) in x.iter().zip(y) {
+        sxy += (a - mx) * (b - my);
+        sxx += (a - mx).powi(2);
+        syy += (b - my).powi(2);
+    }
+    let r = sxy / (sxx * syy).sqrt();
+    let t = r * ((n - 2.0) / (1.0 - r * r)).sqrt();
+    let p = StudentsT::new(0.0, 1.0, n - 2.0).map(|d| 2.0 * d.sf(t.abs())).unwrap_or(f64::NAN);
+    (r, p)
+}
+
+/// Median of a slice (NaN when empty).
+pub fn median(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let k = s.len();
+    if k % 2 == 1 { s[k / 2] } else { 0.5 * (s[k / 2 - 1] + s[k / 2]) }
+}
+
+/// Generates every material of the settings into `out_dir` and returns the summaries.
+pub fn synthesize(settings: &SynthSettings, out_dir: &Path) -> Result<Vec<SynthSummary>> {
+    let mut out = Vec::new();
+    for (i, m) in settings.material.iter().enumerate() {
+        let particles = generate(settings, i)?;
+        let records: Vec<CrushRecord> = particles.into_iter().map(|p| p.record).collect();
+        let path = out_dir.join(&m.file);
+        write_crush_csv(&path, &records, &m.measurement)?;
+        let d: Vec<f64> = records.iter().map(|r| r.diameter_m).collect();
+        let f: Vec<f64> = records.iter().map(|r| r.crush_force_n).collect();
+        let mid: Vec<f64> = records
+            .iter()
+            .filter(|r| (0.8e-3..=1.0e-3).contains(&r.diameter_m))
+            .map(|r| r.crush_force_n)
+            .collect();
+        let (r, p) = pearson(&d, &f);
+        out.push(SynthSummary {
+            path,
+            count: records.len(),
+            diameter_range: (d.iter().cloned().fold(f64::MAX, f64::min), d.iter().cloned().fold(f64::MIN, f64::max)),
+            median_force_08_10mm: median(&mid),
+            force_diameter_r: r,
+            force_diameter_p: p,
+        });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decimals_of_resolutions() {
+        assert_eq!(decimals(1e-6), 6);
+        assert_eq!(decimals(0.01), 2);
+        assert_eq!(decimals(0.001), 3);
+        assert_eq!(decimals(1.0), 0);
+    }
+
+    #[test]
+    fn pearson_of_a_line_and_of_noise() {
+        let x: Vec<f64> = (0..50).map(|i| i as f64).collect();
+        let y: Vec<f64> = x.iter().map(|v| 2.0 * v + 1.0).collect();
+        let (r, p) = pearson(&x, &y);
+        assert!((r - 1.0).abs() < 1e-12 && p < 1e-10);
+        // r = 0.279 is the two-sided 5 % critical value at n = 50.
+        let t = 0.279 * (48.0f64 / (1.0 - 0.279 * 0.279)).sqrt();
+        let p = StudentsT::new(0.0, 1.0, 48.0).unwrap().sf(t) * 2.0;
+        assert!((p - 0.05).abs() < 0.002, "{p}");
+    }
+}

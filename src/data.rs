@@ -73,6 +73,43 @@ pub const CRUSH_COLUMNS: [&str; 7] =
     ["id", "material", "diameter_m", "crush_force_n", "roundness", "sphericity", "temperature_c"];
 const CRUSH_REQUIRED: [&str; 4] = ["id", "material", "diameter_m", "crush_force_n"];
 
+/// Number of comma-separated fields of one CSV line (double quotes respected).
+fn field_count(line: &str) -> usize {
+    let mut n = 1;
+    let mut quoted = false;
+    for c in line.chars() {
+        match c {
+            '"' => quoted = !quoted,
+            ',' if !quoted => n += 1,
+            _ => {}
+        }
+    }
+    n
+}
+
+/// Explains why polars rejected a CSV file: the first line whose field count differs from the
+/// header's, else polars' own message on one line.
+fn explain_csv_error(path: &Path, polars_message: &str) -> Error {
+    if let Ok(text) = std::fs::read_to_string(path) {
+        let mut lines = text.lines();
+        if let Some(header) = lines.next() {
+            let want = field_count(header);
+            for (i, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+                let got = field_count(line);
+                if got != want {
+                    return Error::Data {
+                        file: path.display().to_string(),
+                        location: format!("row {} (line {})", i + 1, i + 2),
+                        rule: format!("has {got} fields, the header has {want}"),
+                    };
+                }
+            }
+        }
+    }
+    let flat = polars_message.split_whitespace().collect::<Vec<_>>().join(" ");
+    Error::data_file(path, "file", format!("not a readable CSV table: {flat}"))
+}
+
 /// Reads a CSV file with every column as text.
 pub fn read_text_table(path: &Path) -> Result<DataFrame> {
     if !path.is_file() {
@@ -83,7 +120,7 @@ pub fn read_text_table(path: &Path) -> Result<DataFrame> {
         .with_infer_schema_length(Some(0))
         .try_into_reader_with_file_path(Some(path.to_path_buf()))
         .and_then(|r| r.finish())
-        .map_err(|e| Error::data_file(path, "file", format!("not a readable CSV table: {e}")))
+        .map_err(|e| explain_csv_error(path, &e.to_string()))
 }
 
 /// Text cells of one column (`None` for an empty cell); `None` if the column is absent.

@@ -212,9 +212,26 @@ pub struct LoadedStudy {
 }
 
 impl LoadedStudy {
-    /// Resolves a path of the study relative to the study file's directory.
+    /// Resolves a path of the study relative to the study file's directory (lexically:
+    /// `studies/../datasets/x.csv` becomes `datasets/x.csv`).
     pub fn resolve(&self, p: &Path) -> PathBuf {
-        if p.is_absolute() { p.to_path_buf() } else { self.path.parent().unwrap_or(Path::new(".")).join(p) }
+        if p.is_absolute() {
+            return p.to_path_buf();
+        }
+        let joined = self.path.parent().unwrap_or(Path::new(".")).join(p);
+        let mut out = PathBuf::new();
+        for c in joined.components() {
+            match c {
+                std::path::Component::CurDir => {}
+                std::path::Component::ParentDir
+                    if matches!(out.components().next_back(), Some(std::path::Component::Normal(_))) =>
+                {
+                    out.pop();
+                }
+                other => out.push(other),
+            }
+        }
+        out
     }
 }
 

@@ -1,0 +1,265 @@
+//! Bad input: each malformed input gets one clear message naming the file, the row/key and the
+//! rule, exit code 2, no panic, and nothing written under reports/ (an earlier report stays
+//! byte-for-byte intact).
+
+mod common;
+use common::Scratch;
+
+/// Runs the study in a scratch copy after `spoil` and checks the failure contract. Each
+/// `expect` string must appear in the message.
+fn check(spoil: impl Fn(&Scratch), expect: &[&str]) {
+    let s = Scratch::new();
+    // A good run first: its report must survive the bad one untouched.
+    let ok = s.run(&["run", "studies/lifetime.toml", "--quiet"]);
+    assert_eq!(ok.code, 0, "{}", ok.stderr);
+    let before: Vec<(String, Vec<u8>)> =
+        s.report_files().into_iter().map(|f| (f.clone(), std::fs::read(s.path("reports").join(&f)).unwrap())).collect();
+    spoil(&s);
+    let out = s.run(&["run", "studies/lifetime.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "exit code; stderr: {}", out.stderr);
+    assert!(!out.stderr.contains("panicked"), "{}", out.stderr);
+    assert_eq!(out.stderr.trim().lines().count(), 1, "one message: {}", out.stderr);
+    for e in expect {
+        assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
+    }
+    let after: Vec<(String, Vec<u8>)> =
+        s.report_files().into_iter().map(|f| (f.clone(), std::fs::read(s.path("reports").join(&f)).unwrap())).collect();
+    assert_eq!(before.len(), after.len(), "files under reports/ changed");
+    assert!(before == after, "the earlier report was modified");
+}
+
+fn edit_csv(s: &Scratch, file: &str, f: impl Fn(&str) -> String) {
+    let rel = format!("datasets/{file}");
+    let text = s.read(&rel);
+    s.write(&rel, &f(&text));
+}
+
+/// Replaces field `col` of data row `row` (1-based) of a CSV text.
+fn set_cell(text: &str, row: usize, col: usize, value: &str) -> String {
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let mut cells: Vec<String> = lines[row].split(',').map(String::from).collect();
+    cells[col] = value.into();
+    lines[row] = cells.join(",");
+    lines.join("\n") + "\n"
+}
+
+#[test]
+fn missing_data_file() {
+    check(|s| std::fs::remove_file(s.path("datasets/crush_gen4.csv")).unwrap(), &["crush_gen4.csv", "cannot read"]);
+}
+
+#[test]
+fn missing_study_file() {
+    let s = Scratch::new();
+    let out = s.run(&["run", "studies/nope.toml"]);
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("nope.toml") && out.stderr.contains("cannot read"), "{}", out.stderr);
+    assert!(!s.path("reports").exists(), "reports/ created by a failed run");
+}
+
+#[test]
+fn missing_column() {
+    check(
+        |s| edit_csv(s, "crush_bl1630.csv", |t| t.replacen("crush_force_n", "force", 1)),
+        &["crush_bl1630.csv", "header", "missing column `crush_force_n`"],
+    );
+}
+
+#[test]
+fn non_numeric_cell() {
+    check(
+        |s| edit_csv(s, "crush_bl1630.csv", |t| set_cell(t, 3, 2, "0.9mm")),
+        &["crush_bl1630.csv", "row 3 (line 4), column diameter_m", "\"0.9mm\" is not a number"],
+    );
+}
+
+#[test]
+fn zero_diameter() {
+    check(
+        |s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 5, 2, "0")),
+        &["crush_gen4.csv", "row 5 (line 6), column diameter_m", "must be > 0"],
+    );
+}
+
+#[test]
+fn negative_force() {
+    check(
+        |s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 2, 3, "-12.5")),
+        &["crush_gen4.csv", "row 2 (line 3), column crush_force_n", "must be > 0 N"],
+    );
+}
+
+#[test]
+fn zero_force() {
+    check(
+        |s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 7, 3, "0")),
+        &["row 7 (line 8), column crush_force_n", "must be > 0 N"],
+    );
+}
+
+#[test]
+fn nan_diameter() {
+    check(
+        |s| edit_csv(s, "crush_bl1630.csv", |t| set_cell(t, 10, 2, "NaN")),
+        &["row 10 (line 11), column diameter_m", "not a finite number"],
+    );
+}
+
+#[test]
+fn nan_force() {
+    check(
+        |s| edit_csv(s, "crush_bl1630.csv", |t| set_cell(t, 1, 3, "nan")),
+        &["row 1 (line 2), column crush_force_n", "not a finite number"],
+    );
+}
+
+#[test]
+fn empty_required_cell() {
+    check(
+        |s| edit_csv(s, "crush_bl1630.csv", |t| set_cell(t, 4, 3, "")),
+        &["row 4 (line 5), column crush_force_n", "empty"],
+    );
+}
+
+#[test]
+fn roundness_above_one() {
+    check(
+        |s| edit_csv(s, "crush_bl1630.csv", |t| set_cell(t, 8, 4, "1.2")),
+        &["row 8 (line 9), column roundness", "(0, 1]"],
+    );
+}
+
+#[test]
+fn roundness_zero() {
+    check(|s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 3, 4, "0")), &["column roundness", "(0, 1]"]);
+}
+
+#[test]
+fn sphericity_negative() {
+    check(|s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 3, 5, "-0.5")), &["column sphericity", "(0, 1]"]);
+}
+
+#[test]
+fn ragged_row() {
+    check(
+        |s| edit_csv(s, "crush_gen4.csv", |t| t.replacen("G4-002,Gen 4,", "G4-002,Gen 4,0.001,", 1)),
+        &["datasets/crush_gen4.csv: row 2 (line 3)", "has 8 fields, the header has 7"],
+    );
+}
+
+#[test]
+fn unknown_toml_key() {
+    check(
+        |s| {
+            let t = s.read("studies/lifetime.toml").replace("energy_fraction = 0.1", "energy_fraction = 0.1\nenergy_fracton = 0.2");
+            s.write("studies/lifetime.toml", &t)
+        },
+        &["lifetime.toml", "line", "energy_fracton", "unknown field"],
+    );
+}
+
+#[test]
+fn toml_syntax_error() {
+    check(
+        |s| {
+            let t = s.read("studies/lifetime.toml").replace("seed = 20261121", "seed = ");
+            s.write("studies/lifetime.toml", &t)
+        },
+        &["lifetime.toml", "line"],
+    );
+}
+
+#[test]
+fn energy_fraction_zero() {
+    check(
+        |s| {
+            let t = s.read("studies/lifetime.toml").replace("energy_fraction = 0.1", "energy_fraction = 0.0");
+            s.write("studies/lifetime.toml", &t)
+        },
+        &["lifetime.toml", "impact.energy_fraction", "(0, 1]", "got 0"],
+    );
+}
+
+#[test]
+fn energy_fraction_negative() {
+    check(
+        |s| {
+            let t = s.read("studies/lifetime.toml").replace("energy_fraction = 0.1", "energy_fraction = -0.1");
+            s.write("studies/lifetime.toml", &t)
+        },
+        &["impact.energy_fraction", "(0, 1]"],
+    );
+}
+
+#[test]
+fn energy_fraction_above_one() {
+    check(
+        |s| {
+            let t = s.read("studies/lifetime.toml").replace("energy_fraction = 0.1", "energy_fraction = 1.5");
+            s.write("studies/lifetime.toml", &t)
+        },
+        &["impact.energy_fraction"],
+    );
+}
+
+#[test]
+fn impossible_poisson_ratio() {
+    check(
+        |s| {
+            let t = s.read("studies/lifetime.toml").replacen("poisson_ratio = 0.25", "poisson_ratio = 0.5", 1);
+            s.write("studies/lifetime.toml", &t)
+        },
+        &["material[0].elastic.poisson_ratio", "(-1, 0.5)"],
+    );
+}
+
+#[test]
+fn averaging_domain_inside_contact() {
+    check(
+        |s| {
+            let t = s.read("studies/lifetime.toml").replace("kappa = 2.0", "kappa = 0.8");
+            s.write("studies/lifetime.toml", &t)
+        },
+        &["contact.averaging.kappa", "kappa > 1"],
+    );
+}
+
+#[test]
+fn unknown_study_kind() {
+    check(
+        |s| {
+            let t = s.read("studies/lifetime.toml").replace("kind = \"lifetime\"", "kind = \"lifetme\"");
+            s.write("studies/lifetime.toml", &t)
+        },
+        &["kind", "lifetme", "known: lifetime"],
+    );
+}
+
+#[test]
+fn datasets_check_reports_bad_cells() {
+    let s = Scratch::new();
+    edit_csv(&s, "crush_bl1630.csv", |t| set_cell(t, 2, 4, "7"));
+    let out = s.run(&["datasets", "check", "datasets/crush_gen4.csv", "datasets/crush_bl1630.csv"]);
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("crush_bl1630.csv: row 2 (line 3), column roundness"), "{}", out.stderr);
+}
+
+#[test]
+fn report_of_a_missing_run() {
+    let s = Scratch::new();
+    let out = s.run(&["report", "lifetime"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("manifest.json"), "{}", out.stderr);
+}
+
+#[test]
+fn bad_generator_settings() {
+    let s = Scratch::new();
+    let text = std::fs::read_to_string(common::root().join("datasets/synth_crush.toml")).unwrap().replacen("count = 50", "count = 1", 1);
+    s.write("datasets/synth_crush.toml", &text);
+    let before = s.read("datasets/crush_bl1630.csv");
+    let out = s.run(&["datasets", "synth", "--settings", "datasets/synth_crush.toml"]);
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("material[0].count"), "{}", out.stderr);
+    assert_eq!(before, s.read("datasets/crush_bl1630.csv"), "a dataset was rewritten by a failed synth");
+}

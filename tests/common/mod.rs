@@ -1,0 +1,78 @@
+//! Shared helpers of the CLI-level tests: a scratch copy of the repository's study and
+//! datasets, and a runner of the built binary.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The repository root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A temporary project: `studies/lifetime.toml` and `datasets/*.csv` copied from the repo.
+pub struct Scratch {
+    pub dir: tempfile::TempDir,
+}
+
+impl Scratch {
+    pub fn new() -> Self {
+        let dir = tempfile::tempdir().unwrap();
+        for sub in ["studies", "datasets"] {
+            std::fs::create_dir_all(dir.path().join(sub)).unwrap();
+        }
+        std::fs::copy(root().join("studies/lifetime.toml"), dir.path().join("studies/lifetime.toml")).unwrap();
+        for f in ["crush_bl1630.csv", "crush_gen4.csv"] {
+            std::fs::copy(root().join("datasets").join(f), dir.path().join("datasets").join(f)).unwrap();
+        }
+        Scratch { dir }
+    }
+    pub fn path(&self, rel: &str) -> PathBuf {
+        self.dir.path().join(rel)
+    }
+    pub fn read(&self, rel: &str) -> String {
+        std::fs::read_to_string(self.path(rel)).unwrap()
+    }
+    pub fn write(&self, rel: &str, text: &str) {
+        std::fs::write(self.path(rel), text).unwrap();
+    }
+    /// Runs `partlife <args>` in the scratch directory.
+    pub fn run(&self, args: &[&str]) -> Out {
+        run_in(self.dir.path(), args)
+    }
+    /// Every file under reports/, relative, sorted.
+    pub fn report_files(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        walk(&self.path("reports"), &self.path("reports"), &mut out);
+        out.sort();
+        out
+    }
+}
+
+fn walk(base: &Path, dir: &Path, out: &mut Vec<String>) {
+    let Ok(rd) = std::fs::read_dir(dir) else { return };
+    for e in rd.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            walk(base, &p, out);
+        } else {
+            out.push(p.strip_prefix(base).unwrap().display().to_string());
+        }
+    }
+}
+
+/// Output of one CLI call.
+pub struct Out {
+    pub code: i32,
+    pub stdout: String,
+    pub stderr: String,
+}
+
+pub fn run_in(dir: &Path, args: &[&str]) -> Out {
+    let o = Command::new(env!("CARGO_BIN_EXE_partlife")).args(args).current_dir(dir).output().unwrap();
+    Out {
+        code: o.status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
+    }
+}

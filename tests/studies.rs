@@ -1,0 +1,176 @@
+//! Every study file parses and validates; the lifetime study runs end to end into a temporary
+//! directory with all figures, tables and the manifest, deterministically and independent of
+//! the thread count, and reproduces the deliverable's qualitative findings on the synthetic data.
+
+mod common;
+use common::{Scratch, root};
+use partlife::io::{col_f64, col_str, read_table};
+
+const TABLES: [&str; 12] = [
+    "particles",
+    "weibull_fits",
+    "weibull_points",
+    "weibull_cdf",
+    "size_trend",
+    "stress_profile",
+    "stress_profile_summary",
+    "impact_curves",
+    "breakage_curves",
+    "force_time",
+    "lifetime_summary",
+    "manifest",
+];
+const FIGURES: [&str; 6] =
+    ["fig05_force_time", "fig13_stress_profile", "fig14_sigma_vs_diameter", "fig14_weibull_cdf", "fig15_impact", "fig16_breakage"];
+
+#[test]
+fn every_study_file_parses_and_validates() {
+    let mut n = 0;
+    for e in std::fs::read_dir(root().join("studies")).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "toml") {
+            let s = partlife::study::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            let lines: Vec<&str> = s.text.lines().take(2).collect();
+            assert!(lines.len() == 2 && lines.iter().all(|l| l.starts_with('#')), "{}: two comment lines first", p.display());
+            n += 1;
+        }
+    }
+    assert!(n >= 1);
+}
+
+fn run_ok(s: &Scratch, extra: &[&str]) {
+    let mut args = vec!["run", "studies/lifetime.toml", "--quiet"];
+    args.extend_from_slice(extra);
+    let out = s.run(&args);
+    assert_eq!(out.code, 0, "stderr: {}", out.stderr);
+}
+
+#[test]
+fn lifetime_study_writes_every_output() {
+    let s = Scratch::new();
+    run_ok(&s, &[]);
+    let dir = s.path("reports/lifetime");
+    for t in TABLES {
+        let f = if t == "manifest" { "manifest.json".to_string() } else { format!("{t}.csv") };
+        assert!(dir.join(&f).is_file(), "missing {f}");
+    }
+    for f in FIGURES {
+        // SVG with its physical size, single-column width.
+        let svg = std::fs::read_to_string(dir.join(format!("{f}.svg"))).unwrap();
+        assert!(svg.contains("width=\"8.500cm\""), "{f}.svg size");
+        assert!(svg.contains("font-family=\"DejaVu Sans\""), "{f}.svg font");
+        // PNG at 300 dpi: 8.5 cm = 1004 px.
+        let png = std::fs::read(dir.join(format!("{f}.png"))).unwrap();
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+        let width = u32::from_be_bytes(png[16..20].try_into().unwrap());
+        assert_eq!(width, 1004, "{f}.png width");
+        // Vector PDF with the font embedded (a FontFile2 stream of DejaVu Sans), 8.5 cm wide.
+        let pdf = std::fs::read(dir.join(format!("{f}.pdf"))).unwrap();
+        let text = String::from_utf8_lossy(&pdf);
+        assert!(text.starts_with("%PDF-"), "{f}.pdf header");
+        assert!(text.contains("/FontFile2") && text.contains("DejaVuSans"), "{f}.pdf embeds no font");
+        assert!(text.contains("/MediaBox [0 0 240.94"), "{f}.pdf page width");
+    }
+    // Manifest: inputs hashed, generator truth not among them, no failures.
+    let m: serde_json::Value = serde_json::from_str(&s.read("reports/lifetime/manifest.json")).unwrap();
+    let inputs: Vec<String> = m["inputs"].as_array().unwrap().iter().map(|i| i["path"].as_str().unwrap().to_string()).collect();
+    assert_eq!(inputs, ["studies/lifetime.toml", "datasets/crush_bl1630.csv", "datasets/crush_gen4.csv"]);
+    let hash = partlife::io::sha256_hex(&std::fs::read(s.path("datasets/crush_gen4.csv")).unwrap());
+    assert_eq!(m["inputs"][2]["sha256"], hash);
+    assert_eq!(m["seed"], 20261121);
+    assert_eq!(m["failures"].as_array().unwrap().len(), 0, "{}", m["failures"]);
+    assert_eq!(m["study_toml"].as_str().unwrap(), s.read("studies/lifetime.toml"));
+    assert_eq!(m["study_resolved"]["impact"]["energy_fraction"], 0.1);
+    assert!(m["evaluations"]["lifetime_chain"].as_u64().unwrap() == 2 * 201);
+    assert_eq!(m["outputs"].as_array().unwrap().len(), 11 + 18 + 1);
+    // No temporary directory left behind.
+    let names: Vec<String> = std::fs::read_dir(s.path("reports")).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(names, ["lifetime"]);
+}
+
+#[test]
+fn legends_hide_no_data() {
+    let s = Scratch::new();
+    run_ok(&s, &[]);
+    let r = partlife::report::render(&s.path("reports/lifetime"), 8.5).unwrap();
+    assert_eq!(r.legend_hidden.len(), 6);
+    for (fig, n) in &r.legend_hidden {
+        assert_eq!(*n, 0, "{fig}: the legend hides {n} data samples");
+    }
+    // Also at double-column width.
+    let r = partlife::report::render(&s.path("reports/lifetime"), 17.0).unwrap();
+    assert!(r.legend_hidden.iter().all(|(_, n)| *n == 0), "{:?}", r.legend_hidden);
+}
+
+fn tables(s: &Scratch) -> Vec<(String, Vec<u8>)> {
+    TABLES[..11]
+        .iter()
+        .map(|t| (t.to_string(), std::fs::read(s.path(&format!("reports/lifetime/{t}.csv"))).unwrap()))
+        .collect()
+}
+
+#[test]
+fn runs_are_deterministic_and_thread_count_independent() {
+    let a = Scratch::new();
+    let b = Scratch::new();
+    run_ok(&a, &[]);
+    run_ok(&b, &["--threads", "1"]);
+    for ((name, x), (_, y)) in tables(&a).iter().zip(tables(&b)) {
+        assert!(*x == y, "{name}.csv differs between runs (threads all vs 1)");
+    }
+    for f in FIGURES {
+        let p = format!("reports/lifetime/{f}.svg");
+        assert_eq!(a.read(&p), b.read(&p), "{f}.svg differs");
+    }
+}
+
+#[test]
+fn report_redraws_from_tables_only() {
+    let s = Scratch::new();
+    run_ok(&s, &[]);
+    let svg = s.read("reports/lifetime/fig16_breakage.svg");
+    for f in FIGURES {
+        for ext in ["svg", "png", "pdf"] {
+            std::fs::remove_file(s.path(&format!("reports/lifetime/{f}.{ext}"))).unwrap();
+        }
+    }
+    // The datasets are gone too: redrawing must not need them.
+    std::fs::remove_dir_all(s.path("datasets")).unwrap();
+    let out = s.run(&["report", "lifetime"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains("redrew 18 files"), "{}", out.stdout);
+    assert_eq!(s.read("reports/lifetime/fig16_breakage.svg"), svg);
+}
+
+#[test]
+fn synthetic_data_reproduce_the_deliverables_findings() {
+    // Deliverable §6: BL 16/30 has the higher tensile stress at break and a Weibull modulus near
+    // 10; Gen 4 has a lower modulus; the average tensile stress falls slightly with diameter.
+    let s = Scratch::new();
+    run_ok(&s, &[]);
+    let p = s.path("reports/lifetime/weibull_fits.csv");
+    let fits = read_table(&p).unwrap();
+    let keys = col_str(&fits, &p, "material_key").unwrap();
+    assert_eq!(keys, ["bl1630", "gen4"]);
+    let m = col_f64(&fits, &p, "shape_mle").unwrap();
+    let scale = col_f64(&fits, &p, "scale_pa").unwrap();
+    assert!((9.0..=11.0).contains(&m[0]), "BL modulus {}", m[0]);
+    assert!(m[1] < m[0] - 1.0, "Gen 4 modulus {} not below BL {}", m[1], m[0]);
+    assert!(scale[0] > scale[1], "BL scale {} not above Gen 4 {}", scale[0], scale[1]);
+    let p = s.path("reports/lifetime/size_trend.csv");
+    let trend = read_table(&p).unwrap();
+    for b in col_f64(&trend, &p, "exponent").unwrap() {
+        assert!(b < 0.0 && b > -1.0, "size exponent {b}");
+    }
+    // Breaking probability rises with N and V; Gen 4 breaks more (the deliverable's conclusion).
+    let p = s.path("reports/lifetime/lifetime_summary.csv");
+    let sum = read_table(&p).unwrap();
+    let pb = col_f64(&sum, &p, "p_break").unwrap();
+    let lo = col_f64(&sum, &p, "p_break_lower").unwrap();
+    let hi = col_f64(&sum, &p, "p_break_upper").unwrap();
+    assert!(pb[0] < pb[1] && pb[2] < pb[3], "{pb:?}");
+    assert!(pb[2] > pb[0] && pb[3] > pb[1], "{pb:?}");
+    for i in 0..4 {
+        assert!(lo[i] < pb[i] && pb[i] < hi[i], "band {i}: {} {} {}", lo[i], pb[i], hi[i]);
+    }
+}

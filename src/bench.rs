@@ -72,7 +72,7 @@ pub fn weibull_fit_with_bounds_ms(repeats: usize) -> Result<f64> {
         black_box(piv.bounds(&fit, 0.9)?);
         times.push(start.elapsed().as_secs_f64() * 1e3);
     }
-    Ok(crate::synth::median(&times))
+    Ok(crate::stats::median(&times))
 }
 
 /// Runs every benchmark and returns the figures.

@@ -141,6 +141,11 @@ pub fn fcol(name: &str, values: Vec<f64>) -> Column {
     Column::new(name.into(), values)
 }
 
+/// A count column.
+pub fn ucol(name: &str, values: Vec<u64>) -> Column {
+    Column::new(name.into(), values)
+}
+
 /// A text column.
 pub fn scol(name: &str, values: Vec<String>) -> Column {
     Column::new(name.into(), values)

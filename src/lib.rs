@@ -37,6 +37,7 @@
 //! | [`lifetime`] | p(V), P_N without underflow, impacts per year, the chain as a Simulator |
 //! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation |
 //! | [`synth`] | the documented generator of the synthetic crush datasets |
+//! | [`stats`] | median, Pearson correlation with p-value |
 //! | [`study`] | TOML study schema (unknown keys rejected), validation, dispatch |
 //! | [`runner`] | runs a lifetime study into its tables |
 //! | [`io`] | atomic report directories, CSV tables, manifest |
@@ -60,6 +61,7 @@ pub mod model;
 pub mod params;
 pub mod report;
 pub mod runner;
+pub mod stats;
 pub mod study;
 pub mod synth;
 pub mod testfns;

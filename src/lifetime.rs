@@ -31,6 +31,9 @@ use crate::model::{OutputSpec, Simulator, check_outputs};
 use crate::params::{Param, ParamSpace};
 use crate::weibull::Weibull;
 
+/// Largest impact velocity the chain accepts (m/s); far beyond the elastic Hertz regime anyway.
+pub const MAX_VELOCITY: f64 = 100.0;
+
 /// Default number of high-velocity impacts per particle and year (deliverable §6, from D2.3 §5.2).
 pub const IMPACTS_PER_YEAR: f64 = 730.0;
 
@@ -222,11 +225,12 @@ impl LifetimeChain {
             return Err(Error::Param { name: "impact_counts".into(), rule: format!("every count must be ≥ 1 (got {counts:?})") });
         }
         let (w, eta, v) = nominal;
+        // Wide physical bounds; a nominal outside them is an error, never clamped.
         let space = ParamSpace::new(vec![
-            Param::uniform("weibull_shape", "-", 0.5, 60.0, w.shape.clamp(0.5, 60.0)),
-            Param::uniform("weibull_scale_pa", "Pa", 1e6, 1e11, w.scale.clamp(1e6, 1e11)),
-            Param::uniform("energy_fraction", "-", 1e-4, 1.0, eta),
-            Param::uniform("velocity_m_s", "m/s", 0.0, 100.0, v),
+            Param::uniform("weibull_shape", "-", 0.1, 500.0, w.shape),
+            Param::uniform("weibull_scale_pa", "Pa", 1e3, 1e12, w.scale),
+            Param::uniform("energy_fraction", "-", 1e-9, 1.0, eta),
+            Param::uniform("velocity_m_s", "m/s", 0.0, MAX_VELOCITY, v),
         ])?;
         let mut outputs = vec![OutputSpec::new("f_max_n", "N"), OutputSpec::new("sigma_bar_pa", "Pa")];
         outputs.extend(counts.iter().map(|n| OutputSpec::new(format!("p_break_{n}"), "-")));

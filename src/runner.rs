@@ -3,7 +3,7 @@
 //!
 //! A lifetime study ([`run_lifetime`]) does, per material:
 //! 1. read and validate the crush data;
-//! 2. Hertz contact at the force at break with R = d/2 → a, p0, σ_max, σ̄ (`particles.csv`);
+//! 2. Hertz contact at the force at break with R = d/2 → a, δ, p0, σ_max, σ̄ (`particles.csv`);
 //! 3. Weibull MLE of σ̄, C1239 unbiasing and pivotal bounds, Fisher (log-Wald) bounds
 //!    (`weibull_fits.csv`), probability-plot points and the CDF with its pivotal band;
 //! 4. power-law trend of σ̄ with diameter (`size_trend.csv`);
@@ -21,14 +21,14 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::contact::{ContactStress, Hertz, Sphere};
+use crate::contact::{ContactState, ContactStress, Hertz, Sphere, TensileZone};
 use crate::data::{CrushData, read_crush};
 use crate::error::{Error, Result};
-use crate::io::{InputFile, Manifest, ReportDir, fcol, git_state, scol, table};
+use crate::io::{InputFile, Manifest, ReportDir, fcol, git_state, scol, table, ucol};
 use crate::lifetime::{LifetimeChain, breakage_from_hazard, impacts_in, theta};
 use crate::model::Simulator;
 use crate::study::{LifetimeStudy, LoadedStudy, ShapeEstimate, Study};
-use crate::synth::{median, pearson};
+use crate::stats::{median, pearson};
 use crate::weibull::{FisherBounds, PivotalBounds, Weibull, WeibullFit, fisher_bounds, fit_mle, probability_plot, simulate_pivotal, sorted_quantile};
 
 /// What a run produced, for the CLI to print.
@@ -63,6 +63,9 @@ struct MaterialRun {
     key: String,
     label: String,
     data: CrushData,
+    /// Hertz contact state at the force at break, per particle (R = d/2).
+    at_break: Vec<ContactState>,
+    /// σ̄ at break (Pa), per particle.
     sigma_bar: Vec<f64>,
     fit: WeibullFit,
     pivotal: PivotalBounds,
@@ -111,16 +114,17 @@ pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) 
     let mut runs = Vec::new();
     for (m, data) in s.material.iter().zip(datasets) {
         pb.set_message(format!("{}: contact stresses and Weibull fit", m.label));
-        let sigma_bar = data
+        let zone = TensileZone::new(m.elastic.poisson_ratio);
+        let at_break = data
             .records
             .iter()
             .map(|r| {
-                let hertz = Hertz::sphere_on_flat(&m.elastic, &s.contact.platen, 0.5 * r.diameter_m);
-                ContactStress::new(hertz, s.contact.averaging, 0.5 * r.diameter_m)
-                    .at_force(r.crush_force_n)
-                    .map(|c| c.mean_tensile)
+                let radius = 0.5 * r.diameter_m;
+                let hertz = Hertz::sphere_on_flat(&m.elastic, &s.contact.platen, radius);
+                ContactStress { hertz, zone, domain: s.contact.averaging, particle_radius: radius }.at_force(r.crush_force_n)
             })
-            .collect::<Result<Vec<f64>>>()?;
+            .collect::<Result<Vec<ContactState>>>()?;
+        let sigma_bar: Vec<f64> = at_break.iter().map(|c| c.mean_tensile).collect();
         let fit = fit_mle(&sigma_bar).map_err(|e| {
             Error::data_file(&data.path, "all rows", format!("Weibull fit of the average tensile stress failed: {e}"))
         })?;
@@ -149,6 +153,7 @@ pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) 
             key: m.key.clone(),
             label: m.label.clone(),
             data,
+            at_break,
             sigma_bar,
             fit,
             pivotal,
@@ -216,12 +221,13 @@ fn repeat(s: &str, n: usize) -> Vec<String> {
 }
 
 fn write_particles(dir: &mut ReportDir, runs: &[MaterialRun]) -> Result<()> {
-    let rows: Vec<(&MaterialRun, &crate::data::CrushRecord, f64)> = runs
+    type Row<'a> = (&'a MaterialRun, &'a crate::data::CrushRecord, &'a ContactState);
+    let rows: Vec<Row> = runs
         .iter()
-        .flat_map(|run| run.data.records.iter().zip(&run.sigma_bar).map(move |(r, sb)| (run, r, *sb)))
+        .flat_map(|run| run.data.records.iter().zip(&run.at_break).map(move |(r, c)| (run, r, c)))
         .collect();
-    let text = |f: &dyn Fn(&(&MaterialRun, &crate::data::CrushRecord, f64)) -> String| rows.iter().map(f).collect::<Vec<_>>();
-    let num = |f: &dyn Fn(&(&MaterialRun, &crate::data::CrushRecord, f64)) -> f64| rows.iter().map(f).collect::<Vec<_>>();
+    let text = |f: &dyn Fn(&Row) -> String| rows.iter().map(f).collect::<Vec<_>>();
+    let num = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).collect::<Vec<_>>();
     let mut df = table(vec![
         scol("material_key", text(&|r| r.0.key.clone())),
         scol("material", text(&|r| r.0.label.clone())),
@@ -231,7 +237,11 @@ fn write_particles(dir: &mut ReportDir, runs: &[MaterialRun]) -> Result<()> {
         fcol("roundness", num(&|r| r.1.roundness.unwrap_or(f64::NAN))),
         fcol("sphericity", num(&|r| r.1.sphericity.unwrap_or(f64::NAN))),
         fcol("temperature_c", num(&|r| r.1.temperature_c.unwrap_or(f64::NAN))),
-        fcol("sigma_bar_pa", num(&|r| r.2)),
+        fcol("contact_radius_m", num(&|r| r.2.radius)),
+        fcol("approach_per_contact_m", num(&|r| r.2.approach)),
+        fcol("peak_pressure_pa", num(&|r| r.2.peak_pressure)),
+        fcol("max_tensile_pa", num(&|r| r.2.max_tensile)),
+        fcol("sigma_bar_pa", num(&|r| r.2.mean_tensile)),
     ])?;
     dir.write_table("particles", &mut df)
 }
@@ -242,7 +252,7 @@ fn write_weibull(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -
     let mut fits = table(vec![
         scol("material_key", runs.iter().map(|r| r.key.clone()).collect()),
         scol("material", runs.iter().map(|r| r.label.clone()).collect()),
-        fcol("n", get(&|r| r.fit.n as f64)),
+        ucol("n", runs.iter().map(|r| r.fit.n as u64).collect()),
         fcol("shape_mle", get(&|r| r.fit.mle.shape)),
         fcol("unbiasing_factor", get(&|r| r.pivotal.unbiasing_factor)),
         fcol("shape_unbiased", get(&|r| r.pivotal.shape_unbiased)),

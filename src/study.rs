@@ -285,11 +285,12 @@ pub fn validate_lifetime(s: &LifetimeStudy, file: &str) -> Result<()> {
         i.energy_fraction > 0.0 && i.energy_fraction <= 1.0,
         format!("the elastic energy fraction η must lie in (0, 1] (got {})", i.energy_fraction),
     )?;
+    let vmax = crate::lifetime::MAX_VELOCITY;
     check(
         file,
         "impact.velocity_max_m_s",
-        i.velocity_max_m_s.is_finite() && i.velocity_max_m_s > 0.0,
-        format!("must be a finite velocity > 0 (got {})", i.velocity_max_m_s),
+        i.velocity_max_m_s > 0.0 && i.velocity_max_m_s <= vmax,
+        format!("must lie in (0, {vmax}] m/s (got {})", i.velocity_max_m_s),
     )?;
     check(
         file,
@@ -318,8 +319,8 @@ pub fn validate_lifetime(s: &LifetimeStudy, file: &str) -> Result<()> {
     check(
         file,
         "impact.reference_velocity_m_s",
-        i.reference_velocity_m_s.is_finite() && i.reference_velocity_m_s > 0.0,
-        format!("must be a finite velocity > 0 (got {})", i.reference_velocity_m_s),
+        i.reference_velocity_m_s > 0.0 && i.reference_velocity_m_s <= vmax,
+        format!("must lie in (0, {vmax}] m/s (got {})", i.reference_velocity_m_s),
     )?;
     let w = &s.weibull;
     check(

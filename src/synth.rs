@@ -33,12 +33,12 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Beta, Distribution, Normal};
 use serde::{Deserialize, Serialize};
-use statrs::distribution::{ContinuousCDF, StudentsT};
 
 use crate::contact::{Elastic, effective_modulus};
 use crate::data::{CRUSH_COLUMNS, CrushRecord};
 use crate::error::{Error, Result};
 use crate::io::write_atomic;
+use crate::stats::{median, pearson};
 use crate::weibull::Weibull;
 
 /// Generator settings (the file `datasets/synth_crush.toml`).
@@ -183,6 +183,9 @@ impl SynthSettings {
             if !(d.min > 0.0 && d.min < d.max && d.sd > 0.0 && d.mean.is_finite()) {
                 return Err(bad(file, k("diameter"), format!("needs 0 < min < max and sd > 0 (got {d:?})")));
             }
+            if !(d.min < d.mean + 4.0 * d.sd && d.max > d.mean - 4.0 * d.sd) {
+                return Err(bad(file, k("diameter"), format!("[min, max] lies in the far tail of the normal (got {d:?})")));
+            }
             for (name, ms) in [("roundness", m.roundness), ("sphericity", m.sphericity)] {
                 if !(ms.mean > 0.0 && ms.mean < 1.0 && ms.sd > 0.0 && ms.sd * ms.sd < ms.mean * (1.0 - ms.mean)) {
                     return Err(bad(file, k(name), format!("needs 0 < mean < 1 and 0 < sd² < mean(1 − mean) (got {ms:?})")));
@@ -245,12 +248,21 @@ pub fn generate(settings: &SynthSettings, index: usize) -> Result<Vec<SynthParti
     for i in 0..m.count {
         // Fixed draw order per particle: diameter (rejection), roundness, sphericity, strength,
         // then the four measurement errors.
-        let d = loop {
+        let mut d = f64::NAN;
+        for _ in 0..100_000 {
             let x = m.diameter.mean + m.diameter.sd * std_normal.sample(&mut rng);
             if x >= m.diameter.min && x <= m.diameter.max {
-                break x;
+                d = x;
+                break;
             }
-        };
+        }
+        if d.is_nan() {
+            return Err(Error::config(
+                "<generator settings>",
+                format!("material[{index}].diameter"),
+                "the truncation interval [min, max] is practically outside the normal distribution".to_string(),
+            ));
+        }
         let roundness = round_dist.sample(&mut rng);
         let sphericity = spher_dist.sample(&mut rng);
         let n = m.nature;
@@ -327,33 +339,6 @@ pub struct SynthSummary {
     pub force_diameter_p: f64,
 }
 
-/// Pearson correlation and its two-sided p-value.
-pub fn pearson(x: &[f64], y: &[f64]) -> (f64, f64) {
-    let n = x.len() as f64;
-    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
-    for (a, b) in x.iter().zip(y) {
-        sxy += (a - mx) * (b - my);
-        sxx += (a - mx).powi(2);
-        syy += (b - my).powi(2);
-    }
-    let r = sxy / (sxx * syy).sqrt();
-    let t = r * ((n - 2.0) / (1.0 - r * r)).sqrt();
-    let p = StudentsT::new(0.0, 1.0, n - 2.0).map(|d| 2.0 * d.sf(t.abs())).unwrap_or(f64::NAN);
-    (r, p)
-}
-
-/// Median of a slice (NaN when empty).
-pub fn median(v: &[f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let k = s.len();
-    if k % 2 == 1 { s[k / 2] } else { 0.5 * (s[k / 2 - 1] + s[k / 2]) }
-}
-
 /// Generates every material of the settings into `out_dir` and returns the summaries.
 pub fn synthesize(settings: &SynthSettings, out_dir: &Path) -> Result<Vec<SynthSummary>> {
     let mut out = Vec::new();
@@ -394,15 +379,4 @@ mod tests {
         assert_eq!(decimals(1.0), 0);
     }
 
-    #[test]
-    fn pearson_of_a_line_and_of_noise() {
-        let x: Vec<f64> = (0..50).map(|i| i as f64).collect();
-        let y: Vec<f64> = x.iter().map(|v| 2.0 * v + 1.0).collect();
-        let (r, p) = pearson(&x, &y);
-        assert!((r - 1.0).abs() < 1e-12 && p < 1e-10);
-        // r = 0.279 is the two-sided 5 % critical value at n = 50.
-        let t = 0.279 * (48.0f64 / (1.0 - 0.279 * 0.279)).sqrt();
-        let p = StudentsT::new(0.0, 1.0, 48.0).unwrap().sf(t) * 2.0;
-        assert!((p - 0.05).abs() < 0.002, "{p}");
-    }
 }

@@ -5,7 +5,8 @@
 mod common;
 use common::root;
 use partlife::data::{read_crush, read_table1};
-use partlife::synth::{SynthSettings, median, pearson, synthesize};
+use partlife::stats::{median, pearson};
+use partlife::synth::{SynthSettings, synthesize};
 
 #[test]
 fn synth_reproduces_the_committed_files() {

@@ -367,6 +367,9 @@ fn fig16_breakage(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
         }
     }
     counts.sort_by(f64::total_cmp);
+    if counts.is_empty() {
+        return Err(Error::data_file(&t.path, "file", "no rows: nothing to draw"));
+    }
     let vmax = v.iter().cloned().fold(0.0, f64::max);
     // Floor of the log axis: the smallest probability of one impact at 5 % of the velocity range.
     let low = v

@@ -28,7 +28,7 @@ use crate::io::{InputFile, Manifest, ReportDir, fcol, git_state, scol, table, uc
 use crate::lifetime::{LifetimeChain, breakage_from_hazard, impacts_in, theta};
 use crate::model::Simulator;
 use crate::study::{LifetimeStudy, LoadedStudy, ShapeEstimate, Study};
-use crate::stats::{median, pearson};
+use crate::stats::{fit_line, median};
 use crate::weibull::{FisherBounds, PivotalBounds, Weibull, WeibullFit, fisher_bounds, fit_mle, probability_plot, simulate_pivotal, sorted_quantile};
 
 /// What a run produced, for the CLI to print.
@@ -324,21 +324,22 @@ fn write_weibull(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -
 }
 
 fn write_size_trend(dir: &mut ReportDir, runs: &[MaterialRun]) -> Result<()> {
+    // Power law σ̄ = e^c d^b: a straight line in log–log coordinates.
     let mut rows: Vec<[f64; 7]> = Vec::new();
     for r in runs {
-        let x: Vec<f64> = r.data.diameters().iter().map(|d| d.ln()).collect();
-        let y: Vec<f64> = r.sigma_bar.iter().map(|s| s.ln()).collect();
-        let n = x.len() as f64;
-        let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-        let sxx: f64 = x.iter().map(|v| (v - mx).powi(2)).sum();
-        let sxy: f64 = x.iter().zip(&y).map(|(a, b)| (a - mx) * (b - my)).sum();
-        let b = sxy / sxx;
-        let c = my - b * mx;
-        let rss: f64 = x.iter().zip(&y).map(|(a, v)| (v - c - b * a).powi(2)).sum();
-        let se = (rss / (n - 2.0) / sxx).sqrt();
-        let (r_xy, p) = pearson(&x, &y);
         let d = r.data.diameters();
-        rows.push([b, se, c, r_xy, p, d.iter().cloned().fold(f64::MAX, f64::min), d.iter().cloned().fold(f64::MIN, f64::max)]);
+        let x: Vec<f64> = d.iter().map(|d| d.ln()).collect();
+        let y: Vec<f64> = r.sigma_bar.iter().map(|s| s.ln()).collect();
+        let f = fit_line(&x, &y)?;
+        rows.push([
+            f.slope,
+            f.slope_se,
+            f.intercept,
+            f.r,
+            f.p_value,
+            d.iter().cloned().fold(f64::MAX, f64::min),
+            d.iter().cloned().fold(f64::MIN, f64::max),
+        ]);
     }
     let col = |i: usize| rows.iter().map(|r| r[i]).collect::<Vec<f64>>();
     let mut df = table(vec![

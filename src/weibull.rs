@@ -229,15 +229,16 @@ pub fn fisher_bounds(fit: &WeibullFit, data: &[f64], confidence: f64) -> Result<
         szl += z * l;
         szl2 += z * l * l;
     }
-    // Negative Hessian of ℓ(m, η).
+    // Observed information = negative Hessian of ℓ(m, η); its inverse is the covariance.
     let imm = n / (m * m) + szl2;
     let iee = -(m / (eta * eta)) * (n - (m + 1.0) * sz);
     let ime = n / eta - sz / eta - m * szl / eta;
-    let det = imm * iee - ime * ime;
-    if !(det > 0.0) {
-        return Err(Error::numerical("Weibull Fisher matrix", format!("not positive definite (det {det})")));
-    }
-    let (vmm, vee, vme) = (iee / det, imm / det, -ime / det);
+    let info = nalgebra::Matrix2::new(imm, ime, ime, iee);
+    let cov = info
+        .cholesky()
+        .map(|c| c.inverse())
+        .ok_or_else(|| Error::numerical("Weibull Fisher matrix", format!("not positive definite: {info:?}")))?;
+    let (vmm, vee, vme) = (cov[(0, 0)], cov[(1, 1)], cov[(0, 1)]);
     let z = std_normal_quantile(0.5 + 0.5 * confidence);
     let (sm, se) = (vmm.sqrt(), vee.sqrt());
     Ok(FisherBounds {

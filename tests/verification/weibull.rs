@@ -23,6 +23,30 @@ fn lieblein_zelen_mle() {
     assert!((fit.mle.quantile(0.1) - 28.069).abs() < 5e-4, "B10 {}", fit.mle.quantile(0.1));
 }
 
+/// Independent check of the shape-equation root: maximise the log-likelihood directly with
+/// argmin's Nelder–Mead in (ln m, ln η); the optimum must coincide with the MLE.
+#[test]
+fn lieblein_zelen_direct_likelihood_maximum() {
+    use argmin::core::{CostFunction, Executor, State};
+    use argmin::solver::neldermead::NelderMead;
+    struct NegLogLik;
+    impl CostFunction for NegLogLik {
+        type Param = Vec<f64>;
+        type Output = f64;
+        fn cost(&self, p: &Vec<f64>) -> Result<f64, argmin::core::Error> {
+            Ok(-Weibull { shape: p[0].exp(), scale: p[1].exp() }.log_likelihood(&LZ))
+        }
+    }
+    let start = vec![vec![0.0, 4.0], vec![1.0, 4.0], vec![0.0, 5.0]];
+    let solver = NelderMead::new(start).with_sd_tolerance(1e-14).unwrap();
+    let res = Executor::new(NegLogLik, solver).configure(|s| s.max_iters(5000)).run().unwrap();
+    let best = res.state().get_best_param().unwrap().clone();
+    rel(best[0].exp(), 2.10206, 1e-5, "shape (Nelder–Mead)");
+    rel(best[1].exp(), 81.8783, 1e-5, "scale (Nelder–Mead)");
+    let fit = fit_mle(&LZ).unwrap();
+    assert!(-res.state().get_best_cost() <= fit.log_likelihood + 1e-9, "the root is not the maximum");
+}
+
 #[test]
 fn lieblein_zelen_fisher_log_wald() {
     let fit = fit_mle(&LZ).unwrap();

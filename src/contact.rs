@@ -370,7 +370,7 @@ impl AveragingDomain {
         particle_radius: f64,
     ) -> Result<f64> {
         let l = self.outer_limit(a, particle_radius);
-        if !(l > a) {
+        if l.is_nan() || l <= a {
             return Err(Error::numerical(
                 "average tensile stress",
                 format!(

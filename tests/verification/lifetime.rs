@@ -13,7 +13,7 @@ fn stress_ratio_table_section_4_1() {
         for (n, r) in [(730.0, r730), (7300.0, r7300)] {
             // Exact ratio for the target, and P_N at the printed ratio (rounding of the third
             // decimal moves P_N by up to k·0.0005/r relative).
-            let exact = (-(-target as f64).ln_1p() / n).powf(1.0 / k);
+            let exact = (-(-target).ln_1p() / n).powf(1.0 / k);
             assert!((exact - r).abs() <= 0.0005 + 1e-12, "k={k} P={target} N={n}: {exact} vs {r}");
             let p = breakage_from_hazard(r.powf(k), n);
             let tol = k * 0.0005 / r * 1.1;

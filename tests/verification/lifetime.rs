@@ -8,7 +8,8 @@ use partlife::weibull::Weibull;
 #[test]
 fn stress_ratio_table_section_4_1() {
     // k, P_N, σ/σ0 at N = 730, σ/σ0 at N = 7300 (printed to 3 decimals).
-    let rows = [(5.0, 0.01, 0.107, 0.067), (10.0, 0.01, 0.327, 0.259), (10.0, 0.10, 0.413, 0.328), (15.0, 0.01, 0.474, 0.407)];
+    let rows: [(f64, f64, f64, f64); 4] =
+        [(5.0, 0.01, 0.107, 0.067), (10.0, 0.01, 0.327, 0.259), (10.0, 0.10, 0.413, 0.328), (15.0, 0.01, 0.474, 0.407)];
     for (k, target, r730, r7300) in rows {
         for (n, r) in [(730.0, r730), (7300.0, r7300)] {
             // Exact ratio for the target, and P_N at the printed ratio (rounding of the third

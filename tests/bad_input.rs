@@ -34,6 +34,13 @@ fn edit_csv(s: &Scratch, file: &str, f: impl Fn(&str) -> String) {
     s.write(&rel, &f(&text));
 }
 
+/// Replaces `from` by `to` (first occurrence) in the scratch study file.
+fn edit_study(s: &Scratch, from: &str, to: &str) {
+    let text = s.read("studies/lifetime.toml");
+    assert!(text.contains(from), "the study has no \"{from}\"");
+    s.write("studies/lifetime.toml", &text.replacen(from, to, 1));
+}
+
 /// Replaces field `col` of data row `row` (1-based) of a CSV text.
 fn set_cell(text: &str, row: usize, col: usize, value: &str) -> String {
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
@@ -150,10 +157,7 @@ fn ragged_row() {
 #[test]
 fn unknown_toml_key() {
     check(
-        |s| {
-            let t = s.read("studies/lifetime.toml").replace("energy_fraction = 0.1", "energy_fraction = 0.1\nenergy_fracton = 0.2");
-            s.write("studies/lifetime.toml", &t)
-        },
+        |s| edit_study(s, "energy_fraction = 0.1", "energy_fraction = 0.1\nenergy_fracton = 0.2"),
         &["lifetime.toml", "line", "energy_fracton", "unknown field"],
     );
 }
@@ -161,10 +165,7 @@ fn unknown_toml_key() {
 #[test]
 fn toml_syntax_error() {
     check(
-        |s| {
-            let t = s.read("studies/lifetime.toml").replace("seed = 20261121", "seed = ");
-            s.write("studies/lifetime.toml", &t)
-        },
+        |s| edit_study(s, "seed = 20261121", "seed = "),
         &["lifetime.toml", "line"],
     );
 }
@@ -172,10 +173,7 @@ fn toml_syntax_error() {
 #[test]
 fn energy_fraction_zero() {
     check(
-        |s| {
-            let t = s.read("studies/lifetime.toml").replace("energy_fraction = 0.1", "energy_fraction = 0.0");
-            s.write("studies/lifetime.toml", &t)
-        },
+        |s| edit_study(s, "energy_fraction = 0.1", "energy_fraction = 0.0"),
         &["lifetime.toml", "impact.energy_fraction", "(0, 1]", "got 0"],
     );
 }
@@ -183,10 +181,7 @@ fn energy_fraction_zero() {
 #[test]
 fn energy_fraction_negative() {
     check(
-        |s| {
-            let t = s.read("studies/lifetime.toml").replace("energy_fraction = 0.1", "energy_fraction = -0.1");
-            s.write("studies/lifetime.toml", &t)
-        },
+        |s| edit_study(s, "energy_fraction = 0.1", "energy_fraction = -0.1"),
         &["impact.energy_fraction", "(0, 1]"],
     );
 }
@@ -194,10 +189,7 @@ fn energy_fraction_negative() {
 #[test]
 fn energy_fraction_above_one() {
     check(
-        |s| {
-            let t = s.read("studies/lifetime.toml").replace("energy_fraction = 0.1", "energy_fraction = 1.5");
-            s.write("studies/lifetime.toml", &t)
-        },
+        |s| edit_study(s, "energy_fraction = 0.1", "energy_fraction = 1.5"),
         &["impact.energy_fraction"],
     );
 }
@@ -205,10 +197,7 @@ fn energy_fraction_above_one() {
 #[test]
 fn impossible_poisson_ratio() {
     check(
-        |s| {
-            let t = s.read("studies/lifetime.toml").replacen("poisson_ratio = 0.25", "poisson_ratio = 0.5", 1);
-            s.write("studies/lifetime.toml", &t)
-        },
+        |s| edit_study(s, "poisson_ratio = 0.25", "poisson_ratio = 0.5"),
         &["material[0].elastic.poisson_ratio", "(-1, 0.5)"],
     );
 }
@@ -216,10 +205,7 @@ fn impossible_poisson_ratio() {
 #[test]
 fn averaging_domain_inside_contact() {
     check(
-        |s| {
-            let t = s.read("studies/lifetime.toml").replace("kappa = 2.0", "kappa = 0.8");
-            s.write("studies/lifetime.toml", &t)
-        },
+        |s| edit_study(s, "kappa = 2.0", "kappa = 0.8"),
         &["contact.averaging.kappa", "kappa > 1"],
     );
 }
@@ -227,10 +213,7 @@ fn averaging_domain_inside_contact() {
 #[test]
 fn unknown_study_kind() {
     check(
-        |s| {
-            let t = s.read("studies/lifetime.toml").replace("kind = \"lifetime\"", "kind = \"lifetme\"");
-            s.write("studies/lifetime.toml", &t)
-        },
+        |s| edit_study(s, "kind = \"lifetime\"", "kind = \"lifetme\""),
         &["kind", "lifetme", "known: lifetime"],
     );
 }

@@ -125,9 +125,10 @@ impl Lifetime {
 /// A precomputed breakage curve V ↦ (σ̄, P_N) for one material, η, averaging domain and
 /// Weibull law: the fast path for loops over many velocities (Monte Carlo, figures).
 ///
-/// For a sphere on a wall the contact radius and the peak pressure both scale as V^(2/5):
-/// a = c_a t, p0 = c_p t with t = V^(2/5), c_a = √(R* c_δ), c_p = (2/π) E* √(c_δ/R*) and
-/// c_δ = [15 m* η/(16 E* √R*)]^(2/5). With L = κa, σ̄ = r p0 and the cumulative hazard is
+/// For a sphere on a wall δ_m ∝ V^(4/5), so the contact radius and the peak pressure at the
+/// force peak both scale as t = V^(2/5): a = c_a t, p0 = c_p t, where c_a and c_p are a and p0
+/// of the same impact at V = 1 m/s (taken from [`Impact`] and [`crate::contact::Hertz`], not
+/// re-derived). With L = κa, σ̄ = r p0 and the cumulative hazard is
 /// H = exp(m ln(r c_p/σ_θ) + (2m/5) ln V); with L = R the domain formula is evaluated at (p0, a).
 /// Agrees with [`Lifetime::p_after`] to 1e-12 relative (`tests::fast_curve_matches_the_chain`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -144,12 +145,12 @@ pub struct BreakageCurve {
 impl BreakageCurve {
     /// Precomputes the curve of a lifetime model.
     pub fn new(life: &Lifetime) -> Self {
-        let imp = life.load.impact;
-        let h = imp.hertz;
-        let c_delta = (15.0 * imp.effective_mass * imp.energy_fraction / (16.0 * h.e_star * h.r_star.sqrt())).powf(0.4);
-        let c_p = 2.0 / std::f64::consts::PI * h.e_star * (c_delta / h.r_star).sqrt();
+        // The impact at V = 1 m/s fixes the prefactors of a and p0 ∝ V^(2/5).
+        let f1 = life.load.impact.max_force(1.0);
+        let h = life.load.impact.hertz;
+        let c_p = h.peak_pressure(f1);
         BreakageCurve {
-            c_a: (h.r_star * c_delta).sqrt(),
+            c_a: h.contact_radius(f1),
             c_p,
             shape: life.strength.shape,
             ln_scale: life.strength.scale.ln(),

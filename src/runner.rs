@@ -65,7 +65,8 @@ struct MaterialRun {
     data: CrushData,
     /// Hertz contact state at the force at break, per particle (R = d/2).
     at_break: Vec<ContactState>,
-    /// σ̄ at break (Pa), per particle.
+    /// σ̄ at break (Pa), per particle: `at_break[i].mean_tensile`, projected once because the
+    /// Weibull fit, bounds and plots take a slice.
     sigma_bar: Vec<f64>,
     fit: WeibullFit,
     pivotal: PivotalBounds,

@@ -35,6 +35,7 @@
 //! | [`contact`] | Hertz: contact size, surface stresses, average tensile stress (explicit domain), crush, impact with η |
 //! | [`weibull`] | ASTM C1239 MLE, unbiasing, pivotal and Fisher bounds, probability plot, size scaling |
 //! | [`lifetime`] | p(V), P_N without underflow, impacts per year, the chain as a Simulator |
+//! | [`dem`] | native DEM of the tube bank: Hertz–Mindlin, cell lists, impacts, profiles, VTK; `TubeBankModel` |
 //! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation |
 //! | [`synth`] | the documented generator of the synthetic crush datasets |
 //! | [`stats`] | median, Pearson correlation with p-value |
@@ -54,6 +55,7 @@
 pub mod bench;
 pub mod contact;
 pub mod data;
+pub mod dem;
 pub mod error;
 pub mod io;
 pub mod lifetime;

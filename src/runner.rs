@@ -55,6 +55,7 @@ pub struct RunOptions {
 pub fn run(study: &LoadedStudy, opts: &RunOptions) -> Result<RunSummary> {
     match &study.study {
         Study::Lifetime(s) => run_lifetime(study, s, opts),
+        Study::Dem(s) => crate::dem::run::run_dem(study, s, opts),
     }
 }
 

@@ -165,7 +165,7 @@ pub struct MaterialSpec {
 }
 
 /// The kinds of study this version can run.
-pub const KINDS: [&str; 1] = ["lifetime"];
+pub const KINDS: [&str; 2] = ["lifetime", "dem"];
 
 /// A lifetime study (kind = "lifetime"): the deliverable's §6 chain for several materials.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -196,6 +196,8 @@ pub struct LifetimeStudy {
 pub enum Study {
     /// kind = "lifetime".
     Lifetime(LifetimeStudy),
+    /// kind = "dem": particle flow through the tube bank.
+    Dem(Box<crate::dem::run::DemStudy>),
 }
 
 /// A study file loaded from disk.
@@ -254,6 +256,11 @@ pub fn load(path: &Path) -> Result<LoadedStudy> {
             let s: LifetimeStudy = parse_toml(path, &text)?;
             validate_lifetime(&s, &file)?;
             Study::Lifetime(s)
+        }
+        "dem" => {
+            let s: crate::dem::run::DemStudy = parse_toml(path, &text)?;
+            s.setup(&file)?;
+            Study::Dem(Box::new(s))
         }
         other => {
             return Err(Error::config(&file, "kind", format!("unknown kind \"{other}\"; known: {}", KINDS.join(", "))));

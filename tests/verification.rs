@@ -3,6 +3,7 @@
 //! states its tolerance: half a unit in the last printed digit of the reference unless noted.
 
 mod verification {
+    mod dem;
     mod hertz;
     mod lifetime;
     mod weibull;

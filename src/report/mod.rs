@@ -14,6 +14,7 @@
 //! embedded DejaVu Sans font ([`canvas`]).
 
 pub mod canvas;
+pub mod dem;
 pub mod panel;
 
 use std::collections::BTreeMap;
@@ -135,6 +136,9 @@ pub fn redraw(report_dir: &Path) -> Result<Rendered> {
         .pointer("/study_resolved/figures/width_cm")
         .and_then(|v| v.as_f64())
         .unwrap_or(8.5);
+    if json.pointer("/study_resolved/kind").and_then(|v| v.as_str()) == Some("dem") {
+        return dem::render(report_dir, width);
+    }
     render(report_dir, width)
 }
 

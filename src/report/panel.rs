@@ -91,7 +91,8 @@ pub fn padded(values: impl IntoIterator<Item = f64>, lo_frac: f64, hi_frac: f64)
     (lo - lo_frac * span, hi + hi_frac * span)
 }
 
-fn pt(v: f64) -> u32 {
+/// Points to pixels.
+pub fn pt(v: f64) -> u32 {
     (v * super::canvas::PX_PER_PT).round().max(1.0) as u32
 }
 

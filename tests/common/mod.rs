@@ -10,7 +10,8 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// A temporary project: `studies/lifetime.toml` and `datasets/*.csv` copied from the repo.
+/// A temporary project: `studies/{lifetime,dem_cold_test}.toml` and `datasets/*.csv` copied
+/// from the repo.
 pub struct Scratch {
     pub dir: tempfile::TempDir,
 }
@@ -21,7 +22,9 @@ impl Scratch {
         for sub in ["studies", "datasets"] {
             std::fs::create_dir_all(dir.path().join(sub)).unwrap();
         }
-        std::fs::copy(root().join("studies/lifetime.toml"), dir.path().join("studies/lifetime.toml")).unwrap();
+        for f in ["lifetime.toml", "dem_cold_test.toml"] {
+            std::fs::copy(root().join("studies").join(f), dir.path().join("studies").join(f)).unwrap();
+        }
         for f in ["crush_bl1630.csv", "crush_gen4.csv"] {
             std::fs::copy(root().join("datasets").join(f), dir.path().join("datasets").join(f)).unwrap();
         }

@@ -1,0 +1,243 @@
+//! Neighbour search: a uniform cell grid (periodic along y) with sorted cells, and a Verlet
+//! half neighbour list (pairs i < j within r_i + r_j + skin) rebuilt when any particle has moved
+//! more than half the skin since the last build.
+//!
+//! The grid also keeps, per cell, the walls (planes and tubes) within reach of a particle in
+//! that cell, so the wall loop tests a handful of candidates instead of every tube.
+
+use rayon::prelude::*;
+
+use super::geometry::Geometry;
+use super::vec3::V3;
+
+/// The cell grid.
+#[derive(Debug, Clone)]
+pub struct Grid {
+    x_lo: f64,
+    z_lo: f64,
+    cell_x: f64,
+    cell_y: f64,
+    cell_z: f64,
+    /// Cells along x.
+    pub nx: usize,
+    /// Cells along y.
+    pub ny: usize,
+    /// Cells along z.
+    pub nz: usize,
+    slab: f64,
+    wall_start: Vec<u32>,
+    wall_ids: Vec<u32>,
+    /// Distinct neighbour-cell offsets along y (−1, 0, 1, deduplicated when ny < 3).
+    y_offsets: Vec<isize>,
+}
+
+impl Grid {
+    /// A grid of cells at least `cutoff` wide over the geometry, with wall candidates within
+    /// `wall_margin` of each cell.
+    pub fn new(g: &Geometry, cutoff: f64, wall_margin: f64) -> Self {
+        // The grid extends a cutoff beyond the domain in z so that particles just leaving
+        // through the outlet or inserted at the top are still binned exactly.
+        let z_lo = g.z_lo - 2.0 * cutoff;
+        let z_hi = g.z_hi + 2.0 * cutoff;
+        let nx = (((g.x_hi - g.x_lo) / cutoff).floor() as usize).max(1);
+        let ny = ((g.slab / cutoff).floor() as usize).max(1);
+        let nz = (((z_hi - z_lo) / cutoff).floor() as usize).max(1);
+        let cell_x = (g.x_hi - g.x_lo) / nx as f64;
+        let cell_y = g.slab / ny as f64;
+        let cell_z = (z_hi - z_lo) / nz as f64;
+        let mut y_offsets: Vec<isize> = vec![-1, 0, 1];
+        if ny < 3 {
+            y_offsets = if ny == 1 { vec![0] } else { vec![0, 1] };
+        }
+        let mut grid = Grid { x_lo: g.x_lo, z_lo, cell_x, cell_y, cell_z, nx, ny, nz, slab: g.slab, wall_start: Vec::new(), wall_ids: Vec::new(), y_offsets };
+        grid.build_wall_candidates(g, wall_margin);
+        grid
+    }
+
+    fn build_wall_candidates(&mut self, g: &Geometry, margin: f64) {
+        let (hx, hy, hz) = (self.cell_x / 2.0, self.cell_y / 2.0, self.cell_z / 2.0);
+        let mut start = Vec::with_capacity(self.cells() + 1);
+        let mut ids = Vec::new();
+        start.push(0u32);
+        for cz in 0..self.nz {
+            for cy in 0..self.ny {
+                for cx in 0..self.nx {
+                    let c = [
+                        self.x_lo + (cx as f64 + 0.5) * self.cell_x,
+                        (cy as f64 + 0.5) * self.cell_y,
+                        self.z_lo + (cz as f64 + 0.5) * self.cell_z,
+                    ];
+                    for (w, p) in g.planes.iter().enumerate() {
+                        let reach = p.normal[0].abs() * hx + p.normal[1].abs() * hy + p.normal[2].abs() * hz;
+                        if p.distance(c) - reach < margin {
+                            ids.push(w as u32);
+                        }
+                    }
+                    for (t, tube) in g.tubes.iter().enumerate() {
+                        let dx = ((c[0] - tube.x).abs() - hx).max(0.0);
+                        let dz = ((c[2] - tube.z).abs() - hz).max(0.0);
+                        if (dx * dx + dz * dz).sqrt() - tube.radius < margin {
+                            ids.push((g.planes.len() + t) as u32);
+                        }
+                    }
+                    start.push(ids.len() as u32);
+                }
+            }
+        }
+        self.wall_start = start;
+        self.wall_ids = ids;
+    }
+
+    /// Number of cells.
+    pub fn cells(&self) -> usize {
+        self.nx * self.ny * self.nz
+    }
+
+    /// Cell coordinates of a position (clamped in x and z, wrapped in y).
+    #[inline]
+    pub fn coords(&self, p: V3) -> (usize, usize, usize) {
+        let cx = (((p[0] - self.x_lo) / self.cell_x).floor().max(0.0) as usize).min(self.nx - 1);
+        let yw = p[1] - self.slab * (p[1] / self.slab).floor();
+        let cy = ((yw / self.cell_y).floor().max(0.0) as usize).min(self.ny - 1);
+        let cz = (((p[2] - self.z_lo) / self.cell_z).floor().max(0.0) as usize).min(self.nz - 1);
+        (cx, cy, cz)
+    }
+
+    /// Linear cell index.
+    #[inline]
+    pub fn index(&self, c: (usize, usize, usize)) -> usize {
+        (c.2 * self.ny + c.1) * self.nx + c.0
+    }
+
+    /// Wall ids within reach of a particle binned in cell `cell`.
+    #[inline]
+    pub fn walls_near(&self, cell: usize) -> &[u32] {
+        &self.wall_ids[self.wall_start[cell] as usize..self.wall_start[cell + 1] as usize]
+    }
+
+    /// The distinct neighbour cells of a cell (itself included).
+    pub fn neighbour_cells(&self, c: (usize, usize, usize), out: &mut Vec<usize>) {
+        out.clear();
+        for dz in -1isize..=1 {
+            let z = c.2 as isize + dz;
+            if z < 0 || z >= self.nz as isize {
+                continue;
+            }
+            for &dy in &self.y_offsets {
+                let y = (c.1 as isize + dy).rem_euclid(self.ny as isize);
+                for dx in -1isize..=1 {
+                    let x = c.0 as isize + dx;
+                    if x < 0 || x >= self.nx as isize {
+                        continue;
+                    }
+                    out.push(self.index((x as usize, y as usize, z as usize)));
+                }
+            }
+        }
+    }
+}
+
+/// State of one neighbour pair.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PairState {
+    /// Tangential displacement ξ, oriented for the pair's (i, j) order.
+    pub xi: V3,
+    /// In contact at the last force evaluation.
+    pub touching: bool,
+}
+
+/// Half neighbour list in CSR form.
+#[derive(Debug, Clone, Default)]
+pub struct NeighbourList {
+    /// Row starts, len n + 1.
+    pub start: Vec<u32>,
+    /// Neighbour indices j > i.
+    pub j: Vec<u32>,
+    /// Pair states, aligned with `j`.
+    pub state: Vec<PairState>,
+    /// Cell of each particle at the build.
+    pub cell_of: Vec<u32>,
+}
+
+/// Sorts particles by cell: returns (order, cell of each sorted particle, cell starts).
+pub fn sort_by_cell(grid: &Grid, pos: &[V3]) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
+    let cells: Vec<u32> = pos.iter().map(|&p| grid.index(grid.coords(p)) as u32).collect();
+    let mut count = vec![0u32; grid.cells() + 1];
+    for &c in &cells {
+        count[c as usize + 1] += 1;
+    }
+    for k in 1..count.len() {
+        count[k] += count[k - 1];
+    }
+    let cell_start = count.clone();
+    let mut next = count;
+    let mut order = vec![0u32; pos.len()];
+    for (i, &c) in cells.iter().enumerate() {
+        order[next[c as usize] as usize] = i as u32;
+        next[c as usize] += 1;
+    }
+    let sorted_cells = order.iter().map(|&i| cells[i as usize]).collect();
+    (order, sorted_cells, cell_start)
+}
+
+/// Rows of the half list for particles already sorted by cell: j > i within r_i + r_j + skin
+/// (minimum image along y). Built in parallel over fixed blocks and concatenated in order.
+pub fn build_pairs(grid: &Grid, pos: &[V3], radius: &[f64], cell_of: &[u32], cell_start: &[u32], skin: f64, slab: f64) -> (Vec<u32>, Vec<u32>) {
+    const BLOCK: usize = 1024;
+    let n = pos.len();
+    let half = slab / 2.0;
+    let blocks: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(BLOCK))
+        .into_par_iter()
+        .map(|b| {
+            let lo = b * BLOCK;
+            let hi = (lo + BLOCK).min(n);
+            let mut counts = Vec::with_capacity(hi - lo);
+            let mut js = Vec::with_capacity((hi - lo) * 8);
+            let mut cells = Vec::with_capacity(27);
+            for i in lo..hi {
+                let before = js.len();
+                let c = cell_of[i] as usize;
+                let cz = c / (grid.nx * grid.ny);
+                let cy = (c / grid.nx) % grid.ny;
+                let cx = c % grid.nx;
+                grid.neighbour_cells((cx, cy, cz), &mut cells);
+                let (pi, ri) = (pos[i], radius[i]);
+                for &nc in &cells {
+                    let (s, e) = (cell_start[nc] as usize, cell_start[nc + 1] as usize);
+                    // Cells are contiguous in sorted order: only j > i.
+                    let s = s.max(i + 1);
+                    for j in s..e {
+                        let pj = pos[j];
+                        let dx = pi[0] - pj[0];
+                        let mut dy = pi[1] - pj[1];
+                        if dy > half {
+                            dy -= slab;
+                        } else if dy < -half {
+                            dy += slab;
+                        }
+                        let dz = pi[2] - pj[2];
+                        let cut = ri + radius[j] + skin;
+                        if dx * dx + dy * dy + dz * dz < cut * cut {
+                            js.push(j as u32);
+                        }
+                    }
+                }
+                // Sorted rows make the pair order independent of the cell visiting order.
+                js[before..].sort_unstable();
+                counts.push((js.len() - before) as u32);
+            }
+            (counts, js)
+        })
+        .collect();
+    let mut start = Vec::with_capacity(n + 1);
+    start.push(0u32);
+    let mut all = Vec::with_capacity(blocks.iter().map(|b| b.1.len()).sum());
+    for (counts, js) in blocks {
+        for c in counts {
+            let last = *start.last().unwrap_or(&0);
+            start.push(last + c);
+        }
+        all.extend_from_slice(&js);
+    }
+    (start, all)
+}

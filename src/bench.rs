@@ -131,3 +131,88 @@ pub fn run_all(study: Option<&Path>) -> Result<Vec<Figure>> {
     }
     Ok(out)
 }
+
+/// The DEM speed case shared with the LIGGGHTS input in `tests/bench/liggghts/`: the cold-test
+/// bank (Ø 25 mm tubes, 5 staggered rows, 125 mm × 5 mm slab), 1 mm particles, ρ = 3600 kg/m³,
+/// E = 10⁸ Pa, ν = 0.25, e = 0.7, μ = 0.3, Δt = 2 µs, 200 kg/(m² s) inserted at 0.5 m/s.
+pub fn dem_benchmark_setup() -> Result<crate::dem::DemSetup> {
+    use crate::dem::contact::{Interaction, Material};
+    use crate::dem::geometry::{BankSpec, Geometry};
+    use crate::dem::{DemSetup, Diameters, Inlet, ProbeSetup};
+    let geometry = Geometry::tube_bank(&BankSpec::cold_test());
+    let m = Material { density: 3600.0, youngs_modulus: 1e8, poisson_ratio: 0.25 };
+    let i = Interaction { restitution: 0.7, friction: 0.3, rolling_friction: 0.0 };
+    let inlet = Inlet { mass_flux: 200.0, velocity: 0.5, z_lo: geometry.z_hi - 0.015, z_hi: geometry.z_hi };
+    let s = DemSetup {
+        particle: m,
+        wall: m,
+        particle_particle: i,
+        particle_wall: i,
+        diameters: Diameters::Fixed { value: 1e-3 },
+        geometry,
+        gravity: [0.0, 0.0, -9.81],
+        inlet: Some(inlet),
+        time_step: 2e-6,
+        max_speed: 3.5,
+        skin_fraction: 0.25,
+        max_rebuild_steps: 200,
+        rotation: true,
+        max_overlap_fraction: 0.3,
+        probes: ProbeSetup { warmup: 1e9, ..ProbeSetup::default() },
+        seed: 1,
+    };
+    s.validate("<dem benchmark>")?;
+    Ok(s)
+}
+
+/// One DEM speed measurement.
+#[derive(Debug, Clone)]
+pub struct DemSpeed {
+    /// Worker threads.
+    pub threads: usize,
+    /// Particle-steps per second.
+    pub particle_steps_per_second: f64,
+    /// Wall time per step and phase (µs): kick–drift, position check, neighbour rebuild, force
+    /// blocks, serial reduction, closing kick and sampling.
+    pub phase_us: [f64; 6],
+    /// Neighbour-list builds during the measurement.
+    pub rebuilds: u64,
+}
+
+/// DEM particle-steps per second: fills the bank for `fill_s` simulated seconds on all threads,
+/// then times `steps` steps on 1 thread and `steps` more on all threads. Returns the particle
+/// count at the start of timing and one [`DemSpeed`] per thread count.
+pub fn dem_particle_steps_per_second(fill_s: f64, steps: u64) -> Result<(usize, Vec<DemSpeed>)> {
+    let mut dem = crate::dem::Dem::new(dem_benchmark_setup()?, "<dem benchmark>")?;
+    dem.advance((fill_s / dem.setup.time_step).round() as u64)?;
+    let n0 = dem.p.len();
+    let mut out = Vec::new();
+    let all = rayon::current_num_threads();
+    let mut counts = vec![1];
+    if all > 1 {
+        counts.push(all);
+    }
+    for threads in counts {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| crate::Error::numerical("thread pool", e.to_string()))?;
+        let before = dem.counters.particle_steps;
+        let ph0 = dem.phase_seconds;
+        let b0 = dem.counters.builds;
+        let start = Instant::now();
+        pool.install(|| dem.advance(steps))?;
+        let secs = start.elapsed().as_secs_f64();
+        let mut phase_us = [0.0; 6];
+        for (k, v) in phase_us.iter_mut().enumerate() {
+            *v = 1e6 * (dem.phase_seconds[k] - ph0[k]) / steps as f64;
+        }
+        out.push(DemSpeed {
+            threads,
+            particle_steps_per_second: (dem.counters.particle_steps - before) as f64 / secs,
+            phase_us,
+            rebuilds: dem.counters.builds - b0,
+        });
+    }
+    Ok((n0, out))
+}

@@ -51,6 +51,9 @@ enum Command {
         /// Also time this study end to end.
         #[arg(long)]
         study: Option<PathBuf>,
+        /// Run the DEM benchmark instead (the LIGGGHTS comparison case; about a minute).
+        #[arg(long)]
+        dem: bool,
     },
 }
 
@@ -142,7 +145,22 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 }
             }
         }
-        Command::Bench { study } => {
+        Command::Bench { dem: true, .. } => {
+            println!("machine: {} threads available to rayon", rayon::current_num_threads());
+            let (n, figs) = partlife::bench::dem_particle_steps_per_second(0.15, 25_000)?;
+            println!("DEM cold-test bank, {n} particles after 0.15 s of filling, 25 000 steps per measurement:");
+            for f in figs {
+                let ph: Vec<String> = f.phase_us.iter().map(|v| format!("{v:.0}")).collect();
+                println!(
+                    "  {} thread(s): {:.4e} particle-steps/s; µs/step [kick–drift, check, rebuild, forces, reduction, kick+sample] = [{}]; {} rebuilds",
+                    f.threads,
+                    f.particle_steps_per_second,
+                    ph.join(", "),
+                    f.rebuilds
+                );
+            }
+        }
+        Command::Bench { study, .. } => {
             println!("machine: {} threads available to rayon", rayon::current_num_threads());
             for fig in partlife::bench::run_all(study.as_deref())? {
                 println!("{}: {:.4e} {} (goal {})", fig.what, fig.value, fig.unit, fig.goal);

@@ -193,6 +193,7 @@ pub struct LifetimeStudy {
 
 /// A parsed, validated study.
 #[derive(Debug, Clone, PartialEq)]
+#[allow(clippy::large_enum_variant)] // one per run: the size difference does not matter
 pub enum Study {
     /// kind = "lifetime".
     Lifetime(LifetimeStudy),

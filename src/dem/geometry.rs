@@ -207,7 +207,7 @@ impl Geometry {
         if !(self.x_hi > self.x_lo && self.z_hi > self.z_lo) {
             return cfg("geometry", format!("empty domain x [{}, {}], z [{}, {}] m", self.x_lo, self.x_hi, self.z_lo, self.z_hi));
         }
-        if !(self.slab > d_max) {
+        if self.slab.is_nan() || self.slab <= d_max {
             return cfg(
                 "geometry.slab",
                 format!("slab thickness {} m is thinner than the largest particle ({} m)", self.slab, d_max),
@@ -224,7 +224,7 @@ impl Geometry {
             );
         }
         for (i, a) in self.tubes.iter().enumerate() {
-            if !(a.radius > 0.0) {
+            if a.radius.is_nan() || a.radius <= 0.0 {
                 return cfg("geometry.tube_diameter", format!("tube {i} has radius {} m; must be > 0", a.radius));
             }
             for (j, b) in self.tubes.iter().enumerate().skip(i + 1) {

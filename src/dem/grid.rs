@@ -29,6 +29,10 @@ pub struct Grid {
     wall_ids: Vec<u32>,
     /// Distinct neighbour-cell offsets along y (−1, 0, 1, deduplicated when ny < 3).
     y_offsets: Vec<isize>,
+    /// Per cell, its neighbour cells with an index ≥ its own, sorted (CSR): particles are sorted
+    /// by cell, so these hold exactly the candidates j > i of a half list, in increasing order.
+    fwd_start: Vec<u32>,
+    fwd_cells: Vec<u32>,
 }
 
 impl Grid {
@@ -49,8 +53,39 @@ impl Grid {
         if ny < 3 {
             y_offsets = if ny == 1 { vec![0] } else { vec![0, 1] };
         }
-        let mut grid = Grid { x_lo: g.x_lo, z_lo, cell_x, cell_y, cell_z, nx, ny, nz, slab: g.slab, wall_start: Vec::new(), wall_ids: Vec::new(), y_offsets };
+        let mut grid = Grid {
+            x_lo: g.x_lo,
+            z_lo,
+            cell_x,
+            cell_y,
+            cell_z,
+            nx,
+            ny,
+            nz,
+            slab: g.slab,
+            wall_start: Vec::new(),
+            wall_ids: Vec::new(),
+            y_offsets,
+            fwd_start: Vec::new(),
+            fwd_cells: Vec::new(),
+        };
         grid.build_wall_candidates(g, wall_margin);
+        let mut start = Vec::with_capacity(grid.cells() + 1);
+        let mut cells = Vec::new();
+        let mut tmp = Vec::with_capacity(27);
+        start.push(0u32);
+        for c in 0..grid.cells() {
+            let cz = c / (nx * ny);
+            let cy = (c / nx) % ny;
+            let cx = c % nx;
+            grid.neighbour_cells((cx, cy, cz), &mut tmp);
+            tmp.retain(|&n| n >= c);
+            tmp.sort_unstable();
+            cells.extend(tmp.iter().map(|&n| n as u32));
+            start.push(cells.len() as u32);
+        }
+        grid.fwd_start = start;
+        grid.fwd_cells = cells;
         grid
     }
 
@@ -113,6 +148,12 @@ impl Grid {
     #[inline]
     pub fn walls_near(&self, cell: usize) -> &[u32] {
         &self.wall_ids[self.wall_start[cell] as usize..self.wall_start[cell + 1] as usize]
+    }
+
+    /// Neighbour cells with an index ≥ `cell`, sorted.
+    #[inline]
+    pub fn forward_cells(&self, cell: usize) -> &[u32] {
+        &self.fwd_cells[self.fwd_start[cell] as usize..self.fwd_start[cell + 1] as usize]
     }
 
     /// The distinct neighbour cells of a cell (itself included).
@@ -193,18 +234,13 @@ pub fn build_pairs(grid: &Grid, pos: &[V3], radius: &[f64], cell_of: &[u32], cel
             let hi = (lo + BLOCK).min(n);
             let mut counts = Vec::with_capacity(hi - lo);
             let mut js = Vec::with_capacity((hi - lo) * 8);
-            let mut cells = Vec::with_capacity(27);
             for i in lo..hi {
                 let before = js.len();
-                let c = cell_of[i] as usize;
-                let cz = c / (grid.nx * grid.ny);
-                let cy = (c / grid.nx) % grid.ny;
-                let cx = c % grid.nx;
-                grid.neighbour_cells((cx, cy, cz), &mut cells);
                 let (pi, ri) = (pos[i], radius[i]);
-                for &nc in &cells {
+                // Forward cells in increasing order: rows come out sorted by j.
+                for &nc in grid.forward_cells(cell_of[i] as usize) {
+                    let nc = nc as usize;
                     let (s, e) = (cell_start[nc] as usize, cell_start[nc + 1] as usize);
-                    // Cells are contiguous in sorted order: only j > i.
                     let s = s.max(i + 1);
                     for j in s..e {
                         let pj = pos[j];
@@ -222,8 +258,6 @@ pub fn build_pairs(grid: &Grid, pos: &[V3], radius: &[f64], cell_of: &[u32], cel
                         }
                     }
                 }
-                // Sorted rows make the pair order independent of the cell visiting order.
-                js[before..].sort_unstable();
                 counts.push((js.len() - before) as u32);
             }
             (counts, js)

@@ -56,7 +56,6 @@ pub mod run;
 pub mod vec3;
 pub mod vtk;
 
-use std::collections::HashMap;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -273,7 +272,7 @@ impl DemSetup {
         }
         self.geometry.validate(file, self.diameters.max(), self.skin())?;
         let limit = self.time_step_limit();
-        if !(self.time_step > 0.0) || self.time_step > limit {
+        if self.time_step.is_nan() || self.time_step <= 0.0 || self.time_step > limit {
             return Err(Error::config(
                 file,
                 "run.time_step",
@@ -377,18 +376,25 @@ pub struct Dem {
     pub outflow_mass_measured: f64,
     /// Impacts after the warm-up.
     pub impacts: Vec<Impact>,
-    /// Completed passes of particles inserted after the warm-up.
+    /// Passes completed (particle left through the outlet) after the warm-up, with the impacts
+    /// counted since the particle's insertion.
     pub passes: Vec<Pass>,
     /// Field accumulators.
     pub fields: Fields,
     /// Hold-up and flow, at every field sample.
     pub flow: Vec<FlowSample>,
     trace_target: Option<(u64, u32, f64)>,
+    trace_v: Option<f64>,
     /// The traced impact's force history (empty until one happened).
     pub trace: Vec<TraceSample>,
     trace_done: bool,
+    reduce_seconds: f64,
+    block_out: Vec<BlockOut>,
     /// Counters.
     pub counters: Counters,
+    /// Wall time per phase (s): kick–drift, position check, neighbour rebuild, force blocks,
+    /// serial reduction, closing kick and sampling.
+    pub phase_seconds: [f64; 6],
 }
 
 impl Dem {
@@ -428,10 +434,19 @@ impl Dem {
             fields,
             flow: Vec::new(),
             trace_target: None,
+            trace_v: None,
             trace: Vec::new(),
             trace_done: false,
+            reduce_seconds: 0.0,
+            block_out: Vec::new(),
             counters: Counters::default(),
+            phase_seconds: [0.0; 6],
         })
+    }
+
+    /// Normal velocity of the traced tube impact, once one happened (m/s).
+    pub fn trace_velocity(&self) -> Option<f64> {
+        self.trace_v
     }
 
     /// Places a particle by hand (verification set-ups); returns its id.
@@ -508,75 +523,119 @@ impl Dem {
         let slab = self.setup.geometry.slab;
         let skin2 = (0.5 * self.setup.skin()).powi(2);
         // Kick + drift, and the largest displacement since the last build.
+        let t0 = std::time::Instant::now();
+        let bounds = self.escape_bounds();
         let p = &mut self.p;
+        // Fixed blocks of plain loops over slices (the compiler keeps them tight; rayon only
+        // distributes blocks).
         let max_disp2 = p
             .pos
-            .par_iter_mut()
-            .zip(p.vel.par_iter_mut())
-            .zip(p.omega.par_iter_mut())
-            .zip(p.force.par_iter().zip(p.torque.par_iter()))
-            .zip(p.mass.par_iter().zip(p.inv_inertia.par_iter()))
-            .zip(p.pos_at_build.par_iter())
-            .zip(p.vel_pred.par_iter_mut().zip(p.omega_pred.par_iter_mut()))
-            .with_min_len(BLOCK)
-            .map(|((((((x, v), w), (f, t)), (m, ii)), x0), (vp, wp))| {
-                let a = half / *m;
-                v[0] += a * f[0];
-                v[1] += a * f[1];
-                v[2] += a * f[2];
-                w[0] += half * ii * t[0];
-                w[1] += half * ii * t[1];
-                w[2] += half * ii * t[2];
-                // End-of-step prediction v(t) + Δt a(t) for the velocity-dependent forces.
-                *vp = [v[0] + a * f[0], v[1] + a * f[1], v[2] + a * f[2]];
-                *wp = [w[0] + half * ii * t[0], w[1] + half * ii * t[1], w[2] + half * ii * t[2]];
-                x[0] += dt * v[0];
-                x[1] += dt * v[1];
-                x[2] += dt * v[2];
-                if x[1] >= slab {
-                    x[1] -= slab;
-                } else if x[1] < 0.0 {
-                    x[1] += slab;
+            .par_chunks_mut(BLOCK)
+            .zip(p.vel.par_chunks_mut(BLOCK))
+            .zip(p.omega.par_chunks_mut(BLOCK))
+            .zip(p.vel_pred.par_chunks_mut(BLOCK))
+            .zip(p.omega_pred.par_chunks_mut(BLOCK))
+            .zip(p.force.par_chunks(BLOCK))
+            .zip(p.torque.par_chunks(BLOCK))
+            .zip(p.mass.par_chunks(BLOCK))
+            .zip(p.inv_inertia.par_chunks(BLOCK))
+            .zip(p.pos_at_build.par_chunks(BLOCK))
+            .map(|(((((((((xs, vs), ws), vps), wps), fs), ts), ms), iis), x0s)| {
+                let mut worst = 0.0f64;
+                for k in 0..xs.len() {
+                    let (x, v, w, f, t) = (&mut xs[k], &mut vs[k], &mut ws[k], fs[k], ts[k]);
+                    let a = half / ms[k];
+                    let ii = iis[k];
+                    v[0] += a * f[0];
+                    v[1] += a * f[1];
+                    v[2] += a * f[2];
+                    w[0] += half * ii * t[0];
+                    w[1] += half * ii * t[1];
+                    w[2] += half * ii * t[2];
+                    // End-of-step prediction v(t) + Δt a(t) for the velocity-dependent forces.
+                    vps[k] = [v[0] + a * f[0], v[1] + a * f[1], v[2] + a * f[2]];
+                    wps[k] = [w[0] + half * ii * t[0], w[1] + half * ii * t[1], w[2] + half * ii * t[2]];
+                    x[0] += dt * v[0];
+                    x[1] += dt * v[1];
+                    x[2] += dt * v[2];
+                    if x[1] >= slab {
+                        x[1] -= slab;
+                    } else if x[1] < 0.0 {
+                        x[1] += slab;
+                    }
+                    let x0 = x0s[k];
+                    let mut dy = x[1] - x0[1];
+                    if dy > 0.5 * slab {
+                        dy -= slab;
+                    } else if dy < -0.5 * slab {
+                        dy += slab;
+                    }
+                    let d2 = (x[0] - x0[0]).powi(2) + dy * dy + (x[2] - x0[2]).powi(2);
+                    // A particle that may have left the domain (or a NaN) flags the step for
+                    // the exact serial check below.
+                    let inside = x[0] >= bounds.0 && x[0] <= bounds.1 && x[2] >= bounds.2 && x[2] <= bounds.3;
+                    worst = if inside && d2 <= f64::MAX { worst.max(d2) } else { f64::INFINITY };
                 }
-                let mut dy = x[1] - x0[1];
-                if dy > 0.5 * slab {
-                    dy -= slab;
-                } else if dy < -0.5 * slab {
-                    dy += slab;
-                }
-                let d2 = (x[0] - x0[0]).powi(2) + dy * dy + (x[2] - x0[2]).powi(2);
-                if d2.is_nan() { f64::INFINITY } else { d2 }
+                worst
             })
             .reduce(|| 0.0, f64::max);
         self.time += dt;
         self.step += 1;
         self.steps_since_build += 1;
-        self.check_positions()?;
+        let t1 = std::time::Instant::now();
+        if max_disp2 == f64::INFINITY {
+            self.check_positions()?;
+        }
+        let t2 = std::time::Instant::now();
         if max_disp2 > skin2 || self.steps_since_build >= self.setup.max_rebuild_steps {
             self.rebuild()?;
         }
+        let t3 = std::time::Instant::now();
         self.compute_forces()?;
+        let t5 = std::time::Instant::now();
         let p = &mut self.p;
         p.vel
-            .par_iter_mut()
-            .zip(p.omega.par_iter_mut())
-            .zip(p.force.par_iter().zip(p.torque.par_iter()))
-            .zip(p.mass.par_iter().zip(p.inv_inertia.par_iter()))
-            .with_min_len(BLOCK)
-            .for_each(|(((v, w), (f, t)), (m, ii))| {
-                let a = half / *m;
-                v[0] += a * f[0];
-                v[1] += a * f[1];
-                v[2] += a * f[2];
-                w[0] += half * ii * t[0];
-                w[1] += half * ii * t[1];
-                w[2] += half * ii * t[2];
+            .par_chunks_mut(BLOCK)
+            .zip(p.omega.par_chunks_mut(BLOCK))
+            .zip(p.force.par_chunks(BLOCK))
+            .zip(p.torque.par_chunks(BLOCK))
+            .zip(p.mass.par_chunks(BLOCK))
+            .zip(p.inv_inertia.par_chunks(BLOCK))
+            .for_each(|(((((vs, ws), fs), ts), ms), iis)| {
+                for k in 0..vs.len() {
+                    let (v, w, f, t) = (&mut vs[k], &mut ws[k], fs[k], ts[k]);
+                    let a = half / ms[k];
+                    v[0] += a * f[0];
+                    v[1] += a * f[1];
+                    v[2] += a * f[2];
+                    w[0] += half * iis[k] * t[0];
+                    w[1] += half * iis[k] * t[1];
+                    w[2] += half * iis[k] * t[2];
+                }
             });
         self.counters.particle_steps += self.p.len() as u64;
-        if self.time >= self.setup.probes.warmup && self.step % self.setup.probes.sample_every == 0 {
+        if self.time >= self.setup.probes.warmup && self.step.is_multiple_of(self.setup.probes.sample_every) {
             self.sample();
         }
+        let t6 = std::time::Instant::now();
+        let ph = &mut self.phase_seconds;
+        ph[0] += (t1 - t0).as_secs_f64();
+        ph[1] += (t2 - t1).as_secs_f64();
+        ph[2] += (t3 - t2).as_secs_f64();
+        ph[3] += (t5 - t3).as_secs_f64() - self.reduce_seconds;
+        ph[4] += self.reduce_seconds;
+        ph[5] += (t6 - t5).as_secs_f64();
         Ok(())
+    }
+
+    /// Conservative bounds (x_lo, x_hi, z_lo, z_hi) outside which a particle centre may have
+    /// left the domain; [`Self::check_positions`] decides exactly.
+    fn escape_bounds(&self) -> (f64, f64, f64, f64) {
+        let g = &self.setup.geometry;
+        let r = self.setup.diameters.max() / 2.0;
+        let height = g.z_hi - g.z_lo;
+        let z_lo = if g.outlet_z.is_none() { g.z_lo - r } else { f64::NEG_INFINITY };
+        (g.x_lo - r, g.x_hi + r, z_lo, g.z_hi + height)
     }
 
     fn check_positions(&self) -> Result<()> {
@@ -610,48 +669,67 @@ impl Dem {
     /// Removes exited particles, inserts due ones, sorts by cell and rebuilds the half list,
     /// carrying pair histories over by particle id.
     fn rebuild(&mut self) -> Result<()> {
-        // Histories of touching pairs, keyed by (lower id, higher id), oriented lower → higher.
-        let mut history: HashMap<(u64, u64), V3> = HashMap::new();
-        for i in 0..self.nl.start.len().saturating_sub(1) {
-            for k in self.nl.start[i] as usize..self.nl.start[i + 1] as usize {
-                let s = self.nl.state[k];
-                if s.touching {
-                    let (a, b) = (self.p.id[i], self.p.id[self.nl.j[k] as usize]);
-                    if a < b {
-                        history.insert((a, b), s.xi);
-                    } else {
-                        history.insert((b, a), scale(s.xi, -1.0));
-                    }
-                }
-            }
-        }
-        self.remove_exited();
+        // Old index of every particle after removal and insertion (u32::MAX: new), so that the
+        // histories of touching pairs can be carried over from the old list.
+        let n_old = self.p.len();
+        let mut origin: Vec<u32> = match self.remove_exited() {
+            Some(keep) => keep,
+            None => (0..n_old as u32).collect(),
+        };
         self.insert_due();
+        origin.resize(self.p.len(), u32::MAX);
         // Free wall slots whose wall is no longer touched.
         let g = &self.setup.geometry;
-        for i in 0..self.p.len() {
-            let (x, r) = (self.p.pos[i], self.p.radius[i]);
-            for slot in self.p.walls[i].iter_mut() {
+        let p = &mut self.p;
+        p.walls.par_iter_mut().zip(p.pos.par_iter().zip(p.radius.par_iter())).with_min_len(BLOCK).for_each(|(slots, (&x, &r))| {
+            for slot in slots.iter_mut() {
                 if slot.wall != u32::MAX && wall_contact(g, slot.wall, x, r).is_none() {
                     *slot = WallSlot::FREE;
                 }
             }
-        }
+        });
         let (order, cell_of, cell_start) = sort_by_cell(&self.grid, &self.p.pos);
         self.p.gather(&order);
-        let (start, j) = build_pairs(&self.grid, &self.p.pos, &self.p.radius, &cell_of, &cell_start, self.setup.skin(), self.setup.geometry.slab);
-        let mut state = vec![PairState::default(); j.len()];
-        if !history.is_empty() {
-            for i in 0..self.p.len() {
-                for k in start[i] as usize..start[i + 1] as usize {
-                    let (a, b) = (self.p.id[i], self.p.id[j[k] as usize]);
-                    let found = if a < b { history.get(&(a, b)).copied() } else { history.get(&(b, a)).map(|v| scale(*v, -1.0)) };
-                    if let Some(xi) = found {
-                        state[k] = PairState { xi, touching: true };
+        let origin: Vec<u32> = order.iter().map(|&k| origin[k as usize]).collect();
+        let slab = self.setup.geometry.slab;
+        let (start, j) = build_pairs(&self.grid, &self.p.pos, &self.p.radius, &cell_of, &cell_start, self.setup.skin(), slab);
+        let old = std::mem::take(&mut self.nl);
+        let p = &self.p;
+        // Rows in parallel: only overlapping pairs look their history up (binary search in the
+        // old row of the lower old index; rows are sorted).
+        let state: Vec<PairState> = (0..p.len())
+            .into_par_iter()
+            .with_min_len(BLOCK)
+            .flat_map_iter(|i| {
+                let (old, origin, start, j) = (&old, &origin, &start, &j);
+                (start[i] as usize..start[i + 1] as usize).map(move |k| {
+                    let jj = j[k] as usize;
+                    let (oi, oj) = (origin[i], origin[jj]);
+                    if oi == u32::MAX || oj == u32::MAX || old.start.is_empty() {
+                        return PairState::default();
                     }
-                }
-            }
-        }
+                    let mut d = sub(p.pos[i], p.pos[jj]);
+                    d[1] -= slab * (d[1] / slab).round();
+                    let rs = p.radius[i] + p.radius[jj];
+                    if dot(d, d) >= rs * rs {
+                        return PairState::default();
+                    }
+                    let (a, b, sign) = if oi < oj { (oi, oj, 1.0) } else { (oj, oi, -1.0) };
+                    // Particles placed by hand since the last build have no row.
+                    if a as usize + 1 >= old.start.len() {
+                        return PairState::default();
+                    }
+                    let row = &old.j[old.start[a as usize] as usize..old.start[a as usize + 1] as usize];
+                    match row.binary_search(&b) {
+                        Ok(pos) => {
+                            let st = old.state[old.start[a as usize] as usize + pos];
+                            if st.touching { PairState { xi: scale(st.xi, sign), touching: true } } else { PairState::default() }
+                        }
+                        Err(_) => PairState::default(),
+                    }
+                })
+            })
+            .collect();
         self.nl = NeighbourList { start, j, state, cell_of };
         self.p.pos_at_build.clone_from(&self.p.pos);
         self.steps_since_build = 0;
@@ -659,10 +737,11 @@ impl Dem {
         Ok(())
     }
 
-    fn remove_exited(&mut self) {
-        let Some(z_out) = self.setup.geometry.outlet_z else { return };
+    /// Removes particles below the outlet; returns the kept old indices when any left.
+    fn remove_exited(&mut self) -> Option<Vec<u32>> {
+        let z_out = self.setup.geometry.outlet_z?;
         if !self.p.pos.iter().any(|x| x[2] < z_out) {
-            return;
+            return None;
         }
         let warm = self.setup.probes.warmup;
         let mut keep = Vec::with_capacity(self.p.len());
@@ -673,7 +752,7 @@ impl Dem {
                 if self.time >= warm {
                     self.outflow_mass_measured += self.p.mass[i];
                 }
-                if self.p.t_insert[i] >= warm {
+                if self.time >= warm {
                     self.passes.push(Pass {
                         particle: self.p.id[i],
                         diameter: 2.0 * self.p.radius[i],
@@ -687,6 +766,7 @@ impl Dem {
             }
         }
         self.p.gather(&keep);
+        Some(keep)
     }
 
     fn insert_due(&mut self) {
@@ -701,10 +781,12 @@ impl Dem {
         }
         let r_max = self.setup.diameters.max() / 2.0;
         // Particles that may overlap new ones.
+        // Sorted by x: a candidate is checked against the particles within 2 r_max in x only.
         let mut near: Vec<(V3, f64)> = (0..self.p.len())
             .filter(|&i| self.p.pos[i][2] + self.p.radius[i] > inlet.z_lo - r_max)
             .map(|i| (self.p.pos[i], self.p.radius[i]))
             .collect();
+        near.sort_by(|a, b| a.0[0].total_cmp(&b.0[0]));
         let slab = g.slab;
         while self.inflow_mass + mass_of(self.next_diameter) <= target {
             let d = self.next_diameter;
@@ -716,7 +798,9 @@ impl Dem {
                     self.rng.random_range(0.0..slab),
                     self.rng.random_range(inlet.z_lo + r..inlet.z_hi - r),
                 ];
-                let free = near.iter().all(|&(y, ry)| {
+                let from = near.partition_point(|q| q.0[0] < x[0] - r - r_max);
+                let to = near.partition_point(|q| q.0[0] <= x[0] + r + r_max);
+                let free = near[from..to].iter().all(|&(y, ry)| {
                     let mut dy = x[1] - y[1];
                     dy -= slab * (dy / slab).round();
                     (x[0] - y[0]).powi(2) + dy * dy + (x[2] - y[2]).powi(2) >= (r + ry).powi(2)
@@ -733,7 +817,8 @@ impl Dem {
             let id = self.next_id;
             self.next_id += 1;
             self.p.push(id, x, [0.0, 0.0, -inlet.velocity], r, rho, self.setup.rotation, self.time);
-            near.push((x, r));
+            let at = near.partition_point(|q| q.0[0] < x[0]);
+            near.insert(at, (x, r));
             self.inflow_mass += mass_of(d);
             self.counters.inserted += 1;
             self.next_diameter = self.setup.diameters.sample(&mut self.rng);
@@ -777,24 +862,28 @@ impl Dem {
             max_overlap: self.setup.max_overlap_fraction,
             trace: if self.trace_done { None } else { self.trace_target.map(|(id, w, _)| (id, w)) },
         };
-        let outs: Vec<BlockOut> = self
-            .p
+        // Per-block output buffers are kept between steps: reallocating them every step costs
+        // page faults that serialise the threads.
+        let mut outs = std::mem::take(&mut self.block_out);
+        outs.resize_with(nblocks, BlockOut::default);
+        self.p
             .force
             .par_chunks_mut(BLOCK)
             .zip(self.p.torque.par_chunks_mut(BLOCK))
             .zip(self.p.walls.par_chunks_mut(BLOCK))
             .zip(state_blocks.into_par_iter())
+            .zip(outs.par_iter_mut())
             .enumerate()
-            .map(|(b, (((f, t), w), s))| ctx.block(b * BLOCK, f, t, w, s))
-            .collect();
+            .for_each(|(b, ((((f, t), w), s), out))| ctx.block(b * BLOCK, f, t, w, s, out));
         // Serial reduction in block order.
+        let tr = std::time::Instant::now();
         let mut worst: Option<(f64, u32)> = None;
-        for out in outs {
-            for (j, f, t) in out.reactions {
+        for out in &outs {
+            for &(j, f, t) in &out.reactions {
                 add_to(&mut self.p.force[j as usize], f);
                 add_to(&mut self.p.torque[j as usize], t);
             }
-            for (imp, i, j, delta, fnorm) in out.impacts {
+            for &(imp, i, j, delta, fnorm) in &out.impacts {
                 match imp.target {
                     Target::Particle => {
                         self.p.n_particle[i as usize] += 1;
@@ -806,13 +895,14 @@ impl Dem {
                 if self.time >= self.setup.probes.warmup {
                     if imp.target == Target::Tube && self.trace_target.is_none() && imp.v_normal >= self.setup.probes.trace_min_velocity {
                         self.trace_target = Some((imp.particle, imp.partner as u32, imp.time));
+                        self.trace_v = Some(imp.v_normal);
                         self.trace.push(TraceSample { time: 0.0, overlap: delta, normal_force: fnorm });
                     }
                     self.impacts.push(imp);
                 }
             }
             if let Some((_, _, t0)) = self.trace_target {
-                for s in out.trace {
+                for &s in &out.trace {
                     self.trace.push(TraceSample { time: s.time - t0, ..s });
                 }
             }
@@ -825,6 +915,8 @@ impl Dem {
                 worst = Some(w);
             }
         }
+        self.block_out = outs;
+        self.reduce_seconds = tr.elapsed().as_secs_f64();
         if let Some((frac, i)) = worst {
             let i = i as usize;
             return Err(Error::numerical(
@@ -928,9 +1020,13 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
-    /// Forces on the particles of one block (starting at `lo`).
-    fn block(&self, lo: usize, force: &mut [V3], torque: &mut [V3], walls: &mut [[WallSlot; MAX_WALL_CONTACTS]], state: &mut [PairState]) -> BlockOut {
-        let mut out = BlockOut::default();
+    /// Forces on the particles of one block (starting at `lo`), records into `out` (cleared).
+    fn block(&self, lo: usize, force: &mut [V3], torque: &mut [V3], walls: &mut [[WallSlot; MAX_WALL_CONTACTS]], state: &mut [PairState], out: &mut BlockOut) {
+        out.reactions.clear();
+        out.impacts.clear();
+        out.trace.clear();
+        out.trace_ended = false;
+        out.worst_overlap = None;
         let base = self.start[lo] as usize;
         let slab = self.geom.slab;
         let half = 0.5 * slab;
@@ -1072,6 +1168,5 @@ impl Ctx<'_> {
             *f = fi;
             *t = ti;
         }
-        out
     }
 }

@@ -43,7 +43,7 @@ impl TubeBankModel {
     /// sampling the profile at `heights` (m) with a ±`window` (m) band.
     pub fn new(base: DemSetup, duration: f64, heights: Vec<f64>, window: f64) -> Result<Self> {
         base.validate("<TubeBankModel>")?;
-        if !(duration > base.probes.warmup) {
+        if duration.is_nan() || duration <= base.probes.warmup {
             return Err(Error::config("<TubeBankModel>", "duration", format!("must exceed the warm-up {} s, got {duration}", base.probes.warmup)));
         }
         let space = ParamSpace::new(vec![

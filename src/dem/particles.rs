@@ -92,8 +92,9 @@ impl Particles {
 
     /// Reorders every field: new index k holds old index `order[k]` (which may drop particles).
     pub fn gather(&mut self, order: &[u32]) {
-        fn g<T: Copy>(v: &mut Vec<T>, order: &[u32]) {
-            let out: Vec<T> = order.iter().map(|&k| v[k as usize]).collect();
+        fn g<T: Copy + Send + Sync>(v: &mut Vec<T>, order: &[u32]) {
+            use rayon::prelude::*;
+            let out: Vec<T> = order.par_iter().with_min_len(4096).map(|&k| v[k as usize]).collect();
             *v = out;
         }
         g(&mut self.pos, order);

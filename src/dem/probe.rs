@@ -48,7 +48,8 @@ pub struct Impact {
     pub point: [f64; 3],
 }
 
-/// One particle's pass through the domain (inserted after the warm-up, left through the outlet).
+/// One particle's pass through the domain, from insertion to the outlet (recorded when it
+/// leaves after the warm-up).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pass {
     /// Particle id.

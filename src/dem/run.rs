@@ -9,9 +9,9 @@
 //! | `impact_spectrum.csv` | per target and row: count, mean and quantiles of the normal impact velocity — the file the lifetime study reads |
 //! | `velocity_profile.csv` | mean vertical velocity vs height |
 //! | `speed_map.csv` | mean speed and vertical velocity on an (x, z) grid |
-//! | `passes.parquet` | per particle that crossed the bank after the warm-up: residence time and impact counts |
+//! | `passes.parquet` | per particle that left through the outlet after the warm-up: residence time and impact counts since insertion |
 //! | `flow.csv` | hold-up and cumulative in/outflow vs time |
-//! | `force_trace.csv` | the traced tube impact: overlap, normal force and its cumulative integral |
+//! | `force_trace.csv` | the traced tube impact: overlap, normal force and its cumulative integral, the impact's normal velocity and the (reduced) modulus |
 //! | `tubes.csv` | the tube layout |
 //! | `dem_summary.csv` | mass flow, hold-up, impacts per pass, counters, speed |
 //! | `particles_t*.vtp` | particle snapshots for ParaView |
@@ -560,6 +560,8 @@ fn write_tables(dir: &mut ReportDir, dem: &Dem, s: &DemStudy, loop_s: f64) -> Re
         fcol("overlap_m", tr.iter().map(|t| t.overlap).collect()),
         fcol("normal_force_n", tr.iter().map(|t| t.normal_force).collect()),
         fcol("cumulative_impulse_n_s", cum),
+        fcol("youngs_modulus_pa", vec![dem.setup.particle.youngs_modulus; tr.len()]),
+        fcol("v_normal_m_s", vec![dem.trace_velocity().unwrap_or(f64::NAN); tr.len()]),
     ])?;
     dir.write_table("force_trace", &mut df)?;
 
@@ -622,7 +624,11 @@ fn write_tables(dir: &mut ReportDir, dem: &Dem, s: &DemStudy, loop_s: f64) -> Re
 
     let mut headlines = vec![
         format!("{:.0} particles in the domain on average; outlet mass flow {:.4} kg/s (inlet {:.4} kg/s)", mean_n, mass_flow, s.inlet.mass_flux * inlet_area),
-        format!("{:.2} tube and {:.2} particle impacts per pass ({} passes)", tube_pp, part_pp, ps.len()),
+        if ps.is_empty() {
+            "no particle left through the outlet after the warm-up: run longer for impacts per pass".to_string()
+        } else {
+            format!("{:.2} tube and {:.2} particle impacts per pass ({} passes, mean residence {:.3} s)", tube_pp, part_pp, ps.len(), res)
+        },
     ];
     if let (Some(t), Some(k)) = (tube_all, q50) {
         headlines.push(format!("tube impacts: {} recorded, median normal velocity {:.2} m/s, mean {:.2} m/s", t.count, t.quantiles[k], t.mean));

@@ -121,10 +121,13 @@ fn speed_map(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let width = col_f64(&tdf, &tp, "width_m")?.first().copied().unwrap_or(0.125);
     let top = col_f64(&tdf, &tp, "domain_top_m")?.first().copied().unwrap_or(0.3);
     let vmax = s.iter().cloned().filter(|v| v.is_finite()).fold(0.0, f64::max).max(1e-9);
-    // Equal data aspect: the plotting area is sized to the domain.
-    let aspect = (top / width) * 0.80 + 0.12;
+    // Equal data aspect: the plotting area (left 80 % of the canvas less margins and label
+    // areas, as laid out below) gets the domain's height/width ratio.
     register_fonts()?;
-    let size = canvas_size(width_cm, aspect);
+    let w_px = canvas_size(width_cm, 1.0).0 as f64;
+    let plot_w = 0.8 * w_px - pt(33.0) as f64;
+    let h_px = plot_w * top / width + pt(27.0) as f64;
+    let size = canvas_size(width_cm, h_px / w_px);
     let mut svg = String::new();
     let x_desc = "x (mm)";
     let y_desc = "height z (mm)";
@@ -165,10 +168,9 @@ fn speed_map(dir: &Path, width_cm: f64) -> Result<Drawn> {
         chart
             .draw_series((0..x.len()).filter(|&k| s[k].is_finite()).map(|k| {
                 let c = viridis(s[k] / vmax);
-                Rectangle::new(
-                    [(1e3 * (x[k] - dx[k] / 2.0), 1e3 * (z[k] - dz[k] / 2.0)), (1e3 * (x[k] + dx[k] / 2.0), 1e3 * (z[k] + dz[k] / 2.0))],
-                    c.filled(),
-                )
+                // Cells overlap by 3 % so that anti-aliasing leaves no seams between them.
+                let (hx, hz) = (0.53 * dx[k], 0.53 * dz[k]);
+                Rectangle::new([(1e3 * (x[k] - hx).max(0.0), 1e3 * (z[k] - hz).max(0.0)), (1e3 * (x[k] + hx).min(width), 1e3 * (z[k] + hz).min(top))], c.filled())
             }))
             .map_err(&err)?;
         for &(tx, tz, r, _) in &tubes {
@@ -243,7 +245,7 @@ fn impact_spectra(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let rows = tubes(dir)?.iter().map(|t| t.3).max().unwrap_or(0);
     let vmax = padded(v.iter().cloned().chain([0.0]), 0.0, 0.03).1;
     let mut panels = Vec::new();
-    for (tname, desc) in [("tube", "tube impacts"), ("particle", "particle–particle impacts")] {
+    for (tname, desc) in [("tube", "fraction, tube impacts"), ("particle", "fraction, particle impacts")] {
         let mut series = Vec::new();
         for r in 1..=rows {
             let sel: Vec<f64> = (0..v.len()).filter(|&i| target[i] == tname && row[i] as u32 == r).map(|i| v[i]).collect();
@@ -254,8 +256,8 @@ fn impact_spectra(dir: &Path, width_cm: f64) -> Result<Drawn> {
         }
         panels.push((
             Panel {
-                x_desc: format!("normal impact velocity, {desc} (m/s)"),
-                y_desc: "cumulative fraction".into(),
+                x_desc: "normal impact velocity at first contact (m/s)".into(),
+                y_desc: format!("cumulative {desc}"),
                 x_range: (0.0, vmax),
                 y_range: (0.0, 1.02),
                 y_log: false,
@@ -273,6 +275,8 @@ fn force_time(dir: &Path, width_cm: f64) -> Result<Option<Drawn>> {
     let t = col_f64(&df, &p, "time_s")?;
     let f = col_f64(&df, &p, "normal_force_n")?;
     let c = col_f64(&df, &p, "cumulative_impulse_n_s")?;
+    let modulus = col_f64(&df, &p, "youngs_modulus_pa")?.first().copied().unwrap_or(f64::NAN);
+    let v0 = col_f64(&df, &p, "v_normal_m_s")?.first().copied().unwrap_or(f64::NAN);
     if t.len() < 3 {
         return Ok(None);
     }
@@ -285,7 +289,7 @@ fn force_time(dir: &Path, width_cm: f64) -> Result<Option<Drawn>> {
         x_range: xr,
         y_range: padded(tf.iter().map(|q| q.1).chain([0.0]), 0.02, 0.08),
         y_log: false,
-        series: vec![Series::line(Some("Hertz force, DEM".into()), tf, colour(0), 1.2)],
+        series: vec![Series::line(Some(format!("DEM, E = {:.2} GPa, v_n = {:.2} m/s", modulus / 1e9, v0)), tf, colour(0), 1.2)],
         legend: Some(SeriesLabelPosition::UpperRight),
     };
     let p2 = Panel {

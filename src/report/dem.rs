@@ -245,7 +245,7 @@ fn impact_spectra(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let rows = tubes(dir)?.iter().map(|t| t.3).max().unwrap_or(0);
     let vmax = padded(v.iter().cloned().chain([0.0]), 0.0, 0.03).1;
     let mut panels = Vec::new();
-    for (tname, desc) in [("tube", "fraction, tube impacts"), ("particle", "fraction, particle impacts")] {
+    for (tname, desc) in [("tube", "tube impacts"), ("particle", "particle impacts")] {
         let mut series = Vec::new();
         for r in 1..=rows {
             let sel: Vec<f64> = (0..v.len()).filter(|&i| target[i] == tname && row[i] as u32 == r).map(|i| v[i]).collect();
@@ -257,7 +257,7 @@ fn impact_spectra(dir: &Path, width_cm: f64) -> Result<Drawn> {
         panels.push((
             Panel {
                 x_desc: "normal impact velocity at first contact (m/s)".into(),
-                y_desc: format!("cumulative {desc}"),
+                y_desc: format!("CDF, {desc}"),
                 x_range: (0.0, vmax),
                 y_range: (0.0, 1.02),
                 y_log: false,

@@ -183,8 +183,10 @@ impl Grid {
 pub struct PairState {
     /// Tangential displacement ξ, oriented for the pair's (i, j) order.
     pub xi: V3,
-    /// In contact at the last force evaluation.
-    pub touching: bool,
+    /// Force evaluation (epoch, ≥ 1) at which the pair last touched; 0 = never. A pair touching
+    /// now continues a contact when it touched at the previous evaluation, so separated pairs
+    /// need no write (and the force loop reads no state for pairs not in contact).
+    pub last: u32,
 }
 
 /// Half neighbour list in CSR form.
@@ -229,6 +231,7 @@ pub fn build_pairs(grid: &Grid, pos: &[V3], radius: &[f64], cell_of: &[u32], cel
     let half = slab / 2.0;
     let blocks: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(BLOCK))
         .into_par_iter()
+        .with_max_len(1)
         .map(|b| {
             let lo = b * BLOCK;
             let hi = (lo + BLOCK).min(n);

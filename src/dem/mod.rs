@@ -390,6 +390,8 @@ pub struct Dem {
     trace_done: bool,
     reduce_seconds: f64,
     block_out: Vec<BlockOut>,
+    /// Force evaluations so far (pair-contact epoch, see [`grid::PairState`]).
+    epoch: u32,
     /// Counters.
     pub counters: Counters,
     /// Wall time per phase (s): kick–drift, position check, neighbour rebuild, force blocks,
@@ -439,6 +441,7 @@ impl Dem {
             trace_done: false,
             reduce_seconds: 0.0,
             block_out: Vec::new(),
+            epoch: 0,
             counters: Counters::default(),
             phase_seconds: [0.0; 6],
         })
@@ -695,6 +698,7 @@ impl Dem {
         let (start, j) = build_pairs(&self.grid, &self.p.pos, &self.p.radius, &cell_of, &cell_start, self.setup.skin(), slab);
         let old = std::mem::take(&mut self.nl);
         let p = &self.p;
+        let epoch = self.epoch;
         // Rows in parallel: only overlapping pairs look their history up (binary search in the
         // old row of the lower old index; rows are sorted).
         let state: Vec<PairState> = (0..p.len())
@@ -723,7 +727,7 @@ impl Dem {
                     match row.binary_search(&b) {
                         Ok(pos) => {
                             let st = old.state[old.start[a as usize] as usize + pos];
-                            if st.touching { PairState { xi: scale(st.xi, sign), touching: true } } else { PairState::default() }
+                            if st.last == epoch && epoch > 0 { PairState { xi: scale(st.xi, sign), last: epoch } } else { PairState::default() }
                         }
                         Err(_) => PairState::default(),
                     }
@@ -841,7 +845,9 @@ impl Dem {
                 consumed = hi;
             }
         }
+        self.epoch += 1;
         let ctx = Ctx {
+            epoch: self.epoch,
             pos: &self.p.pos,
             vel: &self.p.vel_pred,
             omega: &self.p.omega_pred,
@@ -874,6 +880,9 @@ impl Dem {
             .zip(state_blocks.into_par_iter())
             .zip(outs.par_iter_mut())
             .enumerate()
+            // One block per task: rayon's default leaves of many blocks balance badly when the
+            // contact density varies with height.
+            .with_max_len(1)
             .for_each(|(b, ((((f, t), w), s), out))| ctx.block(b * BLOCK, f, t, w, s, out));
         // Serial reduction in block order.
         let tr = std::time::Instant::now();
@@ -1017,6 +1026,7 @@ struct Ctx<'a> {
     min_v: f64,
     max_overlap: f64,
     trace: Option<(u64, u32)>,
+    epoch: u32,
 }
 
 impl Ctx<'_> {
@@ -1037,7 +1047,6 @@ impl Ctx<'_> {
             let mut ti = [0.0; 3];
             for k in self.start[i] as usize..self.start[i + 1] as usize {
                 let j = self.nbr[k] as usize;
-                let st = &mut state[k - base];
                 let pj = self.pos[j];
                 let mut d = [pi[0] - pj[0], pi[1] - pj[1], pi[2] - pj[2]];
                 if d[1] > half {
@@ -1049,11 +1058,14 @@ impl Ctx<'_> {
                 let rs = ri + rj;
                 let r2 = dot(d, d);
                 if r2 >= rs * rs {
-                    if st.touching {
-                        *st = PairState::default();
-                    }
                     continue;
                 }
+                let st = &mut state[k - base];
+                let new_contact = st.last + 1 != self.epoch;
+                if new_contact {
+                    st.xi = [0.0; 3];
+                }
+                st.last = self.epoch;
                 let dist = r2.sqrt();
                 let delta = rs - dist;
                 let n = scale(d, 1.0 / dist);
@@ -1071,8 +1083,7 @@ impl Ctx<'_> {
                 if delta > self.max_overlap * ri.min(rj) && out.worst_overlap.is_none_or(|w| delta / ri.min(rj) > w.0) {
                     out.worst_overlap = Some((delta / ri.min(rj), i as u32));
                 }
-                if !st.touching {
-                    st.touching = true;
+                if new_contact {
                     let vn = -dot(v_rel, n);
                     if vn >= self.min_v {
                         let vt = norm(sub(v_rel, scale(n, -vn)));

@@ -22,7 +22,7 @@
 //!
 //! Physical models implement [`model::Simulator`] over a [`params::ParamSpace`]; methods
 //! (Monte Carlo, least squares, MCMC, experiment design, discrepancy) only see that trait.
-//! Implementers today: [`lifetime::LifetimeChain`], [`testfns::Ishigami`].
+//! Implementers today: [`lifetime::LifetimeChain`], [`dem::model::TubeBankModel`], [`testfns::Ishigami`].
 //!
 //! ## Module map
 //!

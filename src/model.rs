@@ -11,7 +11,8 @@
 //! * a non-finite output is a bug → [`Error::Numerical`] (see [`check_outputs`]).
 //!
 //! Implementers: [`crate::lifetime::LifetimeChain`] and the analytic
-//! [`crate::testfns::Ishigami`]; later the crush FE and the tube-bank DEM.
+//! [`crate::testfns::Ishigami`], the tube-bank DEM [`crate::dem::model::TubeBankModel`]; later the
+//! crush FE.
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};

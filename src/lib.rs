@@ -43,7 +43,7 @@
 //! | [`runner`] | runs a lifetime study into its tables |
 //! | [`io`] | atomic report directories, CSV tables, manifest |
 //! | [`report`] | figures from tables only: SVG (plotters) → PNG (resvg) and vector PDF (svg2pdf) |
-//! | [`bench`] | the speed figures the issues ask for |
+//! | [`bench`](mod@bench) | the speed figures the issues ask for |
 //!
 //! ## Conventions
 //!

@@ -18,8 +18,8 @@
 //! # The Simulator
 //!
 //! [`LifetimeChain`] is the chain as a black box θ ↦ y for the uncertainty and calibration
-//! methods: θ = (Weibull shape m, Weibull scale σ_θ [Pa], energy fraction η, impact velocity V
-//! [m/s]); y = (F_max [N], σ̄ [Pa], P_N for each configured impact count N). Parameter indices
+//! methods: θ = (Weibull shape m, Weibull scale σ_θ (Pa), energy fraction η, impact velocity V
+//! (m/s)); y = (F_max (N), σ̄ (Pa), P_N for each configured impact count N). Parameter indices
 //! are fixed at construction.
 //!
 //! Verified by the unit tests below (series expansion of P_N for tiny p, geometric closed form,
@@ -159,7 +159,7 @@ impl BreakageCurve {
         }
     }
 
-    /// (σ̄ at the force peak [Pa], P_N) for an impact at V (m/s) repeated N times. V ≤ 0 gives
+    /// (σ̄ at the force peak (Pa), P_N) for an impact at V (m/s) repeated N times. V ≤ 0 gives
     /// (0, 0); a contact larger than an L = R domain gives NaN (the general path reports it as
     /// an error).
     #[inline(always)]

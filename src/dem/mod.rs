@@ -271,6 +271,16 @@ impl DemSetup {
             return Err(Error::config(file, "run.max_overlap_fraction", format!("must lie in (0, 1), got {}", self.max_overlap_fraction)));
         }
         self.geometry.validate(file, self.diameters.max(), self.skin())?;
+        let g = &self.geometry;
+        let cut = self.diameters.max() + self.skin();
+        let cells = ((g.x_hi - g.x_lo) / cut).ceil() * (g.slab / cut).ceil() * ((g.z_hi - g.z_lo) / cut + 4.0).ceil();
+        if cells > 5e7 {
+            return Err(Error::config(
+                file,
+                "geometry",
+                format!("the domain needs {cells:.2e} neighbour cells of {cut:.2e} m (limit 5e7): reduce the width, slab or height, or the resolution is wrong"),
+            ));
+        }
         let limit = self.time_step_limit();
         if self.time_step.is_nan() || self.time_step <= 0.0 || self.time_step > limit {
             return Err(Error::config(
@@ -291,17 +301,17 @@ impl DemSetup {
             if !(inlet.velocity.is_finite()) {
                 return Err(Error::config(file, "inlet.velocity", "must be finite"));
             }
-            if !(inlet.z_lo >= g.z_lo && inlet.z_hi <= g.z_hi && inlet.z_hi - inlet.z_lo >= 2.0 * r) {
+            if !(inlet.z_lo >= g.z_lo && inlet.z_hi <= g.z_hi && inlet.z_hi - inlet.z_lo > 2.0 * r) {
                 return Err(Error::config(
                     file,
                     "inlet.region",
                     format!(
-                        "insertion region z [{}, {}] m must lie inside the domain z [{}, {}] m and be at least one particle diameter high",
+                        "insertion region z [{}, {}] m must lie inside the domain z [{}, {}] m and be higher than the largest particle diameter",
                         inlet.z_lo, inlet.z_hi, g.z_lo, g.z_hi
                     ),
                 ));
             }
-            if g.x_hi - g.x_lo < 2.0 * r {
+            if g.x_hi - g.x_lo <= 2.0 * r {
                 return Err(Error::config(file, "inlet.region", "the domain is narrower than one particle"));
             }
             for (t, tube) in g.tubes.iter().enumerate() {

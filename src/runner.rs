@@ -185,12 +185,36 @@ pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) 
     // Figures from the tables just written.
     pb.set_message("figures");
     let rendered = crate::report::render(dir.path(), s.figures.width_cm)?;
+    record_figures(&mut dir, rendered, &mut failures);
+    pb.inc(1);
+
+    let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
+    let run = RunRecord { inputs, seed: s.seed, started_unix_s, start, evaluations, failures };
+    let report_dir = commit_with_manifest(dir, loaded, study_resolved, run)?;
+    pb.finish_and_clear();
+    Ok(RunSummary { report_dir, wall_time_s: start.elapsed().as_secs_f64(), headlines })
+}
+
+/// Records rendered figures in the report and any legend that had to hide data as a failure.
+pub(crate) fn record_figures(dir: &mut ReportDir, rendered: crate::report::Rendered, failures: &mut Vec<String>) {
     dir.record(rendered.files);
     for (fig, n) in rendered.legend_hidden.iter().filter(|(_, n)| *n > 0) {
         failures.push(format!("figure {fig}: its legend hides {n} data samples (no free corner)"));
     }
-    pb.inc(1);
+}
 
+/// What a run records in its manifest besides the study.
+pub(crate) struct RunRecord {
+    pub inputs: Vec<InputFile>,
+    pub seed: u64,
+    pub started_unix_s: u64,
+    pub start: Instant,
+    pub evaluations: BTreeMap<String, u64>,
+    pub failures: Vec<String>,
+}
+
+/// Writes `manifest.json` (listing every file of the report) and renames the report into place.
+pub(crate) fn commit_with_manifest(mut dir: ReportDir, loaded: &LoadedStudy, study_resolved: serde_json::Value, run: RunRecord) -> Result<PathBuf> {
     let (git_revision, git_dirty) = git_state(loaded.path.parent().unwrap_or(Path::new(".")));
     let mut outputs = dir.files().to_vec();
     outputs.push("manifest.json".into());
@@ -199,23 +223,21 @@ pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) 
         study: loaded.name.clone(),
         study_file: loaded.path.display().to_string(),
         study_toml: loaded.text.clone(),
-        study_resolved: serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?,
-        inputs,
-        seed: s.seed,
+        study_resolved,
+        inputs: run.inputs,
+        seed: run.seed,
         threads: rayon::current_num_threads(),
         git_revision,
         git_dirty,
-        started_unix_s,
-        wall_time_s: start.elapsed().as_secs_f64(),
-        evaluations,
-        failures,
+        started_unix_s: run.started_unix_s,
+        wall_time_s: run.start.elapsed().as_secs_f64(),
+        evaluations: run.evaluations,
+        failures: run.failures,
         outputs,
     };
     let json = serde_json::to_vec_pretty(&manifest).map_err(|e| Error::numerical("manifest", e.to_string()))?;
     dir.write_bytes("manifest.json", &json)?;
-    let report_dir = dir.commit()?;
-    pb.finish_and_clear();
-    Ok(RunSummary { report_dir, wall_time_s: start.elapsed().as_secs_f64(), headlines })
+    dir.commit()
 }
 
 fn repeat(s: &str, n: usize) -> Vec<String> {

@@ -188,7 +188,7 @@ pub struct ProbeSetup {
 
 impl Default for ProbeSetup {
     fn default() -> Self {
-        ProbeSetup { warmup: 0.0, sample_every: 100, profile_bins: 100, map_nx: 50, map_nz: 120, min_impact_velocity: 0.1, trace_min_velocity: 0.5 }
+        ProbeSetup { warmup: 0.0, sample_every: 100, profile_bins: 150, map_nx: 50, map_nz: 130, min_impact_velocity: 0.1, trace_min_velocity: 1.0 }
     }
 }
 
@@ -393,8 +393,8 @@ pub struct Dem {
     pub fields: Fields,
     /// Hold-up and flow, at every field sample.
     pub flow: Vec<FlowSample>,
-    trace_target: Option<(u64, u32, f64)>,
-    trace_v: Option<f64>,
+    /// The traced impact: (particle id, wall id, time of first contact, normal velocity).
+    trace_target: Option<(u64, u32, f64, f64)>,
     /// The traced impact's force history (empty until one happened).
     pub trace: Vec<TraceSample>,
     trace_done: bool,
@@ -446,7 +446,6 @@ impl Dem {
             fields,
             flow: Vec::new(),
             trace_target: None,
-            trace_v: None,
             trace: Vec::new(),
             trace_done: false,
             reduce_seconds: 0.0,
@@ -459,7 +458,7 @@ impl Dem {
 
     /// Normal velocity of the traced tube impact, once one happened (m/s).
     pub fn trace_velocity(&self) -> Option<f64> {
-        self.trace_v
+        self.trace_target.map(|t| t.3)
     }
 
     /// Places a particle by hand (verification set-ups); returns its id.
@@ -493,7 +492,7 @@ impl Dem {
             for k in self.nl.start[i] as usize..self.nl.start[i + 1] as usize {
                 let j = self.nl.j[k] as usize;
                 let mut d = sub(p.pos[i], p.pos[j]);
-                d[1] -= slab * (d[1] / slab).round();
+                d[1] = min_image(d[1], slab);
                 let delta = p.radius[i] + p.radius[j] - norm(d);
                 if delta > 0.0 {
                     let rs = p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]);
@@ -501,7 +500,7 @@ impl Dem {
                 }
             }
             for w in 0..self.setup.geometry.wall_count() {
-                if let Some((delta, _, rs, _, _)) = self.wall_contact(w as u32, p.pos[i], p.radius[i]) {
+                if let Some((delta, _, rs, _, _)) = wall_contact(&self.setup.geometry, w as u32, p.pos[i], p.radius[i]) {
                     e += hertz_energy(&self.pw, rs, delta);
                 }
             }
@@ -509,10 +508,6 @@ impl Dem {
         e
     }
 
-    #[inline(always)]
-    fn wall_contact(&self, w: u32, x: V3, r: f64) -> Option<(f64, V3, f64, Target, u32)> {
-        wall_contact(&self.setup.geometry, w, x, r)
-    }
 
     /// Advances `n` steps.
     pub fn advance(&mut self, n: u64) -> Result<()> {
@@ -557,17 +552,11 @@ impl Dem {
                 let mut worst = 0.0f64;
                 for k in 0..xs.len() {
                     let (x, v, w, f, t) = (&mut xs[k], &mut vs[k], &mut ws[k], fs[k], ts[k]);
-                    let a = half / ms[k];
-                    let ii = iis[k];
-                    v[0] += a * f[0];
-                    v[1] += a * f[1];
-                    v[2] += a * f[2];
-                    w[0] += half * ii * t[0];
-                    w[1] += half * ii * t[1];
-                    w[2] += half * ii * t[2];
+                    let (a, b) = (half / ms[k], half * iis[k]);
+                    kick(v, w, f, t, a, b);
                     // End-of-step prediction v(t) + Δt a(t) for the velocity-dependent forces.
                     vps[k] = [v[0] + a * f[0], v[1] + a * f[1], v[2] + a * f[2]];
-                    wps[k] = [w[0] + half * ii * t[0], w[1] + half * ii * t[1], w[2] + half * ii * t[2]];
+                    wps[k] = [w[0] + b * t[0], w[1] + b * t[1], w[2] + b * t[2]];
                     x[0] += dt * v[0];
                     x[1] += dt * v[1];
                     x[2] += dt * v[2];
@@ -617,13 +606,7 @@ impl Dem {
             .for_each(|(((((vs, ws), fs), ts), ms), iis)| {
                 for k in 0..vs.len() {
                     let (v, w, f, t) = (&mut vs[k], &mut ws[k], fs[k], ts[k]);
-                    let a = half / ms[k];
-                    v[0] += a * f[0];
-                    v[1] += a * f[1];
-                    v[2] += a * f[2];
-                    w[0] += half * iis[k] * t[0];
-                    w[1] += half * iis[k] * t[1];
-                    w[2] += half * iis[k] * t[2];
+                    kick(v, w, f, t, half / ms[k], half * iis[k]);
                 }
             });
         self.counters.particle_steps += self.p.len() as u64;
@@ -723,7 +706,7 @@ impl Dem {
                         return PairState::default();
                     }
                     let mut d = sub(p.pos[i], p.pos[jj]);
-                    d[1] -= slab * (d[1] / slab).round();
+                    d[1] = min_image(d[1], slab);
                     let rs = p.radius[i] + p.radius[jj];
                     if dot(d, d) >= rs * rs {
                         return PairState::default();
@@ -816,7 +799,7 @@ impl Dem {
                 let to = near.partition_point(|q| q.0[0] <= x[0] + r + r_max);
                 let free = near[from..to].iter().all(|&(y, ry)| {
                     let mut dy = x[1] - y[1];
-                    dy -= slab * (dy / slab).round();
+                    dy = min_image(dy, slab);
                     (x[0] - y[0]).powi(2) + dy * dy + (x[2] - y[2]).powi(2) >= (r + ry).powi(2)
                 });
                 if free {
@@ -876,7 +859,7 @@ impl Dem {
             gravity: self.setup.gravity,
             min_v: self.setup.probes.min_impact_velocity,
             max_overlap: self.setup.max_overlap_fraction,
-            trace: if self.trace_done { None } else { self.trace_target.map(|(id, w, _)| (id, w)) },
+            trace: if self.trace_done { None } else { self.trace_target.map(|(id, w, _, _)| (id, w)) },
         };
         // Per-block output buffers are kept between steps: reallocating them every step costs
         // page faults that serialise the threads.
@@ -913,14 +896,13 @@ impl Dem {
                 }
                 if self.time >= self.setup.probes.warmup {
                     if imp.target == Target::Tube && self.trace_target.is_none() && imp.v_normal >= self.setup.probes.trace_min_velocity {
-                        self.trace_target = Some((imp.particle, imp.partner as u32, imp.time));
-                        self.trace_v = Some(imp.v_normal);
+                        self.trace_target = Some((imp.particle, imp.partner as u32, imp.time, imp.v_normal));
                         self.trace.push(TraceSample { time: 0.0, overlap: delta, normal_force: fnorm });
                     }
                     self.impacts.push(imp);
                 }
             }
-            if let Some((_, _, t0)) = self.trace_target {
+            if let Some((_, _, t0, _)) = self.trace_target {
                 for &s in &out.trace {
                     self.trace.push(TraceSample { time: s.time - t0, ..s });
                 }
@@ -979,7 +961,7 @@ impl Dem {
             for k in self.nl.start[i] as usize..self.nl.start[i + 1] as usize {
                 let j = self.nl.j[k] as usize;
                 let mut d = sub(p.pos[i], p.pos[j]);
-                d[1] -= slab * (d[1] / slab).round();
+                d[1] = min_image(d[1], slab);
                 if norm(d) < p.radius[i] + p.radius[j] {
                     z_count[i] += 1;
                     z_count[j] += 1;
@@ -989,6 +971,21 @@ impl Dem {
         let inside: Vec<usize> = (0..p.len()).filter(|&i| (x.0..x.1).contains(&p.pos[i][0]) && (z.0..z.1).contains(&p.pos[i][2])).collect();
         let total: u32 = inside.iter().map(|&i| z_count[i]).sum();
         (total as f64 / inside.len().max(1) as f64, inside.len())
+    }
+}
+
+/// Minimum-image separation along the periodic axis.
+#[inline(always)]
+fn min_image(d: f64, slab: f64) -> f64 {
+    d - slab * (d / slab).round()
+}
+
+/// Half kick: v += a f, ω += b T (a = ½Δt/m, b = ½Δt/I).
+#[inline(always)]
+fn kick(v: &mut V3, w: &mut V3, f: V3, t: V3, a: f64, b: f64) {
+    for c in 0..3 {
+        v[c] += a * f[c];
+        w[c] += b * t[c];
     }
 }
 

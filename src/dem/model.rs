@@ -13,7 +13,7 @@ use crate::error::{Error, Result};
 use crate::model::{OutputSpec, Simulator, check_outputs};
 use crate::params::{Param, ParamSpace};
 
-use super::probe::{Target, quantile};
+use super::probe::Target;
 
 /// θ indices.
 pub mod theta {
@@ -107,11 +107,12 @@ impl Simulator for TubeBankModel {
         let after: Vec<_> = dem.flow.iter().filter(|x| x.time >= warmup).collect();
         y.push(after.iter().map(|x| x.particles as f64).sum::<f64>() / after.len().max(1) as f64);
         y.push(dem.passes.iter().map(|p| p.tube_impacts as f64).sum::<f64>() / dem.passes.len().max(1) as f64);
+        let spectrum = super::run::spectrum(&dem, &[0.5, 0.9]);
         for target in [Target::Tube, Target::Particle] {
-            let mut v: Vec<f64> = dem.impacts.iter().filter(|i| i.target == target).map(|i| i.v_normal).collect();
-            for q in [0.5, 0.9] {
-                let x = quantile(&mut v, q);
-                y.push(if x.is_finite() { x } else { 0.0 });
+            // Row 0 = all rows; no impacts → 0 (a finite output).
+            let all = spectrum.iter().find(|r| r.target == target.name() && r.row == 0);
+            for k in 0..2 {
+                y.push(all.map(|r| r.quantiles[k]).filter(|x| x.is_finite()).unwrap_or(0.0));
             }
         }
         check_outputs("tube bank DEM", &self.outputs, theta, &y)?;

@@ -16,7 +16,6 @@
 //! | `dem_summary.csv` | mass flow, hold-up, impacts per pass, counters, speed |
 //! | `particles_t*.vtp` | particle snapshots for ParaView |
 
-use std::path::Path;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -29,8 +28,8 @@ use super::probe::{Target, quantile};
 use super::vtk;
 use super::{Dem, DemSetup, Diameters, Inlet, ProbeSetup};
 use crate::error::{Error, Result};
-use crate::io::{InputFile, Manifest, ReportDir, fcol, git_state, scol, table, ucol};
-use crate::runner::{RunOptions, RunSummary};
+use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
+use crate::runner::{RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
 use crate::study::LoadedStudy;
 
 /// `[particles]`
@@ -144,23 +143,24 @@ pub struct RunTable {
     pub snapshots: Vec<f64>,
 }
 
+// `[probes]` defaults are the solver's (`ProbeSetup::default`), in one place.
 fn default_sample_every() -> u64 {
-    100
+    ProbeSetup::default().sample_every
 }
 fn default_profile_bins() -> usize {
-    150
+    ProbeSetup::default().profile_bins
 }
 fn default_map_nx() -> usize {
-    50
+    ProbeSetup::default().map_nx
 }
 fn default_map_nz() -> usize {
-    130
+    ProbeSetup::default().map_nz
 }
 fn default_min_v() -> f64 {
-    0.1
+    ProbeSetup::default().min_impact_velocity
 }
 fn default_trace_v() -> f64 {
-    1.0
+    ProbeSetup::default().trace_min_velocity
 }
 fn default_quantiles() -> Vec<f64> {
     vec![0.05, 0.25, 0.5, 0.75, 0.9, 0.95, 0.99]
@@ -380,33 +380,13 @@ pub fn run_dem(loaded: &LoadedStudy, s: &DemStudy, opts: &RunOptions) -> Result<
     let headlines = write_tables(&mut dir, &dem, s, loop_s)?;
     pb.set_message("figures");
     let rendered = crate::report::dem::render(dir.path(), s.figures.width_cm)?;
-    dir.record(rendered.files.clone());
-
-    let (git_revision, git_dirty) = git_state(loaded.path.parent().unwrap_or(Path::new(".")));
-    let mut outputs = dir.files().to_vec();
-    outputs.push("manifest.json".into());
+    let mut failures = Vec::new();
+    record_figures(&mut dir, rendered, &mut failures);
     let mut evaluations = std::collections::BTreeMap::new();
     evaluations.insert("dem_particle_steps".to_string(), dem.counters.particle_steps);
-    let manifest = Manifest {
-        partlife_version: env!("CARGO_PKG_VERSION").into(),
-        study: loaded.name.clone(),
-        study_file: loaded.path.display().to_string(),
-        study_toml: loaded.text.clone(),
-        study_resolved: serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?,
-        inputs,
-        seed: s.seed,
-        threads: rayon::current_num_threads(),
-        git_revision,
-        git_dirty,
-        started_unix_s,
-        wall_time_s: start.elapsed().as_secs_f64(),
-        evaluations,
-        failures: Vec::new(),
-        outputs,
-    };
-    let json = serde_json::to_vec_pretty(&manifest).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    dir.write_bytes("manifest.json", &json)?;
-    let report_dir = dir.commit()?;
+    let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
+    let run = RunRecord { inputs, seed: s.seed, started_unix_s, start, evaluations, failures };
+    let report_dir = commit_with_manifest(dir, loaded, study_resolved, run)?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: start.elapsed().as_secs_f64(), headlines })
 }

@@ -15,7 +15,7 @@ use super::Rendered;
 use super::canvas::{FONT, canvas_size, check_glyphs, colour, encode, fig_err, register_fonts, text, tick_format};
 use super::panel::{Kind, Panel, Series, figure, padded, pt};
 use crate::error::{Error, Result};
-use crate::io::{col_f64, col_str, read_table, write_atomic};
+use crate::io::{col_f64, col_str, read_table};
 
 fn load(dir: &Path, name: &str) -> Result<(std::path::PathBuf, polars::prelude::DataFrame)> {
     let path = dir.join(name);
@@ -42,17 +42,7 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
     if let Some(f) = force_time(dir, width_cm)? {
         figures.push(("dem_force_time", f));
     }
-    let mut files = Vec::new();
-    let mut legend_hidden = Vec::new();
-    for (name, (enc, hidden)) in figures {
-        legend_hidden.push((name.to_string(), hidden));
-        for (ext, bytes) in [("svg", enc.svg.as_bytes()), ("png", enc.png.as_slice()), ("pdf", enc.pdf.as_slice())] {
-            let file = format!("{name}.{ext}");
-            write_atomic(&dir.join(&file), bytes)?;
-            files.push(file);
-        }
-    }
-    Ok(Rendered { files, legend_hidden })
+    super::write_figures(dir, figures)
 }
 
 type Drawn = (super::canvas::Encoded, usize);

@@ -112,6 +112,11 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
         ("fig15_impact", fig15_impact(dir, &mats, width_cm)?),
         ("fig16_breakage", fig16_breakage(dir, &mats, width_cm)?),
     ];
+    write_figures(dir, figures)
+}
+
+/// Writes each drawn figure as `<name>.svg`, `.png` and `.pdf` into `dir`.
+pub(crate) fn write_figures(dir: &Path, figures: Vec<(&str, Drawn)>) -> Result<Rendered> {
     let mut files = Vec::new();
     let mut legend_hidden = Vec::new();
     for (name, (enc, hidden)) in figures {

@@ -56,6 +56,7 @@ pub mod bench;
 pub mod contact;
 pub mod data;
 pub mod dem;
+pub mod fem;
 pub mod error;
 pub mod io;
 pub mod lifetime;

@@ -56,6 +56,7 @@ pub fn run(study: &LoadedStudy, opts: &RunOptions) -> Result<RunSummary> {
     match &study.study {
         Study::Lifetime(s) => run_lifetime(study, s, opts),
         Study::Dem(s) => crate::dem::run::run_dem(study, s, opts),
+        Study::Crush(s) => crate::fem::run::run_crush(study, s, opts),
     }
 }
 

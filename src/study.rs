@@ -165,7 +165,7 @@ pub struct MaterialSpec {
 }
 
 /// The kinds of study this version can run.
-pub const KINDS: [&str; 2] = ["lifetime", "dem"];
+pub const KINDS: [&str; 3] = ["lifetime", "dem", "crush"];
 
 /// A lifetime study (kind = "lifetime"): the deliverable's §6 chain for several materials.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -199,6 +199,8 @@ pub enum Study {
     Lifetime(LifetimeStudy),
     /// kind = "dem": particle flow through the tube bank.
     Dem(Box<crate::dem::run::DemStudy>),
+    /// kind = "crush": single-particle crush tests with the FE.
+    Crush(Box<crate::fem::run::CrushStudy>),
 }
 
 /// A study file loaded from disk.
@@ -262,6 +264,11 @@ pub fn load(path: &Path) -> Result<LoadedStudy> {
             let s: crate::dem::run::DemStudy = parse_toml(path, &text)?;
             s.setup(&file)?;
             Study::Dem(Box::new(s))
+        }
+        "crush" => {
+            let s: crate::fem::run::CrushStudy = parse_toml(path, &text)?;
+            s.setups(&file)?;
+            Study::Crush(Box::new(s))
         }
         other => {
             return Err(Error::config(&file, "kind", format!("unknown kind \"{other}\"; known: {}", KINDS.join(", "))));

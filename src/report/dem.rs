@@ -84,7 +84,7 @@ fn velocity_profile(dir: &Path, width_cm: f64) -> Result<Drawn> {
 }
 
 /// Perceptually uniform colour map (viridis anchors, linear interpolation).
-fn viridis(t: f64) -> RGBColor {
+pub(crate) fn viridis(t: f64) -> RGBColor {
     const A: [(f64, (u8, u8, u8)); 6] =
         [(0.0, (68, 1, 84)), (0.2, (65, 68, 135)), (0.4, (42, 120, 142)), (0.6, (34, 168, 132)), (0.8, (122, 209, 81)), (1.0, (253, 231, 37))];
     let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };

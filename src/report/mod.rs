@@ -14,6 +14,7 @@
 //! embedded DejaVu Sans font ([`canvas`]).
 
 pub mod canvas;
+pub mod crush;
 pub mod dem;
 pub mod panel;
 
@@ -141,8 +142,10 @@ pub fn redraw(report_dir: &Path) -> Result<Rendered> {
         .pointer("/study_resolved/figures/width_cm")
         .and_then(|v| v.as_f64())
         .unwrap_or(8.5);
-    if json.pointer("/study_resolved/kind").and_then(|v| v.as_str()) == Some("dem") {
-        return dem::render(report_dir, width);
+    match json.pointer("/study_resolved/kind").and_then(|v| v.as_str()) {
+        Some("dem") => return dem::render(report_dir, width),
+        Some("crush") => return crush::render(report_dir, width),
+        _ => {}
     }
     render(report_dir, width)
 }

@@ -1,0 +1,679 @@
+//! Native crush FE: a particle compressed between rigid flat platens, axisymmetric explicit
+//! dynamics with the Johnson–Holmquist-2 ceramic model (deliverable §4, Figs. 6–9).
+//!
+//! ## Model
+//! * Mesh ([`mesh`]): the (r, z) quarter of a body of revolution, graded towards the contact
+//!   pole; symmetry conditions `v_r = 0` on the axis and `v_z = 0` on the equatorial plane, so
+//!   the platen displacement u is half the total crush displacement δ_tot = 2u (both contacts).
+//! * Element ([`element`]): 4-node axisymmetric quad, one-point integration, stiffness
+//!   hourglass control, bulk viscosity.
+//! * Kinematics: updated Lagrangian **rate form** — the rate of deformation D and spin W are
+//!   evaluated on the current configuration, stresses are advanced hypo-elastically with the
+//!   Jaumann rate, and the JH-2 compression μ = V₀/V − 1 comes from the current volume. JH-2 is
+//!   defined incrementally (plastic-strain increments, damage), and the near-contact strains
+//!   (p₀/E ≈ 7 %) and rotations are moderate, so a rate form with an objective rate is the
+//!   natural and standard (LS-DYNA, Autodyn) choice; a total small-strain form would not handle
+//!   the rotation of damaged material beside the contact.
+//! * Time integration: central differences with lumped (row-sum, per-radian) masses, variable
+//!   step recomputed every `solver.step_interval` steps as `safety ×` the smallest element step
+//!   ([`element::Kernel::critical_step`]); optional uniform mass scaling.
+//! * Platen ([`contact`]): rigid and flat, moved at constant speed after a smooth cubic ramp;
+//!   kinematic (velocity-constraint) contact, frictionless or Coulomb.
+//!
+//! ## Results
+//! [`CrushResult`]: the force–displacement curve (top platen and equatorial reaction, each
+//! averaged over its sample interval), energies, peak force and fracture displacement (first
+//! sustained drop, see [`FractureParams`]), field snapshots at requested displacements, the
+//! quasi-static check, step counts.
+//!
+//! Verified by `tests/verification/crush_fe.rs`.
+
+pub mod contact;
+pub mod element;
+pub mod material;
+pub mod mesh;
+pub mod model;
+pub mod output;
+pub mod run;
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use element::{ElementForces, ElementState, Kernel};
+use material::MaterialParams;
+use mesh::{Mesh, MeshParams, Shape};
+
+/// Platen loading.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlatenParams {
+    /// Speed of each platen after the ramp (m/s, default 1): time scaling of a test run at
+    /// mm/min (mechanics.md §2.3).
+    pub speed: f64,
+    /// Coulomb friction coefficient (default 0, frictionless).
+    pub friction: f64,
+    /// Largest total crush displacement δ_tot (m, default 60 µm).
+    pub max_displacement: f64,
+    /// Ramp duration in dilatational wave transits 2R/c (default 20).
+    pub ramp_transits: f64,
+}
+
+impl Default for PlatenParams {
+    fn default() -> Self {
+        PlatenParams { speed: 1.0, friction: 0.0, max_displacement: 60e-6, ramp_transits: 20.0 }
+    }
+}
+
+/// Solver controls.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SolverParams {
+    /// Fraction of the critical time step (default 0.8).
+    pub safety: f64,
+    /// Density multiplier of the nodal masses (default 1, none).
+    pub mass_scaling: f64,
+    /// Hourglass stiffness coefficient (default 0.05).
+    pub hourglass: f64,
+    /// Linear bulk viscosity Q₁ (default 0.06, LS-DYNA's).
+    pub bulk_viscosity_linear: f64,
+    /// Quadratic bulk viscosity Q₂ (default 1.5, LS-DYNA's).
+    pub bulk_viscosity_quadratic: f64,
+    /// Steps between time-step updates (default 10).
+    pub step_interval: u32,
+    /// Force–displacement samples over `max_displacement` (default 300).
+    pub samples: u32,
+    /// Geometrically linear kinematics (default false): for comparisons with small-strain
+    /// theory only; crush runs use the finite-deformation rate form.
+    pub small_strain: bool,
+}
+
+impl Default for SolverParams {
+    fn default() -> Self {
+        SolverParams {
+            safety: 0.8,
+            mass_scaling: 1.0,
+            hourglass: 0.05,
+            bulk_viscosity_linear: 0.06,
+            bulk_viscosity_quadratic: 1.5,
+            step_interval: 10,
+            samples: 300,
+            small_strain: false,
+        }
+    }
+}
+
+/// Definition of fracture on the force–displacement curve.
+///
+/// Fracture is the **first sustained force drop**: the force falls below `(1 − drop)` times its
+/// running maximum and stays below for at least `sustain` of further total displacement (m). The
+/// fracture displacement is the displacement at that running maximum, the peak force its value.
+/// A drop that recovers (a ring crack, a contact node snapping) is not fracture.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FractureParams {
+    /// Relative drop (default 0.2).
+    pub drop: f64,
+    /// Displacement the drop must last (m, default 1 µm).
+    pub sustain: f64,
+    /// Run on after fracture by this fraction of the fracture displacement (default 0.15),
+    /// then stop.
+    pub run_on: f64,
+}
+
+impl Default for FractureParams {
+    fn default() -> Self {
+        FractureParams { drop: 0.2, sustain: 1e-6, run_on: 0.15 }
+    }
+}
+
+/// One crush test.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CrushSetup {
+    /// Particle height along the load = diameter of the sphere (m).
+    pub diameter: f64,
+    /// Outline.
+    #[serde(default = "sphere")]
+    pub shape: Shape,
+    /// Particle material.
+    pub material: MaterialParams,
+    /// Mesh density.
+    #[serde(default)]
+    pub mesh: MeshParams,
+    /// Loading.
+    #[serde(default)]
+    pub platen: PlatenParams,
+    /// Solver controls.
+    #[serde(default)]
+    pub solver: SolverParams,
+    /// Fracture definition.
+    #[serde(default)]
+    pub fracture: FractureParams,
+    /// Total displacements δ_tot (m) at which element fields are kept.
+    #[serde(default)]
+    pub fields_at: Vec<f64>,
+}
+
+fn sphere() -> Shape {
+    Shape::Sphere
+}
+
+impl CrushSetup {
+    /// Dilatational wave speed at rest (m/s).
+    pub fn wave_speed(&self) -> f64 {
+        let m = self.material.build();
+        (m.wave_modulus(0.0) / m.density()).sqrt()
+    }
+
+    /// Checks every input before any step runs; `file` names the study in errors.
+    pub fn validate(&self, file: &str) -> Result<()> {
+        let bad = |k: &str, rule: String| Err(Error::config(file, k, rule));
+        if !(self.diameter.is_finite() && self.diameter > 0.0) {
+            return bad("crush.diameter", format!("must be positive, got {}", self.diameter));
+        }
+        self.shape.validate(file, "crush.shape")?;
+        self.material.validate(file, "crush.material")?;
+        self.mesh.validate(file, "crush.mesh")?;
+        let p = &self.platen;
+        if !(p.speed.is_finite() && p.speed > 0.0) {
+            return bad("crush.platen.speed", format!("must be positive, got {}", p.speed));
+        }
+        let c = self.wave_speed();
+        if p.speed > 0.01 * c {
+            return bad(
+                "crush.platen.speed",
+                format!(
+                    "{} m/s is more than 1 % of the dilatational wave speed {c:.0} m/s: the run would be an impact, not a quasi-static crush (use ≤ {:.1} m/s)",
+                    p.speed,
+                    0.01 * c
+                ),
+            );
+        }
+        if !(p.friction.is_finite() && p.friction >= 0.0) {
+            return bad("crush.platen.friction", format!("must be ≥ 0, got {}", p.friction));
+        }
+        if !(p.max_displacement > 0.0 && p.max_displacement < 0.5 * self.diameter) {
+            return bad("crush.platen.max_displacement", format!("must lie in (0, d/2), got {}", p.max_displacement));
+        }
+        if !(p.ramp_transits >= 0.0 && p.ramp_transits.is_finite()) {
+            return bad("crush.platen.ramp_transits", format!("must be ≥ 0, got {}", p.ramp_transits));
+        }
+        let s = &self.solver;
+        if !(s.safety > 0.0 && s.safety <= 1.0) {
+            return bad("crush.solver.safety", format!("must lie in (0, 1], got {}", s.safety));
+        }
+        if !(s.mass_scaling >= 1.0 && s.mass_scaling <= 1e4) {
+            return bad("crush.solver.mass_scaling", format!("must lie in [1, 1e4], got {}", s.mass_scaling));
+        }
+        for (k, v) in [("hourglass", s.hourglass), ("bulk_viscosity_linear", s.bulk_viscosity_linear), ("bulk_viscosity_quadratic", s.bulk_viscosity_quadratic)] {
+            if !(v.is_finite() && (0.0..=5.0).contains(&v)) {
+                return bad(&format!("crush.solver.{k}"), format!("must lie in [0, 5], got {v}"));
+            }
+        }
+        if s.step_interval == 0 || s.samples < 10 {
+            return bad("crush.solver.samples", "step_interval ≥ 1 and samples ≥ 10 required".into());
+        }
+        let f = &self.fracture;
+        if !(f.drop > 0.0 && f.drop < 1.0) || !(f.sustain >= 0.0) || !(f.run_on >= 0.0) {
+            return bad("crush.fracture", format!("drop must lie in (0, 1), sustain and run_on ≥ 0; got {f:?}"));
+        }
+        for (i, &d) in self.fields_at.iter().enumerate() {
+            if !(d > 0.0 && d <= p.max_displacement) {
+                return bad(&format!("crush.fields_at[{i}]"), format!("must lie in (0, max_displacement], got {d}"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One sample of the force–displacement curve.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct CurveSample {
+    /// Time (s).
+    pub time: f64,
+    /// Total crush displacement δ_tot = 2u (m), mid-interval.
+    pub displacement: f64,
+    /// Top platen force, averaged over the interval (N).
+    pub force: f64,
+    /// Equatorial-plane reaction (the bottom platen by symmetry), averaged (N).
+    pub force_bottom: f64,
+    /// Kinetic energy of the whole particle (J).
+    pub kinetic: f64,
+    /// Internal (strain + plastic + viscous) energy (J).
+    pub internal: f64,
+    /// Hourglass energy (J).
+    pub hourglass: f64,
+    /// Work done by the platens (J).
+    pub external: f64,
+}
+
+/// Quasi-static check of a run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct QuasiStatic {
+    /// Largest E_kin / E_int after the ramp and up to the peak force, where E_int exceeds 1 % of
+    /// its value at the peak.
+    pub max_kinetic_ratio: f64,
+    /// Largest |F_top − F_bottom| / F_peak over the same samples, both forces averaged over two
+    /// wave transits (see [`output::quasi_static`]).
+    pub max_force_imbalance: f64,
+    /// Largest hourglass / internal energy over the same samples.
+    pub max_hourglass_ratio: f64,
+    /// A warning when the run was not quasi-static (ratio > 5 % or imbalance > 5 %) or the
+    /// hourglass energy exceeded 10 % of the internal energy.
+    pub warning: Option<String>,
+}
+
+/// Element fields at one displacement.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FieldSnapshot {
+    /// Requested total displacement (m).
+    pub displacement: f64,
+    /// Deformed node positions (m).
+    pub nodes: Vec<[f64; 2]>,
+    /// Per element, in mesh order.
+    pub values: output::ElementFields,
+}
+
+/// Outcome of a crush run.
+#[derive(Debug, Clone)]
+pub struct CrushResult {
+    /// Force–displacement samples, starting at (0, 0).
+    pub curve: Vec<CurveSample>,
+    /// Largest force before fracture (N), the largest of the run when no fracture.
+    pub peak_force: f64,
+    /// Total displacement at the peak force (m).
+    pub peak_displacement: f64,
+    /// Fracture displacement (m) when a sustained drop occurred.
+    pub fracture_displacement: Option<f64>,
+    /// Field snapshots at the requested displacements, in order.
+    pub fields: Vec<FieldSnapshot>,
+    /// Quasi-static check.
+    pub quasi_static: QuasiStatic,
+    /// Time steps taken.
+    pub steps: u64,
+    /// Element count.
+    pub elements: usize,
+    /// Smallest and largest time step (s).
+    pub time_step: (f64, f64),
+}
+
+/// The crush test: mesh, state and solver.
+pub struct CrushTest {
+    /// The set-up.
+    pub setup: CrushSetup,
+    /// The undeformed mesh.
+    pub mesh: Mesh,
+    kernel: Kernel,
+    /// Current node positions (m).
+    pub x: Vec<[f64; 2]>,
+    v: Vec<[f64; 2]>,
+    inv_mass: Vec<f64>,
+    mass: Vec<f64>,
+    /// Element states.
+    pub states: Vec<ElementState>,
+    forces: Vec<ElementForces>,
+    /// Node → (element, local index) lists, CSR, in element order.
+    adj_start: Vec<u32>,
+    adj: Vec<(u32, u8)>,
+    f_node: Vec<[f64; 2]>,
+    fix_r: Vec<bool>,
+    fix_z: Vec<bool>,
+    platen: contact::Platen,
+    /// Time (s).
+    pub time: f64,
+    dt: f64,
+    steps: u64,
+    /// 2π for axisymmetric totals.
+    scale: f64,
+    e_int: f64,
+    e_hg: f64,
+    e_ext: f64,
+}
+
+const CHUNK: usize = 128;
+
+impl CrushTest {
+    /// Builds the mesh and the initial state; errors before any step runs.
+    pub fn new(setup: CrushSetup, file: &str) -> Result<Self> {
+        setup.validate(file)?;
+        let mesh = Mesh::quarter(&setup.shape, setup.diameter, &setup.mesh).map_err(|e| match e {
+            Error::Config { key, rule, .. } => Error::config(file, format!("crush.{key}"), rule),
+            other => other,
+        })?;
+        Self::with_mesh(setup, mesh, true)
+    }
+
+    /// A test on a given mesh (axisymmetric when `axisymmetric`).
+    pub fn with_mesh(setup: CrushSetup, mesh: Mesh, axisymmetric: bool) -> Result<Self> {
+        let material = setup.material.build();
+        let density = material.density();
+        let kernel = Kernel {
+            material,
+            axisymmetric,
+            hourglass: setup.solver.hourglass,
+            q_linear: setup.solver.bulk_viscosity_linear,
+            q_quadratic: setup.solver.bulk_viscosity_quadratic,
+            needs_rate: matches!(setup.material, MaterialParams::Jh2(j) if j.c > 0.0),
+            density,
+            wave_speed: (material.wave_modulus(0.0) / density).sqrt(),
+            small_strain: setup.solver.small_strain,
+        };
+        let nn = mesh.nodes.len();
+        let ne = mesh.elements.len();
+        let mut mass = vec![0.0; nn];
+        let mut states = vec![ElementState::default(); ne];
+        for (e, conn) in mesh.elements.iter().enumerate() {
+            let x = conn.map(|i| mesh.nodes[i as usize]);
+            let g = element::geometry(&x, axisymmetric)
+                .ok_or_else(|| Error::config("<mesh>", "mesh", format!("element {e} has a non-positive area")))?;
+            states[e].v0 = g.area * g.rc;
+            for &i in conn {
+                mass[i as usize] += 0.25 * density * setup.solver.mass_scaling * g.area * g.rc;
+            }
+        }
+        let inv_mass = mass.iter().map(|m| 1.0 / m).collect();
+        // Node adjacency in element order (deterministic gather).
+        let mut count = vec![0u32; nn + 1];
+        for conn in &mesh.elements {
+            for &i in conn {
+                count[i as usize + 1] += 1;
+            }
+        }
+        for i in 0..nn {
+            count[i + 1] += count[i];
+        }
+        let mut fill = count.clone();
+        let mut adj = vec![(0u32, 0u8); 4 * ne];
+        for (e, conn) in mesh.elements.iter().enumerate() {
+            for (k, &i) in conn.iter().enumerate() {
+                adj[fill[i as usize] as usize] = (e as u32, k as u8);
+                fill[i as usize] += 1;
+            }
+        }
+        let mut fix_r = vec![false; nn];
+        let mut fix_z = vec![false; nn];
+        if axisymmetric {
+            for &i in &mesh.axis {
+                fix_r[i as usize] = true;
+            }
+        }
+        for &i in &mesh.equator {
+            fix_z[i as usize] = true;
+        }
+        let top = mesh.surface.iter().map(|&i| mesh.nodes[i as usize][1]).fold(f64::MIN, f64::max);
+        let transit = setup.diameter / kernel.wave_speed;
+        let platen = contact::Platen::new(top, setup.platen.speed, setup.platen.ramp_transits * transit, setup.platen.friction);
+        let x = mesh.nodes.clone();
+        let mut t = CrushTest {
+            kernel,
+            x,
+            v: vec![[0.0; 2]; nn],
+            inv_mass,
+            mass,
+            states,
+            forces: vec![ElementForces::default(); ne],
+            adj_start: count,
+            adj,
+            f_node: vec![[0.0; 2]; nn],
+            fix_r,
+            fix_z,
+            platen,
+            time: 0.0,
+            dt: 0.0,
+            steps: 0,
+            scale: if axisymmetric { 2.0 * std::f64::consts::PI } else { 1.0 },
+            e_int: 0.0,
+            e_hg: 0.0,
+            e_ext: 0.0,
+            setup,
+            mesh,
+        };
+        t.dt = t.stable_step();
+        if !(t.dt > 0.0 && t.dt.is_finite()) {
+            return Err(Error::numerical("crush FE", format!("no stable time step (got {:e} s)", t.dt)));
+        }
+        Ok(t)
+    }
+
+    /// `safety ×` the smallest element step (s).
+    pub fn stable_step(&self) -> f64 {
+        let ms = self.setup.solver.mass_scaling;
+        let min = self
+            .mesh
+            .elements
+            .par_iter()
+            .zip(self.states.par_iter())
+            .with_min_len(CHUNK)
+            .map(|(conn, st)| self.kernel.critical_step(&conn.map(|i| self.x[i as usize]), st, ms))
+            .reduce(|| f64::MAX, f64::min);
+        self.setup.solver.safety * min
+    }
+
+    /// Current time step (s).
+    pub fn time_step(&self) -> f64 {
+        self.dt
+    }
+
+    /// Current total crush displacement δ_tot = 2u (m).
+    pub fn displacement(&self) -> f64 {
+        2.0 * self.platen.displacement(self.time)
+    }
+
+    /// Kinetic energy of the whole body (J).
+    pub fn kinetic_energy(&self) -> f64 {
+        self.scale * 0.5 * self.v.iter().zip(&self.mass).map(|(v, m)| m * (v[0] * v[0] + v[1] * v[1])).sum::<f64>()
+    }
+
+    /// (internal, hourglass, external work) energies so far (J).
+    pub fn energies(&self) -> (f64, f64, f64) {
+        (self.scale * self.e_int, self.scale * self.e_hg, self.scale * self.e_ext)
+    }
+
+    /// Sets the node velocities (verification runs: rigid-body motion, free vibration).
+    pub fn set_velocities(&mut self, f: impl Fn([f64; 2]) -> [f64; 2]) {
+        for (v, x) in self.v.iter_mut().zip(&self.x) {
+            *v = f(*x);
+        }
+    }
+
+    /// Disables the platen (free-body verification runs) and, when `free`, the symmetry
+    /// conditions too.
+    pub fn detach_platen(&mut self, free: bool) {
+        self.platen.active = false;
+        if free {
+            self.fix_r.iter_mut().for_each(|f| *f = false);
+            self.fix_z.iter_mut().for_each(|f| *f = false);
+        }
+    }
+
+    /// One explicit step; returns the (top platen impulse, equatorial reaction impulse) of the
+    /// step per radian (N s).
+    pub fn step(&mut self) -> Result<(f64, f64)> {
+        if self.steps > 0 && self.steps % self.setup.solver.step_interval as u64 == 0 {
+            self.dt = self.stable_step();
+        }
+        let dt = self.dt;
+        // 1. Element pass: stresses at t from the velocities of the last half step.
+        let kernel = self.kernel;
+        let x = if kernel.small_strain { &self.mesh.nodes } else { &self.x };
+        let v = &self.v;
+        let elements = &self.mesh.elements;
+        let partial: Vec<std::result::Result<(f64, f64), usize>> = self
+            .states
+            .par_chunks_mut(CHUNK)
+            .zip(self.forces.par_chunks_mut(CHUNK))
+            .enumerate()
+            .map(|(c, (st, fo))| {
+                let (mut ei, mut eh) = (0.0, 0.0);
+                for k in 0..st.len() {
+                    let e = c * CHUNK + k;
+                    let conn = elements[e];
+                    let xe = conn.map(|i| x[i as usize]);
+                    let ve = conn.map(|i| v[i as usize]);
+                    let (f, a, b) = kernel.update(&xe, &ve, &mut st[k], dt).ok_or(e)?;
+                    fo[k] = f;
+                    ei += a;
+                    eh += b;
+                }
+                Ok((ei, eh))
+            })
+            .collect();
+        for p in partial {
+            match p {
+                Ok((a, b)) => {
+                    self.e_int += a;
+                    self.e_hg += b;
+                }
+                Err(e) => {
+                    return Err(Error::numerical(
+                        "crush FE",
+                        format!("step {}: element {e} inverted (non-positive Jacobian) at t = {:.4e} s", self.steps, self.time),
+                    ));
+                }
+            }
+        }
+        // 2. Gather nodal forces in element order.
+        let (forces, adj, start) = (&self.forces, &self.adj, &self.adj_start);
+        self.f_node.par_iter_mut().enumerate().with_min_len(4 * CHUNK).for_each(|(i, f)| {
+            let mut s = [0.0; 2];
+            for &(e, k) in &adj[start[i] as usize..start[i + 1] as usize] {
+                let fe = &forces[e as usize].f;
+                s[0] -= fe[2 * k as usize];
+                s[1] -= fe[2 * k as usize + 1];
+            }
+            *f = s;
+        });
+        // 3. Velocities, constraints, contact, positions.
+        let mut bottom = 0.0;
+        for i in 0..self.x.len() {
+            let f = self.f_node[i];
+            let w = self.inv_mass[i];
+            let vi = &mut self.v[i];
+            vi[0] = if self.fix_r[i] { 0.0 } else { vi[0] + dt * f[0] * w };
+            if self.fix_z[i] {
+                vi[1] = 0.0;
+                bottom -= f[1] * dt;
+            } else {
+                vi[1] += dt * f[1] * w;
+            }
+        }
+        let t_new = self.time + dt;
+        let top = if self.platen.active { self.platen.constrain(t_new, dt, &self.mesh.surface, &self.x, &mut self.v, &self.mass, &self.fix_r) } else { 0.0 };
+        // External work: the platen's impulse times its velocity over the step.
+        self.e_ext += top * self.platen.velocity(self.time + 0.5 * dt);
+        for (xi, vi) in self.x.iter_mut().zip(&self.v) {
+            xi[0] += dt * vi[0];
+            xi[1] += dt * vi[1];
+        }
+        self.time = t_new;
+        self.steps += 1;
+        Ok((top, bottom))
+    }
+
+    /// Runs the crush to the maximum displacement or past fracture.
+    pub fn run(&mut self, progress: Option<&indicatif::ProgressBar>) -> Result<CrushResult> {
+        let p = self.setup.platen;
+        let dmax = p.max_displacement;
+        let interval = dmax / self.setup.solver.samples as f64;
+        let mut curve = vec![CurveSample::default()];
+        let mut fields = Vec::new();
+        let mut pending: Vec<f64> = self.setup.fields_at.clone();
+        pending.sort_by(f64::total_cmp);
+        pending.dedup();
+        let mut detector = output::FractureDetector::new(self.setup.fracture);
+        let (mut imp_top, mut imp_bot, mut t0, mut d0) = (0.0, 0.0, self.time, self.displacement());
+        let (mut dt_min, mut dt_max) = (f64::MAX, 0.0f64);
+        let mut stop_at = dmax;
+        loop {
+            let (a, b) = self.step()?;
+            dt_min = dt_min.min(self.dt);
+            dt_max = dt_max.max(self.dt);
+            imp_top += a;
+            imp_bot += b;
+            let d = self.displacement();
+            while let Some(&target) = pending.first() {
+                if d >= target {
+                    fields.push(self.snapshot(target));
+                    pending.remove(0);
+                } else {
+                    break;
+                }
+            }
+            if d - d0 >= interval || d >= stop_at {
+                let span = self.time - t0;
+                let (ei, eh, ee) = self.energies();
+                let s = CurveSample {
+                    time: self.time,
+                    displacement: 0.5 * (d + d0),
+                    force: self.scale * imp_top / span,
+                    force_bottom: self.scale * imp_bot / span,
+                    kinetic: self.kinetic_energy(),
+                    internal: ei,
+                    hourglass: eh,
+                    external: ee,
+                };
+                self.check_sample(&s)?;
+                curve.push(s);
+                if let Some(pb) = progress {
+                    pb.set_position((1000.0 * d / dmax).min(1000.0) as u64);
+                }
+                if let Some(df) = detector.push(s.displacement, s.force)
+                    && stop_at == dmax
+                {
+                    stop_at = (df * (1.0 + self.setup.fracture.run_on)).max(s.displacement + interval).min(dmax);
+                }
+                imp_top = 0.0;
+                imp_bot = 0.0;
+                t0 = self.time;
+                d0 = d;
+                if d >= stop_at {
+                    break;
+                }
+            }
+        }
+        let (peak_force, peak_displacement, fracture_displacement) = detector.result();
+        let transit = self.setup.diameter / self.kernel.wave_speed;
+        let quasi_static = output::quasi_static(&curve, peak_force, peak_displacement, p.ramp_transits * transit, 2.0 * transit);
+        Ok(CrushResult {
+            curve,
+            peak_force,
+            peak_displacement,
+            fracture_displacement,
+            fields,
+            quasi_static,
+            steps: self.steps,
+            elements: self.mesh.elements.len(),
+            time_step: (dt_min, dt_max),
+        })
+    }
+
+    fn check_sample(&self, s: &CurveSample) -> Result<()> {
+        let finite = [s.force, s.force_bottom, s.kinetic, s.internal, s.hourglass, s.external].iter().all(|v| v.is_finite());
+        if !finite {
+            let node = self.v.iter().position(|v| !(v[0].is_finite() && v[1].is_finite()));
+            let elem = self.states.iter().position(|st| !st.point.stress().iter().all(|v| v.is_finite()));
+            return Err(Error::numerical(
+                "crush FE",
+                format!("step {}: non-finite state (first bad node {node:?}, element {elem:?}) at δ = {:.3e} m", self.steps, s.displacement),
+            ));
+        }
+        // Energy blow-up: kinetic energy far above the work put in.
+        if s.kinetic > 10.0 * s.external.abs() + 1e-9 {
+            return Err(Error::numerical(
+                "crush FE",
+                format!("step {}: energy blow-up, kinetic energy {:.3e} J against platen work {:.3e} J (unstable time step?)", self.steps, s.kinetic, s.external),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Element fields now.
+    pub fn snapshot(&self, displacement: f64) -> FieldSnapshot {
+        FieldSnapshot {
+            displacement,
+            nodes: self.x.clone(),
+            values: output::ElementFields::compute(&self.mesh, &self.x, &self.states, self.kernel.axisymmetric),
+        }
+    }
+}

@@ -1,0 +1,235 @@
+//! Figures of a crush report (`kind = "crush"`), drawn from the report's tables only.
+//!
+//! | file stem | deliverable | table(s) |
+//! |---|---|---|
+//! | `crush_force_displacement` | Figs. 6b, 9c (F–δ per case, fracture marked) | `curves.csv`, `crush_summary.csv` |
+//! | `crush_strain_map` | Fig. 6c (max principal log strain, whole section) | `fields.csv` |
+//! | `crush_strain_map_contact` | Fig. 8 bottom (the same, contact region) | `fields.csv` |
+//! | `crush_depth_profile` | Fig. 8 top (principal strains below the contact vs depth) | `depth_profile.csv` |
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use super::Rendered;
+use super::canvas::{canvas_size, check_glyphs, colour, encode, fig_err, register_fonts, text, tick_format};
+use super::panel::{Kind, Marker, Panel, Series, figure, padded, pt};
+use crate::error::Result;
+use crate::io::{col_f64, col_str, read_table};
+
+type Drawn = (super::canvas::Encoded, usize);
+
+struct Table {
+    path: std::path::PathBuf,
+    df: polars::prelude::DataFrame,
+}
+
+impl Table {
+    fn load(dir: &Path, name: &str) -> Result<Self> {
+        let path = dir.join(name);
+        Ok(Table { df: read_table(&path)?, path })
+    }
+    fn f(&self, c: &str) -> Result<Vec<f64>> {
+        col_f64(&self.df, &self.path, c)
+    }
+    fn s(&self, c: &str) -> Result<Vec<String>> {
+        col_str(&self.df, &self.path, c)
+    }
+}
+
+/// Case keys in order of first appearance.
+fn cases(keys: &[String]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for k in keys {
+        if !out.contains(k) {
+            out.push(k.clone());
+        }
+    }
+    out
+}
+
+/// Draws every crush figure in `dir`.
+pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
+    let mut figures = vec![("crush_force_displacement", force_displacement(dir, width_cm)?)];
+    let fields = Table::load(dir, "fields.csv")?;
+    if fields.df.height() > 0 {
+        figures.push(("crush_strain_map", strain_map("crush_strain_map", &fields, width_cm, 1.0)?));
+        figures.push(("crush_strain_map_contact", strain_map("crush_strain_map_contact", &fields, width_cm, 0.35)?));
+        figures.push(("crush_depth_profile", depth_profile(dir, width_cm)?));
+    }
+    super::write_figures(dir, figures)
+}
+
+fn force_displacement(dir: &Path, width_cm: f64) -> Result<Drawn> {
+    let t = Table::load(dir, "curves.csv")?;
+    let (keys, labels, d, f) = (t.s("case")?, t.s("label")?, t.f("displacement_m")?, t.f("force_n")?);
+    let s = Table::load(dir, "crush_summary.csv")?;
+    let (skeys, peak, at, frac) = (s.s("case")?, s.f("peak_force_n")?, s.f("peak_displacement_m")?, s.f("fracture_displacement_m")?);
+    let mut series = Vec::new();
+    let mut marks = Vec::new();
+    for (ci, key) in cases(&keys).iter().enumerate() {
+        let idx: Vec<usize> = (0..keys.len()).filter(|&i| &keys[i] == key).collect();
+        let pts: Vec<(f64, f64)> = idx.iter().map(|&i| (1e6 * d[i], f[i])).collect();
+        series.push(Series::line(Some(labels[idx[0]].clone()), pts, colour(ci), 1.0));
+        if let Some(k) = skeys.iter().position(|s| s == key)
+            && frac[k].is_finite()
+        {
+            marks.push((1e6 * at[k], peak[k], colour(ci)));
+        }
+    }
+    if !marks.is_empty() {
+        for (i, (x, y, c)) in marks.iter().enumerate() {
+            let label = if i == 0 { Some("fracture (first sustained drop)".to_string()) } else { None };
+            series.push(Series { label, points: vec![(*x, *y)], colour: *c, kind: Kind::Markers(Marker::Circle, 2.0) });
+        }
+    }
+    let panel = Panel {
+        x_desc: "Total crush displacement δ (µm)".into(),
+        y_desc: "Platen force F (N)".into(),
+        x_range: padded(d.iter().map(|x| 1e6 * x), 0.0, 0.02),
+        y_range: (0.0, padded(f.iter().cloned(), 0.0, 0.3).1),
+        y_log: false,
+        series,
+        legend: Some(SeriesLabelPosition::UpperLeft),
+    };
+    figure("crush_force_displacement", width_cm, 0.75, &[(panel, 1.0)])
+}
+
+/// Diverging blue–white–red map for t ∈ [−1, 1] (compression blue, tension red).
+fn diverging(t: f64) -> RGBColor {
+    let t = if t.is_finite() { t.clamp(-1.0, 1.0) } else { 0.0 };
+    let (a, b) = if t < 0.0 { ((59.0, 76.0, 192.0), (247.0, 247.0, 247.0)) } else { ((247.0, 247.0, 247.0), (180.0, 4.0, 38.0)) };
+    let f = if t < 0.0 { t + 1.0 } else { t };
+    let m = |x: f64, y: f64| (x + f * (y - x)).round() as u8;
+    RGBColor(m(a.0, b.0), m(a.1, b.1), m(a.2, b.2))
+}
+
+/// Max principal log strain of the first case's last snapshot, mirrored about the axis; the
+/// window is `zoom` × the particle (1 = whole section; < 1 = the contact region, 1.4 times as
+/// deep as wide).
+fn strain_map(name: &str, t: &Table, width_cm: f64, zoom: f64) -> Result<Drawn> {
+    let keys = t.s("case")?;
+    let disp = t.f("displacement_m")?;
+    let key = keys[0].clone();
+    let d0 = (0..keys.len()).filter(|&i| keys[i] == key).map(|i| disp[i]).fold(0.0, f64::max);
+    let idx: Vec<usize> = (0..keys.len()).filter(|&i| keys[i] == key && disp[i] == d0).collect();
+    let cols: Vec<Vec<f64>> = ["r1_m", "z1_m", "r2_m", "z2_m", "r3_m", "z3_m", "r4_m", "z4_m"].iter().map(|c| t.f(c)).collect::<Result<_>>()?;
+    let val: Vec<f64> = t.f("max_principal_log_strain")?.iter().map(|v| 1e3 * v).collect();
+    let r_max = idx.iter().flat_map(|&i| [cols[0][i], cols[2][i], cols[4][i], cols[6][i]]).fold(0.0, f64::max);
+    let z_max = idx.iter().flat_map(|&i| [cols[1][i], cols[3][i], cols[5][i], cols[7][i]]).fold(0.0, f64::max);
+    let (x_lo, x_hi) = (-zoom * r_max * 1e3, zoom * r_max * 1e3);
+    let depth = if zoom < 1.0 { 1.4 * zoom } else { 1.0 };
+    let (y_lo, y_hi) = (z_max * (1.0 - depth) * 1e3, z_max * 1e3 * (1.0 + 0.02 * depth));
+    let vmax = idx.iter().map(|&i| val[i].abs()).filter(|v| v.is_finite()).fold(1e-12, f64::max);
+    register_fonts()?;
+    let w_px = canvas_size(width_cm, 1.0).0 as f64;
+    let plot_w = 0.8 * w_px - pt(33.0) as f64;
+    let h_px = plot_w * (y_hi - y_lo) / (x_hi - x_lo) + pt(27.0) as f64;
+    let size = canvas_size(width_cm, h_px / w_px);
+    let x_desc = "radius r (mm)";
+    let y_desc = "height z (mm)";
+    let bar_desc = format!("ε₁ (‰) at δ = {:.0} µm", d0 * 1e6);
+    for s in [x_desc, y_desc, bar_desc.as_str()] {
+        check_glyphs(name, s)?;
+    }
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        root.fill(&WHITE).map_err(fig_err(name))?;
+        let (left, right) = root.split_horizontally((size.0 as f64 * 0.80) as u32);
+        let err = fig_err(name);
+        let mut chart = ChartBuilder::on(&left)
+            .margin_top(pt(6.0))
+            .margin_right(pt(4.0))
+            .margin_left(pt(2.0))
+            .margin_bottom(pt(2.0))
+            .x_label_area_size(pt(19.0))
+            .y_label_area_size(pt(27.0))
+            .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)
+            .map_err(&err)?;
+        let xf = tick_format(x_lo, x_hi);
+        let yf = tick_format(y_lo, y_hi);
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .label_style(text(7.0))
+            .axis_desc_style(text(8.0))
+            .x_labels(5)
+            .y_labels(5)
+            .x_label_formatter(&xf)
+            .y_label_formatter(&yf)
+            .disable_mesh()
+            .axis_style(BLACK.stroke_width(pt(0.5)))
+            .draw()
+            .map_err(&err)?;
+        for sign in [1.0, -1.0] {
+            chart
+                .draw_series(idx.iter().map(|&i| {
+                    let poly: Vec<(f64, f64)> = (0..4).map(|k| (sign * 1e3 * cols[2 * k][i], 1e3 * cols[2 * k + 1][i])).collect();
+                    Polygon::new(poly, diverging(val[i] / vmax).filled())
+                }))
+                .map_err(&err)?;
+        }
+        let mut bar = ChartBuilder::on(&right)
+            .margin_top(pt(6.0))
+            .margin_right(pt(2.0))
+            .margin_left(pt(4.0))
+            .margin_bottom(pt(2.0))
+            .x_label_area_size(pt(19.0))
+            .y_label_area_size(pt(0.0))
+            .right_y_label_area_size(pt(26.0))
+            .build_cartesian_2d(0.0..1.0, -vmax..vmax)
+            .map_err(&err)?
+            .set_secondary_coord(0.0..1.0, -vmax..vmax);
+        bar.draw_series((0..100).map(|k| {
+            let a = -vmax + 2.0 * vmax * k as f64 / 100.0;
+            let b = -vmax + 2.0 * vmax * (k + 1) as f64 / 100.0;
+            Rectangle::new([(0.0, a), (1.0, b)], diverging(-1.0 + 2.0 * (k as f64 + 0.5) / 100.0).filled())
+        }))
+        .map_err(&err)?;
+        let bf = tick_format(-vmax, vmax);
+        bar.configure_secondary_axes()
+            .y_desc(bar_desc.as_str())
+            .label_style(text(7.0))
+            .axis_desc_style(text(7.0))
+            .y_labels(5)
+            .y_label_formatter(&bf)
+            .x_labels(0)
+            .axis_style(BLACK.stroke_width(pt(0.5)))
+            .draw()
+            .map_err(&err)?;
+        root.present().map_err(fig_err(name))?;
+    }
+    Ok((encode(name, &svg, size, width_cm)?, 0))
+}
+
+fn depth_profile(dir: &Path, width_cm: f64) -> Result<Drawn> {
+    let t = Table::load(dir, "depth_profile.csv")?;
+    let (keys, disp, depth) = (t.s("case")?, t.f("displacement_m")?, t.f("depth_m")?);
+    let (emax, emin) = (t.f("max_principal_log_strain")?, t.f("min_principal_log_strain")?);
+    let key = keys[0].clone();
+    let mut snaps: Vec<f64> = (0..keys.len()).filter(|&i| keys[i] == key).map(|i| disp[i]).collect();
+    snaps.dedup();
+    let mut series = Vec::new();
+    let mut xs = Vec::new();
+    for (si, &d) in snaps.iter().enumerate() {
+        let idx: Vec<usize> = (0..keys.len()).filter(|&i| keys[i] == key && disp[i] == d).collect();
+        let tens: Vec<(f64, f64)> = idx.iter().map(|&i| (1e6 * depth[i], 1e3 * emax[i])).collect();
+        let comp: Vec<(f64, f64)> = idx.iter().map(|&i| (1e6 * depth[i], 1e3 * emin[i])).collect();
+        xs.extend(tens.iter().chain(&comp).map(|p| p.1));
+        series.push(Series::line(Some(format!("δ = {:.0} µm", d * 1e6)), tens, colour(si), 1.0));
+        series.push(Series { label: None, points: comp, colour: colour(si), kind: Kind::Dashed(1.0, 3.0, 2.0) });
+    }
+    let r_max = depth.iter().cloned().fold(0.0, f64::max);
+    let panel = Panel {
+        x_desc: "Depth below the platen (µm)".into(),
+        y_desc: "ε₁ (solid), ε₃ (dashed) on the axis (‰)".into(),
+        x_range: (0.0, 1e6 * (0.5 * r_max)),
+        y_range: padded(xs, 0.05, 0.35),
+        y_log: false,
+        series,
+        legend: Some(SeriesLabelPosition::LowerRight),
+    };
+    figure("crush_depth_profile", width_cm, 0.8, &[(panel, 1.0)])
+}

@@ -216,3 +216,71 @@ pub fn dem_particle_steps_per_second(fill_s: f64, steps: u64) -> Result<(usize, 
     }
     Ok((n0, out))
 }
+
+/// The crush FE speed case: the `studies/crush_gen3_rt.toml` set-up (1 mm sphere, JH-2, default
+/// calibration mesh), without field snapshots.
+pub fn fem_benchmark_setup() -> Result<crate::fem::CrushSetup> {
+    let text = include_str!("../studies/crush_gen3_rt.toml");
+    let study: crate::fem::run::CrushStudy = crate::study::parse_toml(Path::new("studies/crush_gen3_rt.toml"), text)?;
+    let mut s = study.crush;
+    s.fields_at.clear();
+    s.validate("studies/crush_gen3_rt.toml")?;
+    Ok(s)
+}
+
+/// One crush FE speed measurement: a run to fracture.
+#[derive(Debug, Clone)]
+pub struct FemSpeed {
+    /// Worker threads.
+    pub threads: usize,
+    /// Element updates per second.
+    pub element_steps_per_second: f64,
+    /// Wall time of the run (s), mesh generation included.
+    pub run_seconds: f64,
+    /// Elements and steps.
+    pub elements: usize,
+    /// Time steps.
+    pub steps: u64,
+    /// Peak force (N): the same on every thread count.
+    pub peak_force: f64,
+}
+
+/// Times one crush run to fracture on 1 thread and on all threads, `repeats` times each, and
+/// keeps the fastest of each.
+pub fn fem_speed(repeats: usize) -> Result<Vec<FemSpeed>> {
+    let setup = fem_benchmark_setup()?;
+    let all = rayon::current_num_threads();
+    let mut counts = vec![1];
+    if all > 1 {
+        counts.push(all);
+    }
+    let mut out = Vec::new();
+    for threads in counts {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| crate::Error::numerical("thread pool", e.to_string()))?;
+        let mut best: Option<FemSpeed> = None;
+        for _ in 0..repeats.max(1) {
+            let start = Instant::now();
+            let r = pool.install(|| -> Result<crate::fem::CrushResult> {
+                let mut t = crate::fem::CrushTest::new(setup.clone(), "<fem benchmark>")?;
+                t.run(None)
+            })?;
+            let secs = start.elapsed().as_secs_f64();
+            let s = FemSpeed {
+                threads,
+                element_steps_per_second: (r.steps * r.elements as u64) as f64 / secs,
+                run_seconds: secs,
+                elements: r.elements,
+                steps: r.steps,
+                peak_force: r.peak_force,
+            };
+            if best.as_ref().is_none_or(|b| s.run_seconds < b.run_seconds) {
+                best = Some(s);
+            }
+        }
+        out.extend(best);
+    }
+    Ok(out)
+}

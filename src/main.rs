@@ -54,6 +54,9 @@ enum Command {
         /// Run the DEM benchmark instead (the LIGGGHTS comparison case; about a minute).
         #[arg(long)]
         dem: bool,
+        /// Run the crush FE benchmark instead (JH-2 crush to fracture on 1 and all threads).
+        #[arg(long)]
+        fem: bool,
     },
 }
 
@@ -157,6 +160,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     f.particle_steps_per_second,
                     ph.join(", "),
                     f.rebuilds
+                );
+            }
+        }
+        Command::Bench { fem: true, .. } => {
+            println!("machine: {} threads available to rayon", rayon::current_num_threads());
+            for f in partlife::bench::fem_speed(3)? {
+                println!(
+                    "crush FE (studies/crush_gen3_rt.toml, {} elements, {} steps to fracture), {} thread(s): {:.4e} element-steps/s, run {:.2} s (goals: ≥ 2e7 element-steps/s on one core, ≥ 1.7× on two, run < 2 s); peak force {:.6} N",
+                    f.elements, f.steps, f.threads, f.element_steps_per_second, f.run_seconds, f.peak_force
                 );
             }
         }

@@ -3,8 +3,10 @@
 //! states its tolerance: half a unit in the last printed digit of the reference unless noted.
 
 mod verification {
+    mod crush_fe;
     mod dem;
     mod hertz;
+    mod jh2;
     mod lifetime;
     mod weibull;
 }

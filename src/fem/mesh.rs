@@ -120,7 +120,7 @@ impl Shape {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MeshParams {
-    /// Elements per expected contact radius at the pole (the one refinement parameter; default 8).
+    /// Elements per expected contact radius at the pole (the one refinement parameter; default 12).
     pub refinement: f64,
     /// Expected contact radius at the end of the run / R (default 0.15).
     pub expected_contact_ratio: f64,
@@ -134,7 +134,7 @@ pub struct MeshParams {
 
 impl Default for MeshParams {
     fn default() -> Self {
-        MeshParams { refinement: 8.0, expected_contact_ratio: 0.15, fine_zone: 1.5, growth: 1.15, bulk_elements: 12.0 }
+        MeshParams { refinement: 12.0, expected_contact_ratio: 0.15, fine_zone: 1.5, growth: 1.15, bulk_elements: 12.0 }
     }
 }
 

@@ -1,5 +1,5 @@
 //! Constitutive models of the crush FE: [`LinearElastic`] (verification) and the
-//! Johnson–Holmquist-2 ceramic model [`Jh2`], both in rate (hypo-elastic) form.
+//! Johnson–Holmquist-2 ceramic model ([`Jh2Params`], `kind = "jh2"`), both in rate (hypo-elastic) form.
 //!
 //! Stress is stored as four tensor components `[rr, zz, θθ, rz]` (plane strain: `θθ` is the
 //! out-of-plane `yy`), compression negative, with the deviator `s` and the pressure
@@ -466,8 +466,8 @@ mod tests {
                 // μ = V₀/V − 1 with V/V₀ = exp(tr Δε).
                 let mu = (-(de[0] + de[1] + de[2])).exp() - 1.0;
                 let sig = elastic_step(&m, de, mu);
-                for row in 0..4 {
-                    let fd = sig[row] / h;
+                for (row, s) in sig.iter().enumerate() {
+                    let fd = s / h;
                     let exact = if row == 3 {
                         if col == 3 { 2.0 * g } else { 0.0 }
                     } else if col == 3 {

@@ -107,7 +107,7 @@ impl Shape {
                 Ok(())
             }
             Shape::Spheroid { aspect } => {
-                if !(aspect >= 0.3 && aspect <= 3.0) {
+                if !(0.3..=3.0).contains(&aspect) {
                     return Err(Error::config(file, format!("{key}.aspect"), format!("must lie in [0.3, 3], got {aspect}")));
                 }
                 Ok(())

@@ -40,7 +40,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use element::{ElementForces, ElementState, Kernel};
+use element::{ElementState, Kernel};
 use material::MaterialParams;
 use mesh::{Mesh, MeshParams, Shape};
 
@@ -215,7 +215,8 @@ impl CrushSetup {
             return bad("crush.solver.samples", "step_interval ≥ 1 and samples ≥ 10 required".into());
         }
         let f = &self.fracture;
-        if !(f.drop > 0.0 && f.drop < 1.0) || !(f.sustain >= 0.0) || !(f.run_on >= 0.0) {
+        let ok = f.drop > 0.0 && f.drop < 1.0 && f.sustain >= 0.0 && f.run_on >= 0.0;
+        if !ok {
             return bad("crush.fracture", format!("drop must lie in (0, 1), sustain and run_on ≥ 0; got {f:?}"));
         }
         for (i, &d) in self.fields_at.iter().enumerate() {
@@ -312,10 +313,11 @@ pub struct CrushTest {
     mass: Vec<f64>,
     /// Element states.
     pub states: Vec<ElementState>,
-    forces: Vec<ElementForces>,
-    /// Node → (element, local index) lists, CSR, in element order.
+    forces: Vec<[f64; 8]>,
+    /// Node → element-force slots (`8e + 2k`, the r component; z follows), CSR, in element
+    /// order so the gather sums in a fixed order.
     adj_start: Vec<u32>,
-    adj: Vec<(u32, u8)>,
+    adj: Vec<u32>,
     f_node: Vec<[f64; 2]>,
     fix_r: Vec<bool>,
     fix_z: Vec<bool>,
@@ -384,10 +386,10 @@ impl CrushTest {
             count[i + 1] += count[i];
         }
         let mut fill = count.clone();
-        let mut adj = vec![(0u32, 0u8); 4 * ne];
+        let mut adj = vec![0u32; 4 * ne];
         for (e, conn) in mesh.elements.iter().enumerate() {
             for (k, &i) in conn.iter().enumerate() {
-                adj[fill[i as usize] as usize] = (e as u32, k as u8);
+                adj[fill[i as usize] as usize] = (8 * e + 2 * k) as u32;
                 fill[i as usize] += 1;
             }
         }
@@ -412,7 +414,7 @@ impl CrushTest {
             inv_mass,
             mass,
             states,
-            forces: vec![ElementForces::default(); ne],
+            forces: vec![[0.0; 8]; ne],
             adj_start: count,
             adj,
             f_node: vec![[0.0; 2]; nn],
@@ -477,6 +479,13 @@ impl CrushTest {
         }
     }
 
+    /// Overrides the time-step safety factor without validation: only for tests of the failure
+    /// path (a factor above 1 makes the run unstable).
+    pub fn override_safety(&mut self, safety: f64) {
+        self.setup.solver.safety = safety;
+        self.dt = self.stable_step();
+    }
+
     /// Disables the platen (free-body verification runs) and, when `free`, the symmetry
     /// conditions too.
     pub fn detach_platen(&mut self, free: bool) {
@@ -490,7 +499,7 @@ impl CrushTest {
     /// One explicit step; returns the (top platen impulse, equatorial reaction impulse) of the
     /// step per radian (N s).
     pub fn step(&mut self) -> Result<(f64, f64)> {
-        if self.steps > 0 && self.steps % self.setup.solver.step_interval as u64 == 0 {
+        if self.steps > 0 && self.steps.is_multiple_of(self.setup.solver.step_interval as u64) {
             self.dt = self.stable_step();
         }
         let dt = self.dt;
@@ -512,7 +521,7 @@ impl CrushTest {
                     let xe = conn.map(|i| x[i as usize]);
                     let ve = conn.map(|i| v[i as usize]);
                     let (f, a, b) = kernel.update(&xe, &ve, &mut st[k], dt).ok_or(e)?;
-                    fo[k] = f;
+                    fo[k] = f.f;
                     ei += a;
                     eh += b;
                 }
@@ -534,13 +543,14 @@ impl CrushTest {
             }
         }
         // 2. Gather nodal forces in element order.
-        let (forces, adj, start) = (&self.forces, &self.adj, &self.adj_start);
+        let (adj, start) = (&self.adj, &self.adj_start);
+        let flat: &[f64] = self.forces.as_flattened();
         self.f_node.par_iter_mut().enumerate().with_min_len(4 * CHUNK).for_each(|(i, f)| {
             let mut s = [0.0; 2];
-            for &(e, k) in &adj[start[i] as usize..start[i + 1] as usize] {
-                let fe = &forces[e as usize].f;
-                s[0] -= fe[2 * k as usize];
-                s[1] -= fe[2 * k as usize + 1];
+            for &slot in &adj[start[i] as usize..start[i + 1] as usize] {
+                let pair = &flat[slot as usize..slot as usize + 2];
+                s[0] -= pair[0];
+                s[1] -= pair[1];
             }
             *f = s;
         });

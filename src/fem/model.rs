@@ -14,8 +14,10 @@ use crate::model::{OutputSpec, Simulator, check_outputs};
 use crate::params::{Param, ParamSpace};
 
 type Setter = fn(&mut MaterialParams, f64);
+/// A JH-2 constant: its setter, getter and unit.
+type Jh2Field = (Setter, fn(&Jh2Params) -> f64, &'static str);
 
-fn jh2_setter(name: &str) -> Option<(Setter, fn(&Jh2Params) -> f64, &'static str)> {
+fn jh2_setter(name: &str) -> Option<Jh2Field> {
     macro_rules! field {
         ($f:ident, $unit:expr) => {
             Some((

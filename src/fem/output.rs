@@ -5,6 +5,9 @@
 //! `F = ∂x/∂X` (in-plane, with the initial-configuration shape-function gradients) and the hoop
 //! stretch `r̄/R̄`; principal log strains are `½ ln λ` of the eigenvalues λ of `b = F Fᵀ`.
 
+// Index loops over the four nodes read like the formulas above.
+#![allow(clippy::needless_range_loop)]
+
 use std::fmt::Write as _;
 
 use super::element::{ElementState, geometry};

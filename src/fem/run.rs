@@ -145,6 +145,12 @@ pub fn run_crush(loaded: &LoadedStudy, s: &CrushStudy, opts: &RunOptions) -> Res
         if let Some(w) = &r.quasi_static.warning {
             failures.push(format!("case {}: {w}", case.key));
         }
+        for &d in &t.setup.fields_at {
+            if !r.fields.iter().any(|f| f.displacement == d) {
+                let end = r.curve.last().map(|s| s.displacement).unwrap_or(0.0);
+                failures.push(format!("case {}: no fields at δ = {:.1} µm, the run ended at {:.1} µm (after fracture)", case.key, d * 1e6, end * 1e6));
+            }
+        }
         steps_total += r.steps * r.elements as u64;
         runs.push((case.clone(), t, r));
     }

@@ -6,6 +6,9 @@
 //! | `crush_strain_map` | Fig. 6c (max principal log strain, whole section) | `fields.csv` |
 //! | `crush_strain_map_contact` | Fig. 8 bottom (the same, contact region) | `fields.csv` |
 //! | `crush_depth_profile` | Fig. 8 top (principal strains below the contact vs depth) | `depth_profile.csv` |
+//!
+//! The strain maps show the first case's last snapshot; their colour range is ± the 98th
+//! percentile of |ε₁| in the window (larger values take the end colours).
 
 use std::path::Path;
 
@@ -120,7 +123,11 @@ fn strain_map(name: &str, t: &Table, width_cm: f64, zoom: f64) -> Result<Drawn> 
     let (x_lo, x_hi) = (-zoom * r_max * 1e3, zoom * r_max * 1e3);
     let depth = if zoom < 1.0 { 1.4 * zoom } else { 1.0 };
     let (y_lo, y_hi) = (z_max * (1.0 - depth) * 1e3, z_max * 1e3 * (1.0 + 0.02 * depth));
-    let vmax = idx.iter().map(|&i| val[i].abs()).filter(|v| v.is_finite()).fold(1e-12, f64::max);
+    // Colour range: ±the 98th percentile of |ε₁| in the window, so that a few crushed elements
+    // under the platen do not wash out the rest; larger values take the end colours.
+    let mut mags: Vec<f64> = idx.iter().map(|&i| val[i].abs()).filter(|v| v.is_finite()).collect();
+    mags.sort_by(f64::total_cmp);
+    let vmax = mags.get(((mags.len() as f64 * 0.98) as usize).min(mags.len().saturating_sub(1))).copied().unwrap_or(1e-12).max(1e-12);
     register_fonts()?;
     let w_px = canvas_size(width_cm, 1.0).0 as f64;
     let plot_w = 0.8 * w_px - pt(33.0) as f64;
@@ -178,7 +185,7 @@ fn strain_map(name: &str, t: &Table, width_cm: f64, zoom: f64) -> Result<Drawn> 
             .margin_bottom(pt(2.0))
             .x_label_area_size(pt(19.0))
             .y_label_area_size(pt(0.0))
-            .right_y_label_area_size(pt(26.0))
+            .right_y_label_area_size(pt(31.0))
             .build_cartesian_2d(0.0..1.0, -vmax..vmax)
             .map_err(&err)?
             .set_secondary_coord(0.0..1.0, -vmax..vmax);

@@ -211,3 +211,24 @@ fn an_unstable_run_stops_with_a_numerical_error() {
     assert!(msg.contains("step") && (msg.contains("element") || msg.contains("energy blow-up")), "{msg}");
     assert!(!e.is_bad_input());
 }
+
+/// Fig. 9 in plane strain, coarse mesh (the study `crush_irregular.toml` runs the default mesh):
+/// the irregular random outline fails at a lower displacement and force than the disc, and both
+/// platens carry the same force before fracture.
+#[test]
+fn irregular_outline_breaks_before_the_disc() {
+    let loaded = partlife::study::load(&root().join("studies/crush_irregular.toml")).unwrap();
+    let partlife::study::Study::Crush(study) = loaded.study else { panic!("not a crush study") };
+    let mut setups = study.setups("crush_irregular.toml").unwrap();
+    let mut out = Vec::new();
+    for s in setups.iter_mut().take(2) {
+        s.mesh.refinement = 6.0;
+        s.mesh.bulk_elements = 8.0;
+        s.fields_at.clear();
+        let mut t = CrushTest::new(s.clone(), "coarse").unwrap();
+        out.push(t.run(None).unwrap());
+    }
+    let (irregular, disc) = (&out[0], &out[1]);
+    let (di, dd) = (irregular.fracture_displacement.unwrap(), disc.fracture_displacement.unwrap());
+    assert!(di < 0.9 * dd && irregular.peak_force < 0.9 * disc.peak_force, "irregular {di:e} m / {} N/m vs disc {dd:e} m / {} N/m", irregular.peak_force, disc.peak_force);
+}

@@ -1,6 +1,7 @@
 //! Rigid flat platen with kinematic (velocity-constraint) contact.
 //!
-//! The top platen sits at `z_p(t) = z₀ − u(t)`; u follows a smooth cubic ramp of the velocity,
+//! The top platen sits at `z_p(t) = z₀ − u(t)` (a bottom platen, plane-strain runs only, at
+//! `z₀ + u(t)`); u follows a smooth cubic ramp of the velocity,
 //! `u̇ = V (3τ² − 2τ³)`, τ = t/t_r < 1, then the constant speed V. After each velocity update, a
 //! surface node whose predicted position would pass the platen gets the normal velocity that puts
 //! it exactly on the platen at the end of the step; the normal impulse `m Δv_z` is the platen
@@ -25,12 +26,19 @@ pub struct Platen {
     pub friction: f64,
     /// Whether the platen acts.
     pub active: bool,
+    /// −1 for the top platen (moves down, keeps nodes below it), +1 for a bottom platen.
+    pub sign: f64,
 }
 
 impl Platen {
-    /// A platen touching height `z0`.
+    /// A top platen touching height `z0` from above.
     pub fn new(z0: f64, speed: f64, ramp: f64, friction: f64) -> Self {
-        Platen { z0, speed, ramp, friction, active: true }
+        Platen { z0, speed, ramp, friction, active: true, sign: -1.0 }
+    }
+
+    /// A bottom platen touching height `z0` from below and moving up.
+    pub fn bottom(z0: f64, speed: f64, ramp: f64, friction: f64) -> Self {
+        Platen { sign: 1.0, ..Platen::new(z0, speed, ramp, friction) }
     }
 
     /// Platen displacement u(t) (m, downward).
@@ -62,14 +70,14 @@ impl Platen {
     /// the particle per radian (N s, positive = compression).
     #[allow(clippy::too_many_arguments)]
     pub fn constrain(&self, t_new: f64, dt: f64, surface: &[u32], x: &[[f64; 2]], v: &mut [[f64; 2]], mass: &[f64], fix_r: &[bool]) -> f64 {
-        let zp = self.z0 - self.displacement(t_new);
+        let zp = self.z0 + self.sign * self.displacement(t_new);
         let mut impulse = 0.0;
         for &i in surface {
             let i = i as usize;
             let z_pred = x[i][1] + dt * v[i][1];
-            if z_pred > zp {
+            if self.sign * (z_pred - zp) < 0.0 {
                 let vz = (zp - x[i][1]) / dt;
-                let dvz = v[i][1] - vz; // > 0
+                let dvz = (v[i][1] - vz).abs();
                 v[i][1] = vz;
                 let jn = mass[i] * dvz;
                 impulse += jn;

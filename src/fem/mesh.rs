@@ -180,7 +180,7 @@ pub struct Mesh {
     pub nodes: Vec<[f64; 2]>,
     /// Element connectivity, counter-clockwise.
     pub elements: Vec<[u32; 4]>,
-    /// Nodes on the symmetry axis r = 0.
+    /// Nodes on the symmetry axis r = 0 (plane-strain section: the centre node, held in x).
     pub axis: Vec<u32>,
     /// Nodes on the equatorial plane z = 0.
     pub equator: Vec<u32>,
@@ -274,6 +274,88 @@ impl Builder {
 impl Mesh {
     /// The axisymmetric quarter mesh of a particle of diameter `diameter` (m).
     pub fn quarter(shape: &Shape, diameter: f64, p: &MeshParams) -> Result<Mesh> {
+        let mut mesh = Self::unit_quarter(p);
+        let radius = 0.5 * diameter;
+        for n in mesh.nodes.iter_mut() {
+            let rho = (n[0] * n[0] + n[1] * n[1]).sqrt();
+            let theta = n[0].atan2(n[1]);
+            let f = shape.radius_factor(theta);
+            let (s, co) = theta.sin_cos();
+            *n = if rho > 0.0 { [radius * rho * f * s, radius * rho * f * co] } else { [0.0, 0.0] };
+        }
+        for &i in &mesh.axis {
+            mesh.nodes[i as usize][0] = 0.0;
+        }
+        for &i in &mesh.equator {
+            mesh.nodes[i as usize][1] = 0.0;
+        }
+        mesh.check_quality()?;
+        Ok(mesh)
+    }
+
+    /// The whole (x, z) section for plane strain: the unit quarter reflected into four quadrants
+    /// (fine at both poles), its angles warped piecewise linearly so that the poles land on the
+    /// directions `theta_top` and `theta_bottom` of the contact points (rad from +z towards +x),
+    /// and mapped radially onto the outline radius `radius(θ)` (m).
+    pub fn section(radius: &dyn Fn(f64) -> f64, theta_top: f64, theta_bottom: f64, p: &MeshParams) -> Result<Mesh> {
+        let q = Self::unit_quarter(p);
+        let nq = q.nodes.len();
+        let on_axis: Vec<bool> = (0..nq).map(|i| q.axis.binary_search(&(i as u32)).is_ok()).collect();
+        let on_eq: Vec<bool> = (0..nq).map(|i| q.equator.binary_search(&(i as u32)).is_ok()).collect();
+        let mut nodes: Vec<[f64; 2]> = Vec::new();
+        let mut elements = Vec::new();
+        let mut surface = Vec::new();
+        // Node ids per quadrant (sx, sz); shared nodes on the mirror lines are reused.
+        let mut ids: Vec<Vec<u32>> = Vec::new();
+        for (qi, (sx, sz)) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)].into_iter().enumerate() {
+            let mut map = vec![0u32; nq];
+            for i in 0..nq {
+                let reuse = if sx < 0.0 && on_axis[i] {
+                    Some(ids[qi - 1][i])
+                } else if sz < 0.0 && on_eq[i] {
+                    Some(ids[qi - 2][i])
+                } else {
+                    None
+                };
+                map[i] = reuse.unwrap_or_else(|| {
+                    nodes.push([sx * q.nodes[i][0], sz * q.nodes[i][1]]);
+                    (nodes.len() - 1) as u32
+                });
+            }
+            for e in &q.elements {
+                let c = e.map(|i| map[i as usize]);
+                // One reflection reverses the orientation.
+                elements.push(if sx * sz < 0.0 { [c[3], c[2], c[1], c[0]] } else { c });
+            }
+            surface.extend(q.surface.iter().map(|&i| map[i as usize]));
+            ids.push(map);
+        }
+        surface.sort_unstable();
+        surface.dedup();
+        let two_pi = std::f64::consts::TAU;
+        let pi = std::f64::consts::PI;
+        // Clockwise (towards +x) from the top pole to the bottom pole, and the rest.
+        let span_right = (theta_bottom - theta_top).rem_euclid(two_pi);
+        let span_left = two_pi - span_right;
+        for n in nodes.iter_mut() {
+            let rho = (n[0] * n[0] + n[1] * n[1]).sqrt();
+            if rho == 0.0 {
+                continue;
+            }
+            let t = n[0].atan2(n[1]);
+            let theta = if t >= 0.0 { theta_top + span_right * t / pi } else { theta_top + span_left * t / pi };
+            let (s, c) = theta.sin_cos();
+            let r = radius(theta);
+            *n = [rho * r * s, rho * r * c];
+        }
+        let origin = nodes.iter().position(|n| n[0] == 0.0 && n[1] == 0.0).map(|i| i as u32);
+        let mesh = Mesh { nodes, elements, axis: origin.into_iter().collect(), equator: Vec::new(), surface };
+        mesh.check_quality()?;
+        Ok(mesh)
+    }
+
+    /// The unit quarter disc (R = 1), graded towards the pole (0, 1).
+    fn unit_quarter(p: &MeshParams) -> Mesh {
         let r = 1.0; // unit sphere; scaled and shaped at the end
         let h0 = p.expected_contact_ratio / p.refinement;
         let fine = p.fine_zone * p.expected_contact_ratio;
@@ -343,25 +425,7 @@ impl Mesh {
             v.sort_unstable();
             v.dedup();
         }
-        // Shape and scale.
-        let radius = 0.5 * diameter;
-        let mut nodes = b.nodes;
-        for n in nodes.iter_mut() {
-            let rho = (n[0] * n[0] + n[1] * n[1]).sqrt();
-            let theta = n[0].atan2(n[1]);
-            let f = shape.radius_factor(theta);
-            let (s, co) = theta.sin_cos();
-            *n = if rho > 0.0 { [radius * rho * f * s, radius * rho * f * co] } else { [0.0, 0.0] };
-        }
-        for &i in &axis {
-            nodes[i as usize][0] = 0.0;
-        }
-        for &i in &equator {
-            nodes[i as usize][1] = 0.0;
-        }
-        let mesh = Mesh { nodes, elements: b.elements, axis, equator, surface };
-        mesh.check_quality()?;
-        Ok(mesh)
+        Mesh { nodes: b.nodes, elements: b.elements, axis, equator, surface }
     }
 
     /// Signed area of element `e` (m²), positive counter-clockwise.

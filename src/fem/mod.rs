@@ -33,6 +33,7 @@ pub mod element;
 pub mod material;
 pub mod mesh;
 pub mod model;
+pub mod outline;
 pub mod output;
 pub mod run;
 
@@ -127,6 +128,17 @@ impl Default for FractureParams {
     }
 }
 
+/// Kinematics of the section.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kinematics {
+    /// The (r, z) quarter of a body of revolution (forces in N).
+    #[default]
+    Axisymmetric,
+    /// The whole (x, z) section of a prism, two platens (forces per unit thickness, N/m).
+    PlaneStrain,
+}
+
 /// One crush test.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -153,6 +165,12 @@ pub struct CrushSetup {
     /// Total displacements δ_tot (m) at which element fields are kept.
     #[serde(default)]
     pub fields_at: Vec<f64>,
+    /// Axisymmetric (default) or plane strain.
+    #[serde(default)]
+    pub kinematics: Kinematics,
+    /// An irregular outline (plane strain only); replaces `shape`.
+    #[serde(default)]
+    pub outline: Option<outline::Outline>,
 }
 
 fn sphere() -> Shape {
@@ -160,6 +178,28 @@ fn sphere() -> Shape {
 }
 
 impl CrushSetup {
+    /// The mesh of this set-up: the axisymmetric quarter, or the plane-strain section of the
+    /// shape or the outline.
+    pub fn mesh(&self, file: &str) -> Result<Mesh> {
+        let radius = 0.5 * self.diameter;
+        let mesh = match (&self.kinematics, &self.outline) {
+            (Kinematics::Axisymmetric, _) => Mesh::quarter(&self.shape, self.diameter, &self.mesh),
+            (Kinematics::PlaneStrain, None) => {
+                let shape = self.shape;
+                Mesh::section(&|t: f64| radius * shape.radius_factor(t.abs().min(std::f64::consts::PI - t.abs())), 0.0, std::f64::consts::PI, &self.mesh)
+            }
+            (Kinematics::PlaneStrain, Some(o)) => {
+                let poly = o.polygon(self.diameter, file, "crush.outline")?;
+                let (top, bottom) = poly.poles();
+                Mesh::section(&|t: f64| poly.radius(t), top, bottom, &self.mesh)
+            }
+        };
+        mesh.map_err(|e| match e {
+            Error::Config { key, rule, .. } => Error::config(file, format!("crush.{key}"), rule),
+            other => other,
+        })
+    }
+
     /// Dilatational wave speed at rest (m/s).
     pub fn wave_speed(&self) -> f64 {
         let m = self.material.build();
@@ -173,6 +213,9 @@ impl CrushSetup {
             return bad("crush.diameter", format!("must be positive, got {}", self.diameter));
         }
         self.shape.validate(file, "crush.shape")?;
+        if self.outline.is_some() && self.kinematics != Kinematics::PlaneStrain {
+            return bad("crush.outline", "an irregular outline needs kinematics = \"plane_strain\"".into());
+        }
         self.material.validate(file, "crush.material")?;
         self.mesh.validate(file, "crush.mesh")?;
         let p = &self.platen;
@@ -322,6 +365,8 @@ pub struct CrushTest {
     fix_r: Vec<bool>,
     fix_z: Vec<bool>,
     platen: contact::Platen,
+    /// The bottom platen (plane strain; axisymmetric runs use the equatorial symmetry plane).
+    bottom: Option<contact::Platen>,
     /// Time (s).
     pub time: f64,
     dt: f64,
@@ -339,11 +384,9 @@ impl CrushTest {
     /// Builds the mesh and the initial state; errors before any step runs.
     pub fn new(setup: CrushSetup, file: &str) -> Result<Self> {
         setup.validate(file)?;
-        let mesh = Mesh::quarter(&setup.shape, setup.diameter, &setup.mesh).map_err(|e| match e {
-            Error::Config { key, rule, .. } => Error::config(file, format!("crush.{key}"), rule),
-            other => other,
-        })?;
-        Self::with_mesh(setup, mesh, true)
+        let mesh = setup.mesh(file)?;
+        let axisymmetric = setup.kinematics == Kinematics::Axisymmetric;
+        Self::with_mesh(setup, mesh, axisymmetric)
     }
 
     /// A test on a given mesh (axisymmetric when `axisymmetric`).
@@ -395,17 +438,20 @@ impl CrushTest {
         }
         let mut fix_r = vec![false; nn];
         let mut fix_z = vec![false; nn];
-        if axisymmetric {
-            for &i in &mesh.axis {
-                fix_r[i as usize] = true;
-            }
+        // Axisymmetric: v_r = 0 on the axis. Plane strain: the centre node is held in x against
+        // rigid sliding between frictionless platens.
+        for &i in &mesh.axis {
+            fix_r[i as usize] = true;
         }
         for &i in &mesh.equator {
             fix_z[i as usize] = true;
         }
         let top = mesh.surface.iter().map(|&i| mesh.nodes[i as usize][1]).fold(f64::MIN, f64::max);
+        let low = mesh.surface.iter().map(|&i| mesh.nodes[i as usize][1]).fold(f64::MAX, f64::min);
         let transit = setup.diameter / kernel.wave_speed;
-        let platen = contact::Platen::new(top, setup.platen.speed, setup.platen.ramp_transits * transit, setup.platen.friction);
+        let (speed, ramp, mu) = (setup.platen.speed, setup.platen.ramp_transits * transit, setup.platen.friction);
+        let platen = contact::Platen::new(top, speed, ramp, mu);
+        let bottom = (!axisymmetric).then(|| contact::Platen::bottom(low, speed, ramp, mu));
         let x = mesh.nodes.clone();
         let mut t = CrushTest {
             kernel,
@@ -421,6 +467,7 @@ impl CrushTest {
             fix_r,
             fix_z,
             platen,
+            bottom,
             time: 0.0,
             dt: 0.0,
             steps: 0,
@@ -490,14 +537,18 @@ impl CrushTest {
     /// conditions too.
     pub fn detach_platen(&mut self, free: bool) {
         self.platen.active = false;
+        if let Some(b) = self.bottom.as_mut() {
+            b.active = false;
+        }
         if free {
             self.fix_r.iter_mut().for_each(|f| *f = false);
             self.fix_z.iter_mut().for_each(|f| *f = false);
         }
     }
 
-    /// One explicit step; returns the (top platen impulse, equatorial reaction impulse) of the
-    /// step per radian (N s).
+    /// One explicit step; returns the (top platen impulse, bottom impulse) of the step per
+    /// radian (N s) or per unit thickness (N s/m); the bottom is the equatorial reaction of an
+    /// axisymmetric run and the bottom platen of a plane-strain run.
     pub fn step(&mut self) -> Result<(f64, f64)> {
         if self.steps > 0 && self.steps.is_multiple_of(self.setup.solver.step_interval as u64) {
             self.dt = self.stable_step();
@@ -570,8 +621,12 @@ impl CrushTest {
         }
         let t_new = self.time + dt;
         let top = if self.platen.active { self.platen.constrain(t_new, dt, &self.mesh.surface, &self.x, &mut self.v, &self.mass, &self.fix_r) } else { 0.0 };
-        // External work: the platen's impulse times its velocity over the step.
-        self.e_ext += top * self.platen.velocity(self.time + 0.5 * dt);
+        if let Some(b) = self.bottom.filter(|b| b.active) {
+            bottom = b.constrain(t_new, dt, &self.mesh.surface, &self.x, &mut self.v, &self.mass, &self.fix_r);
+        }
+        // External work: each platen's impulse times its speed over the step.
+        let speed = self.platen.velocity(self.time + 0.5 * dt);
+        self.e_ext += top * speed + if self.bottom.is_some() { bottom * speed } else { 0.0 };
         for (xi, vi) in self.x.iter_mut().zip(&self.v) {
             xi[0] += dt * vi[0];
             xi[1] += dt * vi[1];

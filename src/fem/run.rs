@@ -46,6 +46,9 @@ pub struct CrushCase {
     /// Diameter overriding the base (m).
     #[serde(default)]
     pub diameter: Option<f64>,
+    /// Irregular outline overriding the base (plane strain).
+    #[serde(default)]
+    pub outline: Option<super::outline::Outline>,
 }
 
 /// `[figures]`
@@ -108,12 +111,18 @@ impl CrushStudy {
                 if let Some(d) = c.diameter {
                     s.diameter = d;
                 }
+                if let Some(o) = &c.outline {
+                    s.outline = Some(o.clone());
+                }
                 s.validate(file).map_err(|e| match e {
                     Error::Config { key, rule, .. } => Error::config(file, format!("case[{i}] ({}): {key}", c.key), rule),
                     other => other,
                 })?;
-                super::mesh::Mesh::quarter(&s.shape, s.diameter, &s.mesh).map_err(|e| match e {
-                    Error::Config { rule, .. } => Error::config(file, format!("case[{i}] ({}): crush.mesh", c.key), rule),
+                if s.kinematics != self.crush.kinematics {
+                    return Err(Error::config(file, format!("case[{i}]"), "every case shares the study's kinematics (forces per radian and per thickness do not compare)"));
+                }
+                s.mesh(file).map_err(|e| match e {
+                    Error::Config { key, rule, .. } => Error::config(file, format!("case[{i}] ({}): {key}", c.key), rule),
                     other => other,
                 })?;
                 Ok(s)
@@ -183,7 +192,9 @@ fn write_tables(dir: &mut ReportDir, runs: &[(CrushCase, CrushTest, CrushResult)
             }
         }
     }
-    let names = ["time_s", "displacement_m", "force_n", "force_bottom_n", "kinetic_j", "internal_j", "hourglass_j", "external_work_j"];
+    // Plane strain: forces and energies per unit thickness (column names say so).
+    let per = if runs.first().is_some_and(|r| r.1.setup.kinematics == super::Kinematics::PlaneStrain) { "_per_m" } else { "" };
+    let names = ["time_s".to_string(), "displacement_m".into(), format!("force_n{per}"), format!("force_bottom_n{per}"), format!("kinetic_j{per}"), format!("internal_j{per}"), format!("hourglass_j{per}"), format!("external_work_j{per}")];
     let mut columns = vec![scol("case", keys), scol("label", labels)];
     columns.extend(names.iter().zip(cols).map(|(n, v)| fcol(n, v)));
     dir.write_table("curves", &mut table(columns)?)?;
@@ -196,7 +207,7 @@ fn write_tables(dir: &mut ReportDir, runs: &[(CrushCase, CrushTest, CrushResult)
         scol("label", runs.iter().map(|r| r.0.label.clone()).collect()),
         fcol("diameter_m", runs.iter().map(|r| r.1.setup.diameter).collect()),
         fcol("pole_curvature_ratio", runs.iter().map(|r| r.1.setup.shape.pole_curvature_ratio()).collect()),
-        fcol("peak_force_n", get(&|r| r.peak_force)),
+        fcol(&format!("peak_force_n{per}"), get(&|r| r.peak_force)),
         fcol("peak_displacement_m", get(&|r| r.peak_displacement)),
         fcol("fracture_displacement_m", get(&|r| r.fracture_displacement.unwrap_or(f64::NAN))),
         fcol("max_kinetic_ratio", get(&|r| r.quasi_static.max_kinetic_ratio)),
@@ -211,7 +222,8 @@ fn write_tables(dir: &mut ReportDir, runs: &[(CrushCase, CrushTest, CrushResult)
     dir.write_table("crush_summary", &mut df)?;
     for (c, _, r) in runs {
         let frac = r.fracture_displacement.map(|d| format!("fracture at δ = {:.1} µm", d * 1e6)).unwrap_or_else(|| "no fracture".into());
-        headlines.push(format!("{}: peak force {:.1} N at δ = {:.1} µm, {frac}; {} elements, {} steps", c.label, r.peak_force, r.peak_displacement * 1e6, r.elements, r.steps));
+        let unit = if per.is_empty() { "N" } else { "N/m" };
+        headlines.push(format!("{}: peak force {:.4e} {unit} at δ = {:.1} µm, {frac}; {} elements, {} steps", c.label, r.peak_force, r.peak_displacement * 1e6, r.elements, r.steps));
     }
 
     // Fields: polygons and values; depth profiles; VTU files.
@@ -240,7 +252,7 @@ fn write_tables(dir: &mut ReportDir, runs: &[(CrushCase, CrushTest, CrushResult)
                 }
             }
             let platen_z = t.mesh.surface.iter().map(|&i| t.mesh.nodes[i as usize][1]).fold(f64::MIN, f64::max) - 0.5 * snap.displacement;
-            for p in axis_column(&t.mesh, &snap.values, platen_z) {
+            for p in axis_column(&t.mesh, &snap.nodes, &snap.values, platen_z) {
                 d_case.push(c.key.clone());
                 d_disp.push(snap.displacement);
                 d_depth.push(p.depth);

@@ -65,9 +65,15 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
 
 fn force_displacement(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let t = Table::load(dir, "curves.csv")?;
-    let (keys, labels, d, f) = (t.s("case")?, t.s("label")?, t.f("displacement_m")?, t.f("force_n")?);
+    // Plane-strain reports carry forces per unit thickness (N/m), drawn in N/mm.
+    let plane = t.df.get_column_names().iter().any(|c| c.as_str() == "force_n_per_m");
+    let (fcol, pcol, scale, y_desc) =
+        if plane { ("force_n_per_m", "peak_force_n_per_m", 1e-3, "Force per thickness F/L (N/mm)") } else { ("force_n", "peak_force_n", 1.0, "Platen force F (N)") };
+    let (keys, labels, d) = (t.s("case")?, t.s("label")?, t.f("displacement_m")?);
+    let f: Vec<f64> = t.f(fcol)?.iter().map(|v| v * scale).collect();
     let s = Table::load(dir, "crush_summary.csv")?;
-    let (skeys, peak, at, frac) = (s.s("case")?, s.f("peak_force_n")?, s.f("peak_displacement_m")?, s.f("fracture_displacement_m")?);
+    let (skeys, at, frac) = (s.s("case")?, s.f("peak_displacement_m")?, s.f("fracture_displacement_m")?);
+    let peak: Vec<f64> = s.f(pcol)?.iter().map(|v| v * scale).collect();
     let mut series = Vec::new();
     let mut marks = Vec::new();
     for (ci, key) in cases(&keys).iter().enumerate() {
@@ -88,7 +94,7 @@ fn force_displacement(dir: &Path, width_cm: f64) -> Result<Drawn> {
     }
     let panel = Panel {
         x_desc: "Total crush displacement δ (µm)".into(),
-        y_desc: "Platen force F (N)".into(),
+        y_desc: y_desc.into(),
         x_range: padded(d.iter().map(|x| 1e6 * x), 0.0, 0.02),
         y_range: (0.0, padded(f.iter().cloned(), 0.0, 0.3).1),
         y_log: false,
@@ -119,10 +125,16 @@ fn strain_map(name: &str, t: &Table, width_cm: f64, zoom: f64) -> Result<Drawn> 
     let cols: Vec<Vec<f64>> = ["r1_m", "z1_m", "r2_m", "z2_m", "r3_m", "z3_m", "r4_m", "z4_m"].iter().map(|c| t.f(c)).collect::<Result<_>>()?;
     let val: Vec<f64> = t.f("max_principal_log_strain")?.iter().map(|v| 1e3 * v).collect();
     let r_max = idx.iter().flat_map(|&i| [cols[0][i], cols[2][i], cols[4][i], cols[6][i]]).fold(0.0, f64::max);
+    let r_min = idx.iter().flat_map(|&i| [cols[0][i], cols[2][i], cols[4][i], cols[6][i]]).fold(0.0, f64::min);
     let z_max = idx.iter().flat_map(|&i| [cols[1][i], cols[3][i], cols[5][i], cols[7][i]]).fold(0.0, f64::max);
+    // An axisymmetric quarter (r ≥ 0) is mirrored about the axis; a plane-strain section is whole.
+    let mirror = r_min >= 0.0;
+    let r_max = r_max.max(-r_min);
     let (x_lo, x_hi) = (-zoom * r_max * 1e3, zoom * r_max * 1e3);
     let depth = if zoom < 1.0 { 1.4 * zoom } else { 1.0 };
-    let (y_lo, y_hi) = (z_max * (1.0 - depth) * 1e3, z_max * 1e3 * (1.0 + 0.02 * depth));
+    let z_min = idx.iter().flat_map(|&i| [cols[1][i], cols[3][i], cols[5][i], cols[7][i]]).fold(0.0, f64::min);
+    let y_lo = if !mirror && zoom >= 1.0 { z_min * 1e3 * 1.02 } else { z_max * (1.0 - depth) * 1e3 };
+    let y_hi = z_max * 1e3 * (1.0 + 0.02 * depth);
     // Colour range: ±the 98th percentile of |ε₁| in the window, so that a few crushed elements
     // under the platen do not wash out the rest; larger values take the end colours.
     let mut mags: Vec<f64> = idx.iter().map(|&i| val[i].abs()).filter(|v| v.is_finite()).collect();
@@ -133,7 +145,7 @@ fn strain_map(name: &str, t: &Table, width_cm: f64, zoom: f64) -> Result<Drawn> 
     let plot_w = 0.8 * w_px - pt(33.0) as f64;
     let h_px = plot_w * (y_hi - y_lo) / (x_hi - x_lo) + pt(27.0) as f64;
     let size = canvas_size(width_cm, h_px / w_px);
-    let x_desc = "radius r (mm)";
+    let x_desc = if mirror { "radius r (mm)" } else { "x (mm)" };
     let y_desc = "height z (mm)";
     let bar_desc = format!("ε₁ (‰) at δ = {:.0} µm", d0 * 1e6);
     for s in [x_desc, y_desc, bar_desc.as_str()] {
@@ -170,7 +182,7 @@ fn strain_map(name: &str, t: &Table, width_cm: f64, zoom: f64) -> Result<Drawn> 
             .axis_style(BLACK.stroke_width(pt(0.5)))
             .draw()
             .map_err(&err)?;
-        for sign in [1.0, -1.0] {
+        for sign in if mirror { vec![1.0, -1.0] } else { vec![1.0] } {
             chart
                 .draw_series(idx.iter().map(|&i| {
                     let poly: Vec<(f64, f64)> = (0..4).map(|k| (sign * 1e3 * cols[2 * k][i], 1e3 * cols[2 * k + 1][i])).collect();

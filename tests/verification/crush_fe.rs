@@ -39,6 +39,8 @@ fn setup(refinement: f64, max_displacement: f64) -> CrushSetup {
         solver: SolverParams::default(),
         fracture: FractureParams::default(),
         fields_at: vec![],
+        kinematics: partlife::fem::Kinematics::Axisymmetric,
+        outline: None,
     }
 }
 
@@ -239,4 +241,35 @@ fn undamped_elastic_run_conserves_energy() {
     let (ei, _, _) = t.energies();
     assert!(ei > 0.3 * e0, "the mode exchanged energy: E_int = {ei:e} of {e0:e}");
     assert!(worst < 0.01, "energy drift {:.3} %", 100.0 * worst);
+}
+
+/// Plane strain: an elastic disc (a long cylinder) between two rigid platens against the
+/// line-contact solution for the diametral compression of a cylinder (Johnson 1985, Contact
+/// Mechanics, eq. 5.36 with rigid plates): `δ_tot = 2P(1−ν²)/(πE) (2 ln(4R/b) − 1)`,
+/// `b = √(4PR/(πE*))`, P the force per unit length. This formula already contains the bulk
+/// compression of the disc, so no finite-body correction is needed.
+#[test]
+fn plane_strain_disc_matches_the_cylinder_solution() {
+    let mut s = setup(MeshParams::default().refinement, 12e-6);
+    s.kinematics = partlife::fem::Kinematics::PlaneStrain;
+    let mut t = CrushTest::new(s, "disc").unwrap();
+    let r = t.run(None).unwrap();
+    assert!(r.quasi_static.warning.is_none(), "{:?}", r.quasi_static);
+    let delta = |p: f64| {
+        let b = (4.0 * p * R / (std::f64::consts::PI * e_star())).sqrt();
+        2.0 * p * (1.0 - NU * NU) / (std::f64::consts::PI * E) * (2.0 * (4.0 * R / b).ln() - 1.0)
+    };
+    let mut worst: f64 = 0.0;
+    for smp in r.curve.iter().filter(|x| x.displacement > 3e-6) {
+        let (mut lo, mut hi) = (0.0, 1e8);
+        for _ in 0..200 {
+            let m = 0.5 * (lo + hi);
+            if delta(m) < smp.displacement { lo = m } else { hi = m }
+        }
+        worst = worst.max((smp.force / lo - 1.0).abs());
+        // Both platens carry the same force.
+        assert!((smp.force - smp.force_bottom).abs() < 0.05 * smp.force, "{smp:?}");
+    }
+    eprintln!("plane-strain disc: largest error {:.2} %", 100.0 * worst);
+    assert!(worst < 0.03, "largest error {:.2} %", 100.0 * worst);
 }

@@ -22,7 +22,8 @@
 //!
 //! Physical models implement [`model::Simulator`] over a [`params::ParamSpace`]; methods
 //! (Monte Carlo, least squares, MCMC, experiment design, discrepancy) only see that trait.
-//! Implementers today: [`lifetime::LifetimeChain`], [`dem::model::TubeBankModel`], [`testfns::Ishigami`].
+//! Implementers today: [`lifetime::LifetimeChain`], [`dem::model::TubeBankModel`],
+//! [`fem::model::CrushModel`], [`testfns::Ishigami`].
 //!
 //! ## Module map
 //!
@@ -36,11 +37,12 @@
 //! | [`weibull`] | ASTM C1239 MLE, unbiasing, pivotal and Fisher bounds, probability plot, size scaling |
 //! | [`lifetime`] | p(V), P_N without underflow, impacts per year, the chain as a Simulator |
 //! | [`dem`] | native DEM of the tube bank: Hertz–Mindlin, cell lists, impacts, profiles, VTK; `TubeBankModel` |
+//! | [`fem`] | native crush FE: axisymmetric/plane-strain explicit quads, JH-2, platens, fields, VTU; `CrushModel` |
 //! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation |
 //! | [`synth`] | the documented generator of the synthetic crush datasets |
 //! | [`stats`] | median, Pearson correlation with p-value |
 //! | [`study`] | TOML study schema (unknown keys rejected), validation, dispatch |
-//! | [`runner`] | runs a lifetime study into its tables |
+//! | [`runner`] | runs a study into its report (lifetime here; DEM and crush in their modules) |
 //! | [`io`] | atomic report directories, CSV tables, manifest |
 //! | [`report`] | figures from tables only: SVG (plotters) → PNG (resvg) and vector PDF (svg2pdf) |
 //! | [`bench`](mod@bench) | the speed figures the issues ask for |

@@ -11,8 +11,8 @@
 //! * a non-finite output is a bug → [`Error::Numerical`] (see [`check_outputs`]).
 //!
 //! Implementers: [`crate::lifetime::LifetimeChain`] and the analytic
-//! [`crate::testfns::Ishigami`], the tube-bank DEM [`crate::dem::model::TubeBankModel`]; later the
-//! crush FE.
+//! [`crate::testfns::Ishigami`], the tube-bank DEM [`crate::dem::model::TubeBankModel`] and the
+//! crush FE [`crate::fem::model::CrushModel`].
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};

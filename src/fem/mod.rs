@@ -5,6 +5,9 @@
 //! * Mesh ([`mesh`]): the (r, z) quarter of a body of revolution, graded towards the contact
 //!   pole; symmetry conditions `v_r = 0` on the axis and `v_z = 0` on the equatorial plane, so
 //!   the platen displacement u is half the total crush displacement δ_tot = 2u (both contacts).
+//!   Plane strain ([`Kinematics::PlaneStrain`]): the whole (x, z) section, graded at both
+//!   contacts, between a top and a bottom platen each moving by u, for irregular outlines
+//!   ([`outline`]) that an axisymmetric model cannot represent; forces per unit thickness.
 //! * Element ([`element`]): 4-node axisymmetric quad, one-point integration, stiffness
 //!   hourglass control, bulk viscosity.
 //! * Kinematics: updated Lagrangian **rate form** — the rate of deformation D and spin W are

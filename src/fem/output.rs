@@ -129,21 +129,21 @@ pub struct DepthSample {
 /// the vertical through the top contact node (`nodes`: current positions), upper half only.
 pub fn axis_column(mesh: &Mesh, nodes: &[[f64; 2]], fields: &ElementFields, platen_z: f64) -> Vec<DepthSample> {
     let on_axis: std::collections::HashSet<u32> = mesh.axis.iter().cloned().collect();
-    let keep: Box<dyn Fn(&[u32; 4], usize) -> bool> = if mesh.axis.len() >= 2 {
-        Box::new(|c: &[u32; 4], _| c.iter().filter(|i| on_axis.contains(i)).count() >= 2)
-    } else {
-        let top = mesh.surface.iter().cloned().max_by(|&a, &b| mesh.nodes[a as usize][1].total_cmp(&mesh.nodes[b as usize][1]));
-        let xc = top.map(|i| nodes[i as usize][0]).unwrap_or(0.0);
-        Box::new(move |c: &[u32; 4], e| {
+    let top = mesh.surface.iter().cloned().max_by(|&a, &b| mesh.nodes[a as usize][1].total_cmp(&mesh.nodes[b as usize][1]));
+    let xc = top.map(|i| nodes[i as usize][0]).unwrap_or(0.0);
+    let keep = |e: usize, c: &[u32; 4]| {
+        if mesh.axis.len() >= 2 {
+            c.iter().filter(|i| on_axis.contains(i)).count() >= 2
+        } else {
             let (lo, hi) = c.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &i| (lo.min(nodes[i as usize][0]), hi.max(nodes[i as usize][0])));
             lo <= xc && xc < hi && fields.centroid[e][1] > 0.0
-        })
+        }
     };
     let mut v: Vec<DepthSample> = mesh
         .elements
         .iter()
         .enumerate()
-        .filter(|(e, c)| keep(c, *e))
+        .filter(|(e, c)| keep(*e, c))
         .map(|(e, _)| DepthSample { depth: platen_z - fields.centroid[e][1], element: e })
         .collect();
     v.sort_by(|a, b| a.depth.total_cmp(&b.depth));

@@ -222,8 +222,8 @@ fn write_tables(dir: &mut ReportDir, runs: &[(CrushCase, CrushTest, CrushResult)
     dir.write_table("crush_summary", &mut df)?;
     for (c, _, r) in runs {
         let frac = r.fracture_displacement.map(|d| format!("fracture at δ = {:.1} µm", d * 1e6)).unwrap_or_else(|| "no fracture".into());
-        let unit = if per.is_empty() { "N" } else { "N/m" };
-        headlines.push(format!("{}: peak force {:.4e} {unit} at δ = {:.1} µm, {frac}; {} elements, {} steps", c.label, r.peak_force, r.peak_displacement * 1e6, r.elements, r.steps));
+        let force = if per.is_empty() { format!("{:.1} N", r.peak_force) } else { format!("{:.3e} N/m", r.peak_force) };
+        headlines.push(format!("{}: peak force {force} at δ = {:.1} µm, {frac}; {} elements, {} steps", c.label, r.peak_displacement * 1e6, r.elements, r.steps));
     }
 
     // Fields: polygons and values; depth profiles; VTU files.

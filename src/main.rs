@@ -79,6 +79,15 @@ enum DatasetsCommand {
     },
 }
 
+/// Prints a line to stdout. A closed pipe (`partlife run … | head -1`) is not a failure: the
+/// report is already on disk, so write errors on stdout are ignored instead of panicking.
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
@@ -100,20 +109,20 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let opts = partlife::runner::RunOptions { reports_root: reports_dir, progress: !quiet };
             let summary = partlife::runner::run_file(&study, &opts)?;
             for line in &summary.headlines {
-                println!("{line}");
+                out!("{line}");
             }
-            println!("wrote {} in {:.2} s", summary.report_dir.display(), summary.wall_time_s);
+            out!("wrote {} in {:.2} s", summary.report_dir.display(), summary.wall_time_s);
         }
         Command::Report { name, reports_dir } => {
             let dir = reports_dir.join(&name);
             let rendered = partlife::report::redraw(&dir)?;
-            println!("redrew {} files in {}", rendered.files.len(), dir.display());
+            out!("redrew {} files in {}", rendered.files.len(), dir.display());
         }
         Command::Datasets { command: DatasetsCommand::Synth { settings, out_dir } } => {
             let s = partlife::synth::SynthSettings::load(&settings)?;
             let out = out_dir.unwrap_or_else(|| settings.parent().map(|p| p.to_path_buf()).unwrap_or_default());
             for sum in partlife::synth::synthesize(&s, &out)? {
-                println!(
+                out!(
                     "{}: {} particles, d = {:.0}–{:.0} µm, median F(0.8–1.0 mm) = {:.1} N, r(F, d) = {:.3} (p = {:.3})",
                     sum.path.display(),
                     sum.count,
@@ -131,7 +140,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     partlife::data::CheckedFile::Crush(d) => {
                         let dd = d.diameters();
                         let ff = d.forces();
-                        println!(
+                        out!(
                             "{}: crush data, material \"{}\", {} particles, d = {:.0}–{:.0} µm, F = {:.1}–{:.1} N: ok",
                             f.display(),
                             d.material(),
@@ -143,18 +152,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                         );
                     }
                     partlife::data::CheckedFile::Table1(rows) => {
-                        println!("{}: Table 1, {} rows: ok", f.display(), rows.len());
+                        out!("{}: Table 1, {} rows: ok", f.display(), rows.len());
                     }
                 }
             }
         }
         Command::Bench { dem: true, .. } => {
-            println!("machine: {} threads available to rayon", rayon::current_num_threads());
+            out!("machine: {} threads available to rayon", rayon::current_num_threads());
             let (n, figs) = partlife::bench::dem_particle_steps_per_second(0.15, 25_000)?;
-            println!("DEM cold-test bank, {n} particles after 0.15 s of filling, 25 000 steps per measurement:");
+            out!("DEM cold-test bank, {n} particles after 0.15 s of filling, 25 000 steps per measurement:");
             for f in figs {
                 let ph: Vec<String> = f.phase_us.iter().map(|v| format!("{v:.0}")).collect();
-                println!(
+                out!(
                     "  {} thread(s): {:.4e} particle-steps/s; µs/step [kick–drift, check, rebuild, forces, reduction, kick+sample] = [{}]; {} rebuilds",
                     f.threads,
                     f.particle_steps_per_second,
@@ -164,18 +173,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Bench { fem: true, .. } => {
-            println!("machine: {} threads available to rayon", rayon::current_num_threads());
+            out!("machine: {} threads available to rayon", rayon::current_num_threads());
             for f in partlife::bench::fem_speed(3)? {
-                println!(
+                out!(
                     "crush FE (studies/crush_gen3_rt.toml, {} elements, {} steps to fracture), {} thread(s): {:.4e} element-steps/s, run {:.2} s (goals: ≥ 2e7 element-steps/s on one core, ≥ 1.7× on two, run < 2 s); peak force {:.6} N",
                     f.elements, f.steps, f.threads, f.element_steps_per_second, f.run_seconds, f.peak_force
                 );
             }
         }
         Command::Bench { study, .. } => {
-            println!("machine: {} threads available to rayon", rayon::current_num_threads());
+            out!("machine: {} threads available to rayon", rayon::current_num_threads());
             for fig in partlife::bench::run_all(study.as_deref())? {
-                println!("{}: {:.4e} {} (goal {})", fig.what, fig.value, fig.unit, fig.goal);
+                out!("{}: {:.4e} {} (goal {})", fig.what, fig.value, fig.unit, fig.goal);
             }
         }
     }

@@ -173,3 +173,23 @@ fn synthetic_data_reproduce_the_deliverables_findings() {
         assert!(lo[i] < pb[i] && pb[i] < hi[i], "band {i}: {} {} {}", lo[i], pb[i], hi[i]);
     }
 }
+
+/// Regression: `partlife run … | head -1` panicked ("failed printing to stdout") once the
+/// reader closed the pipe. The report is on disk by then; the run must exit 0 without a panic.
+#[test]
+fn closed_stdout_pipe_is_not_a_panic() {
+    let s = Scratch::new();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_partlife"))
+        .args(["run", "studies/lifetime.toml", "--quiet"])
+        .current_dir(s.dir.path())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // the reader goes away before the first line
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(s.path("reports/lifetime/manifest.json").is_file());
+}

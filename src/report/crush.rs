@@ -15,8 +15,9 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use super::Rendered;
-use super::canvas::{canvas_size, check_glyphs, colour, encode, fig_err, register_fonts, text, tick_format};
-use super::panel::{Kind, Marker, Panel, Series, figure, padded, pt};
+use super::canvas::{colour, fig_err};
+use super::map::{MapSpec, map_figure};
+use super::panel::{Kind, Marker, Panel, Series, figure, padded};
 use crate::error::Result;
 use crate::io::{col_f64, col_str, read_table};
 
@@ -140,87 +141,29 @@ fn strain_map(name: &str, t: &Table, width_cm: f64, zoom: f64) -> Result<Drawn> 
     let mut mags: Vec<f64> = idx.iter().map(|&i| val[i].abs()).filter(|v| v.is_finite()).collect();
     mags.sort_by(f64::total_cmp);
     let vmax = mags.get(((mags.len() as f64 * 0.98) as usize).min(mags.len().saturating_sub(1))).copied().unwrap_or(1e-12).max(1e-12);
-    register_fonts()?;
-    let w_px = canvas_size(width_cm, 1.0).0 as f64;
-    let plot_w = 0.8 * w_px - pt(33.0) as f64;
-    let h_px = plot_w * (y_hi - y_lo) / (x_hi - x_lo) + pt(27.0) as f64;
-    let size = canvas_size(width_cm, h_px / w_px);
     let x_desc = if mirror { "radius r (mm)" } else { "x (mm)" };
-    let y_desc = "height z (mm)";
     let bar_desc = format!("ε₁ (‰) at δ = {:.0} µm", d0 * 1e6);
-    for s in [x_desc, y_desc, bar_desc.as_str()] {
-        check_glyphs(name, s)?;
-    }
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        root.fill(&WHITE).map_err(fig_err(name))?;
-        let (left, right) = root.split_horizontally((size.0 as f64 * 0.80) as u32);
-        let err = fig_err(name);
-        let mut chart = ChartBuilder::on(&left)
-            .margin_top(pt(6.0))
-            .margin_right(pt(4.0))
-            .margin_left(pt(2.0))
-            .margin_bottom(pt(2.0))
-            .x_label_area_size(pt(19.0))
-            .y_label_area_size(pt(27.0))
-            .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)
-            .map_err(&err)?;
-        let xf = tick_format(x_lo, x_hi);
-        let yf = tick_format(y_lo, y_hi);
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc(y_desc)
-            .label_style(text(7.0))
-            .axis_desc_style(text(8.0))
-            .x_labels(5)
-            .y_labels(5)
-            .x_label_formatter(&xf)
-            .y_label_formatter(&yf)
-            .disable_mesh()
-            .axis_style(BLACK.stroke_width(pt(0.5)))
-            .draw()
-            .map_err(&err)?;
+    let colour = |v: f64| diverging(v / vmax);
+    let spec = MapSpec {
+        name,
+        width_cm,
+        x: (x_lo, x_hi, x_desc),
+        y: (y_lo, y_hi, "height z (mm)"),
+        labels: (5, 5),
+        bar: (-vmax, vmax, &bar_desc),
+        colour: &colour,
+    };
+    map_figure(&spec, |chart| {
         for sign in if mirror { vec![1.0, -1.0] } else { vec![1.0] } {
             chart
                 .draw_series(idx.iter().map(|&i| {
                     let poly: Vec<(f64, f64)> = (0..4).map(|k| (sign * 1e3 * cols[2 * k][i], 1e3 * cols[2 * k + 1][i])).collect();
-                    Polygon::new(poly, diverging(val[i] / vmax).filled())
+                    Polygon::new(poly, colour(val[i]).filled())
                 }))
-                .map_err(&err)?;
+                .map_err(fig_err(name))?;
         }
-        let mut bar = ChartBuilder::on(&right)
-            .margin_top(pt(6.0))
-            .margin_right(pt(2.0))
-            .margin_left(pt(4.0))
-            .margin_bottom(pt(2.0))
-            .x_label_area_size(pt(19.0))
-            .y_label_area_size(pt(0.0))
-            .right_y_label_area_size(pt(31.0))
-            .build_cartesian_2d(0.0..1.0, -vmax..vmax)
-            .map_err(&err)?
-            .set_secondary_coord(0.0..1.0, -vmax..vmax);
-        bar.draw_series((0..100).map(|k| {
-            let a = -vmax + 2.0 * vmax * k as f64 / 100.0;
-            let b = -vmax + 2.0 * vmax * (k + 1) as f64 / 100.0;
-            Rectangle::new([(0.0, a), (1.0, b)], diverging(-1.0 + 2.0 * (k as f64 + 0.5) / 100.0).filled())
-        }))
-        .map_err(&err)?;
-        let bf = tick_format(-vmax, vmax);
-        bar.configure_secondary_axes()
-            .y_desc(bar_desc.as_str())
-            .label_style(text(7.0))
-            .axis_desc_style(text(7.0))
-            .y_labels(5)
-            .y_label_formatter(&bf)
-            .x_labels(0)
-            .axis_style(BLACK.stroke_width(pt(0.5)))
-            .draw()
-            .map_err(&err)?;
-        root.present().map_err(fig_err(name))?;
-    }
-    Ok((encode(name, &svg, size, width_cm)?, 0))
+        Ok(())
+    })
 }
 
 fn depth_profile(dir: &Path, width_cm: f64) -> Result<Drawn> {

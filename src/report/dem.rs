@@ -12,7 +12,8 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use super::Rendered;
-use super::canvas::{FONT, canvas_size, check_glyphs, colour, encode, fig_err, register_fonts, text, tick_format};
+use super::canvas::{colour, fig_err};
+use super::map::{MapSpec, map_figure};
 use super::panel::{Kind, Panel, Series, figure, padded, pt};
 use crate::error::{Error, Result};
 use crate::io::{col_f64, col_str, read_table};
@@ -111,56 +112,23 @@ fn speed_map(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let width = col_f64(&tdf, &tp, "width_m")?.first().copied().unwrap_or(0.125);
     let top = col_f64(&tdf, &tp, "domain_top_m")?.first().copied().unwrap_or(0.3);
     let vmax = s.iter().cloned().filter(|v| v.is_finite()).fold(0.0, f64::max).max(1e-9);
-    // Equal data aspect: the plotting area (left 80 % of the canvas less margins and label
-    // areas, as laid out below) gets the domain's height/width ratio.
-    register_fonts()?;
-    let w_px = canvas_size(width_cm, 1.0).0 as f64;
-    let plot_w = 0.8 * w_px - pt(33.0) as f64;
-    let h_px = plot_w * top / width + pt(27.0) as f64;
-    let size = canvas_size(width_cm, h_px / w_px);
-    let mut svg = String::new();
-    let x_desc = "x (mm)";
-    let y_desc = "height z (mm)";
-    let bar_desc = "mean speed (m/s)";
-    for t in [x_desc, y_desc, bar_desc] {
-        check_glyphs(name, t)?;
-    }
-    {
-        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        root.fill(&WHITE).map_err(fig_err(name))?;
-        let (left, right) = root.split_horizontally((size.0 as f64 * 0.80) as u32);
+    let colour = |v: f64| viridis(v / vmax);
+    let spec = MapSpec {
+        name,
+        width_cm,
+        x: (0.0, 1e3 * width, "x (mm)"),
+        y: (0.0, 1e3 * top, "height z (mm)"),
+        labels: (4, 8),
+        bar: (0.0, vmax, "mean speed (m/s)"),
+        colour: &colour,
+    };
+    map_figure(&spec, |chart| {
         let err = fig_err(name);
-        let mut chart = ChartBuilder::on(&left)
-            .margin_top(pt(6.0))
-            .margin_right(pt(4.0))
-            .margin_left(pt(2.0))
-            .margin_bottom(pt(2.0))
-            .x_label_area_size(pt(19.0))
-            .y_label_area_size(pt(27.0))
-            .build_cartesian_2d(0.0..1e3 * width, 0.0..1e3 * top)
-            .map_err(&err)?;
-        let xf = tick_format(0.0, 1e3 * width);
-        let yf = tick_format(0.0, 1e3 * top);
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc(y_desc)
-            .label_style(text(7.0))
-            .axis_desc_style(text(8.0))
-            .x_labels(4)
-            .y_labels(8)
-            .x_label_formatter(&xf)
-            .y_label_formatter(&yf)
-            .disable_mesh()
-            .axis_style(BLACK.stroke_width(pt(0.5)))
-            .draw()
-            .map_err(&err)?;
         chart
             .draw_series((0..x.len()).filter(|&k| s[k].is_finite()).map(|k| {
-                let c = viridis(s[k] / vmax);
                 // Cells overlap by 3 % so that anti-aliasing leaves no seams between them.
                 let (hx, hz) = (0.53 * dx[k], 0.53 * dz[k]);
-                Rectangle::new([(1e3 * (x[k] - hx).max(0.0), 1e3 * (z[k] - hz).max(0.0)), (1e3 * (x[k] + hx).min(width), 1e3 * (z[k] + hz).min(top))], c.filled())
+                Rectangle::new([(1e3 * (x[k] - hx).max(0.0), 1e3 * (z[k] - hz).max(0.0)), (1e3 * (x[k] + hx).min(width), 1e3 * (z[k] + hz).min(top))], colour(s[k]).filled())
             }))
             .map_err(&err)?;
         for &(tx, tz, r, _) in &tubes {
@@ -173,39 +141,8 @@ fn speed_map(dir: &Path, width_cm: f64) -> Result<Drawn> {
             chart.draw_series(std::iter::once(Polygon::new(poly.clone(), RGBColor(200, 200, 200).filled()))).map_err(&err)?;
             chart.draw_series(std::iter::once(PathElement::new(poly, BLACK.stroke_width(pt(0.4))))).map_err(&err)?;
         }
-        // Colour bar.
-        let mut bar = ChartBuilder::on(&right)
-            .margin_top(pt(6.0))
-            .margin_right(pt(2.0))
-            .margin_left(pt(4.0))
-            .margin_bottom(pt(2.0))
-            .x_label_area_size(pt(19.0))
-            .y_label_area_size(pt(0.0))
-            .right_y_label_area_size(pt(22.0))
-            .build_cartesian_2d(0.0..1.0, 0.0..vmax)
-            .map_err(&err)?
-            .set_secondary_coord(0.0..1.0, 0.0..vmax);
-        bar.draw_series((0..100).map(|k| {
-            let a = vmax * k as f64 / 100.0;
-            let b = vmax * (k + 1) as f64 / 100.0;
-            Rectangle::new([(0.0, a), (1.0, b)], viridis((k as f64 + 0.5) / 100.0).filled())
-        }))
-        .map_err(&err)?;
-        let bf = tick_format(0.0, vmax);
-        bar.configure_secondary_axes()
-            .y_desc(bar_desc)
-            .label_style(text(7.0))
-            .axis_desc_style(text(8.0))
-            .y_labels(6)
-            .y_label_formatter(&bf)
-            .x_labels(0)
-            .axis_style(BLACK.stroke_width(pt(0.5)))
-            .draw()
-            .map_err(&err)?;
-        root.present().map_err(fig_err(name))?;
-    }
-    let _ = FONT;
-    Ok((encode(name, &svg, size, width_cm)?, 0))
+        Ok(())
+    })
 }
 
 fn cdf(mut v: Vec<f64>) -> Vec<(f64, f64)> {

@@ -16,6 +16,7 @@
 pub mod canvas;
 pub mod crush;
 pub mod dem;
+pub mod map;
 pub mod panel;
 
 use std::collections::BTreeMap;

@@ -298,8 +298,8 @@ pub struct CurveSample {
 /// Quasi-static check of a run.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct QuasiStatic {
-    /// Largest E_kin / E_int after the ramp and up to the peak force, where E_int exceeds 1 % of
-    /// its value at the peak.
+    /// Largest E_kin / E_int after the ramp and up to 95 % of the peak-force displacement, where
+    /// E_int exceeds 1 % of its value there.
     pub max_kinetic_ratio: f64,
     /// Largest |F_top − F_bottom| / F_peak over the same samples, both forces averaged over two
     /// wave transits (see [`output::quasi_static`]).

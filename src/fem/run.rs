@@ -4,8 +4,8 @@
 //! ```toml
 //! kind = "crush"
 //! [crush]            # the base CrushSetup: diameter, material, mesh, platen, solver, fracture, fields_at
-//! [[case]]           # key, label, optional shape / diameter overriding the base
-//! [figures]          # width_cm, field_map_at (m, one of fields_at)
+//! [[case]]           # key, label, optional shape / diameter / outline overriding the base
+//! [figures]          # width_cm
 //! ```
 //!
 //! Report files (`reports/<study>/`):
@@ -17,6 +17,9 @@
 //! | `fields.csv` | per case, snapshot and element: the element polygon (deformed) and its fields |
 //! | `depth_profile.csv` | per case and snapshot: fields of the axis column vs depth below the platen |
 //! | `<case>_d<µm>um.vtu` | VTK unstructured grid per snapshot (ParaView) |
+//!
+//! A plane-strain study (`kinematics = "plane_strain"`, every case alike) reports forces and
+//! energies per unit thickness: those columns end in `_per_m` (`force_n_per_m`, …).
 
 use std::collections::BTreeMap;
 use std::time::Instant;

@@ -57,6 +57,7 @@
 pub mod bench;
 pub mod contact;
 pub mod data;
+pub mod design;
 pub mod dem;
 pub mod fem;
 pub mod error;

@@ -163,15 +163,13 @@ impl Sobol {
 /// A Latin hypercube of `n` points in `dim` dimensions, seeded.
 pub fn latin_hypercube(n: usize, dim: usize, seed: u64) -> Vec<Vec<f64>> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut out = vec![vec![0.0; dim]; n];
+    let mut columns = Vec::with_capacity(dim);
     let mut perm: Vec<usize> = (0..n).collect();
-    for j in 0..dim {
+    for _ in 0..dim {
         perm.shuffle(&mut rng);
-        for (i, p) in perm.iter().enumerate() {
-            out[i][j] = (*p as f64 + rng.random::<f64>()) / n as f64;
-        }
+        columns.push(perm.iter().map(|&p| (p as f64 + rng.random::<f64>()) / n as f64).collect::<Vec<f64>>());
     }
-    out
+    (0..n).map(|i| columns.iter().map(|c| c[i]).collect()).collect()
 }
 
 #[cfg(test)]

@@ -11,8 +11,8 @@ fn sobol_matches_the_joe_kuo_reference() {
     let pts = Sobol::points(64, 32, 0).unwrap();
     for d in 0..64 {
         let col = col_f64(&df, &p, &format!("d{}", d + 1)).unwrap();
-        for (i, &v) in col.iter().enumerate() {
-            assert_eq!(pts[i][d], v, "point {i}, dimension {}", d + 1);
+        for (i, (&v, q)) in col.iter().zip(&pts).enumerate() {
+            assert_eq!(q[d], v, "point {i}, dimension {}", d + 1);
         }
     }
 }
@@ -31,9 +31,9 @@ fn sobol_far_points_match_the_reference() {
             q = s.next_point();
             n += 1;
         }
-        for d in 0..64 {
+        for (d, &qd) in q.iter().enumerate() {
             let v = col_f64(&df, &p, &format!("d{}", d + 1)).unwrap()[row];
-            assert_eq!(q[d], v, "point {target}, dimension {}", d + 1);
+            assert_eq!(qd, v, "point {target}, dimension {}", d + 1);
         }
     }
 }

@@ -7,6 +7,7 @@ mod verification {
     mod dem;
     mod hertz;
     mod jh2;
+    mod lsq;
     mod lifetime;
     mod weibull;
 }

@@ -1,0 +1,55 @@
+//! Calibration: fitting a [`crate::model::Simulator`]'s parameters θ to measured outputs.
+//!
+//! * [`lsq`]: multi-start Levenberg–Marquardt in unit-cube coordinates, covariance from the
+//!   Jacobian, correlations and an identifiability report.
+//!
+//! The data model ([`Noise`]) turns model outputs y(θ) and data d into weighted residuals
+//! `r_i = (y_i(θ) − d_i)/σ_i`. Calibration code sees only the Simulator seam.
+
+pub mod lsq;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// Measurement noise of the data.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Noise {
+    /// Known standard deviation per observation (same unit as the data).
+    Known {
+        /// σ_i, one per observation, each > 0.
+        sigma: Vec<f64>,
+    },
+    /// One common, unknown σ: fitted by ordinary least squares and estimated as
+    /// `s² = Σ r²/(n − p)` for the covariance.
+    Inferred,
+    /// Relative error: σ_i = `relative`·|d_i| (+ `floor`, in data units, for data near zero).
+    Relative {
+        /// Relative standard deviation, > 0.
+        relative: f64,
+        /// Absolute floor added to σ_i (≥ 0).
+        #[serde(default)]
+        floor: f64,
+    },
+}
+
+impl Noise {
+    /// σ_i for data `d` (1 for [`Noise::Inferred`]).
+    pub fn sigmas(&self, d: &[f64]) -> Result<Vec<f64>> {
+        let s: Vec<f64> = match self {
+            Noise::Known { sigma } => {
+                if sigma.len() != d.len() {
+                    return Err(Error::config("<calibration>", "noise.sigma", format!("{} values for {} observations", sigma.len(), d.len())));
+                }
+                sigma.clone()
+            }
+            Noise::Inferred => vec![1.0; d.len()],
+            Noise::Relative { relative, floor } => d.iter().map(|x| relative * x.abs() + floor).collect(),
+        };
+        if let Some((i, v)) = s.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v > 0.0)) {
+            return Err(Error::config("<calibration>", "noise", format!("σ of observation {i} is {v}: every σ must be positive")));
+        }
+        Ok(s)
+    }
+}

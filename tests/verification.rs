@@ -8,6 +8,7 @@ mod verification {
     mod hertz;
     mod jh2;
     mod lsq;
+    mod mcmc;
     mod lifetime;
     mod weibull;
 }

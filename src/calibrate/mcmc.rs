@@ -1,5 +1,6 @@
 //! Gradient-free MCMC: the affine-invariant ensemble sampler (Goodman & Weare 2010, the
-//! "stretch move" of emcee) and convergence diagnostics (Vehtari, Gelman, Simpson, Carpenter &
+//! "stretch move" of emcee), adaptive Metropolis (Haario et al. 2001, [`adaptive_metropolis`])
+//! and convergence diagnostics (Vehtari, Gelman, Simpson, Carpenter &
 //! Bürkner 2021: rank-normalised split-R̂, bulk and tail ESS).
 //!
 //! ## Stretch move
@@ -154,6 +155,106 @@ where
     }
     let acceptance = accepted.iter().map(|&n| n as f64 / opts.steps as f64).collect();
     Ok(Chains { draws, log_prob: lps, acceptance, evaluations })
+}
+
+/// Adaptive Metropolis settings (Haario, Saksman & Tamminen 2001).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AdaptiveOptions {
+    /// Independent chains (run in parallel, one seeded stream each).
+    pub chains: usize,
+    /// Steps after burn-in, per chain.
+    pub steps: usize,
+    /// Steps discarded first, per chain (adaptation continues through them).
+    pub burn_in: usize,
+    /// Steps with the initial proposal before adapting.
+    pub adapt_after: usize,
+    /// Initial proposal standard deviation per parameter.
+    pub initial_scale: Vec<f64>,
+    /// Seed.
+    pub seed: u64,
+}
+
+/// Adaptive Metropolis: Gaussian random-walk proposals with covariance `s_d (C_t + ε I)`,
+/// s_d = 2.38²/d, C_t the running covariance of the chain so far (updated recursively), ε a
+/// small regulariser; each chain starts at its `init` point. Returns the chains in the layout
+/// of [`Chains`] (one "walker" per chain).
+pub fn adaptive_metropolis<F>(log_prob: F, init: Vec<Vec<f64>>, opts: &AdaptiveOptions) -> Result<Chains>
+where
+    F: Fn(&[f64]) -> f64 + Sync,
+{
+    let d = opts.initial_scale.len();
+    if init.len() != opts.chains || opts.chains == 0 || init.iter().any(|x| x.len() != d) || d == 0 || opts.steps == 0 {
+        return Err(Error::config("<mcmc>", "chains", format!("need {} initial points of dimension {d} (= initial_scale length) and steps ≥ 1", opts.chains)));
+    }
+    if opts.initial_scale.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+        return Err(Error::config("<mcmc>", "initial_scale", "every initial proposal scale must be positive"));
+    }
+    type ChainOut = (Vec<Vec<f64>>, Vec<f64>, u64, u64);
+    let run = |c: usize, x0: &Vec<f64>| -> Result<ChainOut> {
+        let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+        rng.set_stream(c as u64 + 1);
+        let sd = 2.38 * 2.38 / d as f64;
+        let mut x = x0.clone();
+        let mut lp = check_lp(log_prob(&x), &x)?;
+        if !lp.is_finite() {
+            return Err(Error::config("<mcmc>", "initial positions", format!("chain {c} starts at {x:?} with log-density {lp}")));
+        }
+        let mut mean = x.clone();
+        let mut cov = nalgebra::DMatrix::<f64>::zeros(d, d);
+        let eps = opts.initial_scale.iter().map(|s| s * s).fold(f64::MAX, f64::min) * 1e-6;
+        let mut chol = nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_vec(opts.initial_scale.clone()));
+        let (mut out, mut lps, mut acc) = (Vec::with_capacity(opts.steps), Vec::with_capacity(opts.steps), 0u64);
+        let total = opts.burn_in + opts.steps;
+        for t in 1..=total {
+            let z = nalgebra::DVector::<f64>::from_fn(d, |_, _| rng.sample::<f64, _>(rand_distr::StandardNormal));
+            let step = &chol * z;
+            let y: Vec<f64> = x.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+            let ly = check_lp(log_prob(&y), &y)?;
+            let u: f64 = rng.random();
+            if ly.is_finite() && u.ln() < ly - lp {
+                x = y;
+                lp = ly;
+                if t > opts.burn_in {
+                    acc += 1;
+                }
+            }
+            // Recursive mean and covariance of the chain so far (t + 1 points).
+            let tf = t as f64;
+            let old_mean = mean.clone();
+            for k in 0..d {
+                mean[k] += (x[k] - mean[k]) / (tf + 1.0);
+            }
+            for a in 0..d {
+                for b in 0..d {
+                    cov[(a, b)] = (tf - 1.0) / tf * cov[(a, b)] + (x[a] - old_mean[a]) * (x[b] - old_mean[b]) / (tf + 1.0);
+                }
+            }
+            if t >= opts.adapt_after && t % 10 == 0 {
+                let mut m = &cov * sd;
+                for k in 0..d {
+                    m[(k, k)] += sd * eps;
+                }
+                if let Some(ch) = m.cholesky() {
+                    chol = ch.l();
+                }
+            }
+            if t > opts.burn_in {
+                out.push(x.clone());
+                lps.push(lp);
+            }
+        }
+        Ok((out, lps, acc, total as u64 + 1))
+    };
+    let results: Vec<Result<ChainOut>> = init.par_iter().enumerate().map(|(c, x0)| run(c, x0)).collect();
+    let mut per_chain = Vec::new();
+    for r in results {
+        per_chain.push(r?);
+    }
+    let draws = (0..opts.steps).map(|s| per_chain.iter().map(|c| c.0[s].clone()).collect()).collect();
+    let log_prob = (0..opts.steps).map(|s| per_chain.iter().map(|c| c.1[s]).collect()).collect();
+    let acceptance = per_chain.iter().map(|c| c.2 as f64 / opts.steps as f64).collect();
+    let evaluations = per_chain.iter().map(|c| c.3).sum();
+    Ok(Chains { draws, log_prob, acceptance, evaluations })
 }
 
 /// Convergence diagnostics of one parameter.

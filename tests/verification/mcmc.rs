@@ -118,3 +118,30 @@ fn same_chain_on_one_and_two_threads() {
     };
     assert_eq!(run(1).draws, run(2).draws);
 }
+
+#[test]
+fn adaptive_metropolis_on_the_10d_gaussian() {
+    use partlife::calibrate::mcmc::{AdaptiveOptions, adaptive_metropolis};
+    let d = 10;
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let a = nalgebra::DMatrix::<f64>::from_fn(d, d, |_, _| StandardNormal.sample(&mut rng));
+    let q = a.qr().q();
+    let lambda: Vec<f64> = (0..d).map(|i| 10f64.powf(-2.0 + 4.0 * i as f64 / (d - 1) as f64)).collect();
+    let sigma = &q * nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_vec(lambda)) * q.transpose();
+    let prec = sigma.clone().try_inverse().unwrap();
+    let lp = |x: &[f64]| {
+        let v = nalgebra::DVector::from_column_slice(x);
+        -0.5 * (v.transpose() * &prec * &v)[(0, 0)]
+    };
+    let opts = AdaptiveOptions { chains: 4, steps: 100_000, burn_in: 20_000, adapt_after: 1000, initial_scale: vec![0.05; d], seed: 14 };
+    let c = adaptive_metropolis(lp, init(4, d, &[0.0; 10], 0.01, 15), &opts).unwrap();
+    let acc = c.acceptance.iter().sum::<f64>() / 4.0;
+    // The optimal Gaussian random-walk acceptance in 10-D is ≈ 0.23–0.26.
+    assert!((0.15..0.35).contains(&acc), "acceptance {acc}");
+    for k in 0..d {
+        let (m, v, e) = moments(&c, k);
+        assert!(m.abs() < 4.0 * e, "dimension {k}: mean {m} (MCSE {e})");
+        assert!((v / sigma[(k, k)] - 1.0).abs() < 0.15, "dimension {k}: variance {v} vs {}", sigma[(k, k)]);
+        assert!(c.diagnostics(k).r_hat < 1.01);
+    }
+}

@@ -1,5 +1,6 @@
 //! Calibration: fitting a [`crate::model::Simulator`]'s parameters θ to measured outputs.
 //!
+//! * [`cache`]: evaluations stored on disk by a hash of the configuration and θ.
 //! * [`mcmc`]: the affine-invariant ensemble sampler and convergence diagnostics (R̂, ESS).
 //! * [`lsq`]: multi-start Levenberg–Marquardt in unit-cube coordinates, covariance from the
 //!   Jacobian, correlations and an identifiability report.
@@ -7,6 +8,7 @@
 //! The data model ([`Noise`]) turns model outputs y(θ) and data d into weighted residuals
 //! `r_i = (y_i(θ) − d_i)/σ_i`. Calibration code sees only the Simulator seam.
 
+pub mod cache;
 pub mod lsq;
 pub mod mcmc;
 

@@ -5,6 +5,7 @@
 mod verification {
     mod crush_fe;
     mod dem;
+    mod gp;
     mod hertz;
     mod jh2;
     mod lsq;

@@ -54,20 +54,26 @@ fn rosenbrock_banana() {
     assert!((m2 - 11.0).abs() < 4.0 * e2, "E x2 = {m2} (MCSE {e2})");
 }
 
-#[test]
-fn correlated_gaussian_10d() {
-    // Σ = Q diag(λ) Qᵀ, λ from 10⁻² to 10² (condition number 10⁴), Q a random rotation.
+/// N(0, Σ) in 10-D, Σ = Q diag(λ) Qᵀ with λ from 10⁻² to 10² (condition number 10⁴) and Q a
+/// seeded random rotation: (dimension, Σ, log-density).
+fn gaussian_10d() -> (usize, nalgebra::DMatrix<f64>, impl Fn(&[f64]) -> f64 + Sync) {
     let d = 10;
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let a = nalgebra::DMatrix::<f64>::from_fn(d, d, |_, _| StandardNormal.sample(&mut rng));
     let q = a.qr().q();
     let lambda: Vec<f64> = (0..d).map(|i| 10f64.powf(-2.0 + 4.0 * i as f64 / (d - 1) as f64)).collect();
-    let sigma = &q * nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_vec(lambda.clone())) * q.transpose();
+    let sigma = &q * nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_vec(lambda)) * q.transpose();
     let prec = sigma.clone().try_inverse().unwrap();
-    let lp = |x: &[f64]| {
+    let lp = move |x: &[f64]| {
         let v = nalgebra::DVector::from_column_slice(x);
         -0.5 * (v.transpose() * &prec * &v)[(0, 0)]
     };
+    (d, sigma, lp)
+}
+
+#[test]
+fn correlated_gaussian_10d() {
+    let (d, sigma, lp) = gaussian_10d();
     let opts = EnsembleOptions { walkers: 40, steps: 20_000, burn_in: 4000, stretch: 2.0, seed: 12 };
     let c = ensemble(lp, init(40, d, &[0.0; 10], 0.01, 13), &opts).unwrap();
     for k in 0..d {
@@ -122,17 +128,7 @@ fn same_chain_on_one_and_two_threads() {
 #[test]
 fn adaptive_metropolis_on_the_10d_gaussian() {
     use partlife::calibrate::mcmc::{AdaptiveOptions, adaptive_metropolis};
-    let d = 10;
-    let mut rng = ChaCha8Rng::seed_from_u64(11);
-    let a = nalgebra::DMatrix::<f64>::from_fn(d, d, |_, _| StandardNormal.sample(&mut rng));
-    let q = a.qr().q();
-    let lambda: Vec<f64> = (0..d).map(|i| 10f64.powf(-2.0 + 4.0 * i as f64 / (d - 1) as f64)).collect();
-    let sigma = &q * nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_vec(lambda)) * q.transpose();
-    let prec = sigma.clone().try_inverse().unwrap();
-    let lp = |x: &[f64]| {
-        let v = nalgebra::DVector::from_column_slice(x);
-        -0.5 * (v.transpose() * &prec * &v)[(0, 0)]
-    };
+    let (d, sigma, lp) = gaussian_10d();
     let opts = AdaptiveOptions { chains: 4, steps: 100_000, burn_in: 20_000, adapt_after: 1000, initial_scale: vec![0.05; d], seed: 14 };
     let c = adaptive_metropolis(lp, init(4, d, &[0.0; 10], 0.01, 15), &opts).unwrap();
     let acc = c.acceptance.iter().sum::<f64>() / 4.0;

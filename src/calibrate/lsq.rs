@@ -197,7 +197,8 @@ pub fn fit<S: Simulator>(model: &S, data: &[f64], noise: &Noise, opts: &LsqOptio
         let mut lambda = 1e-3;
         let mut it = 0;
         let mut jac = None;
-        while it < opts.max_iterations {
+        let mut converged = false;
+        while it < opts.max_iterations && !converged {
             it += 1;
             let Some(j) = pb.jacobian(&u, &r, opts.fd_step)? else { break };
             let jtj = j.transpose() * &j;
@@ -225,9 +226,7 @@ pub fn fit<S: Simulator>(model: &S, data: &[f64], noise: &Noise, opts: &LsqOptio
                         c = ct;
                         lambda = (lambda / 3.0).max(1e-12);
                         accepted = true;
-                        if rel < opts.ftol || step < opts.xtol {
-                            it = opts.max_iterations; // converged
-                        }
+                        converged = rel < opts.ftol || step < opts.xtol;
                         break;
                     }
                     _ => {
@@ -247,7 +246,7 @@ pub fn fit<S: Simulator>(model: &S, data: &[f64], noise: &Noise, opts: &LsqOptio
             jac = Some(j);
         }
         let theta = pb.theta(&u);
-        starts.push(StartResult { start: theta0, end: Some(theta.clone()), cost: c, iterations: it.min(opts.max_iterations) });
+        starts.push(StartResult { start: theta0, end: Some(theta.clone()), cost: c, iterations: it });
         if let Some(jac) = jac
             && best.as_ref().is_none_or(|b| c < b.cost)
         {

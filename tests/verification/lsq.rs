@@ -57,6 +57,7 @@ fn recovers_exact_parameters_without_noise() {
         assert!((est - tru).abs() < 1e-6 * tru.abs().max(1.0), "θ{k}: {est} vs {tru}");
     }
     assert!(r.cost < 1e-12 && r.unidentified.is_empty(), "{r:?}");
+    assert!(r.starts.iter().all(|s| s.iterations < LsqOptions::default().max_iterations), "a start ran out of iterations: {:?}", r.starts);
 }
 
 #[test]

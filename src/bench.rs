@@ -284,3 +284,53 @@ pub fn fem_speed(repeats: usize) -> Result<Vec<FemSpeed>> {
     }
     Ok(out)
 }
+
+/// The Rosenbrock banana of the MCMC verification (verification.md §2):
+/// `log p = −[100(x₂ − x₁²)² + (1 − x₁)²]/20`.
+pub fn banana_log_prob(x: &[f64]) -> f64 {
+    -(100.0 * (x[1] - x[0] * x[0]).powi(2) + (1.0 - x[0]).powi(2)) / 20.0
+}
+
+/// One sampler speed measurement on the banana.
+#[derive(Debug, Clone)]
+pub struct McmcSpeed {
+    /// Wall time of the sampling (s).
+    pub seconds: f64,
+    /// Log-density evaluations per second.
+    pub evaluations_per_second: f64,
+    /// Smaller bulk ESS of x₁ and x₂.
+    pub ess: f64,
+    /// ESS per second.
+    pub ess_per_second: f64,
+}
+
+/// The ensemble sampler on the banana (32 walkers, `steps` after 2000 burn-in, seed 5), timed.
+pub fn mcmc_banana(steps: usize) -> Result<McmcSpeed> {
+    use crate::calibrate::mcmc::{EnsembleOptions, ensemble};
+    let opts = EnsembleOptions { walkers: 32, steps, burn_in: 2000, stretch: 2.0, seed: 5 };
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    let init: Vec<Vec<f64>> = (0..32).map(|_| vec![1.0 + 0.1 * (rng.random::<f64>() - 0.5), 1.0 + 0.1 * (rng.random::<f64>() - 0.5)]).collect();
+    let start = Instant::now();
+    let c = ensemble(banana_log_prob, init, &opts)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let ess = c.diagnostics(0).ess_bulk.min(c.diagnostics(1).ess_bulk);
+    Ok(McmcSpeed { seconds, evaluations_per_second: c.evaluations as f64 / seconds, ess, ess_per_second: ess / seconds })
+}
+
+/// Bulk ESS (smaller over the columns) of a chain file written by another sampler: CSV with
+/// columns `step, walker, x1, x2` (`tests/bench/emcee/banana.py`), the same estimator as ours.
+pub fn external_chain_ess(path: &Path) -> Result<f64> {
+    let df = crate::io::read_table(path)?;
+    let w = crate::io::col_f64(&df, path, "walker")?;
+    let walkers = w.iter().fold(0.0f64, |a, &b| a.max(b)) as usize + 1;
+    let mut ess = f64::INFINITY;
+    for col in ["x1", "x2"] {
+        let x = crate::io::col_f64(&df, path, col)?;
+        let mut chains = vec![Vec::new(); walkers];
+        for (wi, xi) in w.iter().zip(&x) {
+            chains[*wi as usize].push(*xi);
+        }
+        ess = ess.min(crate::calibrate::mcmc::diagnostics(&chains).ess_bulk);
+    }
+    Ok(ess)
+}

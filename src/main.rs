@@ -57,6 +57,13 @@ enum Command {
         /// Run the crush FE benchmark instead (JH-2 crush to fracture on 1 and all threads).
         #[arg(long)]
         fem: bool,
+        /// Run the MCMC benchmark instead (ensemble sampler on the Rosenbrock banana); with
+        /// `--chain` also the ESS of another sampler's chain (tests/bench/emcee/banana.py).
+        #[arg(long)]
+        mcmc: bool,
+        /// A chain CSV (step, walker, x1, x2) and its sampling time in seconds, `FILE:SECONDS`.
+        #[arg(long)]
+        chain: Option<String>,
     },
 }
 
@@ -170,6 +177,20 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     ph.join(", "),
                     f.rebuilds
                 );
+            }
+        }
+        Command::Bench { mcmc: true, chain, .. } => {
+            out!("machine: {} threads available to rayon", rayon::current_num_threads());
+            let m = partlife::bench::mcmc_banana(40_000)?;
+            out!(
+                "ensemble sampler, Rosenbrock banana, 32 walkers × 40 000 steps: {:.2} s, {:.3e} evaluations/s, bulk ESS {:.0}, ESS/s {:.1}",
+                m.seconds, m.evaluations_per_second, m.ess, m.ess_per_second
+            );
+            if let Some(spec) = chain {
+                let (file, secs) = spec.rsplit_once(':').context("--chain takes FILE:SECONDS")?;
+                let secs: f64 = secs.parse().context("--chain: SECONDS is not a number")?;
+                let ess = partlife::bench::external_chain_ess(std::path::Path::new(file))?;
+                out!("external chain {file}: bulk ESS {ess:.0} in {secs:.2} s → ESS/s {:.1}; ratio ours/theirs {:.1}×", ess / secs, m.ess_per_second / (ess / secs));
             }
         }
         Command::Bench { fem: true, .. } => {

@@ -84,9 +84,58 @@ fn check_lp(v: f64, x: &[f64]) -> Result<f64> {
     Ok(v)
 }
 
+/// Periodic checkpoints of an ensemble run: the whole sampler state (walkers, log-densities,
+/// draws so far, acceptance counts, the random stream's position) written atomically as JSON
+/// every `every` steps. A rerun with the same options and file continues from the last
+/// checkpoint and produces exactly the chain of an uninterrupted run; a killed run loses at most
+/// `every` steps.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checkpoint {
+    /// Checkpoint file.
+    pub path: std::path::PathBuf,
+    /// Steps between checkpoints (≥ 1).
+    pub every: usize,
+}
+
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct EnsembleState {
+    seed: u64,
+    walkers: usize,
+    steps: usize,
+    burn_in: usize,
+    stretch: f64,
+    next_step: usize,
+    word_pos: u128,
+    x: Vec<Vec<f64>>,
+    lp: Vec<f64>,
+    accepted: Vec<u64>,
+    evaluations: u64,
+    draws: Vec<Vec<Vec<f64>>>,
+    lps: Vec<Vec<f64>>,
+}
+
 /// Runs the ensemble sampler from the initial walker positions `init` (each with a finite
 /// log-density).
 pub fn ensemble<F>(log_prob: F, init: Vec<Vec<f64>>, opts: &EnsembleOptions) -> Result<Chains>
+where
+    F: Fn(&[f64]) -> f64 + Sync,
+{
+    run_ensemble(log_prob, init, opts, None)
+}
+
+/// [`ensemble`] with checkpoints: resumes from `checkpoint.path` when it holds a run of the same
+/// options (a file of other options is an error, not silently overwritten).
+pub fn ensemble_with_checkpoint<F>(log_prob: F, init: Vec<Vec<f64>>, opts: &EnsembleOptions, checkpoint: &Checkpoint) -> Result<Chains>
+where
+    F: Fn(&[f64]) -> f64 + Sync,
+{
+    if checkpoint.every == 0 {
+        return Err(Error::config("<mcmc>", "checkpoint.every", "must be ≥ 1"));
+    }
+    run_ensemble(log_prob, init, opts, Some(checkpoint))
+}
+
+fn run_ensemble<F>(log_prob: F, init: Vec<Vec<f64>>, opts: &EnsembleOptions, checkpoint: Option<&Checkpoint>) -> Result<Chains>
 where
     F: Fn(&[f64]) -> f64 + Sync,
 {
@@ -100,21 +149,38 @@ where
         return Err(Error::config("<mcmc>", "stretch", "stretch a > 1 and steps ≥ 1 required"));
     }
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
-    let mut x = init;
-    let mut lp: Vec<f64> = x.par_iter().map(|p| log_prob(p)).collect();
-    let mut evaluations = nw as u64;
-    for (p, v) in x.iter().zip(&lp) {
-        check_lp(*v, p)?;
-        if !v.is_finite() {
-            return Err(Error::config("<mcmc>", "initial positions", format!("walker at {p:?} has log-density {v}")));
+    let resumed: Option<EnsembleState> = match checkpoint {
+        Some(c) if c.path.exists() => {
+            let text = std::fs::read_to_string(&c.path).map_err(|e| Error::read(&c.path, e))?;
+            let st: EnsembleState = serde_json::from_str(&text).map_err(|e| Error::data_file(&c.path, "file", format!("not a checkpoint of this sampler: {e}")))?;
+            let same = st.seed == opts.seed && st.walkers == nw && st.steps == opts.steps && st.burn_in == opts.burn_in && st.stretch == opts.stretch && st.x.first().map(|p| p.len()) == Some(dim);
+            if !same {
+                return Err(Error::data_file(&c.path, "file", "the checkpoint belongs to a run with other sampler options; remove it to start afresh"));
+            }
+            Some(st)
         }
-    }
+        _ => None,
+    };
+    let (mut x, mut lp, mut accepted, mut evaluations, mut draws, mut lps, first) = match resumed {
+        Some(st) => {
+            rng.set_word_pos(st.word_pos);
+            (st.x, st.lp, st.accepted, st.evaluations, st.draws, st.lps, st.next_step)
+        }
+        None => {
+            let x = init;
+            let lp: Vec<f64> = x.par_iter().map(|p| log_prob(p)).collect();
+            for (p, v) in x.iter().zip(&lp) {
+                check_lp(*v, p)?;
+                if !v.is_finite() {
+                    return Err(Error::config("<mcmc>", "initial positions", format!("walker at {p:?} has log-density {v}")));
+                }
+            }
+            (x, lp, vec![0u64; nw], nw as u64, Vec::with_capacity(opts.steps), Vec::with_capacity(opts.steps), 0)
+        }
+    };
     let half = nw / 2;
     let a = opts.stretch;
-    let mut accepted = vec![0u64; nw];
-    let mut draws = Vec::with_capacity(opts.steps);
-    let mut lps = Vec::with_capacity(opts.steps);
-    for step in 0..opts.burn_in + opts.steps {
+    for step in first..opts.burn_in + opts.steps {
         for s in 0..2 {
             let (lo, other) = if s == 0 { (0, half) } else { (half, 0) };
             // Random numbers first, serially: partner, z, acceptance uniform.
@@ -151,6 +217,27 @@ where
         if step >= opts.burn_in {
             draws.push(x.clone());
             lps.push(lp.clone());
+        }
+        if let Some(c) = checkpoint
+            && (step + 1) % c.every == 0
+        {
+            let st = EnsembleState {
+                seed: opts.seed,
+                walkers: nw,
+                steps: opts.steps,
+                burn_in: opts.burn_in,
+                stretch: opts.stretch,
+                next_step: step + 1,
+                word_pos: rng.get_word_pos(),
+                x: x.clone(),
+                lp: lp.clone(),
+                accepted: accepted.clone(),
+                evaluations,
+                draws: draws.clone(),
+                lps: lps.clone(),
+            };
+            let json = serde_json::to_vec(&st).map_err(|e| Error::numerical("checkpoint", e.to_string()))?;
+            crate::io::write_atomic(&c.path, &json)?;
         }
     }
     let acceptance = accepted.iter().map(|&n| n as f64 / opts.steps as f64).collect();

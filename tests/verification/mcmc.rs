@@ -141,3 +141,28 @@ fn adaptive_metropolis_on_the_10d_gaussian() {
         assert!(c.diagnostics(k).r_hat < 1.01);
     }
 }
+
+/// A run killed part-way (here by a log-density that turns NaN after a number of calls) and
+/// rerun with the same checkpoint file ends with exactly the chain of an uninterrupted run.
+#[test]
+fn a_killed_run_resumes_from_its_checkpoint() {
+    use partlife::calibrate::mcmc::{Checkpoint, ensemble_with_checkpoint};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let lp = |x: &[f64]| -0.5 * (x[0] * x[0] + 4.0 * x[1] * x[1]) - 0.1 * x[0] * x[1];
+    let opts = EnsembleOptions { walkers: 8, steps: 600, burn_in: 100, stretch: 2.0, seed: 19 };
+    let start = init(8, 2, &[0.0, 0.0], 1.0, 2);
+    let full = ensemble(lp, start.clone(), &opts).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let ck = Checkpoint { path: dir.path().join("chain.json"), every: 50 };
+    let calls = AtomicUsize::new(0);
+    let dying = |x: &[f64]| if calls.fetch_add(1, Ordering::SeqCst) > 3000 { f64::NAN } else { lp(x) };
+    assert!(ensemble_with_checkpoint(dying, start.clone(), &opts, &ck).is_err(), "the run dies");
+    assert!(ck.path.is_file(), "a checkpoint was written before it died");
+    let resumed = ensemble_with_checkpoint(lp, start.clone(), &opts, &ck).unwrap();
+    let first_diff = resumed.draws.iter().zip(&full.draws).position(|(a, b)| a != b);
+    assert!(first_diff.is_none() && resumed.draws.len() == full.draws.len(), "the resumed chain differs from the uninterrupted one from step {first_diff:?}");
+    assert_eq!(resumed.evaluations, full.evaluations);
+    // A checkpoint of other options is refused, not overwritten.
+    let other = EnsembleOptions { seed: 20, ..opts.clone() };
+    assert!(ensemble_with_checkpoint(lp, start, &other, &ck).is_err());
+}

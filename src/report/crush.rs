@@ -14,48 +14,18 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::Rendered;
+use super::{Rendered, Table};
 use super::canvas::{colour, fig_err};
 use super::map::{MapSpec, map_figure};
 use super::panel::{Kind, Marker, Panel, Series, figure, padded};
 use crate::error::Result;
-use crate::io::{col_f64, col_str, read_table};
 
 type Drawn = (super::canvas::Encoded, usize);
-
-struct Table {
-    path: std::path::PathBuf,
-    df: polars::prelude::DataFrame,
-}
-
-impl Table {
-    fn load(dir: &Path, name: &str) -> Result<Self> {
-        let path = dir.join(name);
-        Ok(Table { df: read_table(&path)?, path })
-    }
-    fn f(&self, c: &str) -> Result<Vec<f64>> {
-        col_f64(&self.df, &self.path, c)
-    }
-    fn s(&self, c: &str) -> Result<Vec<String>> {
-        col_str(&self.df, &self.path, c)
-    }
-}
-
-/// Case keys in order of first appearance.
-fn cases(keys: &[String]) -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    for k in keys {
-        if !out.contains(k) {
-            out.push(k.clone());
-        }
-    }
-    out
-}
 
 /// Draws every crush figure in `dir`.
 pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
     let mut figures = vec![("crush_force_displacement", force_displacement(dir, width_cm)?)];
-    let fields = Table::load(dir, "fields.csv")?;
+    let fields = Table::load(dir, "fields")?;
     if fields.df.height() > 0 {
         figures.push(("crush_strain_map", strain_map("crush_strain_map", &fields, width_cm, 1.0)?));
         figures.push(("crush_strain_map_contact", strain_map("crush_strain_map_contact", &fields, width_cm, 0.35)?));
@@ -65,20 +35,19 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
 }
 
 fn force_displacement(dir: &Path, width_cm: f64) -> Result<Drawn> {
-    let t = Table::load(dir, "curves.csv")?;
+    let t = Table::load(dir, "curves")?;
     // Plane-strain reports carry forces per unit thickness (N/m), drawn in N/mm.
-    let plane = t.df.get_column_names().iter().any(|c| c.as_str() == "force_n_per_m");
+    let plane = t.has("force_n_per_m");
     let (fcol, pcol, scale, y_desc) =
         if plane { ("force_n_per_m", "peak_force_n_per_m", 1e-3, "Force per thickness F/L (N/mm)") } else { ("force_n", "peak_force_n", 1.0, "Platen force F (N)") };
-    let (keys, labels, d) = (t.s("case")?, t.s("label")?, t.f("displacement_m")?);
+    let (labels, d) = (t.s("label")?, t.f("displacement_m")?);
     let f: Vec<f64> = t.f(fcol)?.iter().map(|v| v * scale).collect();
-    let s = Table::load(dir, "crush_summary.csv")?;
+    let s = Table::load(dir, "crush_summary")?;
     let (skeys, at, frac) = (s.s("case")?, s.f("peak_displacement_m")?, s.f("fracture_displacement_m")?);
     let peak: Vec<f64> = s.f(pcol)?.iter().map(|v| v * scale).collect();
     let mut series = Vec::new();
     let mut marks = Vec::new();
-    for (ci, key) in cases(&keys).iter().enumerate() {
-        let idx: Vec<usize> = (0..keys.len()).filter(|&i| &keys[i] == key).collect();
+    for (ci, (key, idx)) in t.groups_by("case")?.iter().enumerate() {
         let pts: Vec<(f64, f64)> = idx.iter().map(|&i| (1e6 * d[i], f[i])).collect();
         series.push(Series::line(Some(labels[idx[0]].clone()), pts, colour(ci), 1.0));
         if let Some(k) = skeys.iter().position(|s| s == key)
@@ -167,7 +136,7 @@ fn strain_map(name: &str, t: &Table, width_cm: f64, zoom: f64) -> Result<Drawn> 
 }
 
 fn depth_profile(dir: &Path, width_cm: f64) -> Result<Drawn> {
-    let t = Table::load(dir, "depth_profile.csv")?;
+    let t = Table::load(dir, "depth_profile")?;
     let (keys, disp, depth) = (t.s("case")?, t.f("displacement_m")?, t.f("depth_m")?);
     let (emax, emin) = (t.f("max_principal_log_strain")?, t.f("min_principal_log_strain")?);
     let key = keys[0].clone();

@@ -11,24 +11,19 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::Rendered;
+use super::{Rendered, Table};
 use super::canvas::{colour, fig_err};
 use super::map::{MapSpec, map_figure};
 use super::panel::{Kind, Panel, Series, figure, padded, pt};
 use crate::error::{Error, Result};
-use crate::io::{col_f64, col_str, read_table};
-
-fn load(dir: &Path, name: &str) -> Result<(std::path::PathBuf, polars::prelude::DataFrame)> {
-    let path = dir.join(name);
-    Ok((path.clone(), read_table(&path)?))
-}
+use crate::io::{col_f64, col_str};
 
 fn tubes(dir: &Path) -> Result<Vec<(f64, f64, f64, u32)>> {
-    let (p, df) = load(dir, "tubes.csv")?;
-    let x = col_f64(&df, &p, "x_m")?;
-    let z = col_f64(&df, &p, "z_m")?;
-    let r = col_f64(&df, &p, "radius_m")?;
-    let row = col_f64(&df, &p, "row")?;
+    let t = Table::load(dir, "tubes")?;
+    let x = t.f("x_m")?;
+    let z = t.f("z_m")?;
+    let r = t.f("radius_m")?;
+    let row = t.f("row")?;
     Ok((0..x.len()).map(|k| (x[k], z[k], r[k], row[k] as u32)).collect())
 }
 
@@ -49,9 +44,9 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
 type Drawn = (super::canvas::Encoded, usize);
 
 fn velocity_profile(dir: &Path, width_cm: f64) -> Result<Drawn> {
-    let (p, df) = load(dir, "velocity_profile.csv")?;
-    let z = col_f64(&df, &p, "z_m")?;
-    let vz = col_f64(&df, &p, "mean_vz_m_s")?;
+    let t = Table::load(dir, "velocity_profile")?;
+    let z = t.f("z_m")?;
+    let vz = t.f("mean_vz_m_s")?;
     let pts: Vec<(f64, f64)> = z.iter().zip(&vz).filter(|(_, v)| v.is_finite()).map(|(&z, &v)| (-v, 1e3 * z)).collect();
     let tubes = tubes(dir)?;
     let (x0, x1) = padded(pts.iter().map(|q| q.0).chain([0.0]), 0.02, 0.08);
@@ -101,16 +96,16 @@ pub(crate) fn viridis(t: f64) -> RGBColor {
 
 fn speed_map(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let name = "dem_speed_map";
-    let (p, df) = load(dir, "speed_map.csv")?;
-    let x = col_f64(&df, &p, "x_m")?;
-    let z = col_f64(&df, &p, "z_m")?;
-    let dx = col_f64(&df, &p, "cell_dx_m")?;
-    let dz = col_f64(&df, &p, "cell_dz_m")?;
-    let s = col_f64(&df, &p, "mean_speed_m_s")?;
+    let t = Table::load(dir, "speed_map")?;
+    let x = t.f("x_m")?;
+    let z = t.f("z_m")?;
+    let dx = t.f("cell_dx_m")?;
+    let dz = t.f("cell_dz_m")?;
+    let s = t.f("mean_speed_m_s")?;
     let tubes = tubes(dir)?;
-    let (tp, tdf) = load(dir, "tubes.csv")?;
-    let width = col_f64(&tdf, &tp, "width_m")?.first().copied().unwrap_or(0.125);
-    let top = col_f64(&tdf, &tp, "domain_top_m")?.first().copied().unwrap_or(0.3);
+    let tt = Table::load(dir, "tubes")?;
+    let width = tt.f("width_m")?.first().copied().unwrap_or(0.125);
+    let top = tt.f("domain_top_m")?.first().copied().unwrap_or(0.3);
     let vmax = s.iter().cloned().filter(|v| v.is_finite()).fold(0.0, f64::max).max(1e-9);
     let colour = |v: f64| viridis(v / vmax);
     let spec = MapSpec {
@@ -198,12 +193,12 @@ fn impact_spectra(dir: &Path, width_cm: f64) -> Result<Drawn> {
 }
 
 fn force_time(dir: &Path, width_cm: f64) -> Result<Option<Drawn>> {
-    let (p, df) = load(dir, "force_trace.csv")?;
-    let t = col_f64(&df, &p, "time_s")?;
-    let f = col_f64(&df, &p, "normal_force_n")?;
-    let c = col_f64(&df, &p, "cumulative_impulse_n_s")?;
-    let modulus = col_f64(&df, &p, "youngs_modulus_pa")?.first().copied().unwrap_or(f64::NAN);
-    let v0 = col_f64(&df, &p, "v_normal_m_s")?.first().copied().unwrap_or(f64::NAN);
+    let trace = Table::load(dir, "force_trace")?;
+    let t = trace.f("time_s")?;
+    let f = trace.f("normal_force_n")?;
+    let c = trace.f("cumulative_impulse_n_s")?;
+    let modulus = trace.f("youngs_modulus_pa")?.first().copied().unwrap_or(f64::NAN);
+    let v0 = trace.f("v_normal_m_s")?.first().copied().unwrap_or(f64::NAN);
     if t.len() < 3 {
         return Ok(None);
     }

@@ -31,25 +31,34 @@ use canvas::{Encoded, colour};
 use panel::{Kind, Marker, Panel, Series, figure, padded};
 
 /// A loaded report table with its path (for messages).
-struct Table {
+/// A report table (`<name>.csv`) with typed column access; shared by every figure module.
+pub(crate) struct Table {
     path: PathBuf,
-    df: polars::prelude::DataFrame,
+    pub(crate) df: polars::prelude::DataFrame,
 }
 
 impl Table {
-    fn load(dir: &Path, name: &str) -> Result<Self> {
+    pub(crate) fn load(dir: &Path, name: &str) -> Result<Self> {
         let path = dir.join(format!("{name}.csv"));
         Ok(Table { df: read_table(&path)?, path })
     }
-    fn f(&self, col: &str) -> Result<Vec<f64>> {
+    pub(crate) fn f(&self, col: &str) -> Result<Vec<f64>> {
         col_f64(&self.df, &self.path, col)
     }
-    fn s(&self, col: &str) -> Result<Vec<String>> {
+    pub(crate) fn s(&self, col: &str) -> Result<Vec<String>> {
         col_str(&self.df, &self.path, col)
+    }
+    /// Whether the table has a column.
+    pub(crate) fn has(&self, col: &str) -> bool {
+        self.df.get_column_names().iter().any(|c| c.as_str() == col)
     }
     /// Row indices per material key, in first-appearance order.
     fn groups(&self) -> Result<Vec<(String, Vec<usize>)>> {
-        let keys = self.s("material_key")?;
+        self.groups_by("material_key")
+    }
+    /// Row indices per value of a text column, in first-appearance order.
+    pub(crate) fn groups_by(&self, col: &str) -> Result<Vec<(String, Vec<usize>)>> {
+        let keys = self.s(col)?;
         let mut out: Vec<(String, Vec<usize>)> = Vec::new();
         for (i, k) in keys.into_iter().enumerate() {
             match out.iter_mut().find(|(kk, _)| *kk == k) {

@@ -94,11 +94,7 @@ fn pivotal_seed(seed: u64, n: usize) -> u64 {
 
 /// Runs a lifetime study.
 pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) -> Result<RunSummary> {
-    let start = Instant::now();
-    let started_unix_s = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs())
-        .unwrap_or(0);
+    let clock = RunClock::start();
     let pb = progress_bar(s.material.len() as u64 * 3 + 2, opts.progress);
 
     // 1. Inputs first: every bad-input error happens before anything is written.
@@ -190,10 +186,10 @@ pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) 
     pb.inc(1);
 
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let run = RunRecord { inputs, seed: s.seed, started_unix_s, start, evaluations, failures };
+    let run = RunRecord { inputs, seed: s.seed, clock, evaluations, failures };
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, run)?;
     pb.finish_and_clear();
-    Ok(RunSummary { report_dir, wall_time_s: start.elapsed().as_secs_f64(), headlines })
+    Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })
 }
 
 /// Records rendered figures in the report and any legend that had to hide data as a failure.
@@ -204,12 +200,30 @@ pub(crate) fn record_figures(dir: &mut ReportDir, rendered: crate::report::Rende
     }
 }
 
+/// When a run started: wall clock for the manifest, monotonic clock for its duration.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RunClock {
+    start: Instant,
+    started_unix_s: u64,
+}
+
+impl RunClock {
+    /// Now.
+    pub fn start() -> Self {
+        let started_unix_s = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0);
+        RunClock { start: Instant::now(), started_unix_s }
+    }
+    /// Seconds since the start.
+    pub fn seconds(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+}
+
 /// What a run records in its manifest besides the study.
 pub(crate) struct RunRecord {
     pub inputs: Vec<InputFile>,
     pub seed: u64,
-    pub started_unix_s: u64,
-    pub start: Instant,
+    pub clock: RunClock,
     pub evaluations: BTreeMap<String, u64>,
     pub failures: Vec<String>,
 }
@@ -230,8 +244,8 @@ pub(crate) fn commit_with_manifest(mut dir: ReportDir, loaded: &LoadedStudy, stu
         threads: rayon::current_num_threads(),
         git_revision,
         git_dirty,
-        started_unix_s: run.started_unix_s,
-        wall_time_s: run.start.elapsed().as_secs_f64(),
+        started_unix_s: run.clock.started_unix_s,
+        wall_time_s: run.clock.seconds(),
         evaluations: run.evaluations,
         failures: run.failures,
         outputs,

@@ -219,7 +219,7 @@ fn an_unstable_run_stops_with_a_numerical_error() {
 fn irregular_outline_breaks_before_the_disc() {
     let loaded = partlife::study::load(&root().join("studies/crush_irregular.toml")).unwrap();
     let partlife::study::Study::Crush(study) = loaded.study else { panic!("not a crush study") };
-    let mut setups = study.setups("crush_irregular.toml").unwrap();
+    let mut setups: Vec<_> = study.setups("crush_irregular.toml").unwrap().into_iter().map(|(s, _)| s).collect();
     let mut out = Vec::new();
     for s in setups.iter_mut().take(2) {
         s.mesh.refinement = 6.0;

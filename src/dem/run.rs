@@ -29,7 +29,7 @@ use super::vtk;
 use super::{Dem, DemSetup, Diameters, Inlet, ProbeSetup};
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
-use crate::runner::{RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
+use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
 use crate::study::LoadedStudy;
 
 /// `[particles]`
@@ -340,8 +340,7 @@ impl DemStudy {
 
 /// Runs a DEM study into `reports/<name>/`.
 pub fn run_dem(loaded: &LoadedStudy, s: &DemStudy, opts: &RunOptions) -> Result<RunSummary> {
-    let start = Instant::now();
-    let started_unix_s = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0);
+    let clock = RunClock::start();
     let file = loaded.path.display().to_string();
     let setup = s.setup(&file)?;
     let inputs = vec![InputFile::hash(&loaded.path)?];
@@ -385,10 +384,10 @@ pub fn run_dem(loaded: &LoadedStudy, s: &DemStudy, opts: &RunOptions) -> Result<
     let mut evaluations = std::collections::BTreeMap::new();
     evaluations.insert("dem_particle_steps".to_string(), dem.counters.particle_steps);
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let run = RunRecord { inputs, seed: s.seed, started_unix_s, start, evaluations, failures };
+    let run = RunRecord { inputs, seed: s.seed, clock, evaluations, failures };
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, run)?;
     pb.finish_and_clear();
-    Ok(RunSummary { report_dir, wall_time_s: start.elapsed().as_secs_f64(), headlines })
+    Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })
 }
 
 fn write_snapshot(dir: &mut ReportDir, dem: &Dem) -> Result<()> {

@@ -68,13 +68,6 @@ pub struct ElementState {
     pub ev: f64,
 }
 
-/// Output of one element update.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct ElementForces {
-    /// Internal nodal forces `[r₁, z₁, …, r₄, z₄]` (to be subtracted).
-    pub f: [f64; 8],
-}
-
 /// Centroid geometry.
 #[derive(Debug, Clone, Copy)]
 pub struct Geometry {
@@ -107,8 +100,9 @@ impl Kernel {
     /// Updates one element over `dt` from the node positions `x` (current, or initial with
     /// small-strain kinematics) and velocities `v`; returns its internal forces and the
     /// (internal, hourglass) energy increments per radian, or `None` if the element is inverted.
+    /// The forces are `[r₁, z₁, …, r₄, z₄]`, to be subtracted.
     #[inline]
-    pub fn update(&self, x: &[[f64; 2]; 4], v: &[[f64; 2]; 4], st: &mut ElementState, dt: f64) -> Option<(ElementForces, f64, f64)> {
+    pub fn update(&self, x: &[[f64; 2]; 4], v: &[[f64; 2]; 4], st: &mut ElementState, dt: f64) -> Option<([f64; 8], f64, f64)> {
         let g = geometry(x, self.axisymmetric)?;
         let vol = g.area * g.rc;
         let (mut dvr_dr, mut dvr_dz, mut dvz_dr, mut dvz_dz, mut vr) = (0.0, 0.0, 0.0, 0.0, 0.0);
@@ -152,11 +146,11 @@ impl Kernel {
                 + 0.5 * (sig[1] + old[1] - old_q) * de[1]
                 + 0.5 * (sig[2] + old[2] - old_q) * de[2]
                 + (sig[3] + old[3]) * de[3]);
-        let mut out = ElementForces::default();
+        let mut out = [0.0; 8];
         let hoop = if self.axisymmetric { 0.25 * sig[2] * g.area } else { 0.0 };
         for i in 0..4 {
-            out.f[2 * i] = (sig[0] * g.br[i] + sig[3] * g.bz[i]) * vol + hoop;
-            out.f[2 * i + 1] = (sig[3] * g.br[i] + sig[1] * g.bz[i]) * vol;
+            out[2 * i] = (sig[0] * g.br[i] + sig[3] * g.bz[i]) * vol + hoop;
+            out[2 * i + 1] = (sig[3] * g.br[i] + sig[1] * g.bz[i]) * vol;
         }
         // Hourglass control.
         let mut e_hg = 0.0;
@@ -178,8 +172,8 @@ impl Kernel {
             st.hg[1] += kappa * qz * dt;
             e_hg = 0.5 * ((hr0 + st.hg[0]) * qr + (hz0 + st.hg[1]) * qz) * dt;
             for i in 0..4 {
-                out.f[2 * i] += st.hg[0] * gamma[i];
-                out.f[2 * i + 1] += st.hg[1] * gamma[i];
+                out[2 * i] += st.hg[0] * gamma[i];
+                out[2 * i + 1] += st.hg[1] * gamma[i];
             }
         }
         Some((out, e_int, e_hg))

@@ -575,7 +575,7 @@ impl CrushTest {
                     let xe = conn.map(|i| x[i as usize]);
                     let ve = conn.map(|i| v[i as usize]);
                     let (f, a, b) = kernel.update(&xe, &ve, &mut st[k], dt).ok_or(e)?;
-                    fo[k] = f.f;
+                    fo[k] = f;
                     ei += a;
                     eh += b;
                 }

@@ -22,7 +22,6 @@
 //! energies per unit thickness: those columns end in `_per_m` (`force_n_per_m`, …).
 
 use std::collections::BTreeMap;
-use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -32,7 +31,7 @@ use super::output::{FIELD_NAMES, axis_column, vtu};
 use super::{CrushResult, CrushSetup, CrushTest};
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
-use crate::runner::{RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
+use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
 use crate::study::LoadedStudy;
 
 /// One crush case.
@@ -87,8 +86,8 @@ pub struct CrushStudy {
 }
 
 impl CrushStudy {
-    /// The set-up of every case; validates everything before any step runs.
-    pub fn setups(&self, file: &str) -> Result<Vec<CrushSetup>> {
+    /// The set-up and mesh of every case; validates everything before any step runs.
+    pub fn setups(&self, file: &str) -> Result<Vec<(CrushSetup, super::mesh::Mesh)>> {
         if self.case.is_empty() {
             return Err(Error::config(file, "case", "at least one [[case]] is required"));
         }
@@ -124,11 +123,11 @@ impl CrushStudy {
                 if s.kinematics != self.crush.kinematics {
                     return Err(Error::config(file, format!("case[{i}]"), "every case shares the study's kinematics (forces per radian and per thickness do not compare)"));
                 }
-                s.mesh(file).map_err(|e| match e {
+                let mesh = s.mesh(file).map_err(|e| match e {
                     Error::Config { key, rule, .. } => Error::config(file, format!("case[{i}] ({}): {key}", c.key), rule),
                     other => other,
                 })?;
-                Ok(s)
+                Ok((s, mesh))
             })
             .collect()
     }
@@ -136,8 +135,7 @@ impl CrushStudy {
 
 /// Runs a crush study.
 pub fn run_crush(loaded: &LoadedStudy, s: &CrushStudy, opts: &RunOptions) -> Result<RunSummary> {
-    let start = Instant::now();
-    let started_unix_s = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0);
+    let clock = RunClock::start();
     let file = loaded.path.display().to_string();
     let setups = s.setups(&file)?;
     let inputs = vec![InputFile::hash(&loaded.path)?];
@@ -149,10 +147,12 @@ pub fn run_crush(loaded: &LoadedStudy, s: &CrushStudy, opts: &RunOptions) -> Res
     let mut runs = Vec::new();
     let mut failures = Vec::new();
     let mut steps_total = 0u64;
-    for (case, setup) in s.case.iter().zip(setups) {
+    for (case, (setup, mesh)) in s.case.iter().zip(setups) {
         pb.set_message(format!("case {} ({})", case.key, case.label));
         pb.set_position(0);
-        let mut t = CrushTest::new(setup, &file)?;
+        // Validated and meshed by `setups` above.
+        let axisymmetric = setup.kinematics == super::Kinematics::Axisymmetric;
+        let mut t = CrushTest::with_mesh(setup, mesh, axisymmetric)?;
         let r = t.run(Some(&pb))?;
         if let Some(w) = &r.quasi_static.warning {
             failures.push(format!("case {}: {w}", case.key));
@@ -176,10 +176,10 @@ pub fn run_crush(loaded: &LoadedStudy, s: &CrushStudy, opts: &RunOptions) -> Res
     evaluations.insert("crush_runs".to_string(), runs.len() as u64);
     evaluations.insert("element_steps".to_string(), steps_total);
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let run = RunRecord { inputs, seed: s.seed, started_unix_s, start, evaluations, failures };
+    let run = RunRecord { inputs, seed: s.seed, clock, evaluations, failures };
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, run)?;
     pb.finish_and_clear();
-    Ok(RunSummary { report_dir, wall_time_s: start.elapsed().as_secs_f64(), headlines })
+    Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })
 }
 
 fn write_tables(dir: &mut ReportDir, runs: &[(CrushCase, CrushTest, CrushResult)]) -> Result<Vec<String>> {

@@ -166,12 +166,12 @@ fn patch_errors(axi: bool, l: [[f64; 2]; 2], (nodes, elements, interior): (Vec<[
         // The volume change of the increment enters μ through the current volume.
         let x1 = x.map(|p| [p[0] + dt * vel(p)[0], p[1] + dt * vel(p)[1]]);
         let (fe, _, _) = k.update(&x1, &v, &mut st, dt).unwrap();
-        let f_el = fe.f.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        let f_el = fe.iter().map(|v| v.abs()).fold(0.0, f64::max);
         assert!(st.hg[0].abs() + st.hg[1].abs() < 1e-12 * f_el, "hourglass force under a linear field: {:?} vs {f_el:e}", st.hg);
         stresses.push(st.point.stress());
         for (n, &i) in conn.iter().enumerate() {
-            f[i as usize][0] += fe.f[2 * n];
-            f[i as usize][1] += fe.f[2 * n + 1];
+            f[i as usize][0] += fe[2 * n];
+            f[i as usize][1] += fe[2 * n + 1];
         }
     }
     let s0 = stresses[0];

@@ -159,18 +159,7 @@ fn crush_model_is_a_simulator() {
 
 /// A bad crush study: exit code 2, one message naming file, key and rule, nothing written.
 fn bad(from: &str, to: &str, expect: &[&str]) {
-    let s = Scratch::new();
-    let text = s.read("studies/crush_gen3_rt.toml");
-    assert!(text.contains(from), "the study has no \"{from}\"");
-    s.write("studies/crush_gen3_rt.toml", &text.replacen(from, to, 1));
-    let out = s.run(&["run", "studies/crush_gen3_rt.toml", "--quiet"]);
-    assert_eq!(out.code, 2, "exit code; stderr: {}", out.stderr);
-    assert!(!out.stderr.contains("panicked"), "{}", out.stderr);
-    assert_eq!(out.stderr.trim().lines().count(), 1, "one message: {}", out.stderr);
-    for e in expect.iter().chain(&["crush_gen3_rt.toml"]) {
-        assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
-    }
-    assert!(s.report_files().is_empty(), "a failed run wrote {:?}", s.report_files());
+    Scratch::new().expect_bad_study("studies/crush_gen3_rt.toml", from, to, expect);
 }
 
 #[test]

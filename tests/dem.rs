@@ -198,19 +198,7 @@ fn tube_bank_model_is_a_deterministic_simulator() {
 /// Spoils the scratch DEM study and checks the bad-input contract (exit 2, one line naming the
 /// file and key, nothing under reports/).
 fn bad(from: &str, to: &str, expect: &[&str]) {
-    let s = Scratch::new();
-    let t = s.read("studies/dem_cold_test.toml");
-    assert!(t.contains(from), "the study has no \"{from}\"");
-    s.write("studies/dem_cold_test.toml", &t.replacen(from, to, 1));
-    let out = s.run(&["run", "studies/dem_cold_test.toml", "--quiet"]);
-    assert_eq!(out.code, 2, "exit code; stderr: {}", out.stderr);
-    assert!(!out.stderr.contains("panicked"), "{}", out.stderr);
-    assert_eq!(out.stderr.trim().lines().count(), 1, "one message: {}", out.stderr);
-    assert!(out.stderr.contains("dem_cold_test.toml"), "names the file: {}", out.stderr);
-    for e in expect {
-        assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
-    }
-    assert!(s.report_files().is_empty(), "something was written: {:?}", s.report_files());
+    Scratch::new().expect_bad_study("studies/dem_cold_test.toml", from, to, expect);
 }
 
 #[test]

@@ -43,6 +43,23 @@ impl Scratch {
     pub fn run(&self, args: &[&str]) -> Out {
         run_in(self.dir.path(), args)
     }
+    /// Edits `study` (a path under studies/) by replacing `from` with `to`, runs it, and checks
+    /// the bad-input contract: exit code 2, no panic, one message naming the study file and
+    /// every `expect` string, and nothing written under reports/.
+    pub fn expect_bad_study(&self, study: &str, from: &str, to: &str, expect: &[&str]) {
+        let text = self.read(study);
+        assert!(text.contains(from), "the study has no \"{from}\"");
+        self.write(study, &text.replacen(from, to, 1));
+        let out = self.run(&["run", study, "--quiet"]);
+        assert_eq!(out.code, 2, "exit code; stderr: {}", out.stderr);
+        assert!(!out.stderr.contains("panicked"), "{}", out.stderr);
+        assert_eq!(out.stderr.trim().lines().count(), 1, "one message: {}", out.stderr);
+        let file = study.rsplit('/').next().unwrap_or(study);
+        for e in expect.iter().chain(&[file]) {
+            assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
+        }
+        assert!(self.report_files().is_empty(), "a failed run wrote {:?}", self.report_files());
+    }
     /// Every file under reports/, relative, sorted.
     pub fn report_files(&self) -> Vec<String> {
         let mut out = Vec::new();

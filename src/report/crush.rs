@@ -100,14 +100,25 @@ fn strain_map(name: &str, t: &Table, width_cm: f64, zoom: f64) -> Result<Drawn> 
     // An axisymmetric quarter (r ≥ 0) is mirrored about the axis; a plane-strain section is whole.
     let mirror = r_min >= 0.0;
     let r_max = r_max.max(-r_min);
-    let (x_lo, x_hi) = (-zoom * r_max * 1e3, zoom * r_max * 1e3);
+    // Centred on the top contact: the axis of a quarter, the highest vertex of a section.
+    let x_c = if mirror {
+        0.0
+    } else {
+        let cols = &cols;
+        idx.iter().flat_map(|&i| (0..4).map(move |k| (cols[2 * k][i], cols[2 * k + 1][i]))).fold((0.0, f64::MIN), |m, p| if p.1 > m.1 { p } else { m }).0
+    };
+    let (x_lo, x_hi) = (1e3 * (x_c - zoom * r_max), 1e3 * (x_c + zoom * r_max));
     let depth = if zoom < 1.0 { 1.4 * zoom } else { 1.0 };
     let z_min = idx.iter().flat_map(|&i| [cols[1][i], cols[3][i], cols[5][i], cols[7][i]]).fold(0.0, f64::min);
     let y_lo = if !mirror && zoom >= 1.0 { z_min * 1e3 * 1.02 } else { z_max * (1.0 - depth) * 1e3 };
     let y_hi = z_max * 1e3 * (1.0 + 0.02 * depth);
     // Colour range: ±the 98th percentile of |ε₁| in the window, so that a few crushed elements
     // under the platen do not wash out the rest; larger values take the end colours.
-    let mut mags: Vec<f64> = idx.iter().map(|&i| val[i].abs()).filter(|v| v.is_finite()).collect();
+    let in_window = |i: usize| {
+        let (x, z) = ((0..4).map(|k| cols[2 * k][i]).sum::<f64>() * 250.0, (0..4).map(|k| cols[2 * k + 1][i]).sum::<f64>() * 250.0);
+        (mirror || (x_lo..=x_hi).contains(&x)) && (y_lo..=y_hi).contains(&z)
+    };
+    let mut mags: Vec<f64> = idx.iter().filter(|&&i| in_window(i)).map(|&i| val[i].abs()).filter(|v| v.is_finite()).collect();
     mags.sort_by(f64::total_cmp);
     let vmax = mags.get(((mags.len() as f64 * 0.98) as usize).min(mags.len().saturating_sub(1))).copied().unwrap_or(1e-12).max(1e-12);
     let x_desc = if mirror { "radius r (mm)" } else { "x (mm)" };
@@ -155,7 +166,7 @@ fn depth_profile(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let r_max = depth.iter().cloned().fold(0.0, f64::max);
     let panel = Panel {
         x_desc: "Depth below the platen (µm)".into(),
-        y_desc: "ε₁ (solid), ε₃ (dashed) on the axis (‰)".into(),
+        y_desc: "ε₁ (solid), ε₃ (dashed) under the contact (‰)".into(),
         x_range: (0.0, 1e6 * (0.5 * r_max)),
         y_range: padded(xs, 0.05, 0.35),
         y_log: false,

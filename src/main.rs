@@ -78,6 +78,15 @@ enum DatasetsCommand {
         #[arg(long)]
         out_dir: Option<PathBuf>,
     },
+    /// Regenerate the synthetic crush force–displacement curves (fine-mesh FE; a few minutes).
+    SynthCurves {
+        /// Generator settings (the generator's truth).
+        #[arg(long, default_value = "datasets/synth_curves.toml")]
+        settings: PathBuf,
+        /// Output directory (default: the settings file's directory).
+        #[arg(long)]
+        out_dir: Option<PathBuf>,
+    },
     /// Validate dataset files (crush CSV or Table 1) and summarise them.
     Check {
         /// Files to check.
@@ -140,6 +149,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     sum.force_diameter_p
                 );
             }
+        }
+        Command::Datasets { command: DatasetsCommand::SynthCurves { settings, out_dir } } => {
+            let s = partlife::calibrate::synth::CurveSynthSettings::load(&settings)?;
+            let out = out_dir.unwrap_or_else(|| settings.parent().map(|p| p.to_path_buf()).unwrap_or_default());
+            let total: usize = s.case.iter().map(|c| c.particles).sum();
+            let bar = partlife::runner::progress_bar(total as u64, true, partlife::runner::PROGRESS_COUNT);
+            for sum in partlife::calibrate::synth::synthesize(&s, &out, &|| bar.inc(1))? {
+                out!("{}: {} particles", sum.path.display(), sum.particles);
+                for (d, rho, f, x) in sum.rows {
+                    out!("  d = {:.0} µm, roundness {:.3}: peak {:.1} N, fracture at {}", d * 1e6, rho, f, x.map(|x| format!("{:.1} µm", x * 1e6)).unwrap_or("—".into()));
+                }
+            }
+            bar.finish_and_clear();
         }
         Command::Datasets { command: DatasetsCommand::Check { files } } => {
             for f in files {

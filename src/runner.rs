@@ -57,6 +57,7 @@ pub fn run(study: &LoadedStudy, opts: &RunOptions) -> Result<RunSummary> {
         Study::Lifetime(s) => run_lifetime(study, s, opts),
         Study::Dem(s) => crate::dem::run::run_dem(study, s, opts),
         Study::Crush(s) => crate::fem::run::run_crush(study, s, opts),
+        Study::Calibrate(s) => crate::calibrate::run::run_calibrate(study, s, opts),
     }
 }
 
@@ -78,10 +79,14 @@ struct MaterialRun {
     chain: LifetimeChain,
 }
 
-fn progress_bar(len: u64, show: bool) -> ProgressBar {
+/// Default progress template: elapsed time, bar, count and message.
+pub const PROGRESS_COUNT: &str = "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg} (eta {eta})";
+
+/// A progress bar on stderr (hidden when `show` is false) with an indicatif `template`.
+pub fn progress_bar(len: u64, show: bool, template: &str) -> ProgressBar {
     let target = if show { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
     let pb = ProgressBar::with_draw_target(Some(len), target);
-    if let Ok(style) = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}") {
+    if let Ok(style) = ProgressStyle::with_template(template) {
         pb.set_style(style);
     }
     pb
@@ -95,7 +100,7 @@ fn pivotal_seed(seed: u64, n: usize) -> u64 {
 /// Runs a lifetime study.
 pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) -> Result<RunSummary> {
     let clock = RunClock::start();
-    let pb = progress_bar(s.material.len() as u64 * 3 + 2, opts.progress);
+    let pb = progress_bar(s.material.len() as u64 * 3 + 2, opts.progress, "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}");
 
     // 1. Inputs first: every bad-input error happens before anything is written.
     let mut inputs = vec![InputFile::hash(&loaded.path)?];

@@ -18,7 +18,6 @@
 
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use polars::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -349,11 +348,7 @@ pub fn run_dem(loaded: &LoadedStudy, s: &DemStudy, opts: &RunOptions) -> Result<
     let mut dem = Dem::new(setup, &file)?;
     let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
 
-    let target = if opts.progress { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
-    let pb = ProgressBar::with_draw_target(Some(total_steps), target);
-    if let Ok(style) = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} steps {msg} (eta {eta})") {
-        pb.set_style(style);
-    }
+    let pb = crate::runner::progress_bar(total_steps, opts.progress, "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} steps {msg} (eta {eta})");
     let mut snaps: Vec<f64> = s.run.snapshots.clone();
     snaps.sort_by(f64::total_cmp);
     let mut next_snap = 0;

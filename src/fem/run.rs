@@ -23,7 +23,6 @@
 
 use std::collections::BTreeMap;
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::{Deserialize, Serialize};
 
 use super::mesh::Shape;
@@ -139,11 +138,7 @@ pub fn run_crush(loaded: &LoadedStudy, s: &CrushStudy, opts: &RunOptions) -> Res
     let file = loaded.path.display().to_string();
     let setups = s.setups(&file)?;
     let inputs = vec![InputFile::hash(&loaded.path)?];
-    let target = if opts.progress { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
-    let pb = ProgressBar::with_draw_target(Some(1000), target);
-    if let Ok(style) = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {msg} (eta {eta})") {
-        pb.set_style(style);
-    }
+    let pb = crate::runner::progress_bar(1000, opts.progress, "{spinner} [{elapsed_precise}] {bar:30} {msg} (eta {eta})");
     let mut runs = Vec::new();
     let mut failures = Vec::new();
     let mut steps_total = 0u64;

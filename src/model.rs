@@ -51,6 +51,21 @@ pub trait Simulator: Sync {
     }
 }
 
+impl<S: Simulator + ?Sized> Simulator for &S {
+    fn space(&self) -> &ParamSpace {
+        (**self).space()
+    }
+    fn outputs(&self) -> &[OutputSpec] {
+        (**self).outputs()
+    }
+    fn simulate(&self, theta: &[f64]) -> Result<Vec<f64>> {
+        (**self).simulate(theta)
+    }
+    fn simulate_batch(&self, thetas: &[Vec<f64>]) -> Vec<Result<Vec<f64>>> {
+        (**self).simulate_batch(thetas)
+    }
+}
+
 /// Fails with [`Error::Numerical`] if any output is not finite, naming the output and θ.
 pub fn check_outputs(model: &str, specs: &[OutputSpec], theta: &[f64], y: &[f64]) -> Result<()> {
     for (s, v) in specs.iter().zip(y) {
@@ -68,4 +83,54 @@ pub fn check_outputs(model: &str, specs: &[OutputSpec], theta: &[f64], y: &[f64]
         ));
     }
     Ok(())
+}
+
+/// A simulator with some of its parameters held at their nominal values: θ of the restricted
+/// model is the listed parameters (with the bounds and priors given here), in their order.
+pub struct Restricted<S: Simulator> {
+    inner: S,
+    free: Vec<usize>,
+    base: Vec<f64>,
+    space: ParamSpace,
+}
+
+impl<S: Simulator> Restricted<S> {
+    /// Frees the parameters `params` (matched by name; unit and nominal value from `inner`,
+    /// the nominal value clamped into the new bounds); the others stay at `inner`'s nominal.
+    pub fn new(inner: S, params: Vec<crate::params::Param>) -> Result<Self> {
+        let mut free = Vec::new();
+        let mut params = params;
+        for p in params.iter_mut() {
+            let k = inner.space().index_of(&p.name)?;
+            let q = &inner.space().params()[k];
+            p.unit = q.unit.clone();
+            p.nominal = q.nominal.clamp(p.lower, p.upper);
+            free.push(k);
+        }
+        let space = ParamSpace::new(params)?;
+        let base = inner.space().nominal();
+        Ok(Restricted { inner, free, base, space })
+    }
+
+    /// The full θ of the inner model.
+    pub fn full(&self, theta: &[f64]) -> Vec<f64> {
+        let mut t = self.base.clone();
+        for (&k, &v) in self.free.iter().zip(theta) {
+            t[k] = v;
+        }
+        t
+    }
+}
+
+impl<S: Simulator> Simulator for Restricted<S> {
+    fn space(&self) -> &ParamSpace {
+        &self.space
+    }
+    fn outputs(&self) -> &[OutputSpec] {
+        self.inner.outputs()
+    }
+    fn simulate(&self, theta: &[f64]) -> Result<Vec<f64>> {
+        self.space.check(theta)?;
+        self.inner.simulate(&self.full(theta))
+    }
 }

@@ -165,7 +165,7 @@ pub struct MaterialSpec {
 }
 
 /// The kinds of study this version can run.
-pub const KINDS: [&str; 3] = ["lifetime", "dem", "crush"];
+pub const KINDS: [&str; 4] = ["lifetime", "dem", "crush", "calibrate"];
 
 /// A lifetime study (kind = "lifetime"): the deliverable's §6 chain for several materials.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -201,6 +201,8 @@ pub enum Study {
     Dem(Box<crate::dem::run::DemStudy>),
     /// kind = "crush": single-particle crush tests with the FE.
     Crush(Box<crate::fem::run::CrushStudy>),
+    /// kind = "calibrate": fit a simulator's parameters to data.
+    Calibrate(Box<crate::calibrate::run::CalibrateStudy>),
 }
 
 /// A study file loaded from disk.
@@ -220,24 +222,28 @@ impl LoadedStudy {
     /// Resolves a path of the study relative to the study file's directory (lexically:
     /// `studies/../datasets/x.csv` becomes `datasets/x.csv`).
     pub fn resolve(&self, p: &Path) -> PathBuf {
-        if p.is_absolute() {
-            return p.to_path_buf();
-        }
-        let joined = self.path.parent().unwrap_or(Path::new(".")).join(p);
-        let mut out = PathBuf::new();
-        for c in joined.components() {
-            match c {
-                std::path::Component::CurDir => {}
-                std::path::Component::ParentDir
-                    if matches!(out.components().next_back(), Some(std::path::Component::Normal(_))) =>
-                {
-                    out.pop();
-                }
-                other => out.push(other),
-            }
-        }
-        out
+        resolve_relative(&self.path, p)
     }
+}
+
+/// Resolves `p` relative to the directory of the file `study` (lexically:
+/// `studies/../datasets/x.csv` becomes `datasets/x.csv`); absolute paths stay.
+pub fn resolve_relative(study: &Path, p: &Path) -> PathBuf {
+    if p.is_absolute() {
+        return p.to_path_buf();
+    }
+    let joined = study.parent().unwrap_or(Path::new(".")).join(p);
+    let mut out = PathBuf::new();
+    for c in joined.components() {
+        match c {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir if matches!(out.components().next_back(), Some(std::path::Component::Normal(_))) => {
+                out.pop();
+            }
+            other => out.push(other),
+        }
+    }
+    out
 }
 
 /// Reads, parses and validates a study file.
@@ -269,6 +275,11 @@ pub fn load(path: &Path) -> Result<LoadedStudy> {
             let s: crate::fem::run::CrushStudy = parse_toml(path, &text)?;
             s.setups(&file)?;
             Study::Crush(Box::new(s))
+        }
+        "calibrate" => {
+            let s: crate::calibrate::run::CalibrateStudy = parse_toml(path, &text)?;
+            s.prepare(path, &|p: &str| resolve_relative(path, Path::new(p)))?;
+            Study::Calibrate(Box::new(s))
         }
         other => {
             return Err(Error::config(&file, "kind", format!("unknown kind \"{other}\"; known: {}", KINDS.join(", "))));

@@ -3,6 +3,7 @@
 //! * [`cache`]: evaluations stored on disk by a hash of the configuration and θ.
 //! * [`mcmc`]: the affine-invariant ensemble sampler and convergence diagnostics (R̂, ESS).
 //! * [`gp`]: Gaussian-process emulator (Matérn-5/2, ML hyperparameters by argmin Nelder–Mead, LOO).
+//! * [`synth`]: the generator of the synthetic crush curves (`partlife datasets synth-curves`).
 //! * [`lsq`]: multi-start Levenberg–Marquardt in unit-cube coordinates, covariance from the
 //!   Jacobian, correlations and an identifiability report.
 //!
@@ -10,9 +11,14 @@
 //! `r_i = (y_i(θ) − d_i)/σ_i`. Calibration code sees only the Simulator seam.
 
 pub mod cache;
+pub mod data;
+pub mod emulator;
 pub mod gp;
 pub mod lsq;
 pub mod mcmc;
+pub mod pipeline;
+pub mod run;
+pub mod synth;
 
 use serde::{Deserialize, Serialize};
 

@@ -14,6 +14,7 @@
 //! embedded DejaVu Sans font ([`canvas`]).
 
 pub mod canvas;
+pub mod calibrate;
 pub mod crush;
 pub mod dem;
 pub mod map;
@@ -39,8 +40,10 @@ pub(crate) struct Table {
 
 impl Table {
     pub(crate) fn load(dir: &Path, name: &str) -> Result<Self> {
-        let path = dir.join(format!("{name}.csv"));
-        Ok(Table { df: read_table(&path)?, path })
+        Self::load_file(&dir.join(format!("{name}.csv")))
+    }
+    pub(crate) fn load_file(path: &Path) -> Result<Self> {
+        Ok(Table { df: read_table(path)?, path: path.to_path_buf() })
     }
     pub(crate) fn f(&self, col: &str) -> Result<Vec<f64>> {
         col_f64(&self.df, &self.path, col)
@@ -155,6 +158,7 @@ pub fn redraw(report_dir: &Path) -> Result<Rendered> {
     match json.pointer("/study_resolved/kind").and_then(|v| v.as_str()) {
         Some("dem") => return dem::render(report_dir, width),
         Some("crush") => return crush::render(report_dir, width),
+        Some("calibrate") => return calibrate::render(report_dir, width),
         _ => {}
     }
     render(report_dir, width)

@@ -329,3 +329,25 @@ pub fn figure(name: &str, width_cm: f64, aspect: f64, panels: &[(Panel, f64)]) -
     }
     Ok((encode(name, &svg, size, width_cm)?, hidden))
 }
+
+/// Draws a figure of panels on a grid of `cols` columns (row-major; `None` leaves a cell
+/// blank, as above the diagonal of a corner plot) and encodes it; returns the hidden-sample
+/// count as [`figure`].
+pub fn figure_grid(name: &str, width_cm: f64, aspect: f64, cols: usize, panels: &[Option<Panel>]) -> Result<(Encoded, usize)> {
+    register_fonts()?;
+    let size = canvas_size(width_cm, aspect);
+    let rows = panels.len().div_ceil(cols.max(1));
+    let mut svg = String::new();
+    let mut hidden = 0;
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        root.fill(&WHITE).map_err(fig_err(name))?;
+        for (area, panel) in root.split_evenly((rows, cols.max(1))).iter().zip(panels) {
+            if let Some(p) = panel {
+                hidden += draw_panel(area, p, name)?;
+            }
+        }
+        root.present().map_err(fig_err(name))?;
+    }
+    Ok((encode(name, &svg, size, width_cm)?, hidden))
+}

@@ -10,7 +10,7 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// A temporary project: `studies/{lifetime,dem_cold_test,crush_gen3_rt}.toml` and
+/// A temporary project: `studies/{lifetime,dem_cold_test,crush_gen3_rt,calibrate_gen3_rt}.toml` and
 /// `datasets/*.csv` copied from the repo.
 pub struct Scratch {
     pub dir: tempfile::TempDir,
@@ -22,10 +22,10 @@ impl Scratch {
         for sub in ["studies", "datasets"] {
             std::fs::create_dir_all(dir.path().join(sub)).unwrap();
         }
-        for f in ["lifetime.toml", "dem_cold_test.toml", "crush_gen3_rt.toml"] {
+        for f in ["lifetime.toml", "dem_cold_test.toml", "crush_gen3_rt.toml", "calibrate_gen3_rt.toml"] {
             std::fs::copy(root().join("studies").join(f), dir.path().join("studies").join(f)).unwrap();
         }
-        for f in ["crush_bl1630.csv", "crush_gen4.csv"] {
+        for f in ["crush_bl1630.csv", "crush_gen4.csv", "crush_curves_gen3_rt.csv"] {
             std::fs::copy(root().join("datasets").join(f), dir.path().join("datasets").join(f)).unwrap();
         }
         Scratch { dir }

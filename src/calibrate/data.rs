@@ -1,0 +1,249 @@
+//! Calibration data: measured crush curves and named observations, reduced to a vector of
+//! observations d_i with standard deviations σ_i, each tied to one model output.
+//!
+//! ## Crush curves (`particle, diameter_m, displacement_m, force_n`)
+//! One force–displacement curve per particle. Particles differ in diameter; an elastic–plastic
+//! continuum without a length scale (JH-2 with a negligible rate term, quasi-static loading)
+//! crushes geometrically similar particles with `F(δ; D) = D² f(δ/D)`, so every curve is
+//! **normalised to a reference diameter D₀** (`δ·D₀/D`, `F·(D₀/D)²`) and one FE run at D₀
+//! serves all particles. The normalised curves are reduced to, per particle:
+//! * the force at K grid displacements `δ_k = k/K · fraction · min_p δ_f,p` (below every
+//!   particle's fracture, so a grid point is never on a post-fracture branch);
+//! * the peak force and the fracture displacement (first sustained drop,
+//!   [`crate::fem::output::FractureDetector`]); a particle whose curve never drops is censored:
+//!   it contributes its grid forces only.
+//!
+//! σ of each output is the **scatter between particles** (sample sd over particles) with a floor
+//! of `sigma_floor` times the mean: particle-to-particle differences in roundness, diameter and
+//! flaws are what a single-particle model cannot represent, and they dominate the machine's
+//! noise. The calibrated θ is then that of the typical particle, and the posterior predictive of
+//! a new particle adds σ.
+//!
+//! ## Observations (`output, unit, value, sd`)
+//! One row per measured model output, by the output's name (for example the DEM's
+//! `vz_at_100mm`, `mass_flow`): the unit must equal the model output's unit; sd > 0.
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::fem::FractureParams;
+use crate::fem::output::FractureDetector;
+use crate::io::{col_f64, col_str, read_table};
+use crate::model::OutputSpec;
+
+/// One measured curve.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Curve {
+    /// Particle label as in the file.
+    pub particle: String,
+    /// Diameter (m).
+    pub diameter: f64,
+    /// Total displacement (m), non-decreasing.
+    pub displacement: Vec<f64>,
+    /// Force (N).
+    pub force: Vec<f64>,
+}
+
+impl Curve {
+    /// The curve normalised to diameter `d0`.
+    pub fn normalised(&self, d0: f64) -> Curve {
+        let s = d0 / self.diameter;
+        Curve {
+            particle: self.particle.clone(),
+            diameter: d0,
+            displacement: self.displacement.iter().map(|x| x * s).collect(),
+            force: self.force.iter().map(|f| f * s * s).collect(),
+        }
+    }
+
+    /// Linear interpolation of the force at `x` (None outside the curve).
+    pub fn force_at(&self, x: f64) -> Option<f64> {
+        let i = self.displacement.partition_point(|&d| d < x);
+        if i == 0 {
+            return (self.displacement.first() == Some(&x)).then(|| self.force[0]);
+        }
+        if i >= self.displacement.len() {
+            return None;
+        }
+        let (x0, x1) = (self.displacement[i - 1], self.displacement[i]);
+        let t = if x1 > x0 { (x - x0) / (x1 - x0) } else { 1.0 };
+        Some(self.force[i - 1] + t * (self.force[i] - self.force[i - 1]))
+    }
+
+    /// (peak force, fracture displacement) by the first sustained drop; None if it never drops.
+    pub fn fracture(&self, p: FractureParams) -> Option<(f64, f64)> {
+        let mut det = FractureDetector::new(p);
+        for (&x, &f) in self.displacement.iter().zip(&self.force) {
+            if let Some(at) = det.push(x, f) {
+                return Some((det.result().0, at));
+            }
+        }
+        None
+    }
+}
+
+/// Reads a curve file; every rule broken names the file, row and column.
+pub fn load_curves(path: &Path) -> Result<Vec<Curve>> {
+    let df = read_table(path)?;
+    let particle = col_str(&df, path, "particle")?;
+    let cols: Vec<Vec<f64>> = ["diameter_m", "displacement_m", "force_n"].iter().map(|c| col_f64(&df, path, c)).collect::<Result<_>>()?;
+    let (diam, disp, force) = (&cols[0], &cols[1], &cols[2]);
+    let mut curves: Vec<Curve> = Vec::new();
+    for i in 0..particle.len() {
+        for (name, v) in [("diameter_m", diam[i]), ("displacement_m", disp[i]), ("force_n", force[i])] {
+            if !v.is_finite() {
+                return Err(Error::data_row(path, i, name, format!("{v} is not a finite number")));
+            }
+        }
+        if !(diam[i] > 0.0 && diam[i] < 0.1) {
+            return Err(Error::data_row(path, i, "diameter_m", format!("{} m is not a particle diameter (0 < d < 0.1 m)", diam[i])));
+        }
+        if disp[i] < 0.0 {
+            return Err(Error::data_row(path, i, "displacement_m", format!("{} is negative", disp[i])));
+        }
+        if particle[i].is_empty() {
+            return Err(Error::data_row(path, i, "particle", "is empty"));
+        }
+        match curves.last_mut() {
+            Some(c) if c.particle == particle[i] => {
+                if diam[i] != c.diameter {
+                    return Err(Error::data_row(path, i, "diameter_m", format!("{} differs from {} earlier in particle {}'s curve", diam[i], c.diameter, c.particle)));
+                }
+                if disp[i] < *c.displacement.last().unwrap_or(&0.0) {
+                    return Err(Error::data_row(path, i, "displacement_m", format!("falls back (from {:e} to {:e}): a curve's displacement must not decrease", c.displacement.last().unwrap_or(&0.0), disp[i])));
+                }
+                c.displacement.push(disp[i]);
+                c.force.push(force[i]);
+            }
+            _ => {
+                if curves.iter().any(|c| c.particle == particle[i]) {
+                    return Err(Error::data_row(path, i, "particle", format!("particle {} appears again after another particle's rows", particle[i])));
+                }
+                curves.push(Curve { particle: particle[i].clone(), diameter: diam[i], displacement: vec![disp[i]], force: vec![force[i]] });
+            }
+        }
+    }
+    if curves.len() < 3 {
+        return Err(Error::data_file(path, "file", format!("{} curves: at least 3 particles are needed to estimate their scatter", curves.len())));
+    }
+    if let Some(c) = curves.iter().find(|c| c.displacement.len() < 10) {
+        return Err(Error::data_file(path, format!("particle {}", c.particle), format!("{} samples: a curve needs at least 10", c.displacement.len())));
+    }
+    Ok(curves)
+}
+
+/// Observations d_i with σ_i, each of model output `output[i]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Observations {
+    /// Values.
+    pub values: Vec<f64>,
+    /// Standard deviations (> 0).
+    pub sigma: Vec<f64>,
+    /// Model output index of each value.
+    pub output: Vec<usize>,
+    /// Group of each value (particle index for curves, 0 otherwise).
+    pub group: Vec<usize>,
+}
+
+impl Observations {
+    /// Number of observations.
+    pub fn len(&self) -> usize {
+        self.values.len()
+    }
+
+    /// True without observations.
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+}
+
+/// Crush curves reduced for calibration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CrushReduction {
+    /// Reference diameter D₀ (m).
+    pub reference_diameter: f64,
+    /// Grid displacements at D₀ (m): the model's `force_at_…` outputs.
+    pub grid: Vec<f64>,
+    /// The curves normalised to D₀.
+    pub curves: Vec<Curve>,
+    /// Per particle: normalised (peak force, fracture displacement), None when censored.
+    pub fractures: Vec<Option<(f64, f64)>>,
+    /// The observations; outputs 0..K are the grid forces, K the peak force, K+1 the fracture
+    /// displacement.
+    pub observations: Observations,
+}
+
+/// Reduces curves (see the module documentation).
+pub fn reduce_curves(path: &Path, curves: &[Curve], d0: f64, points: usize, fraction: f64, sigma_floor: f64, fracture: FractureParams) -> Result<CrushReduction> {
+    let curves: Vec<Curve> = curves.iter().map(|c| c.normalised(d0)).collect();
+    let fractures: Vec<Option<(f64, f64)>> = curves.iter().map(|c| c.fracture(fracture)).collect();
+    let fracture_min = fractures.iter().flatten().map(|f| f.1).fold(f64::INFINITY, f64::min);
+    let broken = fractures.iter().flatten().count();
+    if broken < 3 {
+        return Err(Error::data_file(path, "file", format!("only {broken} curves show a sustained force drop (fracture): at least 3 are needed")));
+    }
+    let grid: Vec<f64> = (1..=points).map(|k| k as f64 / points as f64 * fraction * fracture_min).collect();
+    let k = grid.len();
+    // values[o][p]: output o of particle p.
+    let mut per_output: Vec<Vec<(usize, f64)>> = vec![Vec::new(); k + 2];
+    for (p, c) in curves.iter().enumerate() {
+        for (o, &x) in grid.iter().enumerate() {
+            let f = c.force_at(x).ok_or_else(|| Error::data_file(path, format!("particle {}", c.particle), format!("the curve ends before the grid displacement {:.2} µm", x * 1e6)))?;
+            per_output[o].push((p, f));
+        }
+        if let Some((f, x)) = fractures[p] {
+            per_output[k].push((p, f));
+            per_output[k + 1].push((p, x));
+        }
+    }
+    let mut obs = Observations { values: vec![], sigma: vec![], output: vec![], group: vec![] };
+    for (o, vals) in per_output.iter().enumerate() {
+        let n = vals.len() as f64;
+        let mean = vals.iter().map(|v| v.1).sum::<f64>() / n;
+        let sd = (vals.iter().map(|v| (v.1 - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        let sigma = sd.max(sigma_floor * mean.abs());
+        if !(sigma > 0.0) {
+            return Err(Error::data_file(path, "file", format!("output {o} has zero scatter between particles: set a sigma floor > 0")));
+        }
+        for &(p, v) in vals {
+            obs.values.push(v);
+            obs.sigma.push(sigma);
+            obs.output.push(o);
+            obs.group.push(p);
+        }
+    }
+    Ok(CrushReduction { reference_diameter: d0, grid, curves, fractures, observations: obs })
+}
+
+/// Reads an observation file (`output, unit, value, sd`) against the model outputs.
+pub fn load_observations(path: &Path, outputs: &[OutputSpec]) -> Result<Observations> {
+    let df = read_table(path)?;
+    let name = col_str(&df, path, "output")?;
+    let unit = col_str(&df, path, "unit")?;
+    let value = col_f64(&df, path, "value")?;
+    let sd = col_f64(&df, path, "sd")?;
+    let mut obs = Observations { values: vec![], sigma: vec![], output: vec![], group: vec![] };
+    for i in 0..name.len() {
+        let Some(o) = outputs.iter().position(|s| s.name == name[i]) else {
+            let known: Vec<&str> = outputs.iter().map(|s| s.name.as_str()).collect();
+            return Err(Error::data_row(path, i, "output", format!("`{}` is not an output of the model ({})", name[i], known.join(", "))));
+        };
+        if unit[i] != outputs[o].unit {
+            return Err(Error::data_row(path, i, "unit", format!("`{}` does not match the model output's unit `{}`", unit[i], outputs[o].unit)));
+        }
+        if !value[i].is_finite() {
+            return Err(Error::data_row(path, i, "value", format!("{} is not a finite number", value[i])));
+        }
+        if !(sd[i].is_finite() && sd[i] > 0.0) {
+            return Err(Error::data_row(path, i, "sd", format!("{} must be a finite number > 0", sd[i])));
+        }
+        obs.values.push(value[i]);
+        obs.sigma.push(sd[i]);
+        obs.output.push(o);
+        obs.group.push(0);
+    }
+    if obs.is_empty() {
+        return Err(Error::data_file(path, "file", "no observations"));
+    }
+    Ok(obs)
+}

@@ -1,0 +1,519 @@
+//! The calibration loop: space-filling design → emulator → least squares → MCMC on the
+//! emulator → adaptive refinement where the posterior lies → posterior-predictive check with
+//! real simulator runs.
+//!
+//! 1. **Design**: the nominal θ and `design − 1` Sobol' points of the parameter box, run on
+//!    the simulator (in parallel). Failures are recorded (θ + message) and left out.
+//! 2. **Emulator** ([`Emulator`]): one GP per output, checked by leave-one-out.
+//! 3. **Least squares** ([`super::lsq::fit`], multi-start Levenberg–Marquardt) on the emulator
+//!    mapped to the observations; the estimate is then run on the simulator.
+//! 4. **MCMC** ([`super::mcmc`], ensemble stretch move or adaptive Metropolis) on the emulator
+//!    posterior `log p(θ) = log prior(θ) − ½ Σ_i [(d_i − m_i(θ))²/s_i² + ln s_i²]`,
+//!    `s_i² = σ_i² + v_i(θ)` with v_i the emulator's predictive variance (latent + nugget), so
+//!    where the emulator is unsure the posterior is wider, never falsely narrow. Walkers start in
+//!    a small ball around the least-squares estimate.
+//! 5. **Refinement**: the emulator error is measured at `probe` thinned posterior draws as
+//!    `ε = max_o latent_sd_o / (σ_o/√n_o)`, the emulator's sd against the posterior's resolving
+//!    power for output o (σ_o the data sd, n_o its observations). While the 90th percentile of ε
+//!    exceeds `tolerance`, the `points` draws with the largest ε (kept apart by a minimum distance in
+//!    the unit cube) are run on the simulator, the emulator is refitted and steps 3–4 repeat.
+//! 6. **Check**: the simulator is run at `check` posterior draws; the report compares those
+//!    runs with the emulator (standardised errors) and with the data.
+//!
+//! Every simulator call goes through the caller's simulator (wrap it in
+//! [`super::cache::Cached`] to reuse runs across reruns); the MCMC checkpoints to
+//! `checkpoint_dir` under a name that hashes the emulator's training data and the options, so a
+//! rerun with the same runs resumes and a changed emulator starts afresh.
+
+use std::path::PathBuf;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+use super::data::Observations;
+use super::emulator::{Emulator, Gathered, LooCheck};
+use super::lsq::{LsqOptions, LsqResult};
+use super::mcmc::{self, AdaptiveOptions, Chains, Checkpoint, Diagnostics, EnsembleOptions};
+use super::Noise;
+use crate::design::Sobol;
+use crate::error::{Error, Result};
+use crate::model::Simulator;
+
+/// Which sampler.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Sampler {
+    /// Affine-invariant ensemble (stretch move).
+    #[default]
+    Ensemble,
+    /// Adaptive Metropolis, one chain per walker.
+    AdaptiveMetropolis,
+}
+
+/// Settings of the loop.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PipelineOptions {
+    /// Initial design size (nominal + Sobol' points).
+    pub design: usize,
+    /// Refinement rounds at most.
+    pub rounds: usize,
+    /// Simulator runs added per refinement round.
+    pub points: usize,
+    /// Posterior draws probed for the emulator error per round.
+    pub probe: usize,
+    /// Target of the 90th percentile of ε (emulator sd / posterior resolution).
+    pub tolerance: f64,
+    /// Least-squares starts.
+    pub starts: usize,
+    /// Sampler.
+    pub sampler: Sampler,
+    /// Walkers (ensemble) or chains (adaptive Metropolis).
+    pub walkers: usize,
+    /// Kept steps per walker.
+    pub steps: usize,
+    /// Burn-in steps per walker.
+    pub burn_in: usize,
+    /// Posterior draws run on the simulator for the final check.
+    pub check: usize,
+    /// Steps between MCMC checkpoints.
+    pub checkpoint_every: usize,
+    /// Relative model error (default 0): an sd of `model_error·|d̄_o|` common to all
+    /// observations of output o, for what the model cannot represent (the calibration mesh's
+    /// discretisation error against the data's finer "truth", say); added in quadrature.
+    pub model_error: f64,
+}
+
+impl Default for PipelineOptions {
+    fn default() -> Self {
+        PipelineOptions {
+            design: 32,
+            rounds: 3,
+            points: 8,
+            probe: 200,
+            tolerance: 0.5,
+            starts: 8,
+            sampler: Sampler::Ensemble,
+            walkers: 32,
+            steps: 2000,
+            burn_in: 1000,
+            check: 12,
+            checkpoint_every: 5000,
+            model_error: 0.0,
+        }
+    }
+}
+
+impl PipelineOptions {
+    /// Checks the settings; `file` and `key` name them in messages.
+    pub fn validate(&self, file: &str, key: &str, dim: usize) -> Result<()> {
+        let bad = |k: &str, rule: String| Err(Error::config(file, format!("{key}.{k}"), rule));
+        if self.design < 2 * dim + 2 {
+            return bad("design", format!("{} runs cannot train an emulator in {dim} dimensions: use at least {}", self.design, 2 * dim + 2));
+        }
+        if self.rounds > 0 && self.points == 0 {
+            return bad("points", "refinement rounds need points ≥ 1".into());
+        }
+        if !(self.tolerance > 0.0 && self.tolerance.is_finite()) {
+            return bad("tolerance", format!("must be > 0, got {}", self.tolerance));
+        }
+        if self.starts == 0 {
+            return bad("starts", "must be ≥ 1".into());
+        }
+        if self.walkers < 2 * dim || (self.sampler == Sampler::Ensemble && self.walkers % 2 == 1) {
+            return bad("walkers", format!("need an even number ≥ 2 × {dim} parameters, got {}", self.walkers));
+        }
+        if !(self.model_error >= 0.0 && self.model_error < 1.0) {
+            return bad("model_error", format!("must lie in [0, 1), got {}", self.model_error));
+        }
+        if self.steps < 40 || self.probe == 0 || self.checkpoint_every == 0 {
+            return bad("steps", "steps ≥ 40, probe ≥ 1 and checkpoint_every ≥ 1 required".into());
+        }
+        Ok(())
+    }
+}
+
+/// One pass of the loop.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Round {
+    /// Simulator runs in the emulator.
+    pub runs: usize,
+    /// 50th and 90th percentile of ε over the probed draws.
+    pub epsilon: (f64, f64),
+    /// Leave-one-out checks.
+    pub loo: Vec<LooCheck>,
+}
+
+/// The posterior-predictive check.
+#[derive(Debug, Clone)]
+pub struct Check {
+    /// θ of the check runs.
+    pub thetas: Vec<Vec<f64>>,
+    /// Simulator outputs (None: failed).
+    pub runs: Vec<Option<Vec<f64>>>,
+    /// Per output: RMS of (simulator − emulator)/σ_o over the successful check runs.
+    pub emulator_error: Vec<f64>,
+    /// Fraction of the observations inside the 90 % posterior-predictive interval of the
+    /// simulator runs (± 1.645 √(var_runs + σ²)).
+    pub coverage90: f64,
+}
+
+/// Everything the loop found.
+#[derive(Debug, Clone)]
+pub struct Calibration {
+    /// Least squares on the final emulator.
+    pub lsq: LsqResult,
+    /// Simulator outputs at the least-squares estimate.
+    pub lsq_run: Option<Vec<f64>>,
+    /// Final chains (θ).
+    pub chains: Chains,
+    /// Diagnostics per parameter.
+    pub diagnostics: Vec<Diagnostics>,
+    /// Warnings (diagnostics, refinement not converged, check).
+    pub warnings: Vec<String>,
+    /// The rounds, first (initial design) to last.
+    pub rounds: Vec<Round>,
+    /// The final emulator.
+    pub emulator: Emulator,
+    /// The observations combined per output (what the likelihood sees).
+    pub aggregated: Aggregated,
+    /// The check.
+    pub check: Check,
+    /// Simulator evaluations requested.
+    pub evaluations: u64,
+    /// Failed simulator evaluations: θ and error.
+    pub failures: Vec<(Vec<f64>, String)>,
+    /// Emulator-posterior evaluations (MCMC, all rounds).
+    pub emulator_evaluations: u64,
+}
+
+/// Progress callback: a stage message.
+pub type Progress<'a> = &'a (dyn Fn(&str) + Sync);
+
+struct Runner<'a, S: Simulator> {
+    sim: &'a S,
+    evaluations: u64,
+    failures: Vec<(Vec<f64>, String)>,
+}
+
+impl<S: Simulator> Runner<'_, S> {
+    fn run(&mut self, thetas: &[Vec<f64>]) -> Result<Vec<Option<Vec<f64>>>> {
+        self.evaluations += thetas.len() as u64;
+        let ys = self.sim.simulate_batch(thetas);
+        let mut out = Vec::with_capacity(ys.len());
+        for (t, y) in thetas.iter().zip(ys) {
+            match y {
+                Ok(y) => {
+                    crate::model::check_outputs("calibration", self.sim.outputs(), t, &y)?;
+                    out.push(Some(y));
+                }
+                Err(e @ Error::Numerical { .. }) if e.to_string().contains("returned NaN") => return Err(e),
+                Err(e) => {
+                    self.failures.push((t.clone(), e.to_string()));
+                    out.push(None);
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// The observations of each output combined into their precision-weighted mean: for Gaussian
+/// noise this carries the whole likelihood of θ (the scatter about the mean does not depend on
+/// θ), and an error common to all replicates of an output (emulator, model error) enters once,
+/// not once per replicate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Aggregated {
+    /// Model output index.
+    pub output: Vec<usize>,
+    /// Weighted mean d̄_o.
+    pub mean: Vec<f64>,
+    /// Its sd: `√(1/Σ σ_i⁻² + (model_error·d̄_o)²)`.
+    pub sd: Vec<f64>,
+    /// Observations combined.
+    pub count: Vec<usize>,
+}
+
+impl Aggregated {
+    /// Combines `obs` per output.
+    pub fn new(obs: &Observations, model_error: f64) -> Aggregated {
+        let mut outs: Vec<usize> = obs.output.clone();
+        outs.sort_unstable();
+        outs.dedup();
+        let mut a = Aggregated { output: vec![], mean: vec![], sd: vec![], count: vec![] };
+        for o in outs {
+            let (mut w, mut wd, mut n) = (0.0, 0.0, 0);
+            for i in (0..obs.len()).filter(|&i| obs.output[i] == o) {
+                let wi = 1.0 / (obs.sigma[i] * obs.sigma[i]);
+                w += wi;
+                wd += wi * obs.values[i];
+                n += 1;
+            }
+            let mean = wd / w;
+            a.output.push(o);
+            a.mean.push(mean);
+            a.sd.push((1.0 / w + (model_error * mean).powi(2)).sqrt());
+            a.count.push(n);
+        }
+        a
+    }
+}
+
+/// Log posterior on the emulator (−∞ outside the prior support):
+/// `log prior − ½ Σ_o [(d̄_o − m_o)²/s_o² + ln s_o²]`, `s_o² = sd_o² + v_o(θ)`.
+pub fn log_posterior(em: &Emulator, agg: &Aggregated, theta: &[f64]) -> f64 {
+    let lp = em.space().log_prior(theta);
+    if !lp.is_finite() {
+        return f64::NEG_INFINITY;
+    }
+    let pred = em.predict(theta);
+    let mut ll = 0.0;
+    for (k, &o) in agg.output.iter().enumerate() {
+        let (m, v) = pred[o];
+        let s2 = agg.sd[k] * agg.sd[k] + v;
+        ll -= 0.5 * ((agg.mean[k] - m).powi(2) / s2 + s2.ln());
+    }
+    lp + ll
+}
+
+fn hash_training(em: &Emulator, opts: &PipelineOptions, seed: u64) -> String {
+    let mut bytes = Vec::new();
+    for v in em.thetas.iter().chain(em.runs.iter()).flatten() {
+        bytes.extend_from_slice(&v.to_bits().to_le_bytes());
+    }
+    bytes.extend_from_slice(format!("{opts:?}{seed}").as_bytes());
+    crate::io::sha256_hex(&bytes)[..16].to_string()
+}
+
+fn sample(em: &Emulator, agg: &Aggregated, start: &[f64], opts: &PipelineOptions, steps: usize, seed: u64, checkpoint_dir: Option<&PathBuf>) -> Result<Chains> {
+    let space = em.space();
+    let d = space.len();
+    let u0 = space.to_unit(start);
+    let lp = |t: &[f64]| log_posterior(em, agg, t);
+    // Initial ball: 1 % of the box around the estimate, redrawn until inside the support.
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5EED);
+    let n01 = Normal::new(0.0, 1.0).map_err(|e| Error::numerical("MCMC", e.to_string()))?;
+    let mut init = Vec::with_capacity(opts.walkers);
+    for _ in 0..opts.walkers {
+        let mut tries = 0;
+        loop {
+            let u: Vec<f64> = u0.iter().map(|x| (x + 0.01 * n01.sample(&mut rng)).clamp(1e-6, 1.0 - 1e-6)).collect();
+            let t = space.from_unit(&u);
+            if lp(&t).is_finite() {
+                init.push(t);
+                break;
+            }
+            tries += 1;
+            if tries > 1000 {
+                return Err(Error::numerical("MCMC", format!("no finite posterior density near the least-squares estimate {start:?}")));
+            }
+        }
+    }
+    match opts.sampler {
+        Sampler::Ensemble => {
+            let eo = EnsembleOptions { walkers: opts.walkers, steps, burn_in: opts.burn_in, stretch: 2.0, seed };
+            match checkpoint_dir {
+                Some(dir) => {
+                    let path = dir.join(format!("mcmc_{}_{steps}.json", hash_training(em, opts, seed)));
+                    mcmc::ensemble_with_checkpoint(lp, init, &eo, &Checkpoint { path, every: opts.checkpoint_every })
+                }
+                None => mcmc::ensemble(lp, init, &eo),
+            }
+        }
+        Sampler::AdaptiveMetropolis => {
+            let widths: Vec<f64> = space.params().iter().map(|p| 0.01 * (p.upper - p.lower)).collect();
+            let ao = AdaptiveOptions { chains: opts.walkers, steps, burn_in: opts.burn_in, adapt_after: opts.burn_in.min(200).max(d * 10), initial_scale: widths, seed };
+            mcmc::adaptive_metropolis(lp, init, &ao)
+        }
+    }
+}
+
+/// Thinned draws: `n` points spread evenly over the kept chain (step-major, walker-minor).
+pub fn thinned(chains: &Chains, n: usize) -> Vec<Vec<f64>> {
+    let all: Vec<&Vec<f64>> = chains.draws.iter().flatten().collect();
+    let n = n.min(all.len()).max(1);
+    (0..n).map(|k| all[(k * all.len()) / n + (all.len() / n) / 2].clone()).collect()
+}
+
+/// Emulator error ε of each probed draw: max over outputs of latent sd / sd of d̄_o.
+fn epsilons(em: &Emulator, agg: &Aggregated, draws: &[Vec<f64>]) -> Vec<f64> {
+    draws
+        .iter()
+        .map(|t| {
+            let sd = em.latent_sd(t);
+            agg.output.iter().zip(&agg.sd).map(|(&o, s)| sd[o] / s).fold(0.0, f64::max)
+        })
+        .collect()
+}
+
+fn quantile(v: &[f64], q: f64) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s[((s.len() - 1) as f64 * q).round() as usize]
+}
+
+/// Runs the loop on simulator `sim` against `obs`.
+pub fn calibrate<S: Simulator>(sim: &S, obs: &Observations, opts: &PipelineOptions, seed: u64, checkpoint_dir: Option<&PathBuf>, progress: Progress) -> Result<Calibration> {
+    let space = sim.space().clone();
+    let d = space.len();
+    let mut runner = Runner { sim, evaluations: 0, failures: Vec::new() };
+    let mut warnings = Vec::new();
+    let agg = Aggregated::new(obs, opts.model_error);
+
+    progress(&format!("design: {} simulator runs", opts.design));
+    let mut thetas = vec![space.nominal()];
+    thetas.extend(Sobol::points(d, opts.design - 1, 1)?.iter().map(|u| space.from_unit(u)));
+    let mut train_t = Vec::new();
+    let mut train_y = Vec::new();
+    for (t, y) in thetas.iter().zip(runner.run(&thetas)?) {
+        if let Some(y) = y {
+            train_t.push(t.clone());
+            train_y.push(y);
+        }
+    }
+    if train_t.len() < d + 3 {
+        return Err(Error::numerical("calibration", format!("only {} of {} design runs succeeded: too few to train an emulator (first failure: {})", train_t.len(), thetas.len(), runner.failures.first().map(|f| f.1.as_str()).unwrap_or("—"))));
+    }
+    let mut rounds = Vec::new();
+    let mut emulator_evaluations = 0u64;
+    let mut round = 0usize;
+    loop {
+        progress(&format!("round {round}: emulator of {} runs, least squares, MCMC", train_t.len()));
+        let em = Emulator::fit(&space, sim.outputs(), train_t.clone(), train_y.clone())?;
+        let gathered = Gathered::new(&em, agg.output.clone());
+        let lsq = super::lsq::fit(&gathered, &agg.mean, &Noise::Known { sigma: agg.sd.clone() }, &LsqOptions { starts: opts.starts, fd_step: 1e-5, ..LsqOptions::default() })?;
+        // Refinement rounds probe the posterior with a quarter-length chain; the final
+        // posterior is sampled at full length on the final emulator.
+        let chains = sample(&em, &agg, &lsq.theta, opts, (opts.steps / 4).max(40), seed.wrapping_add(round as u64), checkpoint_dir)?;
+        emulator_evaluations += chains.evaluations;
+        let probe = thinned(&chains, opts.probe);
+        let eps = epsilons(&em, &agg, &probe);
+        let eps_q = (quantile(&eps, 0.5), quantile(&eps, 0.9));
+        rounds.push(Round { runs: train_t.len(), epsilon: eps_q, loo: em.leave_one_out() });
+        let done = eps_q.1 <= opts.tolerance;
+        if done || round >= opts.rounds {
+            if !done {
+                warnings.push(format!(
+                    "emulator refinement stopped after {round} rounds with ε90 = {:.2} > tolerance {:.2}: the emulator is still coarse where the posterior lies (its variance is in the likelihood, so the posterior is wider, not wrong)",
+                    eps_q.1, opts.tolerance
+                ));
+            }
+            progress("final MCMC on the emulator");
+            let chains = sample(&em, &agg, &lsq.theta, opts, opts.steps, seed.wrapping_add(1000), checkpoint_dir)?;
+            emulator_evaluations += chains.evaluations;
+            return finish(&mut runner, em, lsq, chains, rounds, warnings, obs, &agg, opts, emulator_evaluations, progress);
+        }
+        // New runs: the probed draws with the largest ε, at least 0.05 apart in the unit cube.
+        let mut order: Vec<usize> = (0..probe.len()).collect();
+        order.sort_by(|&a, &b| eps[b].total_cmp(&eps[a]));
+        let mut picked: Vec<Vec<f64>> = Vec::new();
+        for &i in &order {
+            let u = space.to_unit(&probe[i]);
+            let far = picked.iter().chain(train_t.iter()).all(|t| {
+                let v = space.to_unit(t);
+                u.iter().zip(&v).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt() >= 0.05
+            });
+            if far {
+                picked.push(probe[i].clone());
+            }
+            if picked.len() == opts.points {
+                break;
+            }
+        }
+        if picked.is_empty() {
+            // Everything probed is already next to a run: the emulator cannot gain more here.
+            warnings.push(format!("emulator refinement: every probed draw lies within 0.05 of a run, stopping with ε90 = {:.2}", eps_q.1));
+            let chains = sample(&em, &agg, &lsq.theta, opts, opts.steps, seed.wrapping_add(1000), checkpoint_dir)?;
+            emulator_evaluations += chains.evaluations;
+            return finish(&mut runner, em, lsq, chains, rounds, warnings, obs, &agg, opts, emulator_evaluations, progress);
+        }
+        progress(&format!("round {}: {} refinement runs", round + 1, picked.len()));
+        for (t, y) in picked.iter().zip(runner.run(&picked)?) {
+            if let Some(y) = y {
+                train_t.push(t.clone());
+                train_y.push(y);
+            }
+        }
+        round += 1;
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn finish<S: Simulator>(
+    runner: &mut Runner<S>,
+    em: Emulator,
+    lsq: LsqResult,
+    chains: Chains,
+    rounds: Vec<Round>,
+    mut warnings: Vec<String>,
+    obs: &Observations,
+    agg: &Aggregated,
+    opts: &PipelineOptions,
+    emulator_evaluations: u64,
+    progress: Progress,
+) -> Result<Calibration> {
+    let space = em.space().clone();
+    let diagnostics: Vec<Diagnostics> = (0..space.len()).map(|k| chains.diagnostics(k)).collect();
+    for (p, dg) in space.params().iter().zip(&diagnostics) {
+        if let Some(w) = dg.warning(&p.name) {
+            warnings.push(w);
+        }
+    }
+    progress(&format!("check: {} simulator runs at posterior draws and one at the estimate", opts.check));
+    let mut thetas = thinned(&chains, opts.check);
+    thetas.push(lsq.theta.clone());
+    let mut runs = runner.run(&thetas)?;
+    let lsq_run = runs.pop().flatten();
+    thetas.pop();
+    // Emulator error at the check runs, per output, in units of the sd of d̄_o (what the
+    // posterior resolves).
+    let m = em.outputs().len();
+    let mut sigma_o = vec![f64::NAN; m];
+    for (&o, s) in agg.output.iter().zip(&agg.sd) {
+        sigma_o[o] = *s;
+    }
+    let mut err = vec![0.0; m];
+    let ok: Vec<(&Vec<f64>, &Vec<f64>)> = thetas.iter().zip(&runs).filter_map(|(t, y)| y.as_ref().map(|y| (t, y))).collect();
+    for (t, y) in &ok {
+        let pred = em.predict(t);
+        for o in 0..m {
+            err[o] += ((y[o] - pred[o].0) / sigma_o[o]).powi(2);
+        }
+    }
+    let emulator_error: Vec<f64> = err.iter().map(|e| (e / ok.len().max(1) as f64).sqrt()).collect();
+    // Coverage of the observations by the 90 % predictive interval of the simulator runs.
+    let mut inside = 0usize;
+    for i in 0..obs.len() {
+        let o = obs.output[i];
+        let v: Vec<f64> = ok.iter().map(|(_, y)| y[o]).collect();
+        let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        let var = if v.len() > 1 { v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (v.len() - 1) as f64 } else { 0.0 };
+        if (obs.values[i] - mean).abs() <= 1.645 * (var + obs.sigma[i].powi(2) + (opts.model_error * mean).powi(2)).sqrt() {
+            inside += 1;
+        }
+    }
+    let coverage90 = inside as f64 / obs.len().max(1) as f64;
+    if ok.len() < thetas.len() {
+        warnings.push(format!("check: {} of {} simulator runs at posterior draws failed", thetas.len() - ok.len(), thetas.len()));
+    }
+    if let Some((o, e)) = emulator_error.iter().enumerate().filter(|(o, _)| sigma_o[*o].is_finite()).max_by(|a, b| a.1.total_cmp(b.1))
+        && *e > 1.0
+    {
+        warnings.push(format!("check: the emulator misses the simulator by {e:.2} σ (RMS) on output {} at posterior draws", em.outputs()[o].name));
+    }
+    Ok(Calibration {
+        lsq,
+        lsq_run,
+        chains,
+        diagnostics,
+        warnings,
+        rounds,
+        emulator: em,
+        aggregated: agg.clone(),
+        check: Check { thetas, runs, emulator_error, coverage90 },
+        evaluations: runner.evaluations,
+        failures: std::mem::take(&mut runner.failures),
+        emulator_evaluations,
+    })
+}

@@ -1,0 +1,670 @@
+//! The `kind = "calibrate"` study: fit a simulator's parameters to measured data with the
+//! loop of [`super::pipeline`] (design, emulator, least squares, MCMC, refinement, check).
+//!
+//! ```toml
+//! kind = "calibrate"
+//! seed = 5
+//! label = "Gen 3, RT"
+//! [data]            # kind = "crush_curves": file, reference_diameter?, points, fraction, sigma_floor
+//!                   # kind = "observations": file (output, unit, value, sd)
+//! [model]           # kind = "crush": [model.crush] = a CrushSetup (the calibration mesh)
+//!                   # kind = "dem": study = "<dem study file>", duration, heights, window
+//! [[param]]         # name, lower, upper, prior = { kind = "uniform" | "normal" | "log_normal", … }
+//! [calibration]     # PipelineOptions: design, rounds, points, tolerance, sampler, walkers, steps, …
+//! [compare]         # optional: reference = "<parameters.csv of another calibration>", label
+//! [figures]         # width_cm
+//! ```
+//!
+//! Everything is checked at load: the data file is read and reduced, the model built, the
+//! parameter names resolved (unknown → error), priors checked (lower ≥ upper, zero variance),
+//! and every observation matched to a model output of the same unit.
+//!
+//! Simulator runs are cached in `<reports root>/.cache/<study>/` (keyed by the model's
+//! configuration and θ) together with the MCMC checkpoints, so a killed or repeated study
+//! reuses its finished runs.
+//!
+//! Report files (`reports/<study>/`): `parameters.csv`, `correlation.csv`, `chains.csv`,
+//! `observations.csv`, `runs.csv`, `rounds.csv`, `failures.csv`, (crush) `curves.csv`,
+//! (with `[compare]`) `comparison.csv`, `summary.md`, figures (see
+//! [`crate::report::calibrate`]), `manifest.json`.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::cache::Cached;
+use super::data::{CrushReduction, Observations, load_curves, load_observations, reduce_curves};
+use super::pipeline::{Calibration, PipelineOptions, calibrate, thinned};
+use crate::error::{Error, Result};
+use crate::fem::model::CrushModel;
+use crate::fem::{CrushSetup, CrushTest};
+use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
+use crate::model::{Restricted, Simulator};
+use crate::params::{Param, Prior};
+use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
+use crate::study::LoadedStudy;
+
+/// `[data]`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum DataSpec {
+    /// Crush force–displacement curves (`particle, diameter_m, displacement_m, force_n`).
+    CrushCurves {
+        /// Curve file, relative to the study file.
+        file: String,
+        /// Reference diameter D₀ (m); default: the mean diameter of the particles.
+        #[serde(default)]
+        reference_diameter: Option<f64>,
+        /// Grid displacements K (default 8).
+        #[serde(default = "default_points")]
+        points: usize,
+        /// Grid end as a fraction of the smallest fracture displacement (default 0.8).
+        #[serde(default = "default_fraction")]
+        fraction: f64,
+        /// σ floor as a fraction of each output's mean (default 0.02).
+        #[serde(default = "default_floor")]
+        sigma_floor: f64,
+    },
+    /// Named observations (`output, unit, value, sd`).
+    Observations {
+        /// Observation file, relative to the study file.
+        file: String,
+    },
+}
+
+fn default_points() -> usize {
+    8
+}
+fn default_fraction() -> f64 {
+    0.8
+}
+fn default_floor() -> f64 {
+    0.02
+}
+
+/// `[model]`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ModelSpec {
+    /// The crush FE ([`CrushModel`]); θ names are JH-2 card names.
+    Crush {
+        /// Base set-up (its diameter is replaced by the data's reference diameter).
+        crush: Box<CrushSetup>,
+    },
+    /// The tube-bank DEM ([`crate::dem::model::TubeBankModel`]); θ names are
+    /// `restitution_pp`, `restitution_pw`, `friction_pp`, `friction_pw`.
+    Dem {
+        /// A `kind = "dem"` study file (relative to this study) whose set-up is the base.
+        study: String,
+        /// Simulated time per evaluation (s), warm-up included.
+        duration: f64,
+        /// Heights of the velocity-profile outputs (m).
+        heights: Vec<f64>,
+        /// Half-width of the height bands (m).
+        window: f64,
+    },
+}
+
+/// `[[param]]`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParamDecl {
+    /// Model parameter name.
+    pub name: String,
+    /// Lower bound.
+    pub lower: f64,
+    /// Upper bound.
+    pub upper: f64,
+    /// Prior (default uniform), truncated to the bounds.
+    #[serde(default = "uniform")]
+    pub prior: Prior,
+}
+
+fn uniform() -> Prior {
+    Prior::Uniform
+}
+
+/// `[compare]`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Compare {
+    /// `parameters.csv` of another calibration report (relative to the study file).
+    pub reference: String,
+    /// Its label (`Gen 3, RT`).
+    pub label: String,
+}
+
+/// `[figures]`
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CalibrateFigures {
+    /// Single-column width (cm), default 8.5; the corner plot is twice as wide.
+    pub width_cm: f64,
+}
+
+impl Default for CalibrateFigures {
+    fn default() -> Self {
+        CalibrateFigures { width_cm: 8.5 }
+    }
+}
+
+/// A calibration study.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrateStudy {
+    /// `calibrate`.
+    pub kind: String,
+    /// Seed (MCMC, predictive draws).
+    #[serde(default)]
+    pub seed: u64,
+    /// What is calibrated, for figures (`Gen 3, RT`).
+    pub label: String,
+    /// Data.
+    pub data: DataSpec,
+    /// Model.
+    pub model: ModelSpec,
+    /// Parameters to fit (at least one).
+    pub param: Vec<ParamDecl>,
+    /// The loop's settings.
+    #[serde(default)]
+    pub calibration: PipelineOptions,
+    /// Comparison with another calibration.
+    #[serde(default)]
+    pub compare: Option<Compare>,
+    /// Figures.
+    #[serde(default)]
+    pub figures: CalibrateFigures,
+}
+
+/// The model of a study, built.
+pub enum Built {
+    /// Crush FE and the curve reduction.
+    Crush(CrushModel, CrushReduction),
+    /// Tube-bank DEM.
+    Dem(Box<Restricted<crate::dem::model::TubeBankModel>>),
+}
+
+/// A study ready to run: the model, the observations, the input files.
+pub struct Prepared {
+    /// The model.
+    pub built: Built,
+    /// Observations.
+    pub observations: Observations,
+    /// Input files (data, referenced studies).
+    pub inputs: Vec<PathBuf>,
+    /// Configuration text of the model (the cache key's prefix).
+    pub config: String,
+}
+
+impl CalibrateStudy {
+    /// Loads the data and builds the model; every mismatch is an error naming the file and key.
+    pub fn prepare(&self, loaded_path: &std::path::Path, resolve: &dyn Fn(&str) -> PathBuf) -> Result<Prepared> {
+        let file = loaded_path.display().to_string();
+        if self.param.is_empty() {
+            return Err(Error::config(&file, "param", "at least one [[param]] is required"));
+        }
+        let mut seen = std::collections::HashSet::new();
+        let params: Vec<Param> = self
+            .param
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                if !seen.insert(p.name.clone()) {
+                    return Err(Error::config(&file, format!("param[{i}].name"), format!("`{}` appears twice", p.name)));
+                }
+                let q = Param { name: p.name.clone(), unit: String::new(), lower: p.lower, upper: p.upper, prior: p.prior.clone(), nominal: 0.5 * (p.lower + p.upper) };
+                crate::params::ParamSpace::new(vec![q.clone()]).map_err(|e| Error::config(&file, format!("param[{i}] ({})", p.name), e.to_string()))?;
+                Ok(q)
+            })
+            .collect::<Result<_>>()?;
+        let relabel = |e: Error| match e {
+            Error::Param { name, rule } => {
+                let i = self.param.iter().position(|p| p.name == name).unwrap_or(0);
+                Error::config(&file, format!("param[{i}].name"), format!("`{name}`: {rule}"))
+            }
+            Error::Config { key, rule, .. } => Error::config(&file, format!("model: {key}"), rule),
+            other => other,
+        };
+        let (built, observations, inputs, config) = match (&self.model, &self.data) {
+            (ModelSpec::Crush { crush }, DataSpec::CrushCurves { file: data, reference_diameter, points, fraction, sigma_floor }) => {
+                if !(*points >= 2 && *points <= 40) {
+                    return Err(Error::config(&file, "data.points", format!("must lie in [2, 40], got {points}")));
+                }
+                if !(*fraction > 0.0 && *fraction <= 1.0) {
+                    return Err(Error::config(&file, "data.fraction", format!("must lie in (0, 1], got {fraction}")));
+                }
+                if !(*sigma_floor >= 0.0 && *sigma_floor < 1.0) {
+                    return Err(Error::config(&file, "data.sigma_floor", format!("must lie in [0, 1), got {sigma_floor}")));
+                }
+                let path = resolve(data);
+                let curves = load_curves(&path)?;
+                let d0 = match reference_diameter {
+                    Some(d) if *d > 0.0 && d.is_finite() => *d,
+                    Some(d) => return Err(Error::config(&file, "data.reference_diameter", format!("must be > 0, got {d}"))),
+                    None => curves.iter().map(|c| c.diameter).sum::<f64>() / curves.len() as f64,
+                };
+                let red = reduce_curves(&path, &curves, d0, *points, *fraction, *sigma_floor, crush.fracture)?;
+                let mut base = (**crush).clone();
+                base.diameter = d0;
+                base.fields_at.clear();
+                let model = CrushModel::new(base.clone(), params, red.grid.clone()).map_err(relabel)?;
+                let config = serde_json::to_string(&(&base, &self.param, &red.grid)).map_err(|e| Error::numerical("cache key", e.to_string()))?;
+                let obs = red.observations.clone();
+                (Built::Crush(model, red), obs, vec![path], config)
+            }
+            (ModelSpec::Dem { study, duration, heights, window }, DataSpec::Observations { file: data }) => {
+                let spath = resolve(study);
+                let loaded = crate::study::load(&spath)?;
+                let crate::study::Study::Dem(ds) = &loaded.study else {
+                    return Err(Error::config(&file, "model.study", format!("{} is not a kind = \"dem\" study", spath.display())));
+                };
+                let setup = ds.setup(&spath.display().to_string())?;
+                if heights.is_empty() || heights.iter().any(|h| !h.is_finite()) || !(*window > 0.0) {
+                    return Err(Error::config(&file, "model.heights", "at least one finite height and a window > 0 are required"));
+                }
+                let tb = crate::dem::model::TubeBankModel::new(setup, *duration, heights.clone(), *window).map_err(relabel)?;
+                let model = Restricted::new(tb, params).map_err(relabel)?;
+                let path = resolve(data);
+                let obs = load_observations(&path, model.outputs())?;
+                let config = format!("{}\n{}", loaded.text, serde_json::to_string(&(&self.model, &self.param)).map_err(|e| Error::numerical("cache key", e.to_string()))?);
+                (Built::Dem(Box::new(model)), obs, vec![path, spath], config)
+            }
+            _ => return Err(Error::config(&file, "data.kind", "a crush model takes data kind \"crush_curves\", a dem model \"observations\"")),
+        };
+        let dim = self.param.len();
+        if observations.len() < dim {
+            return Err(Error::config(&file, "data", format!("{} observations cannot determine {dim} parameters", observations.len())));
+        }
+        self.calibration.validate(&file, "calibration", dim)?;
+        if !(self.figures.width_cm >= 4.0 && self.figures.width_cm <= 40.0) {
+            return Err(Error::config(&file, "figures.width_cm", format!("must lie in [4, 40], got {}", self.figures.width_cm)));
+        }
+        if let Some(c) = &self.compare {
+            let _ = c; // the reference report may not exist yet at load: checked when drawing.
+        }
+        Ok(Prepared { built, observations, inputs, config })
+    }
+}
+
+/// Runs a calibration study.
+pub fn run_calibrate(loaded: &LoadedStudy, s: &CalibrateStudy, opts: &RunOptions) -> Result<RunSummary> {
+    let clock = RunClock::start();
+    let resolve = |p: &str| loaded.resolve(std::path::Path::new(p));
+    let prep = s.prepare(&loaded.path, &resolve)?;
+    let mut inputs = vec![InputFile::hash(&loaded.path)?];
+    for p in &prep.inputs {
+        inputs.push(InputFile::hash(p)?);
+    }
+    let cache_dir = opts.reports_root.join(".cache").join(&loaded.name);
+    let pb = crate::runner::progress_bar(1, opts.progress, "{spinner} [{elapsed_precise}] {msg}");
+    pb.enable_steady_tick(std::time::Duration::from_millis(200));
+    let progress = |m: &str| pb.set_message(m.to_string());
+    let obs = &prep.observations;
+    let (cal, counts, curves) = match &prep.built {
+        Built::Crush(model, red) => {
+            let cached = Cached::new(model, &cache_dir, prep.config.clone())?;
+            let cal = calibrate(&cached, obs, &s.calibration, s.seed, Some(&cache_dir), &progress)?;
+            progress("curves at posterior draws");
+            let curves = crush_curves(model, red, &cal)?;
+            (cal, cached.counts(), Some(curves))
+        }
+        Built::Dem(model) => {
+            let cached = Cached::new(model.as_ref(), &cache_dir, prep.config.clone())?;
+            let cal = calibrate(&cached, obs, &s.calibration, s.seed, Some(&cache_dir), &progress)?;
+            (cal, cached.counts(), None)
+        }
+    };
+    progress("tables");
+    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    let space = cal.emulator.space().clone();
+    let headlines = write_tables(&mut dir, s, &prep, &cal, curves, &resolve)?;
+    progress("figures");
+    let mut failures: Vec<String> = cal.warnings.clone();
+    failures.extend(cal.failures.iter().map(|(t, e)| format!("simulator failed at θ = {t:?}: {e}")));
+    let rendered = crate::report::calibrate::render(dir.path(), s.figures.width_cm)?;
+    record_figures(&mut dir, rendered, &mut failures);
+    let mut evaluations = BTreeMap::new();
+    evaluations.insert("simulator_requested".to_string(), cal.evaluations);
+    evaluations.insert("simulator_cache_hits".to_string(), counts.0);
+    evaluations.insert("simulator_runs".to_string(), counts.1);
+    evaluations.insert("simulator_failures".to_string(), cal.failures.len() as u64);
+    evaluations.insert("emulator_posterior_evaluations".to_string(), cal.emulator_evaluations);
+    evaluations.insert("least_squares_emulator_evaluations".to_string(), cal.lsq.evaluations);
+    evaluations.insert("emulator_training_runs".to_string(), cal.emulator.len() as u64);
+    evaluations.insert("parameters".to_string(), space.len() as u64);
+    let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
+    let run = RunRecord { inputs, seed: s.seed, clock, evaluations, failures };
+    let report_dir = commit_with_manifest(dir, loaded, study_resolved, run)?;
+    pb.finish_and_clear();
+    Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })
+}
+
+/// Full FE curves (normalised to D₀) at the check draws and at the least-squares estimate.
+type CurveSet = Vec<(String, Vec<(f64, f64)>)>;
+
+fn crush_curves(model: &CrushModel, _red: &CrushReduction, cal: &Calibration) -> Result<CurveSet> {
+    let mut thetas: Vec<(String, Vec<f64>)> = cal.check.thetas.iter().enumerate().map(|(i, t)| (format!("posterior_{i}"), t.clone())).collect();
+    thetas.push(("estimate".into(), cal.lsq.theta.clone()));
+    let out: Vec<Option<(String, Vec<(f64, f64)>)>> = thetas
+        .par_iter()
+        .map(|(k, t)| {
+            let setup = model.setup_at(t).ok()?;
+            let mut test = CrushTest::new(setup, "<calibration>").ok()?;
+            let r = test.run(None).ok()?;
+            Some((k.clone(), r.curve.iter().map(|s| (s.displacement, s.force)).collect()))
+        })
+        .collect();
+    Ok(out.into_iter().flatten().collect())
+}
+
+fn pr_mean(preds: &[Vec<(f64, f64)>], o: usize) -> f64 {
+    preds.iter().map(|p| p[o].0).sum::<f64>() / preds.len().max(1) as f64
+}
+
+fn quantiles(v: &mut [f64], qs: &[f64]) -> Vec<f64> {
+    v.sort_by(f64::total_cmp);
+    qs.iter().map(|q| v[((v.len() - 1) as f64 * q).round() as usize]).collect()
+}
+
+#[allow(clippy::too_many_lines)]
+fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &Calibration, curves: Option<CurveSet>, resolve: &dyn Fn(&str) -> PathBuf) -> Result<Vec<String>> {
+    let space = cal.emulator.space();
+    let params = space.params();
+    let p = params.len();
+    let names: Vec<String> = params.iter().map(|q| q.name.clone()).collect();
+    let obs = &prep.observations;
+    let outputs = cal.emulator.outputs();
+
+    // Parameters.
+    let mut stats = Vec::new();
+    for k in 0..p {
+        let mut v = cal.chains.flat(k);
+        let n = v.len() as f64;
+        let mean = v.iter().sum::<f64>() / n;
+        let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        let q = quantiles(&mut v, &[0.05, 0.5, 0.95]);
+        stats.push((mean, sd, q));
+    }
+    let prior_sd: Vec<f64> = params.iter().map(|q| 0.5 * (q.quantile(0.841_344_746) - q.quantile(0.158_655_254))).collect();
+    // Posterior correlation.
+    let mut corr = vec![vec![0.0; p]; p];
+    for a in 0..p {
+        for b in 0..p {
+            let (xa, xb) = (cal.chains.flat(a), cal.chains.flat(b));
+            let c: f64 = xa.iter().zip(&xb).map(|(x, y)| (x - stats[a].0) * (y - stats[b].0)).sum::<f64>() / (xa.len() as f64 - 1.0);
+            corr[a][b] = c / (stats[a].1 * stats[b].1);
+        }
+    }
+    let mut ident = Vec::new();
+    let mut notes = vec![String::new(); p];
+    for k in 0..p {
+        let ratio = stats[k].1 / prior_sd[k];
+        if ratio > 0.9 {
+            notes[k] = format!("not identified: posterior sd is {:.0} % of the prior's", 100.0 * ratio);
+            ident.push(format!("{}: posterior sd {:.0} % of the prior's — the data do not determine it", names[k], 100.0 * ratio));
+        }
+        for m in k + 1..p {
+            if corr[k][m].abs() > 0.95 {
+                ident.push(format!("{} and {}: posterior correlation {:+.3} — only a combination is determined", names[k], names[m], corr[k][m]));
+                for j in [k, m] {
+                    if notes[j].is_empty() {
+                        notes[j] = "strongly correlated (see summary)".into();
+                    }
+                }
+            }
+        }
+    }
+    let col = |f: &dyn Fn(usize) -> f64| (0..p).map(f).collect::<Vec<f64>>();
+    let prior_text = |q: &Param| match &q.prior {
+        Prior::Uniform => "uniform".to_string(),
+        Prior::Normal { mean, sd } => format!("normal({mean:e}, {sd:e})"),
+        Prior::LogNormal { mu, sigma } => format!("log_normal({mu}, {sigma})"),
+    };
+    let mut df = table(vec![
+        scol("name", names.clone()),
+        scol("unit", params.iter().map(|q| q.unit.clone()).collect()),
+        scol("prior", params.iter().map(prior_text).collect()),
+        fcol("lower", col(&|k| params[k].lower)),
+        fcol("upper", col(&|k| params[k].upper)),
+        fcol("lsq_estimate", cal.lsq.theta.clone()),
+        fcol("lsq_std_error", cal.lsq.std_error.clone()),
+        fcol("posterior_mean", col(&|k| stats[k].0)),
+        fcol("posterior_sd", col(&|k| stats[k].1)),
+        fcol("q05", col(&|k| stats[k].2[0])),
+        fcol("q50", col(&|k| stats[k].2[1])),
+        fcol("q95", col(&|k| stats[k].2[2])),
+        fcol("width_ratio", col(&|k| stats[k].1 / prior_sd[k])),
+        fcol("r_hat", col(&|k| cal.diagnostics[k].r_hat)),
+        fcol("ess_bulk", col(&|k| cal.diagnostics[k].ess_bulk)),
+        fcol("ess_tail", col(&|k| cal.diagnostics[k].ess_tail)),
+        fcol("tau_steps", col(&|k| cal.diagnostics[k].tau)),
+        fcol("acceptance", vec![cal.chains.acceptance.iter().sum::<f64>() / cal.chains.acceptance.len() as f64; p]),
+        scol("identifiability", notes.clone()),
+    ])?;
+    dir.write_table("parameters", &mut df)?;
+    let mut cc = vec![scol("name", names.clone())];
+    for (k, n) in names.iter().enumerate() {
+        cc.push(fcol(n, (0..p).map(|a| corr[a][k]).collect()));
+    }
+    dir.write_table("correlation", &mut table(cc)?)?;
+
+    // Chains, thinned to at most 2000 steps per walker.
+    let thin = cal.chains.draws.len().div_ceil(2000).max(1);
+    let (mut st, mut wk, mut lp) = (Vec::new(), Vec::new(), Vec::new());
+    let mut vals: Vec<Vec<f64>> = vec![Vec::new(); p];
+    for (i, step) in cal.chains.draws.iter().enumerate().step_by(thin) {
+        for (w, x) in step.iter().enumerate() {
+            st.push(i as u64);
+            wk.push(w as u64);
+            lp.push(cal.chains.log_prob[i][w]);
+            for k in 0..p {
+                vals[k].push(x[k]);
+            }
+        }
+    }
+    let mut cols = vec![ucol("step", st), ucol("walker", wk)];
+    cols.extend(names.iter().zip(vals).map(|(n, v)| fcol(n, v)));
+    cols.push(fcol("log_posterior", lp));
+    dir.write_table("chains", &mut table(cols)?)?;
+
+    // Posterior predictive of every observation: emulator mean at a posterior draw plus noise
+    // N(0, σ² + v).
+    let draws = thinned(&cal.chains, 400);
+    let preds: Vec<Vec<(f64, f64)>> = draws.par_iter().map(|t| cal.emulator.predict(t)).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(s.seed ^ 0xB0B);
+    let n01 = Normal::new(0.0, 1.0).map_err(|e| Error::numerical("predictive", e.to_string()))?;
+    let est = cal.emulator.predict(&cal.lsq.theta);
+    let (mut q05, mut q50, mut q95, mut mean_fit) = (vec![], vec![], vec![], vec![]);
+    for i in 0..obs.len() {
+        let o = obs.output[i];
+        let me2 = (s.calibration.model_error * pr_mean(&preds, o)).powi(2);
+        let mut v: Vec<f64> = preds.iter().map(|pr| pr[o].0 + (obs.sigma[i].powi(2) + pr[o].1 + me2).sqrt() * n01.sample(&mut rng)).collect();
+        let q = quantiles(&mut v, &[0.05, 0.5, 0.95]);
+        q05.push(q[0]);
+        q50.push(q[1]);
+        q95.push(q[2]);
+        mean_fit.push(est[o].0);
+    }
+    let inside = (0..obs.len()).filter(|&i| obs.values[i] >= q05[i] && obs.values[i] <= q95[i]).count();
+    let mut df = table(vec![
+        scol("output", obs.output.iter().map(|&o| outputs[o].name.clone()).collect()),
+        scol("unit", obs.output.iter().map(|&o| outputs[o].unit.clone()).collect()),
+        ucol("output_index", obs.output.iter().map(|&o| o as u64).collect()),
+        ucol("group", obs.group.iter().map(|&g| g as u64).collect()),
+        fcol("value", obs.values.clone()),
+        fcol("sigma", obs.sigma.clone()),
+        fcol("lsq_fit", mean_fit),
+        fcol("predictive_q05", q05),
+        fcol("predictive_q50", q50),
+        fcol("predictive_q95", q95),
+    ])?;
+    dir.write_table("observations", &mut df)?;
+
+    // Simulator runs: design and refinement (emulator training), check draws, estimate.
+    let m = outputs.len();
+    let mut src = Vec::new();
+    let mut th: Vec<Vec<f64>> = vec![Vec::new(); p];
+    let mut ys: Vec<Vec<f64>> = vec![Vec::new(); m];
+    let mut push = |label: String, t: &[f64], y: Option<&Vec<f64>>| {
+        src.push(label);
+        for k in 0..p {
+            th[k].push(t[k]);
+        }
+        for o in 0..m {
+            ys[o].push(y.map(|y| y[o]).unwrap_or(f64::NAN));
+        }
+    };
+    for (t, y) in cal.emulator.thetas.iter().zip(&cal.emulator.runs) {
+        push("training".into(), t, Some(y));
+    }
+    for (t, y) in cal.check.thetas.iter().zip(&cal.check.runs) {
+        push("check".into(), t, y.as_ref());
+    }
+    push("estimate".into(), &cal.lsq.theta, cal.lsq_run.as_ref());
+    let mut cols = vec![scol("source", src)];
+    cols.extend(names.iter().zip(th).map(|(n, v)| fcol(n, v)));
+    cols.extend(outputs.iter().zip(ys).map(|(o, v)| fcol(&o.name, v)));
+    dir.write_table("runs", &mut table(cols)?)?;
+
+    // Rounds.
+    let mut cols = vec![
+        ucol("round", (0..cal.rounds.len() as u64).collect()),
+        ucol("runs", cal.rounds.iter().map(|r| r.runs as u64).collect()),
+        fcol("epsilon_q50", cal.rounds.iter().map(|r| r.epsilon.0).collect()),
+        fcol("epsilon_q90", cal.rounds.iter().map(|r| r.epsilon.1).collect()),
+    ];
+    for (o, spec) in outputs.iter().enumerate() {
+        cols.push(fcol(&format!("loo_rmse_{}", spec.name), cal.rounds.iter().map(|r| r.loo[o].rmse).collect()));
+        cols.push(fcol(&format!("loo_z2_{}", spec.name), cal.rounds.iter().map(|r| r.loo[o].mean_z2).collect()));
+    }
+    dir.write_table("rounds", &mut table(cols)?)?;
+    let mut df = table(vec![
+        scol("theta", cal.failures.iter().map(|f| format!("{:?}", f.0)).collect()),
+        scol("error", cal.failures.iter().map(|f| f.1.clone()).collect()),
+    ])?;
+    dir.write_table("failures", &mut df)?;
+
+    // Crush: data curves (normalised), FE curves at posterior draws and the estimate.
+    if let (Built::Crush(_, red), Some(curves)) = (&prep.built, curves) {
+        let (mut kind, mut id, mut x, mut f) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for c in &red.curves {
+            for (d, v) in c.displacement.iter().zip(&c.force) {
+                kind.push("data".to_string());
+                id.push(c.particle.clone());
+                x.push(*d);
+                f.push(*v);
+            }
+        }
+        for (k, pts) in curves {
+            for (d, v) in pts {
+                kind.push(if k == "estimate" { "estimate".into() } else { "posterior_draw".into() });
+                id.push(k.clone());
+                x.push(d);
+                f.push(v);
+            }
+        }
+        let mut df = table(vec![scol("kind", kind), scol("id", id), fcol("displacement_m", x), fcol("force_n", f)])?;
+        dir.write_table("curves", &mut df)?;
+        let mut df = table(vec![fcol("grid_displacement_m", red.grid.clone()), fcol("reference_diameter_m", vec![red.reference_diameter; red.grid.len()])])?;
+        dir.write_table("grid", &mut df)?;
+    }
+
+    // Comparison with a reference calibration.
+    let mut compare_line = None;
+    if let Some(c) = &s.compare {
+        let path = resolve(&c.reference);
+        match crate::report::Table::load_file(&path) {
+            Ok(t) => {
+                let (rn, rm, r5, r95) = (t.s("name")?, t.f("posterior_mean")?, t.f("q05")?, t.f("q95")?);
+                let (mut nn, mut a, mut a5, mut a95, mut b, mut b5, mut b95, mut ch) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+                for (k, n) in names.iter().enumerate() {
+                    if let Some(j) = rn.iter().position(|x| x == n) {
+                        nn.push(n.clone());
+                        a.push(rm[j]);
+                        a5.push(r5[j]);
+                        a95.push(r95[j]);
+                        b.push(stats[k].0);
+                        b5.push(stats[k].2[0]);
+                        b95.push(stats[k].2[2]);
+                        ch.push(100.0 * (stats[k].0 - rm[j]) / rm[j]);
+                    }
+                }
+                let mut df = table(vec![
+                    scol("name", nn),
+                    scol("reference_label", vec![c.label.clone(); a.len()]),
+                    fcol("reference_mean", a),
+                    fcol("reference_q05", a5),
+                    fcol("reference_q95", a95),
+                    scol("this_label", vec![s.label.clone(); b.len()]),
+                    fcol("this_mean", b),
+                    fcol("this_q05", b5),
+                    fcol("this_q95", b95),
+                    fcol("change_percent", ch),
+                ])?;
+                dir.write_table("comparison", &mut df)?;
+            }
+            Err(e) => compare_line = Some(format!("comparison with {} skipped: {e} (run that calibration first)", c.label)),
+        }
+    }
+
+    // Summary.
+    let mut md = format!("# Calibration: {}\n\n", s.label);
+    md.push_str(&format!(
+        "Simulator runs: {} requested ({} in the emulator), {} failed; emulator posterior evaluations: {}.\n\n",
+        cal.evaluations,
+        cal.emulator.len(),
+        cal.failures.len(),
+        cal.emulator_evaluations
+    ));
+    md.push_str("| parameter | unit | least squares ± se | posterior mean | 90 % interval | R̂ | ESS bulk | identifiability |\n|---|---|---|---|---|---|---|---|\n");
+    for k in 0..p {
+        md.push_str(&format!(
+            "| {} | {} | {:.4e} ± {:.2e} | {:.4e} | [{:.4e}, {:.4e}] | {:.3} | {:.0} | {} |\n",
+            names[k], params[k].unit, cal.lsq.theta[k], cal.lsq.std_error[k], stats[k].0, stats[k].2[0], stats[k].2[2], cal.diagnostics[k].r_hat, cal.diagnostics[k].ess_bulk, if notes[k].is_empty() { "identified" } else { &notes[k] }
+        ));
+    }
+    md.push_str("\n## Identifiability\n\n");
+    if ident.is_empty() && cal.lsq.unidentified.is_empty() {
+        md.push_str("Every parameter is determined by the data (posterior sd < 90 % of the prior's, no correlation above 0.95).\n");
+    }
+    for l in &ident {
+        md.push_str(&format!("* posterior: {l}\n"));
+    }
+    for l in &cal.lsq.unidentified {
+        md.push_str(&format!("* least squares: {l}\n"));
+    }
+    md.push_str(&format!(
+        "\n## Checks\n\n* {inside} of {} observations ({:.0} %) lie inside their 90 % posterior-predictive interval.\n* Check runs of the simulator at {} posterior draws: {:.0} % of the observations inside the 90 % interval of the runs plus noise; emulator error (RMS, in sd of each output's mean d̄) per output: {}.\n* Emulator refinement: {}.\n",
+        obs.len(),
+        100.0 * inside as f64 / obs.len() as f64,
+        cal.check.thetas.len(),
+        100.0 * cal.check.coverage90,
+        outputs.iter().zip(&cal.check.emulator_error).filter(|(_, e)| e.is_finite()).map(|(o, e)| format!("{} {e:.2}", o.name)).collect::<Vec<_>>().join(", "),
+        cal.rounds.iter().map(|r| format!("{} runs → ε90 = {:.2}", r.runs, r.epsilon.1)).collect::<Vec<_>>().join("; ")
+    ));
+    if !cal.warnings.is_empty() {
+        md.push_str("\n## Warnings\n\n");
+        for w in &cal.warnings {
+            md.push_str(&format!("* {w}\n"));
+        }
+    }
+    if let Some(l) = &compare_line {
+        md.push_str(&format!("\n{l}\n"));
+    }
+    dir.write_bytes("summary.md", md.as_bytes())?;
+
+    let mut headlines: Vec<String> = (0..p)
+        .map(|k| format!("{} = {:.4e} {} (90 % [{:.4e}, {:.4e}]){}", names[k], stats[k].0, params[k].unit, stats[k].2[0], stats[k].2[2], if notes[k].is_empty() { String::new() } else { format!(" — {}", notes[k]) }))
+        .collect();
+    headlines.push(format!("{inside}/{} observations inside the 90 % predictive interval; {} simulator runs", obs.len(), cal.evaluations));
+    headlines.extend(cal.warnings.iter().map(|w| format!("warning: {w}")));
+    if let Some(l) = compare_line {
+        headlines.push(l);
+    }
+    Ok(headlines)
+}

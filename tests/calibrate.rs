@@ -1,0 +1,263 @@
+//! The calibration loop end to end: the crush calibration recovers the synthetic truth inside
+//! its 90 % credible intervals (fast settings), a rerun reuses every cached run and gives the
+//! same posterior, the generator's truth is never an input, the loop on an analytic model, and
+//! bad input at load.
+
+mod common;
+use common::{Scratch, root};
+use partlife::calibrate::data::{Observations, load_curves, reduce_curves};
+use partlife::calibrate::pipeline::{Aggregated, PipelineOptions, calibrate};
+use partlife::error::Result;
+use partlife::model::{OutputSpec, Simulator};
+use partlife::params::{Param, ParamSpace};
+
+/// The generator's truth of a case, read here by the test (never by fitting code).
+fn truth(case_file: &str, name: &str) -> f64 {
+    let text = std::fs::read_to_string(root().join("datasets/synth_curves.toml")).unwrap();
+    let t: toml::Table = toml::from_str(&text).unwrap();
+    let case = t["case"].as_array().unwrap().iter().find(|c| c["file"].as_str() == Some(case_file)).unwrap();
+    case["truth"][name].as_float().unwrap()
+}
+
+fn column(csv: &str, name: &str) -> Vec<String> {
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let k = head.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name}"));
+    lines.map(|l| l.split(',').nth(k).unwrap().to_string()).collect()
+}
+
+/// Fast settings: 20 design runs, one refinement round, short chains.
+fn fast(study: &str) -> String {
+    study
+        .replace("design = 32", "design = 20")
+        .replace("rounds = 4", "rounds = 1")
+        .replace("points = 8\n", "points = 6\n")
+        .replace("steps = 20000", "steps = 2000")
+        .replace("burn_in = 5000", "burn_in = 800")
+        .replace("check = 12", "check = 4")
+}
+
+#[test]
+fn crush_calibration_recovers_the_truth_and_a_rerun_reuses_every_run() {
+    let s = Scratch::new();
+    let study = "studies/calibrate_gen3_rt.toml";
+    s.write(study, &fast(&s.read(study)));
+    let out = s.run(&["run", study, "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let dir = "reports/calibrate_gen3_rt";
+    for f in ["parameters.csv", "correlation.csv", "chains.csv", "observations.csv", "runs.csv", "rounds.csv", "failures.csv", "curves.csv", "summary.md", "manifest.json"] {
+        assert!(s.path(&format!("{dir}/{f}")).is_file(), "{f} missing");
+    }
+    for fig in ["calibration_fit", "calibration_residuals", "calibration_corner", "calibration_trace"] {
+        for ext in ["svg", "png", "pdf"] {
+            assert!(s.path(&format!("{dir}/{fig}.{ext}")).is_file(), "{fig}.{ext} missing");
+        }
+    }
+    let params = s.read(&format!("{dir}/parameters.csv"));
+    let (names, q05, q95, ratio) = (column(&params, "name"), column(&params, "q05"), column(&params, "q95"), column(&params, "width_ratio"));
+    let mut checked = 0;
+    for k in 0..names.len() {
+        let (lo, hi, w): (f64, f64, f64) = (q05[k].parse().unwrap(), q95[k].parse().unwrap(), ratio[k].parse().unwrap());
+        let t = truth("crush_curves_gen3_rt.csv", &names[k]);
+        if w < 0.9 {
+            assert!(t >= lo && t <= hi, "{}: truth {t:e} outside the 90 % interval [{lo:e}, {hi:e}]", names[k]);
+            checked += 1;
+        }
+    }
+    assert!(checked >= 2, "at least G and A are identified ({checked} checked)");
+    // The generator's settings are not an input of the run.
+    let manifest: serde_json::Value = serde_json::from_str(&s.read(&format!("{dir}/manifest.json"))).unwrap();
+    let inputs = manifest["inputs"].to_string();
+    assert!(inputs.contains("crush_curves_gen3_rt.csv") && !inputs.contains("synth_curves"), "{inputs}");
+    let ev = &manifest["evaluations"];
+    let requested = ev["simulator_requested"].as_u64().unwrap();
+    assert!(requested >= 20 && ev["simulator_runs"].as_u64().unwrap() + ev["simulator_cache_hits"].as_u64().unwrap() == requested, "{ev}");
+
+    // Rerun: every simulator run comes from the cache, the posterior is the same.
+    let out = s.run(&["run", study, "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let manifest: serde_json::Value = serde_json::from_str(&s.read(&format!("{dir}/manifest.json"))).unwrap();
+    assert_eq!(manifest["evaluations"]["simulator_runs"].as_u64(), Some(0), "{}", manifest["evaluations"]);
+    assert_eq!(s.read(&format!("{dir}/parameters.csv")), params);
+}
+
+/// y_j = θ₀ exp(−θ₁ x_j): cheap, smooth, two identified parameters.
+struct Decay {
+    space: ParamSpace,
+    outputs: Vec<OutputSpec>,
+    x: Vec<f64>,
+}
+
+impl Simulator for Decay {
+    fn space(&self) -> &ParamSpace {
+        &self.space
+    }
+    fn outputs(&self) -> &[OutputSpec] {
+        &self.outputs
+    }
+    fn simulate(&self, t: &[f64]) -> Result<Vec<f64>> {
+        Ok(self.x.iter().map(|x| t[0] * (-t[1] * x).exp()).collect())
+    }
+}
+
+#[test]
+fn loop_on_an_analytic_model_recovers_the_truth_and_refines_until_the_emulator_is_good() {
+    let x: Vec<f64> = (0..6).map(|i| 0.4 * i as f64).collect();
+    let model = Decay {
+        space: ParamSpace::new(vec![Param::uniform("amplitude", "-", 0.5, 2.0, 1.0), Param::uniform("rate", "-", 0.1, 1.5, 0.5)]).unwrap(),
+        outputs: (0..6).map(|i| OutputSpec::new(format!("y{i}"), "-")).collect(),
+        x,
+    };
+    let truth = [1.3, 0.7];
+    let clean = model.simulate(&truth).unwrap();
+    // Three replicates per output with fixed noise (±0.02).
+    let noise = [0.02, -0.015, 0.01, -0.02, 0.005, 0.0, 0.012, -0.008, 0.018, -0.01, 0.0, 0.007, -0.004, 0.016, -0.019, 0.003, 0.011, -0.013];
+    let mut obs = Observations { values: vec![], sigma: vec![], output: vec![], group: vec![] };
+    for (i, n) in noise.iter().enumerate() {
+        obs.values.push(clean[i % 6] + n);
+        obs.sigma.push(0.02);
+        obs.output.push(i % 6);
+        obs.group.push(i / 6);
+    }
+    let opts = PipelineOptions { design: 10, rounds: 4, points: 4, tolerance: 0.3, steps: 2000, burn_in: 500, check: 6, walkers: 16, ..PipelineOptions::default() };
+    let cal = calibrate(&model, &obs, &opts, 7, None, &|_| {}).unwrap();
+    for (k, t) in truth.iter().enumerate() {
+        let mut v = cal.chains.flat(k);
+        v.sort_by(f64::total_cmp);
+        let (lo, hi) = (v[v.len() / 20], v[v.len() * 19 / 20]);
+        assert!(*t >= lo && *t <= hi, "θ{k}: truth {t} outside [{lo}, {hi}]");
+        assert!(hi - lo < 0.2, "θ{k}: interval [{lo}, {hi}] too wide for σ = 0.02");
+        assert!(cal.diagnostics[k].r_hat < 1.02 && cal.diagnostics[k].ess_bulk > 400.0, "{:?}", cal.diagnostics[k]);
+    }
+    // Refinement drove the emulator error down to the tolerance and the check agrees.
+    let last = cal.rounds.last().unwrap();
+    assert!(last.epsilon.1 <= 0.3, "ε90 = {}", last.epsilon.1);
+    assert!(cal.rounds.len() >= 2 && cal.rounds[0].epsilon.1 > last.epsilon.1, "{:?}", cal.rounds.iter().map(|r| r.epsilon).collect::<Vec<_>>());
+    assert!(cal.check.emulator_error.iter().all(|e| *e < 0.5), "{:?}", cal.check.emulator_error);
+    assert!(cal.failures.is_empty());
+    // The combined data: 6 outputs, σ/√3 each.
+    let agg = Aggregated::new(&obs, 0.0);
+    assert_eq!(agg.output, (0..6).collect::<Vec<_>>());
+    assert!(agg.sd.iter().all(|s| (s - 0.02 / 3f64.sqrt()).abs() < 1e-12));
+}
+
+/// A simulator that fails in part of its space: failures are recorded, never abort.
+struct Holey(Decay);
+
+impl Simulator for Holey {
+    fn space(&self) -> &ParamSpace {
+        self.0.space()
+    }
+    fn outputs(&self) -> &[OutputSpec] {
+        self.0.outputs()
+    }
+    fn simulate(&self, t: &[f64]) -> Result<Vec<f64>> {
+        if t[1] > 1.3 {
+            return Err(partlife::error::Error::numerical("holey", "unstable"));
+        }
+        self.0.simulate(t)
+    }
+}
+
+#[test]
+fn simulator_failures_are_recorded_not_fatal() {
+    let model = Holey(Decay {
+        space: ParamSpace::new(vec![Param::uniform("amplitude", "-", 0.5, 2.0, 1.0), Param::uniform("rate", "-", 0.1, 1.5, 0.5)]).unwrap(),
+        outputs: (0..3).map(|i| OutputSpec::new(format!("y{i}"), "-")).collect(),
+        x: vec![0.0, 0.5, 1.0],
+    });
+    let clean = model.0.simulate(&[1.0, 0.5]).unwrap();
+    let obs = Observations { values: clean.clone(), sigma: vec![0.02; 3], output: vec![0, 1, 2], group: vec![0; 3] };
+    let opts = PipelineOptions { design: 16, rounds: 0, steps: 400, burn_in: 100, check: 2, walkers: 8, ..PipelineOptions::default() };
+    let cal = calibrate(&model, &obs, &opts, 1, None, &|_| {}).unwrap();
+    assert!(!cal.failures.is_empty(), "the design crosses the failing region");
+    assert!(cal.failures.iter().all(|(t, e)| t[1] > 1.3 && e.contains("unstable")));
+}
+
+#[test]
+fn curve_reduction_scales_to_the_reference_diameter() {
+    let curves = load_curves(&root().join("datasets/crush_curves_gen3_rt.csv")).unwrap();
+    assert_eq!(curves.len(), 8);
+    let d0 = 0.9e-3;
+    let red = reduce_curves(std::path::Path::new("x.csv"), &curves, d0, 8, 0.7, 0.02, Default::default()).unwrap();
+    // Scaling: F(δ; D) → F·(D₀/D)² at δ·D₀/D.
+    let c = &curves[0];
+    let n = &red.curves[0];
+    let s = d0 / c.diameter;
+    assert!((n.displacement[40] - c.displacement[40] * s).abs() < 1e-15 && (n.force[40] - c.force[40] * s * s).abs() < 1e-9);
+    // Grid strictly below every particle's fracture.
+    let fmin = red.fractures.iter().flatten().map(|f| f.1).fold(f64::INFINITY, f64::min);
+    assert!(red.grid.iter().all(|g| *g < fmin) && red.grid.len() == 8);
+    // 8 grid forces + peak + fracture per broken particle.
+    let broken = red.fractures.iter().flatten().count();
+    assert_eq!(red.observations.len(), 8 * 8 + 2 * broken);
+    assert!(red.observations.sigma.iter().all(|s| *s > 0.0));
+}
+
+#[test]
+fn bad_calibration_studies_fail_at_load_naming_file_and_key() {
+    let s = Scratch::new();
+    let study = "studies/calibrate_gen3_rt.toml";
+    let original = s.read(study);
+    let cases: [(&str, &str, &[&str]); 6] = [
+        ("name = \"t\"", "name = \"tt\"", &["param[3].name", "tt"]),
+        ("lower = 0.6\nupper = 1.2", "lower = 1.2\nupper = 0.6", &["param[2]", "lower < upper"]),
+        ("name = \"a\"\nlower = 0.6\nupper = 1.2", "name = \"a\"\nlower = 0.6\nupper = 1.2\nprior = { kind = \"normal\", mean = 0.9, sd = 0.0 }", &["param[2]", "sd > 0"]),
+        ("name = \"g\"", "name = \"k1\"", &["param[1].name", "twice"]),
+        ("design = 32", "design = 4", &["calibration.design"]),
+        ("crush_curves_gen3_rt.csv", "missing.csv", &["missing.csv"]),
+    ];
+    for (from, to, expect) in cases {
+        s.write(study, &original);
+        s.expect_bad_study(study, from, to, expect);
+    }
+    // A non-finite force names the row.
+    s.write(study, &original);
+    let data = s.read("datasets/crush_curves_gen3_rt.csv");
+    let mut lines: Vec<String> = data.lines().map(String::from).collect();
+    lines[5] = lines[5].rsplitn(2, ',').nth(1).unwrap().to_string() + ",nan";
+    s.write("datasets/crush_curves_gen3_rt.csv", &(lines.join("\n") + "\n"));
+    s.expect_bad_study(study, "kind = \"calibrate\"", "kind = \"calibrate\"", &["crush_curves_gen3_rt.csv", "row 4", "force_n", "finite"]);
+}
+
+#[test]
+fn observations_must_match_the_model_outputs_in_name_and_unit() {
+    let s = Scratch::new();
+    let study = "studies/calibrate_dem_bad.toml";
+    let text = r#"kind = "calibrate"
+label = "DEM"
+[data]
+kind = "observations"
+file = "../datasets/profile.csv"
+[model]
+kind = "dem"
+study = "dem_cold_test.toml"
+duration = 0.8
+heights = [0.1, 0.2]
+window = 0.01
+[[param]]
+name = "restitution_pw"
+lower = 0.3
+upper = 0.95
+[calibration]
+design = 2
+walkers = 8
+"#;
+    s.write(study, text);
+    s.write("datasets/profile.csv", "output,unit,value,sd\nvz_at_100mm,m/s,-0.8,0.05\nmass_flow,g/s,37.5,1.0\n");
+    let out = s.run(&["run", study, "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("profile.csv") && out.stderr.contains("row 1") && out.stderr.contains("kg/s"), "{}", out.stderr);
+    s.write("datasets/profile.csv", "output,unit,value,sd\nvz_at_150mm,m/s,-0.8,0.05\n");
+    let out = s.run(&["run", study, "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("vz_at_150mm") && out.stderr.contains("not an output"), "{}", out.stderr);
+    s.write("datasets/profile.csv", "output,unit,value,sd\nvz_at_100mm,m/s,-0.8,0.05\n");
+    let out = s.run(&["run", study, "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("calibration.design"), "{}", out.stderr);
+    s.write(study, &text.replace("restitution_pw", "stiffness"));
+    let out = s.run(&["run", study, "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("param[0].name") && out.stderr.contains("stiffness"), "{}", out.stderr);
+}

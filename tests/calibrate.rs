@@ -205,7 +205,7 @@ fn bad_calibration_studies_fail_at_load_naming_file_and_key() {
         ("name = \"a\"\nlower = 0.6\nupper = 1.2", "name = \"a\"\nlower = 0.6\nupper = 1.2\nprior = { kind = \"normal\", mean = 0.9, sd = 0.0 }", &["param[2]", "sd > 0"]),
         ("name = \"g\"", "name = \"k1\"", &["param[1].name", "twice"]),
         ("design = 32", "design = 4", &["calibration.design"]),
-        ("crush_curves_gen3_rt.csv", "missing.csv", &["missing.csv"]),
+        ("file = \"../datasets/crush_curves_gen3_rt.csv\"", "file = \"../datasets/missing.csv\"", &["missing.csv"]),
     ];
     for (from, to, expect) in cases {
         s.write(study, &original);
@@ -217,7 +217,12 @@ fn bad_calibration_studies_fail_at_load_naming_file_and_key() {
     let mut lines: Vec<String> = data.lines().map(String::from).collect();
     lines[5] = lines[5].rsplitn(2, ',').nth(1).unwrap().to_string() + ",nan";
     s.write("datasets/crush_curves_gen3_rt.csv", &(lines.join("\n") + "\n"));
-    s.expect_bad_study(study, "kind = \"calibrate\"", "kind = \"calibrate\"", &["crush_curves_gen3_rt.csv", "row 4", "force_n", "finite"]);
+    let out = s.run(&["run", study, "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    for e in ["crush_curves_gen3_rt.csv", "row 5 (line 6)", "force_n", "finite"] {
+        assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
+    }
+    assert!(s.report_files().is_empty(), "a failed run wrote {:?}", s.report_files());
 }
 
 #[test]
@@ -247,7 +252,7 @@ walkers = 8
     s.write("datasets/profile.csv", "output,unit,value,sd\nvz_at_100mm,m/s,-0.8,0.05\nmass_flow,g/s,37.5,1.0\n");
     let out = s.run(&["run", study, "--quiet"]);
     assert_eq!(out.code, 2, "{}", out.stderr);
-    assert!(out.stderr.contains("profile.csv") && out.stderr.contains("row 1") && out.stderr.contains("kg/s"), "{}", out.stderr);
+    assert!(out.stderr.contains("profile.csv") && out.stderr.contains("row 2") && out.stderr.contains("kg/s"), "{}", out.stderr);
     s.write("datasets/profile.csv", "output,unit,value,sd\nvz_at_150mm,m/s,-0.8,0.05\n");
     let out = s.run(&["run", study, "--quiet"]);
     assert_eq!(out.code, 2, "{}", out.stderr);

@@ -241,7 +241,7 @@ impl CalibrateStudy {
                 if !(*sigma_floor >= 0.0 && *sigma_floor < 1.0) {
                     return Err(Error::config(&file, "data.sigma_floor", format!("must lie in [0, 1), got {sigma_floor}")));
                 }
-                let path = resolve(data);
+                let path = existing(&file, "data.file", resolve(data))?;
                 let curves = load_curves(&path)?;
                 let d0 = match reference_diameter {
                     Some(d) if *d > 0.0 && d.is_finite() => *d,
@@ -258,7 +258,7 @@ impl CalibrateStudy {
                 (Built::Crush(model, red), obs, vec![path], config)
             }
             (ModelSpec::Dem { study, duration, heights, window }, DataSpec::Observations { file: data }) => {
-                let spath = resolve(study);
+                let spath = existing(&file, "model.study", resolve(study))?;
                 let loaded = crate::study::load(&spath)?;
                 let crate::study::Study::Dem(ds) = &loaded.study else {
                     return Err(Error::config(&file, "model.study", format!("{} is not a kind = \"dem\" study", spath.display())));
@@ -269,7 +269,7 @@ impl CalibrateStudy {
                 }
                 let tb = crate::dem::model::TubeBankModel::new(setup, *duration, heights.clone(), *window).map_err(relabel)?;
                 let model = Restricted::new(tb, params).map_err(relabel)?;
-                let path = resolve(data);
+                let path = existing(&file, "data.file", resolve(data))?;
                 let obs = load_observations(&path, model.outputs())?;
                 let config = format!("{}\n{}", loaded.text, serde_json::to_string(&(&self.model, &self.param)).map_err(|e| Error::numerical("cache key", e.to_string()))?);
                 (Built::Dem(Box::new(model)), obs, vec![path, spath], config)
@@ -284,11 +284,15 @@ impl CalibrateStudy {
         if !(self.figures.width_cm >= 4.0 && self.figures.width_cm <= 40.0) {
             return Err(Error::config(&file, "figures.width_cm", format!("must lie in [4, 40], got {}", self.figures.width_cm)));
         }
-        if let Some(c) = &self.compare {
-            let _ = c; // the reference report may not exist yet at load: checked when drawing.
-        }
+        // [compare]'s reference report may not exist yet at load: it is read when the tables are
+        // written, and a missing one is reported in summary.md.
         Ok(Prepared { built, observations, inputs, config })
     }
+}
+
+/// `path` if it is a file, else an error naming the study key that refers to it.
+fn existing(file: &str, key: &str, path: PathBuf) -> Result<PathBuf> {
+    if path.is_file() { Ok(path) } else { Err(Error::config(file, key, format!("{} does not exist", path.display()))) }
 }
 
 /// Runs a calibration study.

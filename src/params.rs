@@ -75,6 +75,12 @@ impl Param {
         }
     }
 
+    /// A robust prior width: half the distance between the 15.9 % and 84.1 % quantiles of the
+    /// truncated prior (the sd of a normal prior far from its bounds).
+    pub fn prior_sd(&self) -> f64 {
+        0.5 * (self.quantile(0.841_344_746) - self.quantile(0.158_655_254))
+    }
+
     fn check(&self) -> Result<()> {
         let bad = |rule: String| Err(Error::Param { name: self.name.clone(), rule });
         if self.name.is_empty() {

@@ -129,3 +129,10 @@ mod tests {
         assert!(median(&[]).is_nan());
     }
 }
+
+/// Nearest-rank quantiles `qs` (each in [0, 1]) of `v`, which is sorted in place; `v` must not
+/// be empty.
+pub fn quantiles(v: &mut [f64], qs: &[f64]) -> Vec<f64> {
+    v.sort_by(f64::total_cmp);
+    qs.iter().map(|q| v[((v.len() - 1) as f64 * q).round() as usize]).collect()
+}

@@ -297,7 +297,7 @@ pub fn fit<S: Simulator>(model: &S, data: &[f64], noise: &Noise, opts: &LsqOptio
             }
         }
     }
-    let prior_sd: Vec<f64> = space.params().iter().map(|q| 0.5 * (q.quantile(0.841_344_746) - q.quantile(0.158_655_254))).collect();
+    let prior_sd: Vec<f64> = space.params().iter().map(|q| q.prior_sd()).collect();
     let width_ratio: Vec<f64> = std_error.iter().zip(&prior_sd).map(|(s, ps)| s / ps).collect();
     let names: Vec<&str> = space.params().iter().map(|q| q.name.as_str()).collect();
     let mut unidentified = Vec::new();

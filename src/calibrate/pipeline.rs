@@ -347,11 +347,6 @@ fn epsilons(em: &Emulator, agg: &Aggregated, draws: &[Vec<f64>]) -> Vec<f64> {
         .collect()
 }
 
-fn quantile(v: &[f64], q: f64) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    s[((s.len() - 1) as f64 * q).round() as usize]
-}
 
 /// Runs the loop on simulator `sim` against `obs`.
 pub fn calibrate<S: Simulator>(sim: &S, obs: &Observations, opts: &PipelineOptions, seed: u64, checkpoint_dir: Option<&PathBuf>, progress: Progress) -> Result<Calibration> {
@@ -389,7 +384,8 @@ pub fn calibrate<S: Simulator>(sim: &S, obs: &Observations, opts: &PipelineOptio
         emulator_evaluations += chains.evaluations;
         let probe = thinned(&chains, opts.probe);
         let eps = epsilons(&em, &agg, &probe);
-        let eps_q = (quantile(&eps, 0.5), quantile(&eps, 0.9));
+        let q = crate::stats::quantiles(&mut eps.clone(), &[0.5, 0.9]);
+        let eps_q = (q[0], q[1]);
         rounds.push(Round { runs: train_t.len(), epsilon: eps_q, loo: em.leave_one_out() });
         let done = eps_q.1 <= opts.tolerance;
         if done || round >= opts.rounds {

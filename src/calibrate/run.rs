@@ -46,6 +46,7 @@ use crate::fem::{CrushSetup, CrushTest};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
 use crate::model::{Restricted, Simulator};
 use crate::params::{Param, Prior};
+use crate::stats::quantiles;
 use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
 use crate::study::LoadedStudy;
 
@@ -370,10 +371,6 @@ fn pr_mean(preds: &[Vec<(f64, f64)>], o: usize) -> f64 {
     preds.iter().map(|p| p[o].0).sum::<f64>() / preds.len().max(1) as f64
 }
 
-fn quantiles(v: &mut [f64], qs: &[f64]) -> Vec<f64> {
-    v.sort_by(f64::total_cmp);
-    qs.iter().map(|q| v[((v.len() - 1) as f64 * q).round() as usize]).collect()
-}
 
 #[allow(clippy::too_many_lines)]
 fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &Calibration, curves: Option<CurveSet>, resolve: &dyn Fn(&str) -> PathBuf) -> Result<Vec<String>> {
@@ -394,7 +391,7 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
         let q = quantiles(&mut v, &[0.05, 0.5, 0.95]);
         stats.push((mean, sd, q));
     }
-    let prior_sd: Vec<f64> = params.iter().map(|q| 0.5 * (q.quantile(0.841_344_746) - q.quantile(0.158_655_254))).collect();
+    let prior_sd: Vec<f64> = params.iter().map(|q| q.prior_sd()).collect();
     // Posterior correlation.
     let mut corr = vec![vec![0.0; p]; p];
     for a in 0..p {

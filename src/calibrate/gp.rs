@@ -24,6 +24,7 @@ pub struct Gp {
     x: Vec<Vec<f64>>,
     /// Length scales ℓ_j (unit-cube units).
     pub length_scales: Vec<f64>,
+    inv_l: Vec<f64>,
     /// Signal variance σ² (standardised units).
     pub signal_variance: f64,
     /// Nugget τ² (standardised units).
@@ -127,13 +128,12 @@ impl Gp {
             .cholesky()
             .ok_or_else(|| Error::numerical("emulator", "kernel matrix not positive definite"))?;
         let alpha = chol.solve(&ys);
-        Ok(Gp { x, length_scales, signal_variance, nugget, y_mean, y_sd, chol, alpha, ys, log_likelihood: -nll })
+        Ok(Gp { x, length_scales, inv_l, signal_variance, nugget, y_mean, y_sd, chol, alpha, ys, log_likelihood: -nll })
     }
 
     /// Predictive mean and variance of the latent function at `p` (output units).
     pub fn predict(&self, p: &[f64]) -> (f64, f64) {
-        let inv_l: Vec<f64> = self.length_scales.iter().map(|l| 1.0 / l).collect();
-        let ks = DVector::from_iterator(self.x.len(), self.x.iter().map(|xi| matern52(xi, p, &inv_l, self.signal_variance)));
+        let ks = DVector::from_iterator(self.x.len(), self.x.iter().map(|xi| matern52(xi, p, &self.inv_l, self.signal_variance)));
         let mean = ks.dot(&self.alpha);
         let v = self.chol.solve(&ks);
         let var = (self.signal_variance - ks.dot(&v)).max(0.0);

@@ -28,7 +28,8 @@
 //! (with `[compare]`) `comparison.csv`, `summary.md`, figures (see
 //! [`crate::report::calibrate`]), `manifest.json`.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Mutex;
 use std::path::PathBuf;
 
 use rand::SeedableRng;
@@ -42,7 +43,7 @@ use super::data::{CrushReduction, Observations, load_curves, load_observations, 
 use super::pipeline::{Calibration, PipelineOptions, calibrate, thinned};
 use crate::error::{Error, Result};
 use crate::fem::model::CrushModel;
-use crate::fem::{CrushSetup, CrushTest};
+use crate::fem::CrushSetup;
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
 use crate::model::{Restricted, Simulator};
 use crate::params::{Param, Prior};
@@ -311,11 +312,12 @@ pub fn run_calibrate(loaded: &LoadedStudy, s: &CalibrateStudy, opts: &RunOptions
     let progress = |m: &str| pb.set_message(m.to_string());
     let obs = &prep.observations;
     let (cal, counts, curves) = match &prep.built {
-        Built::Crush(model, red) => {
-            let cached = Cached::new(model, &cache_dir, prep.config.clone())?;
+        Built::Crush(model, _) => {
+            let recording = Recording { model, curves: Mutex::new(HashMap::new()) };
+            let cached = Cached::new(&recording, &cache_dir, prep.config.clone())?;
             let cal = calibrate(&cached, obs, &s.calibration, s.seed, Some(&cache_dir), &progress)?;
             progress("curves at posterior draws");
-            let curves = crush_curves(model, red, &cal)?;
+            let curves = recording.curves_at(&cal);
             (cal, cached.counts(), Some(curves))
         }
         Built::Dem(model) => {
@@ -349,22 +351,55 @@ pub fn run_calibrate(loaded: &LoadedStudy, s: &CalibrateStudy, opts: &RunOptions
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })
 }
 
-/// Full FE curves (normalised to D₀) at the check draws and at the least-squares estimate.
+/// Full FE curves (normalised to D₀), by label.
 type CurveSet = Vec<(String, Vec<(f64, f64)>)>;
 
-fn crush_curves(model: &CrushModel, _red: &CrushReduction, cal: &Calibration) -> Result<CurveSet> {
-    let mut thetas: Vec<(String, Vec<f64>)> = cal.check.thetas.iter().enumerate().map(|(i, t)| (format!("posterior_{i}"), t.clone())).collect();
-    thetas.push(("estimate".into(), cal.lsq.theta.clone()));
-    let out: Vec<Option<(String, Vec<(f64, f64)>)>> = thetas
-        .par_iter()
-        .map(|(k, t)| {
-            let setup = model.setup_at(t).ok()?;
-            let mut test = CrushTest::new(setup, "<calibration>").ok()?;
-            let r = test.run(None).ok()?;
-            Some((k.clone(), r.curve.iter().map(|s| (s.displacement, s.force)).collect()))
-        })
-        .collect();
-    Ok(out.into_iter().flatten().collect())
+/// The crush model keeping the curve of every run it makes, so the figure's curves at the
+/// check draws and the estimate need no second FE run (runs served by the cache are redone).
+struct Recording<'a> {
+    model: &'a CrushModel,
+    curves: Mutex<HashMap<Vec<u64>, Vec<(f64, f64)>>>,
+}
+
+fn bits(theta: &[f64]) -> Vec<u64> {
+    theta.iter().map(|v| v.to_bits()).collect()
+}
+
+impl Recording<'_> {
+    fn run(&self, theta: &[f64]) -> Result<Vec<f64>> {
+        let (y, r) = self.model.evaluate(theta)?;
+        let curve = r.curve.iter().map(|s| (s.displacement, s.force)).collect();
+        self.curves.lock().unwrap_or_else(|e| e.into_inner()).insert(bits(theta), curve);
+        Ok(y)
+    }
+
+    /// Curves at the check draws (`posterior_<i>`) and at the least-squares estimate; a θ the
+    /// FE fails at is left out.
+    fn curves_at(&self, cal: &Calibration) -> CurveSet {
+        let mut thetas: Vec<(String, &Vec<f64>)> = cal.check.thetas.iter().enumerate().map(|(i, t)| (format!("posterior_{i}"), t)).collect();
+        thetas.push(("estimate".into(), &cal.lsq.theta));
+        let missing: Vec<&Vec<f64>> = {
+            let have = self.curves.lock().unwrap_or_else(|e| e.into_inner());
+            thetas.iter().map(|t| t.1).filter(|t| !have.contains_key(&bits(t))).collect()
+        };
+        missing.par_iter().for_each(|t| {
+            let _ = self.run(t);
+        });
+        let have = self.curves.lock().unwrap_or_else(|e| e.into_inner());
+        thetas.into_iter().filter_map(|(k, t)| have.get(&bits(t)).map(|c| (k, c.clone()))).collect()
+    }
+}
+
+impl Simulator for Recording<'_> {
+    fn space(&self) -> &crate::params::ParamSpace {
+        self.model.space()
+    }
+    fn outputs(&self) -> &[crate::model::OutputSpec] {
+        self.model.outputs()
+    }
+    fn simulate(&self, theta: &[f64]) -> Result<Vec<f64>> {
+        self.run(theta)
+    }
 }
 
 fn pr_mean(preds: &[Vec<(f64, f64)>], o: usize) -> f64 {
@@ -382,9 +417,10 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
     let outputs = cal.emulator.outputs();
 
     // Parameters.
+    let flats: Vec<Vec<f64>> = (0..p).map(|k| cal.chains.flat(k)).collect();
     let mut stats = Vec::new();
     for k in 0..p {
-        let mut v = cal.chains.flat(k);
+        let mut v = flats[k].clone();
         let n = v.len() as f64;
         let mean = v.iter().sum::<f64>() / n;
         let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
@@ -396,8 +432,8 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
     let mut corr = vec![vec![0.0; p]; p];
     for a in 0..p {
         for b in 0..p {
-            let (xa, xb) = (cal.chains.flat(a), cal.chains.flat(b));
-            let c: f64 = xa.iter().zip(&xb).map(|(x, y)| (x - stats[a].0) * (y - stats[b].0)).sum::<f64>() / (xa.len() as f64 - 1.0);
+            let (xa, xb) = (&flats[a], &flats[b]);
+            let c: f64 = xa.iter().zip(xb).map(|(x, y)| (x - stats[a].0) * (y - stats[b].0)).sum::<f64>() / (xa.len() as f64 - 1.0);
             corr[a][b] = c / (stats[a].1 * stats[b].1);
         }
     }

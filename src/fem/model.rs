@@ -124,6 +124,20 @@ impl CrushModel {
     }
 }
 
+impl CrushModel {
+    /// One FE run at θ: the outputs y and the whole result (curve, fields, checks).
+    pub fn evaluate(&self, theta: &[f64]) -> Result<(Vec<f64>, super::CrushResult)> {
+        let setup = self.setup_at(theta)?;
+        let mut t = CrushTest::new(setup, "<CrushModel>")?;
+        let r = t.run(None)?;
+        let mut y: Vec<f64> = self.displacements.iter().map(|&d| force_at(&r.curve, d)).collect();
+        y.push(r.peak_force);
+        y.push(r.fracture_displacement.unwrap_or_else(|| r.curve.last().map(|s| s.displacement).unwrap_or(0.0)));
+        check_outputs("crush FE", &self.outputs, theta, &y)?;
+        Ok((y, r))
+    }
+}
+
 /// Linear interpolation of the force at total displacement `d` on a curve (0 beyond its end).
 pub fn force_at(curve: &[super::CurveSample], d: f64) -> f64 {
     for w in curve.windows(2) {
@@ -143,13 +157,6 @@ impl Simulator for CrushModel {
         &self.outputs
     }
     fn simulate(&self, theta: &[f64]) -> Result<Vec<f64>> {
-        let setup = self.setup_at(theta)?;
-        let mut t = CrushTest::new(setup, "<CrushModel>")?;
-        let r = t.run(None)?;
-        let mut y: Vec<f64> = self.displacements.iter().map(|&d| force_at(&r.curve, d)).collect();
-        y.push(r.peak_force);
-        y.push(r.fracture_displacement.unwrap_or_else(|| r.curve.last().map(|s| s.displacement).unwrap_or(0.0)));
-        check_outputs("crush FE", &self.outputs, theta, &y)?;
-        Ok(y)
+        self.evaluate(theta).map(|(y, _)| y)
     }
 }

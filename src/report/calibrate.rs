@@ -49,8 +49,8 @@ fn fit(dir: &Path, width_cm: f64) -> Result<Drawn> {
     }
     let c = Table::load(dir, "curves")?;
     let (kind, x, f) = (c.s("kind")?, c.f("displacement_m")?, c.f("force_n")?);
-    let grid = Table::load(dir, "grid")?.f("grid_displacement_m")?;
-    let d0 = Table::load(dir, "grid")?.f("reference_diameter_m")?[0];
+    let gt = Table::load(dir, "grid")?;
+    let (grid, d0) = (gt.f("grid_displacement_m")?, gt.f("reference_diameter_m")?[0]);
     let k = grid.len();
     let (oi, q05, q50, q95, val, grp) = (obs.f("output_index")?, obs.f("predictive_q05")?, obs.f("predictive_q50")?, obs.f("predictive_q95")?, obs.f("value")?, obs.f("group")?);
     let first = |o: usize| oi.iter().position(|&v| v as usize == o);
@@ -67,7 +67,7 @@ fn fit(dir: &Path, width_cm: f64) -> Result<Drawn> {
     series.push(Series { label: Some("90 % posterior predictive".into()), points: lower, colour: colour(0), kind: Kind::Band(upper, 0.25) });
     let mut first_data = true;
     let mut first_draw = true;
-    for (id, idx) in c.groups_by("id")? {
+    for (_, idx) in c.groups_by("id")? {
         let pts: Vec<(f64, f64)> = idx.iter().map(|&i| (1e6 * x[i], f[i])).collect();
         match kind[idx[0]].as_str() {
             "data" => {
@@ -79,7 +79,6 @@ fn fit(dir: &Path, width_cm: f64) -> Result<Drawn> {
                 first_draw = false;
             }
             _ => {
-                let _ = id;
                 series.push(Series { label: Some("FE at least-squares estimate".into()), points: pts, colour: BLACK, kind: Kind::Dashed(0.9, 3.0, 2.0) });
             }
         }

@@ -87,6 +87,15 @@ enum DatasetsCommand {
         #[arg(long)]
         out_dir: Option<PathBuf>,
     },
+    /// Regenerate the synthetic tube-bank measurements (one DEM run at the true coefficients).
+    SynthDem {
+        /// Generator settings (the generator's truth).
+        #[arg(long, default_value = "datasets/synth_dem.toml")]
+        settings: PathBuf,
+        /// Output directory (default: the settings file's directory).
+        #[arg(long)]
+        out_dir: Option<PathBuf>,
+    },
     /// Validate dataset files (crush CSV or Table 1) and summarise them.
     Check {
         /// Files to check.
@@ -162,6 +171,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 }
             }
             bar.finish_and_clear();
+        }
+        Command::Datasets { command: DatasetsCommand::SynthDem { settings, out_dir } } => {
+            let (s, model) = partlife::calibrate::synth_dem::DemSynthSettings::load(&settings)?;
+            let out = out_dir.unwrap_or_else(|| settings.parent().map(|p| p.to_path_buf()).unwrap_or_default());
+            let bar = partlife::runner::progress_bar(1, true, "{spinner} [{elapsed_precise}] {msg}");
+            bar.enable_steady_tick(std::time::Duration::from_millis(200));
+            bar.set_message(format!("DEM run of {} s at the true coefficients", s.duration));
+            let (path, obs) = partlife::calibrate::synth_dem::synthesize(&s, &model, &out)?;
+            bar.finish_and_clear();
+            out!("{}: {} observations", path.display(), obs.len());
+            for o in obs {
+                out!("  {} = {:.4e} {} (noise-free {:.4e}, sd {:.2e})", o.output, o.value, o.unit, o.exact, o.sd);
+            }
         }
         Command::Datasets { command: DatasetsCommand::Check { files } } => {
             for f in files {

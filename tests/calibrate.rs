@@ -266,3 +266,60 @@ walkers = 8
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("param[0].name") && out.stderr.contains("stiffness"), "{}", out.stderr);
 }
+
+/// The DEM calibration end to end on a narrower rig (half the particles) with a short design:
+/// the generator writes the "measured" profile from another particle stream, and the fit puts
+/// the true particle–wall restitution inside its 90 % interval. The full study
+/// (`studies/calibrate_dem.toml`, ≈ 1 min) is `dem_calibration_full_study` below.
+#[test]
+fn dem_calibration_recovers_the_wall_restitution() {
+    let s = Scratch::new();
+    let rig = std::fs::read_to_string(root().join("studies/dem_rig.toml")).unwrap();
+    s.write("studies/dem_rig.toml", &rig.replace("width = 0.1\n", "width = 0.05\n"));
+    let synth = std::fs::read_to_string(root().join("datasets/synth_dem.toml")).unwrap();
+    s.write("datasets/synth_dem.toml", &synth.replace("duration = 0.7 ", "duration = 0.55 "));
+    let out = s.run(&["datasets", "synth-dem", "--settings", "datasets/synth_dem.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let data = s.read("datasets/dem_rig_profile.csv");
+    assert_eq!(data.lines().count(), 8, "{data}");
+    assert!(data.starts_with("output,unit,value,sd\nvz_at_15mm,m/s,") && data.contains("\nmass_flow,kg/s,"), "{data}");
+
+    let study = std::fs::read_to_string(root().join("studies/calibrate_dem.toml")).unwrap();
+    let fast = study.replace("design = 16", "design = 10").replace("rounds = 2", "rounds = 0").replace("steps = 10000", "steps = 3000").replace("burn_in = 2500", "burn_in = 1000").replace("check = 4", "check = 2");
+    s.write("studies/calibrate_dem.toml", &fast);
+    let out = s.run(&["run", "studies/calibrate_dem.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let dir = "reports/calibrate_dem";
+    for fig in ["calibration_fit", "calibration_residuals", "calibration_corner", "calibration_trace"] {
+        assert!(s.path(&format!("{dir}/{fig}.pdf")).is_file(), "{fig}.pdf missing");
+    }
+    let truth: toml::Table = toml::from_str(&synth).unwrap();
+    let e_true = truth["truth"]["restitution_pw"].as_float().unwrap();
+    let params = s.read(&format!("{dir}/parameters.csv"));
+    let names = column(&params, "name");
+    let k = names.iter().position(|n| n == "restitution_pw").unwrap();
+    let (lo, hi, w): (f64, f64, f64) = (column(&params, "q05")[k].parse().unwrap(), column(&params, "q95")[k].parse().unwrap(), column(&params, "width_ratio")[k].parse().unwrap());
+    assert!(lo <= e_true && e_true <= hi, "true e_pw {e_true} outside [{lo}, {hi}]");
+    assert!(w < 0.5, "the profile determines e_pw: posterior/prior sd {w}");
+    let manifest = s.read(&format!("{dir}/manifest.json"));
+    assert!(manifest.contains("dem_rig_profile.csv") && manifest.contains("dem_rig.toml") && !manifest.contains("synth_dem"), "{manifest}");
+}
+
+#[test]
+#[ignore = "slow: the full DEM calibration study, about 1–2 min"]
+fn dem_calibration_full_study() {
+    let s = Scratch::new();
+    for f in ["studies/dem_rig.toml", "studies/calibrate_dem.toml", "datasets/dem_rig_profile.csv"] {
+        s.write(f, &std::fs::read_to_string(root().join(f)).unwrap());
+    }
+    let out = s.run(&["run", "studies/calibrate_dem.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let synth: toml::Table = toml::from_str(&std::fs::read_to_string(root().join("datasets/synth_dem.toml")).unwrap()).unwrap();
+    let params = s.read("reports/calibrate_dem/parameters.csv");
+    let names = column(&params, "name");
+    for (k, n) in names.iter().enumerate() {
+        let t = synth["truth"][n.as_str()].as_float().unwrap();
+        let (lo, hi): (f64, f64) = (column(&params, "q05")[k].parse().unwrap(), column(&params, "q95")[k].parse().unwrap());
+        assert!(lo <= t && t <= hi, "{n}: truth {t} outside [{lo}, {hi}]");
+    }
+}

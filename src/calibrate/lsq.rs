@@ -20,16 +20,39 @@
 //! Verified by `tests/verification/lsq.rs` (exact recovery without noise, coverage of the
 //! reported intervals over seeds, a non-identifiable product).
 
+use std::cell::RefCell;
+
+use argmin::core::{CostFunction, Executor, Gradient};
+use argmin::solver::linesearch::MoreThuenteLineSearch;
+use argmin::solver::neldermead::NelderMead;
+use argmin::solver::quasinewton::LBFGS;
 use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
 
 use super::Noise;
 use crate::design::Sobol;
 use crate::error::{Error, Result};
 use crate::model::Simulator;
 
+/// The optimiser of each start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LsqMethod {
+    /// Levenberg–Marquardt on the residuals (the default; uses the least-squares structure).
+    #[default]
+    LevenbergMarquardt,
+    /// argmin's Nelder–Mead simplex on the cost (gradient-free; robust to noisy simulators).
+    NelderMead,
+    /// argmin's L-BFGS with a Moré–Thuente line search on the cost, gradient Jᵀr by forward
+    /// differences.
+    Lbfgs,
+}
+
 /// Options of a least-squares fit.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LsqOptions {
+    /// Optimiser of each start.
+    pub method: LsqMethod,
     /// Number of starts (nominal + Sobol' points), ≥ 1.
     pub starts: usize,
     /// Iterations per start.
@@ -44,7 +67,7 @@ pub struct LsqOptions {
 
 impl Default for LsqOptions {
     fn default() -> Self {
-        LsqOptions { starts: 4, max_iterations: 100, fd_step: 1e-6, ftol: 1e-12, xtol: 1e-10 }
+        LsqOptions { method: LsqMethod::LevenbergMarquardt, starts: 4, max_iterations: 100, fd_step: 1e-6, ftol: 1e-12, xtol: 1e-10 }
     }
 }
 
@@ -156,42 +179,12 @@ impl<S: Simulator> Problem<'_, S> {
     }
 }
 
-/// The best end point so far: u, residuals, cost, Jacobian.
-struct Best {
-    u: Vec<f64>,
-    r: Vec<f64>,
-    cost: f64,
-    jac: DMatrix<f64>,
-}
-
-fn cost(r: &[f64]) -> f64 {
-    0.5 * r.iter().map(|x| x * x).sum::<f64>()
-}
-
-/// Fits `model` to `data` with `noise`.
-pub fn fit<S: Simulator>(model: &S, data: &[f64], noise: &Noise, opts: &LsqOptions) -> Result<LsqResult> {
-    let space = model.space();
-    let p = space.len();
-    if model.outputs().len() != data.len() {
-        return Err(Error::config("<calibration>", "data", format!("{} data for {} model outputs", data.len(), model.outputs().len())));
-    }
-    if data.len() < p {
-        return Err(Error::config("<calibration>", "data", format!("{} data cannot determine {p} parameters", data.len())));
-    }
-    if opts.starts == 0 || !(opts.fd_step > 0.0 && opts.fd_step < 0.1) {
-        return Err(Error::config("<calibration>", "least_squares", "starts ≥ 1 and 0 < fd_step < 0.1 required"));
-    }
-    let mut pb = Problem { model, data, sigma: noise.sigmas(data)?, evaluations: 0, failures: Vec::new() };
-    let mut start_us = vec![space.to_unit(&space.nominal())];
-    start_us.extend(Sobol::points(p, opts.starts.saturating_sub(1), 1)?);
-    let mut starts = Vec::new();
-    let mut best: Option<Best> = None;
-    for u0 in start_us {
-        let theta0 = pb.theta(&u0);
-        let Some(Some(mut r)) = pb.residuals(std::slice::from_ref(&u0))?.pop() else {
-            starts.push(StartResult { start: theta0, end: None, cost: f64::INFINITY, iterations: 0 });
-            continue;
-        };
+/// Levenberg–Marquardt from `u` (residuals `r`): end point, residuals, cost, iterations and the
+/// last Jacobian.
+#[allow(clippy::type_complexity)]
+fn levenberg_marquardt<S: Simulator>(pb: &mut Problem<'_, S>, u0: Vec<f64>, r0: Vec<f64>, opts: &LsqOptions) -> Result<(Vec<f64>, Vec<f64>, f64, usize, Option<DMatrix<f64>>)> {
+    let p = u0.len();
+    let mut r = r0;
         let mut u = u0;
         let mut c = cost(&r);
         let mut lambda = 1e-3;
@@ -241,6 +234,159 @@ pub fn fit<S: Simulator>(model: &S, data: &[f64], noise: &Noise, opts: &LsqOptio
                 break;
             }
         }
+        Ok((u, r, c, it, jac))
+}
+
+/// The cost ½Σr² in unit-cube coordinates for argmin, with a quadratic penalty outside the cube
+/// (the residuals are evaluated at the clamped point) so unconstrained solvers stay inside.
+struct ArgminCost<'p, 'a, S: Simulator> {
+    pb: RefCell<&'p mut Problem<'a, S>>,
+    error: &'p RefCell<Option<Error>>,
+    fd_step: f64,
+}
+
+impl<S: Simulator> ArgminCost<'_, '_, S> {
+    fn clamped(v: &DVector<f64>) -> (Vec<f64>, f64) {
+        let u: Vec<f64> = v.iter().map(|x| x.clamp(0.0, 1.0)).collect();
+        let out: f64 = v.iter().zip(&u).map(|(x, c)| (x - c).powi(2)).sum();
+        (u, out)
+    }
+
+    /// Residuals at the clamped point (None: the simulator failed or an error was kept).
+    fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
+        match self.pb.borrow_mut().residuals(&[u.to_vec()]) {
+            Ok(mut v) => v.pop().flatten(),
+            Err(e) => {
+                self.error.borrow_mut().get_or_insert(e);
+                None
+            }
+        }
+    }
+}
+
+impl<S: Simulator> CostFunction for ArgminCost<'_, '_, S> {
+    type Param = DVector<f64>;
+    type Output = f64;
+    fn cost(&self, v: &DVector<f64>) -> std::result::Result<f64, argmin::core::Error> {
+        let (u, out) = Self::clamped(v);
+        Ok(self.residuals(&u).map_or(f64::INFINITY, |r| cost(&r) * (1.0 + 1e3 * out) + 1e3 * out))
+    }
+}
+
+impl<S: Simulator> Gradient for ArgminCost<'_, '_, S> {
+    type Param = DVector<f64>;
+    type Gradient = DVector<f64>;
+    fn gradient(&self, v: &DVector<f64>) -> std::result::Result<DVector<f64>, argmin::core::Error> {
+        let (u, _) = Self::clamped(v);
+        let Some(r) = self.residuals(&u) else { return Err(argmin::core::Error::msg("the simulator failed at the gradient's base point")) };
+        let jac = match self.pb.borrow_mut().jacobian(&u, &r, self.fd_step) {
+            Ok(Some(j)) => j,
+            Ok(None) => return Err(argmin::core::Error::msg("the simulator failed in a gradient column")),
+            Err(e) => {
+                self.error.borrow_mut().get_or_insert(e);
+                return Err(argmin::core::Error::msg("gradient"));
+            }
+        };
+        let mut g = jac.transpose() * DVector::from_column_slice(&r);
+        // The penalty's gradient outside the cube.
+        for (k, (x, c)) in v.iter().zip(&u).enumerate() {
+            g[k] += 2e3 * (x - c) * (1.0 + cost(&r));
+        }
+        Ok(g)
+    }
+}
+
+/// Nelder–Mead or L-BFGS (argmin) from `u0`: end point, residuals, cost and iterations. A
+/// solver that stops on an error (a failed simulator run inside a line search) ends at its best
+/// point so far; errors of the Problem (wrong output length, non-finite outputs) propagate.
+fn with_argmin<S: Simulator>(pb: &mut Problem<'_, S>, u0: Vec<f64>, r0: Vec<f64>, opts: &LsqOptions) -> Result<(Vec<f64>, Vec<f64>, f64, usize)> {
+    let p = u0.len();
+    let start = DVector::from_column_slice(&u0);
+    let kept = RefCell::new(None);
+    let problem = ArgminCost { pb: RefCell::new(&mut *pb), error: &kept, fd_step: opts.fd_step };
+    let err = |e: argmin::core::Error| Error::numerical("least squares", e.to_string());
+    let (best, iterations) = match opts.method {
+        LsqMethod::NelderMead => {
+            let mut simplex = vec![start.clone()];
+            for k in 0..p {
+                let mut v = start.clone();
+                v[k] += if v[k] + 0.1 <= 1.0 { 0.1 } else { -0.1 };
+                simplex.push(v);
+            }
+            let solver = NelderMead::new(simplex).with_sd_tolerance(opts.ftol.max(1e-14)).map_err(err)?;
+            let res = Executor::new(problem, solver).configure(|s| s.max_iters(opts.max_iterations as u64 * 20)).run();
+            match res {
+                Ok(res) => (res.state().best_param.clone(), res.state().iter as usize),
+                Err(_) => (None, 0),
+            }
+        }
+        _ => {
+            let ls = MoreThuenteLineSearch::new();
+            let solver = LBFGS::new(ls, 7).with_tolerance_cost(opts.ftol).map_err(err)?.with_tolerance_grad(1e-10).map_err(err)?;
+            let res = Executor::new(problem, solver).configure(|s| s.param(start).max_iters(opts.max_iterations as u64)).run();
+            match res {
+                Ok(res) => (res.state().best_param.clone(), res.state().iter as usize),
+                // A failed simulator run inside the line search: the start is kept.
+                Err(_) => (None, 0),
+            }
+        }
+    };
+    if let Some(e) = kept.into_inner() {
+        return Err(e);
+    }
+    let u = best.map(|b| ArgminCost::<S>::clamped(&b).0).unwrap_or(u0.clone());
+    let r = match pb.residuals(std::slice::from_ref(&u))?.pop().flatten() {
+        Some(r) => r,
+        None => r0.clone(),
+    };
+    let (u, r) = if cost(&r) <= cost(&r0) { (u, r) } else { (u0, r0) };
+    let c = cost(&r);
+    Ok((u, r, c, iterations))
+}
+
+/// The best end point so far: u, residuals, cost, Jacobian.
+struct Best {
+    u: Vec<f64>,
+    r: Vec<f64>,
+    cost: f64,
+    jac: DMatrix<f64>,
+}
+
+fn cost(r: &[f64]) -> f64 {
+    0.5 * r.iter().map(|x| x * x).sum::<f64>()
+}
+
+/// Fits `model` to `data` with `noise`.
+pub fn fit<S: Simulator>(model: &S, data: &[f64], noise: &Noise, opts: &LsqOptions) -> Result<LsqResult> {
+    let space = model.space();
+    let p = space.len();
+    if model.outputs().len() != data.len() {
+        return Err(Error::config("<calibration>", "data", format!("{} data for {} model outputs", data.len(), model.outputs().len())));
+    }
+    if data.len() < p {
+        return Err(Error::config("<calibration>", "data", format!("{} data cannot determine {p} parameters", data.len())));
+    }
+    if opts.starts == 0 || !(opts.fd_step > 0.0 && opts.fd_step < 0.1) {
+        return Err(Error::config("<calibration>", "least_squares", "starts ≥ 1 and 0 < fd_step < 0.1 required"));
+    }
+    let mut pb = Problem { model, data, sigma: noise.sigmas(data)?, evaluations: 0, failures: Vec::new() };
+    let mut start_us = vec![space.to_unit(&space.nominal())];
+    start_us.extend(Sobol::points(p, opts.starts.saturating_sub(1), 1)?);
+    let mut starts = Vec::new();
+    let mut best: Option<Best> = None;
+    for u0 in start_us {
+        let theta0 = pb.theta(&u0);
+        let Some(Some(r)) = pb.residuals(std::slice::from_ref(&u0))?.pop() else {
+            starts.push(StartResult { start: theta0, end: None, cost: f64::INFINITY, iterations: 0 });
+            continue;
+        };
+        let (u, r, c, it, mut jac) = match opts.method {
+            LsqMethod::LevenbergMarquardt => levenberg_marquardt(&mut pb, u0, r, opts)?,
+            LsqMethod::NelderMead | LsqMethod::Lbfgs => {
+                let (u, r, c, it) = with_argmin(&mut pb, u0, r, opts)?;
+                (u, r, c, it, None)
+            }
+        };
         // The Jacobian at the end point.
         if let Some(j) = pb.jacobian(&u, &r, opts.fd_step)? {
             jac = Some(j);

@@ -4,6 +4,7 @@
 //! * [`mcmc`]: the affine-invariant ensemble sampler and convergence diagnostics (R̂, ESS).
 //! * [`gp`]: Gaussian-process emulator (Matérn-5/2, ML hyperparameters by argmin Nelder–Mead, LOO).
 //! * [`synth`]: the generator of the synthetic crush curves (`partlife datasets synth-curves`).
+//! * [`synth_dem`]: the generator of the synthetic tube-bank measurements (`partlife datasets synth-dem`).
 //! * [`lsq`]: multi-start Levenberg–Marquardt in unit-cube coordinates, covariance from the
 //!   Jacobian, correlations and an identifiability report.
 //!
@@ -19,6 +20,7 @@ pub mod mcmc;
 pub mod pipeline;
 pub mod run;
 pub mod synth;
+pub mod synth_dem;
 
 use serde::{Deserialize, Serialize};
 

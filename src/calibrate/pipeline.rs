@@ -33,7 +33,7 @@ use rand_distr::{Distribution, Normal};
 
 use super::data::Observations;
 use super::emulator::{Emulator, Gathered, LooCheck};
-use super::lsq::{LsqOptions, LsqResult};
+use super::lsq::{LsqMethod, LsqOptions, LsqResult};
 use super::mcmc::{self, AdaptiveOptions, Chains, Checkpoint, Diagnostics, EnsembleOptions};
 use super::Noise;
 use crate::design::Sobol;
@@ -67,6 +67,8 @@ pub struct PipelineOptions {
     pub tolerance: f64,
     /// Least-squares starts.
     pub starts: usize,
+    /// Least-squares optimiser: `levenberg_marquardt` (default), `nelder_mead` or `lbfgs`.
+    pub least_squares: LsqMethod,
     /// Sampler.
     pub sampler: Sampler,
     /// Walkers (ensemble) or chains (adaptive Metropolis).
@@ -94,6 +96,7 @@ impl Default for PipelineOptions {
             probe: 200,
             tolerance: 0.5,
             starts: 8,
+            least_squares: LsqMethod::LevenbergMarquardt,
             sampler: Sampler::Ensemble,
             walkers: 32,
             steps: 2000,
@@ -376,7 +379,7 @@ pub fn calibrate<S: Simulator>(sim: &S, obs: &Observations, opts: &PipelineOptio
         progress(&format!("round {round}: emulator of {} runs, least squares, MCMC", train_t.len()));
         let em = Emulator::fit(&space, sim.outputs(), train_t.clone(), train_y.clone())?;
         let gathered = Gathered::new(&em, agg.output.clone());
-        let lsq = super::lsq::fit(&gathered, &agg.mean, &Noise::Known { sigma: agg.sd.clone() }, &LsqOptions { starts: opts.starts, fd_step: 1e-5, ..LsqOptions::default() })?;
+        let lsq = super::lsq::fit(&gathered, &agg.mean, &Noise::Known { sigma: agg.sd.clone() }, &LsqOptions { method: opts.least_squares, starts: opts.starts, fd_step: 1e-5, ..LsqOptions::default() })?;
         // Refinement rounds probe the posterior with a quarter-length chain; the final
         // posterior is sampled at full length on the final emulator.
         let chains = sample(&em, &agg, &lsq.theta, opts, (opts.steps / 4).max(40), seed.wrapping_add(round as u64), checkpoint_dir)?;

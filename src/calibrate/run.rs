@@ -444,6 +444,9 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
         if ratio > 0.9 {
             notes[k] = format!("not identified: posterior sd is {:.0} % of the prior's", 100.0 * ratio);
             ident.push(format!("{}: posterior sd {:.0} % of the prior's — the data do not determine it", names[k], 100.0 * ratio));
+        } else if ratio > 0.5 {
+            notes[k] = format!("weakly identified: posterior sd is {:.0} % of the prior's", 100.0 * ratio);
+            ident.push(format!("{}: posterior sd {:.0} % of the prior's — the data narrow it only weakly", names[k], 100.0 * ratio));
         }
         for m in k + 1..p {
             if corr[k][m].abs() > 0.95 {

@@ -101,6 +101,7 @@ fn fit(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let xmax = x.iter().cloned().fold(0.0, f64::max) * 1e6;
     let ymax = f.iter().cloned().fold(0.0, f64::max);
     let panel = Panel {
+        x_categories: vec![],
         x_desc: "Total crush displacement δ·D₀/D (µm)".into(),
         y_desc: "Platen force F·(D₀/D)² (N)".into(),
         x_range: (0.0, xmax * 1.02),
@@ -112,55 +113,71 @@ fn fit(dir: &Path, width_cm: f64) -> Result<Drawn> {
     figure("calibration_fit", width_cm, 0.8, &[(panel, 1.0)])
 }
 
-/// Any model: each observation against its 90 % predictive interval, per output in order.
+/// Any model: each observation against its 90 % predictive interval. Velocity-profile outputs
+/// `vz_at_<h>mm` are drawn against height (a box per sampled height: the profile between the
+/// heights is not known), the other outputs below as ratios to their predictive median.
 fn observations_fit(obs: &Table, width_cm: f64) -> Result<Drawn> {
     let (val, q05, q50, q95) = (obs.f("value")?, obs.f("predictive_q05")?, obs.f("predictive_q50")?, obs.f("predictive_q95")?);
     let names = obs.s("output")?;
-    // Velocity-profile outputs `vz_at_<h>mm` are drawn against height; the rest as a ratio.
     let mut prof = Vec::new();
+    let mut rest = Vec::new();
     for (i, n) in names.iter().enumerate() {
-        if let Some(h) = n.strip_prefix("vz_at_").and_then(|r| r.strip_suffix("mm")).and_then(|h| h.parse::<f64>().ok()) {
-            prof.push((h, i));
+        match n.strip_prefix("vz_at_").and_then(|r| r.strip_suffix("mm")).and_then(|h| h.parse::<f64>().ok()) {
+            Some(h) => prof.push((h, i)),
+            None => rest.push(i),
         }
     }
-    if prof.len() >= 2 {
-        prof.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let lower: Vec<(f64, f64)> = prof.iter().map(|&(h, i)| (h, q05[i])).collect();
-        let upper: Vec<f64> = prof.iter().map(|&(_, i)| q95[i]).collect();
-        let series = vec![
-            Series { label: Some("90 % posterior predictive".into()), points: lower, colour: colour(0), kind: Kind::Band(upper, 0.25) },
-            Series::line(Some("predictive median".into()), prof.iter().map(|&(h, i)| (h, q50[i])).collect(), colour(0), 1.0),
-            Series { label: Some("measured".into()), points: prof.iter().map(|&(h, i)| (h, val[i])).collect(), colour: colour(1), kind: Kind::Markers(Marker::Circle, 1.8) },
-        ];
-        let ys: Vec<f64> = prof.iter().flat_map(|&(_, i)| [q05[i], q95[i], val[i]]).collect();
-        let panel = Panel {
-            x_desc: "Height above the outlet (mm)".into(),
-            y_desc: "Mean vertical velocity (m/s)".into(),
-            x_range: padded(prof.iter().map(|p| p.0), 0.03, 0.03),
-            y_range: padded(ys, 0.1, 0.45),
-            y_log: false,
-            series,
-            legend: Some(SeriesLabelPosition::UpperRight),
-        };
-        return figure("calibration_fit", width_cm, 0.75, &[(panel, 1.0)]);
+    if prof.len() < 2 {
+        return figure("calibration_fit", width_cm, 0.75, &[(ratio_panel(&names, &rest.iter().chain(prof.iter().map(|p| &p.1)).copied().collect::<Vec<_>>(), &val, &q05, &q50, &q95, Some(SeriesLabelPosition::UpperRight)), 1.0)]);
     }
-    let n = val.len();
-    let lower: Vec<(f64, f64)> = (0..n).map(|i| ((i + 1) as f64, q05[i] / q50[i])).collect();
-    let upper: Vec<f64> = (0..n).map(|i| q95[i] / q50[i]).collect();
-    let series = vec![
-        Series { label: Some("90 % posterior predictive".into()), points: lower, colour: colour(0), kind: Kind::Band(upper, 0.25) },
-        Series { label: Some("measured".into()), points: (0..n).map(|i| ((i + 1) as f64, val[i] / q50[i])).collect(), colour: colour(1), kind: Kind::Markers(Marker::Circle, 1.8) },
-    ];
-    let panel = Panel {
-        x_desc: "Observation".into(),
-        y_desc: "Value / predictive median (-)".into(),
-        x_range: (0.5, n as f64 + 0.5),
-        y_range: padded((0..n).flat_map(|i| [q05[i] / q50[i], q95[i] / q50[i], val[i] / q50[i]]), 0.1, 0.4),
+    prof.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let span = prof.last().map(|p| p.0).unwrap_or(1.0) - prof[0].0;
+    let half = (0.015 * span).max(0.5);
+    let mut series = Vec::new();
+    for (k, &(h, i)) in prof.iter().enumerate() {
+        let label = |s: &str| if k == 0 { Some(s.to_string()) } else { None };
+        series.push(Series { label: label("90 % posterior predictive"), points: vec![(h - half, q05[i]), (h + half, q05[i])], colour: colour(0), kind: Kind::Band(vec![q95[i]; 2], 0.3) });
+        series.push(Series::line(label("predictive median"), vec![(h - half, q50[i]), (h + half, q50[i])], colour(0), 1.0));
+    }
+    series.push(Series { label: Some("measured".into()), points: prof.iter().map(|&(h, i)| (h, val[i])).collect(), colour: colour(1), kind: Kind::Markers(Marker::Circle, 1.8) });
+    let ys: Vec<f64> = prof.iter().flat_map(|&(_, i)| [q05[i], q95[i], val[i]]).collect();
+    let profile = Panel {
+        x_categories: vec![],
+        x_desc: "Height above the outlet (mm)".into(),
+        y_desc: "Mean vertical velocity (m/s)".into(),
+        x_range: padded(prof.iter().map(|p| p.0), 0.05, 0.05),
+        y_range: padded(ys, 0.1, 0.45),
         y_log: false,
         series,
         legend: Some(SeriesLabelPosition::UpperRight),
     };
-    figure("calibration_fit", width_cm, 0.75, &[(panel, 1.0)])
+    if rest.is_empty() {
+        return figure("calibration_fit", width_cm, 0.75, &[(profile, 1.0)]);
+    }
+    figure("calibration_fit", width_cm, 1.2, &[(profile, 0.62), (ratio_panel(&names, &rest, &val, &q05, &q50, &q95, None), 0.38)])
+}
+
+/// Observations `idx` as ratios to their predictive median, with the 90 % interval as a box;
+/// x = the output's position in `idx` (named in the x label when there are few).
+fn ratio_panel(names: &[String], idx: &[usize], val: &[f64], q05: &[f64], q50: &[f64], q95: &[f64], legend: Option<SeriesLabelPosition>) -> Panel {
+    let mut series = Vec::new();
+    for (k, &i) in idx.iter().enumerate() {
+        let x = (k + 1) as f64;
+        let label = if k == 0 { Some("90 % posterior predictive".to_string()) } else { None };
+        series.push(Series { label, points: vec![(x - 0.2, q05[i] / q50[i]), (x + 0.2, q05[i] / q50[i])], colour: colour(0), kind: Kind::Band(vec![q95[i] / q50[i]; 2], 0.3) });
+    }
+    series.push(Series { label: Some("measured".into()), points: idx.iter().enumerate().map(|(k, &i)| ((k + 1) as f64, val[i] / q50[i])).collect(), colour: colour(1), kind: Kind::Markers(Marker::Circle, 1.8) });
+    Panel {
+        // Names fit under the axis for a few outputs; more are numbered in table order.
+        x_categories: idx.iter().enumerate().map(|(k, &i)| if idx.len() <= 3 { names[i].replace('_', " ") } else { (k + 1).to_string() }).collect(),
+        x_desc: if idx.len() <= 3 { "Output".into() } else { "Observation (order of observations.csv)".into() },
+        y_desc: "Value / pred. median (-)".into(),
+        x_range: (0.5, idx.len() as f64 + 0.5),
+        y_range: padded(idx.iter().flat_map(|&i| [q05[i] / q50[i], q95[i] / q50[i], val[i] / q50[i]]), 0.15, 0.15),
+        y_log: false,
+        series,
+        legend,
+    }
 }
 
 fn residuals(dir: &Path, width_cm: f64) -> Result<Drawn> {
@@ -177,6 +194,7 @@ fn residuals(dir: &Path, width_cm: f64) -> Result<Drawn> {
     ];
     let lim = z.iter().map(|p| p.1.abs()).chain(upper.iter().map(|u| u.abs())).fold(2.0, f64::max) * 1.5;
     let panel = Panel {
+        x_categories: vec![],
         x_desc: "Observation (in data-file order, grouped by output)".into(),
         y_desc: "(d − predictive median)/σ (-)".into(),
         x_range: (0.5, n as f64 + 0.5),
@@ -235,11 +253,11 @@ fn corner(dir: &Path, width_cm: f64) -> Result<Drawn> {
                     pts.push((x0, v / mx));
                     pts.push((x1, v / mx));
                 }
-                panels.push(Some(Panel { x_desc, y_desc: if c == 0 { "density (rel.)".into() } else { String::new() }, x_range: ranges[c], y_range: (0.0, 1.1), y_log: false, series: vec![Series::line(None, pts, colour(0), 0.8)], legend: None }));
+                panels.push(Some(Panel { x_categories: vec![], x_desc, y_desc: if c == 0 { "density (rel.)".into() } else { String::new() }, x_range: ranges[c], y_range: (0.0, 1.1), y_log: false, series: vec![Series::line(None, pts, colour(0), 0.8)], legend: None }));
             } else {
                 let pts: Vec<(f64, f64)> = (0..n).step_by(stride).map(|i| (cols[c][i], cols[r][i])).collect();
                 let y_desc = if c == 0 { axis_label(&names[r], &units[r]) } else { String::new() };
-                panels.push(Some(Panel { x_desc, y_desc, x_range: ranges[c], y_range: ranges[r], y_log: false, series: vec![Series { label: None, points: pts, colour: colour(0), kind: Kind::Markers(Marker::Circle, 0.35) }], legend: None }));
+                panels.push(Some(Panel { x_categories: vec![], x_desc, y_desc, x_range: ranges[c], y_range: ranges[r], y_log: false, series: vec![Series { label: None, points: pts, colour: colour(0), kind: Kind::Markers(Marker::Circle, 0.35) }], legend: None }));
             }
         }
     }
@@ -256,6 +274,7 @@ fn trace(dir: &Path, width_cm: f64) -> Result<Drawn> {
                 .map(|w| Series::line(None, (0..step.len()).filter(|&i| walker[i] as usize == w).map(|i| (step[i], cols[k][i])).collect(), colour(w), 0.4))
                 .collect();
             let panel = Panel {
+                x_categories: vec![],
                 x_desc: if k + 1 == p { "Step after burn-in".into() } else { String::new() },
                 y_desc: axis_label(&names[k], &units[k]),
                 x_range: padded(step.iter().cloned(), 0.0, 0.0),

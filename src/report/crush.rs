@@ -63,6 +63,7 @@ fn force_displacement(dir: &Path, width_cm: f64) -> Result<Drawn> {
         }
     }
     let panel = Panel {
+        x_categories: vec![],
         x_desc: "Total crush displacement δ (µm)".into(),
         y_desc: y_desc.into(),
         x_range: padded(d.iter().map(|x| 1e6 * x), 0.0, 0.02),
@@ -165,6 +166,7 @@ fn depth_profile(dir: &Path, width_cm: f64) -> Result<Drawn> {
     }
     let r_max = depth.iter().cloned().fold(0.0, f64::max);
     let panel = Panel {
+        x_categories: vec![],
         x_desc: "Depth below the platen (µm)".into(),
         y_desc: "ε₁ (solid), ε₃ (dashed) under the contact (‰)".into(),
         x_range: (0.0, 1e6 * (0.5 * r_max)),

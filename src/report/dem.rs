@@ -68,6 +68,7 @@ fn velocity_profile(dir: &Path, width_cm: f64) -> Result<Drawn> {
     }
     series.push(Series::line(Some("mean −v_z".into()), pts, colour(0), 1.2));
     let panel = Panel {
+        x_categories: vec![],
         x_desc: "mean downward velocity −v_z (m/s)".into(),
         y_desc: "height z (mm)".into(),
         x_range: (x0, x1),
@@ -178,6 +179,7 @@ fn impact_spectra(dir: &Path, width_cm: f64) -> Result<Drawn> {
         }
         panels.push((
             Panel {
+                x_categories: vec![],
                 x_desc: "normal impact velocity at first contact (m/s)".into(),
                 y_desc: format!("CDF, {desc}"),
                 x_range: (0.0, vmax),
@@ -206,6 +208,7 @@ fn force_time(dir: &Path, width_cm: f64) -> Result<Option<Drawn>> {
     let tc: Vec<(f64, f64)> = t.iter().zip(&c).map(|(&t, &c)| (1e6 * t, 1e6 * c)).collect();
     let xr = padded(tf.iter().map(|q| q.0), 0.0, 0.02);
     let p1 = Panel {
+        x_categories: vec![],
         x_desc: "time since first contact (µs)".into(),
         y_desc: "normal force (N)".into(),
         x_range: xr,
@@ -215,6 +218,7 @@ fn force_time(dir: &Path, width_cm: f64) -> Result<Option<Drawn>> {
         legend: Some(SeriesLabelPosition::UpperRight),
     };
     let p2 = Panel {
+        x_categories: vec![],
         x_desc: "time since first contact (µs)".into(),
         y_desc: "∫F dt (µN·s)".into(),
         x_range: xr,

@@ -181,6 +181,7 @@ fn fig05_force_time(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
     }
     let xr = padded(time.iter().map(|x| x * 1e6), 0.0, 0.02);
     let p1 = Panel {
+        x_categories: vec![],
         x_desc: "Time since first contact t (µs)".into(),
         y_desc: "Contact force F (N)".into(),
         x_range: xr,
@@ -190,6 +191,7 @@ fn fig05_force_time(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
         legend: Some(SeriesLabelPosition::UpperRight),
     };
     let p2 = Panel {
+        x_categories: vec![],
         x_desc: "Time since first contact t (µs)".into(),
         y_desc: "Impulse ∫F dt (µN·s)".into(),
         x_range: xr,
@@ -237,6 +239,7 @@ fn fig13_stress_profile(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
     });
     let yr = padded(sr.iter().map(|s| s / 1e9), 0.05, 0.15);
     let p = Panel {
+        x_categories: vec![],
         x_desc: "Distance from contact centre r (µm)".into(),
         y_desc: "Radial surface stress σᵣ (GPa)".into(),
         x_range: (0.0, r.iter().cloned().fold(0.0, f64::max) * 1e6),
@@ -279,6 +282,7 @@ fn fig14_sigma_vs_diameter(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn
         }
     }
     let p = Panel {
+        x_categories: vec![],
         x_desc: "Particle diameter d (mm)".into(),
         y_desc: "σ̄ at break (MPa)".into(),
         x_range: padded(d.iter().map(|x| x * 1e3), 0.05, 0.05),
@@ -336,6 +340,7 @@ fn fig14_weibull_cdf(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
         });
     }
     let p = Panel {
+        x_categories: vec![],
         x_desc: "σ̄ at break (MPa)".into(),
         y_desc: "Breaking probability, data at (i − 0.5)/N".into(),
         x_range: xr,
@@ -358,6 +363,7 @@ fn fig15_impact(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
     }
     let xr = (0.0, v.iter().cloned().fold(0.0, f64::max));
     let p1 = Panel {
+        x_categories: vec![],
         x_desc: "Impact velocity V (m/s)".into(),
         y_desc: "Max. contact force Fₘₐₓ (N)".into(),
         x_range: xr,
@@ -367,6 +373,7 @@ fn fig15_impact(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
         legend: Some(SeriesLabelPosition::UpperLeft),
     };
     let p2 = Panel {
+        x_categories: vec![],
         x_desc: "Impact velocity V (m/s)".into(),
         y_desc: "σ̄ at Fₘₐₓ (MPa)".into(),
         x_range: xr,
@@ -433,6 +440,7 @@ fn fig16_breakage(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
         series.push(Series { label: Some(label), points: vec![], colour: BLACK, kind: styles[ci % 4].clone() });
     }
     let p = Panel {
+        x_categories: vec![],
         x_desc: "Impact velocity V (m/s)".into(),
         y_desc: "Breaking probability after N impacts".into(),
         x_range: (0.0, vmax),

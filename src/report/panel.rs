@@ -56,6 +56,9 @@ impl Series {
 /// One panel of a figure.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Panel {
+    /// Names of categories at x = 1, 2, …: the x-axis then labels only those positions with
+    /// their names (empty: a numeric axis).
+    pub x_categories: Vec<String>,
     /// x-axis label with unit.
     pub x_desc: String,
     /// y-axis label with unit.
@@ -168,7 +171,14 @@ fn draw_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, p: &Panel, name: &str) 
         .y_label_area_size(pt(31.0))
         .build_cartesian_2d(p.x_range.0..p.x_range.1, p.y_range.0..p.y_range.1)
         .map_err(&err)?;
-    let xf = tick_format(p.x_range.0, p.x_range.1);
+    let xf_num = tick_format(p.x_range.0, p.x_range.1);
+    let xf = |v: &f64| {
+        if p.x_categories.is_empty() {
+            return xf_num(v);
+        }
+        let k = v.round();
+        if (v - k).abs() < 1e-9 && k >= 1.0 { p.x_categories.get(k as usize - 1).cloned().unwrap_or_default() } else { String::new() }
+    };
     let yf_lin = tick_format(p.y_range.0, p.y_range.1);
     let yf = |v: &f64| if p.y_log { power_of_ten(&10f64.powf(*v)) } else { yf_lin(v) };
     let span = (p.y_range.1 - p.y_range.0).round() as usize;
@@ -179,7 +189,7 @@ fn draw_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, p: &Panel, name: &str) 
         .y_desc(p.y_desc.as_str())
         .label_style(text(7.0))
         .axis_desc_style(text(8.0))
-        .x_labels(6)
+        .x_labels(if p.x_categories.is_empty() { 6 } else { p.x_categories.len() + 2 })
         .y_labels(y_labels)
         .x_label_formatter(&xf)
         .y_label_formatter(&yf)

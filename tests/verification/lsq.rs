@@ -4,7 +4,7 @@
 //! without aborting the fit.
 
 use partlife::calibrate::Noise;
-use partlife::calibrate::lsq::{LsqOptions, fit};
+use partlife::calibrate::lsq::{LsqMethod, LsqOptions, fit};
 use partlife::model::{OutputSpec, Simulator};
 use partlife::params::{Param, ParamSpace};
 use rand::SeedableRng;
@@ -58,6 +58,28 @@ fn recovers_exact_parameters_without_noise() {
     }
     assert!(r.cost < 1e-12 && r.unidentified.is_empty(), "{r:?}");
     assert!(r.starts.iter().all(|s| s.iterations < LsqOptions::default().max_iterations), "a start ran out of iterations: {:?}", r.starts);
+}
+
+/// argmin's Nelder–Mead and L-BFGS reach the same optimum as Levenberg–Marquardt (to their
+/// own tolerances: NM stops on the simplex spread, L-BFGS on the forward-difference gradient),
+/// and a failing region is skipped, not fatal.
+#[test]
+fn nelder_mead_and_lbfgs_reach_the_same_optimum() {
+    let m = Decay::new(f64::INFINITY);
+    let data = m.simulate(&TRUTH).unwrap();
+    let noise = Noise::Known { sigma: vec![0.01; 21] };
+    for (method, tol) in [(LsqMethod::NelderMead, 1e-4), (LsqMethod::Lbfgs, 1e-4)] {
+        let r = fit(&m, &data, &noise, &LsqOptions { method, starts: 3, max_iterations: 400, ftol: 1e-16, fd_step: 1e-7, ..LsqOptions::default() }).unwrap();
+        for (k, (&est, &tru)) in r.theta.iter().zip(&TRUTH).enumerate() {
+            assert!((est - tru).abs() < tol * tru.abs().max(1.0), "{method:?} θ{k}: {est} vs {tru}");
+        }
+        // The covariance comes from the Jacobian at the end point, as for LM.
+        assert!(r.std_error.iter().all(|s| s.is_finite() && *s > 0.0), "{method:?}: {:?}", r.std_error);
+        let failing = Decay::new(5.0);
+        let rf = fit(&failing, &data, &noise, &LsqOptions { method, starts: 8, max_iterations: 400, ftol: 1e-16, fd_step: 1e-7, ..LsqOptions::default() }).unwrap();
+        assert!((rf.theta[0] - TRUTH[0]).abs() < 1e-3, "{method:?} with failures: {:?}", rf.theta);
+        assert!(!rf.failures.is_empty(), "{method:?}: the Sobol' starts above a = 5 fail");
+    }
 }
 
 #[test]

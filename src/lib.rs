@@ -74,6 +74,7 @@ pub mod stats;
 pub mod study;
 pub mod synth;
 pub mod testfns;
+pub mod uq;
 pub mod weibull;
 
 pub use error::{Error, Result};

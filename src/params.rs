@@ -81,7 +81,8 @@ impl Param {
         0.5 * (self.quantile(0.841_344_746) - self.quantile(0.158_655_254))
     }
 
-    fn check(&self) -> Result<()> {
+    /// Checks bounds, nominal and prior (finite, lower < upper, positive spreads).
+    pub fn check(&self) -> Result<()> {
         let bad = |rule: String| Err(Error::Param { name: self.name.clone(), rule });
         if self.name.is_empty() {
             return bad("name is empty".into());

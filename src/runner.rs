@@ -58,6 +58,7 @@ pub fn run(study: &LoadedStudy, opts: &RunOptions) -> Result<RunSummary> {
         Study::Dem(s) => crate::dem::run::run_dem(study, s, opts),
         Study::Crush(s) => crate::fem::run::run_crush(study, s, opts),
         Study::Calibrate(s) => crate::calibrate::run::run_calibrate(study, s, opts),
+        Study::Uq(s) => crate::uq::run::run_uq(study, s, opts),
     }
 }
 

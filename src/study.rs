@@ -165,7 +165,7 @@ pub struct MaterialSpec {
 }
 
 /// The kinds of study this version can run.
-pub const KINDS: [&str; 4] = ["lifetime", "dem", "crush", "calibrate"];
+pub const KINDS: [&str; 5] = ["lifetime", "dem", "crush", "calibrate", "uq"];
 
 /// A lifetime study (kind = "lifetime"): the deliverable's §6 chain for several materials.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -203,6 +203,8 @@ pub enum Study {
     Crush(Box<crate::fem::run::CrushStudy>),
     /// kind = "calibrate": fit a simulator's parameters to data.
     Calibrate(Box<crate::calibrate::run::CalibrateStudy>),
+    /// kind = "uq": Monte Carlo propagation and Sobol' indices of the lifetime chain.
+    Uq(Box<crate::uq::run::UqStudy>),
 }
 
 /// A study file loaded from disk.
@@ -281,6 +283,11 @@ pub fn load(path: &Path) -> Result<LoadedStudy> {
             s.prepare(path, &|p: &str| resolve_relative(path, Path::new(p)))?;
             Study::Calibrate(Box::new(s))
         }
+        "uq" => {
+            let s: crate::uq::run::UqStudy = parse_toml(path, &text)?;
+            s.prepare(path)?;
+            Study::Uq(Box::new(s))
+        }
         other => {
             return Err(Error::config(&file, "kind", format!("unknown kind \"{other}\"; known: {}", KINDS.join(", "))));
         }
@@ -290,6 +297,11 @@ pub fn load(path: &Path) -> Result<LoadedStudy> {
 
 fn check(file: &str, key: &str, ok: bool, rule: String) -> Result<()> {
     if ok { Ok(()) } else { Err(Error::config(file, key, rule)) }
+}
+
+/// Checks elastic constants, naming the study file and key.
+pub fn elastic_checked(file: &str, key: &str, e: &Elastic) -> Result<()> {
+    elastic(file, key, e)
 }
 
 fn elastic(file: &str, key: &str, e: &Elastic) -> Result<()> {

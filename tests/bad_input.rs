@@ -246,3 +246,54 @@ fn bad_generator_settings() {
     assert!(out.stderr.contains("material[0].count"), "{}", out.stderr);
     assert_eq!(before, s.read("datasets/crush_bl1630.csv"), "a dataset was rewritten by a failed synth");
 }
+
+/// The UQ study: impossible distributions, bad spectra and horizons fail at load with exit
+/// code 2, naming the file, the key or row, and the rule; nothing is written.
+#[test]
+fn uq_study_bad_input() {
+    let s = Scratch::new();
+    let study = "studies/gen4_vs_bl.toml";
+    let text = std::fs::read_to_string(common::root().join(study)).unwrap();
+    let reset = |s: &Scratch| s.write(study, &text);
+    reset(&s);
+    s.expect_bad_study(study, "median = 0.1, sd_log = 0.5", "median = 0.1, sd_log = -0.5", &["impact.energy_fraction", "sd_log"]);
+    reset(&s);
+    s.expect_bad_study(study, "mean = 0.72, sd = 0.05, min = 0.5, max = 1.0", "mean = 0.72, sd = 0.05, min = 0.5, max = 1.5", &["material[0].roundness", "[0.001, 1]"]);
+    reset(&s);
+    s.expect_bad_study(study, "years = [1, 10]", "years = [0, 10]", &["impact.years", "> 0"]);
+    reset(&s);
+    s.expect_bad_study(study, "candidate = \"gen4\"", "candidate = \"gen5\"", &["compare.candidate", "gen5"]);
+    // A velocity spectrum with a negative speed, a non-finite one, and an empty row.
+    let spectrum = "velocity = { distribution = \"spectrum\", file = \"../datasets/spectrum.csv\", target = \"tube\", row = 0 }";
+    let head = "target,row,impacts,mean_v_normal_m_s,q5_v_normal_m_s,q50_v_normal_m_s,q95_v_normal_m_s\n";
+    for (row, expect) in [
+        ("tube,0,100,0.2,0.1,-0.2,0.5\n", vec!["spectrum.csv", "q50_v_normal_m_s", "≥ 0"]),
+        ("tube,0,100,0.2,0.1,NaN,0.5\n", vec!["spectrum.csv", "q50_v_normal_m_s", "finite"]),
+        ("tube,0,0,0,0,0,0\n", vec!["spectrum.csv", "impacts", "empty"]),
+        ("particle,0,100,0.2,0.1,0.2,0.5\n", vec!["spectrum.csv", "no row with target `tube`"]),
+    ] {
+        // A data error names the data file, its row and column (not the study).
+        s.write(study, &text.replace("velocity = { distribution = \"log_normal\", median = 5.0, sd_log = 0.2, min = 1.0, max = 15.0 }", spectrum));
+        s.write("datasets/spectrum.csv", &format!("{head}{row}"));
+        let out = s.run(&["run", study, "--quiet"]);
+        assert_eq!(out.code, 2, "{}", out.stderr);
+        for e in expect {
+            assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
+        }
+        assert!(s.report_files().is_empty());
+    }
+    // A good spectrum runs.
+    reset(&s);
+    s.write("datasets/spectrum.csv", &format!("{head}tube,0,100,0.2,0.1,0.2,0.5\n"));
+    let t = text
+        .replace("velocity = { distribution = \"log_normal\", median = 5.0, sd_log = 0.2, min = 1.0, max = 15.0 }", &spectrum.replace("row = 0 }", "row = 0, scale = 10.0 }"))
+        .replace("samples = 262144", "samples = 8192")
+        .replace("n = 8192", "n = 256");
+    s.write(study, &t);
+    let out = s.run(&["run", study, "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let inputs = s.read("reports/gen4_vs_bl/inputs.csv");
+    let v = inputs.lines().find(|l| l.starts_with("velocity,")).unwrap();
+    let median: f64 = v.split(',').nth(3).unwrap().parse().unwrap();
+    assert!((median - 2.0).abs() < 1e-9, "median of 10 × the spectrum = 2 m/s: {v}");
+}

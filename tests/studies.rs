@@ -193,3 +193,49 @@ fn closed_stdout_pipe_is_not_a_panic() {
     assert_eq!(out.status.code(), Some(0), "{stderr}");
     assert!(s.path("reports/lifetime/manifest.json").is_file());
 }
+
+/// The main study (README's first command) writes every table and figure with the headline and
+/// its Monte Carlo error, and is deterministic and independent of the thread count.
+#[test]
+fn main_uq_study_writes_the_headline_deterministically() {
+    let run = |threads: &str| {
+        let s = Scratch::new();
+        s.write("studies/gen4_vs_bl.toml", &std::fs::read_to_string(root().join("studies/gen4_vs_bl.toml")).unwrap());
+        let out = s.run(&["run", "studies/gen4_vs_bl.toml", "--quiet", "--threads", threads]);
+        assert_eq!(out.code, 0, "{}", out.stderr);
+        assert!(out.stdout.contains("P(Gen 4 breaks more than BL 16/30 in 10 yr) = ") && out.stdout.contains("(Monte Carlo se)"), "{}", out.stdout);
+        s
+    };
+    let (a, b) = (run("2"), run("1"));
+    let dir = "reports/gen4_vs_bl";
+    for t in ["materials", "comparison", "breakage", "convergence", "distributions", "breakage_vs_velocity", "sobol", "inputs"] {
+        assert_eq!(a.read(&format!("{dir}/{t}.csv")), b.read(&format!("{dir}/{t}.csv")), "{t}.csv differs between 2 threads and 1");
+    }
+    for f in ["uq_breakage_vs_velocity", "uq_distributions", "uq_convergence", "uq_sobol", "uq_sobol_convergence", "uq_model_form"] {
+        for ext in ["svg", "png", "pdf"] {
+            assert!(a.path(&format!("{dir}/{f}.{ext}")).is_file(), "{f}.{ext}");
+        }
+    }
+    let manifest: serde_json::Value = serde_json::from_str(&a.read(&format!("{dir}/manifest.json"))).unwrap();
+    assert_eq!(manifest["failures"].as_array().map(|v| v.len()), Some(0), "{}", manifest["failures"]);
+    // The headline's Monte Carlo error is small, and the Sobol' first-order indices of each output
+    // sum to at most 1 (+ their error); the dummy γ has no effect on the independent-trials model.
+    let cmp = read_table(&a.path(&format!("{dir}/comparison.csv"))).unwrap();
+    let se = col_f64(&cmp, &a.path("c"), "mc_se").unwrap();
+    assert!(se[0] < 0.005 && se[1] < 0.005, "{se:?}");
+    let sob = read_table(&a.path(&format!("{dir}/sobol.csv"))).unwrap();
+    let (n, out, input, s1, st) = (col_f64(&sob, &a.path("s"), "n").unwrap(), col_str(&sob, &a.path("s"), "output").unwrap(), col_str(&sob, &a.path("s"), "input").unwrap(), col_f64(&sob, &a.path("s"), "s1").unwrap(), col_f64(&sob, &a.path("s"), "st").unwrap());
+    let nmax = n.iter().cloned().fold(0.0, f64::max);
+    for o in ["log10_p_gen4", "log10_p_bl1630", "p_gen4_minus_p_bl1630"] {
+        let rows: Vec<usize> = (0..n.len()).filter(|&i| n[i] == nmax && out[i] == o).collect();
+        let sum: f64 = rows.iter().map(|&i| s1[i]).sum();
+        assert!(sum <= 1.05 && sum > 0.3, "{o}: ΣS = {sum}");
+        let g = rows.iter().find(|&&i| input[i] == "tk_gamma").unwrap();
+        assert!(st[*g].abs() < 1e-12, "{o}: γ does not enter independent trials, S_T = {}", st[*g]);
+    }
+    // A redraw from the tables alone gives the same figures.
+    let before = a.read(&format!("{dir}/uq_sobol.svg"));
+    std::fs::remove_file(a.path(&format!("{dir}/uq_sobol.svg"))).unwrap();
+    partlife::report::redraw(&a.path(dir)).unwrap();
+    assert_eq!(a.read(&format!("{dir}/uq_sobol.svg")), before);
+}

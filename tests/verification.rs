@@ -11,5 +11,7 @@ mod verification {
     mod lsq;
     mod mcmc;
     mod lifetime;
+    mod sobol;
+    mod uq;
     mod weibull;
 }

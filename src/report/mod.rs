@@ -19,6 +19,7 @@ pub mod crush;
 pub mod dem;
 pub mod map;
 pub mod panel;
+pub mod uq;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -159,6 +160,7 @@ pub fn redraw(report_dir: &Path) -> Result<Rendered> {
         Some("dem") => return dem::render(report_dir, width),
         Some("crush") => return crush::render(report_dir, width),
         Some("calibrate") => return calibrate::render(report_dir, width),
+        Some("uq") => return uq::render(report_dir, width),
         _ => {}
     }
     render(report_dir, width)

@@ -1,0 +1,264 @@
+//! Damage models: from the single-impact breakage law of the lifetime chain to the breaking
+//! probability after N impacts (`../shared/reference/mechanics.md` §4).
+//!
+//! All three start from the same calibrated single-impact law. With the Hertz impact,
+//! σ̄ ∝ V^(2/5), so the Weibull law of σ̄ at break is a Weibull law of the specific impact
+//! energy W = V²/2 with modulus m/5:
+//!
+//! ```text
+//! p(W) = 1 − exp(−H),   H = (σ̄(V)/σ_θ)^m = (W/W_θ)^(m/5)
+//! ```
+//!
+//! * **Independent trials** (the deliverable's): `P_N = 1 − (1 − p)^N = 1 − exp(−N H)`.
+//! * **Vogel & Peukert master curve** (§4.2): `p = 1 − exp(−f x (W − W_min)⁺)`, linear in the
+//!   energy above a threshold; `P_N = 1 − exp(−N f x (W − W_min)⁺)`. Its two constants are fitted
+//!   to the same single-impact law over the range a breakage test resolves: the curves agree at
+//!   10 % and 63.2 % breakage ([`VogelPeukert::matched`]). Below the threshold nothing breaks.
+//! * **Tavares–King damage accumulation** (§4.3): a particle is deterministic — a fixed flaw
+//!   population — whose fracture energy falls by (1 − D_n) at each impact that does not break
+//!   it, with `D_n = [2γ/(2γ − 5D_n + 5) · E_k/E_m,n−1]^(2γ/5)` (fixed point). With constant
+//!   impacts the ratio x = E_k/E_m evolves deterministically, so a particle breaks within N
+//!   impacts iff its initial ratio exceeds x*(N, γ) ([`critical_ratio`]); hence
+//!   `P_N = 1 − exp(−H · x*^(−m/5))`. With γ → ∞ (no damage) x* → 1 and P_N → p: unlike
+//!   independent trials, a particle that survived the first impact survives identical later
+//!   ones (mechanics.md §4.1, caveat 2).
+//!
+//! Verified against hand-computed cases in the unit tests below.
+
+use serde::{Deserialize, Serialize};
+
+use crate::lifetime::breakage_from_hazard;
+
+/// Which damage model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DamageModel {
+    /// 1 − (1 − p)^N.
+    Independent,
+    /// Vogel & Peukert master curve fitted to the single-impact law.
+    VogelPeukert,
+    /// Tavares–King damage accumulation.
+    TavaresKing,
+}
+
+impl DamageModel {
+    /// Every model, in report order.
+    pub const ALL: [DamageModel; 3] = [DamageModel::Independent, DamageModel::VogelPeukert, DamageModel::TavaresKing];
+
+    /// Name in tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            DamageModel::Independent => "independent",
+            DamageModel::VogelPeukert => "vogel_peukert",
+            DamageModel::TavaresKing => "tavares_king",
+        }
+    }
+
+    /// Name in figures.
+    pub fn label(self) -> &'static str {
+        match self {
+            DamageModel::Independent => "independent trials",
+            DamageModel::VogelPeukert => "Vogel–Peukert",
+            DamageModel::TavaresKing => "Tavares–King",
+        }
+    }
+}
+
+/// Vogel–Peukert constants in units of the energy scale W_θ: `f x W_θ` and `W_min/W_θ`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VogelPeukert {
+    /// f_Mat · x · W_θ (-).
+    pub rate: f64,
+    /// W_min / W_θ (-), ≥ 0.
+    pub threshold: f64,
+}
+
+impl VogelPeukert {
+    /// The master curve through the Weibull-in-energy law of modulus `k = m/5` at 10 % and
+    /// 63.2 % breakage (the threshold is kept ≥ 0).
+    pub fn matched(k: f64) -> VogelPeukert {
+        let (l1, l2) = (-(0.9f64).ln(), 1.0);
+        let (w1, w2) = (l1.powf(1.0 / k), 1.0);
+        let rate = (l2 - l1) / (w2 - w1);
+        let threshold = (w1 - l1 / rate).max(0.0);
+        // With the threshold clamped, pass through the 63.2 % point.
+        let rate = if threshold == 0.0 { l2 / w2 } else { rate };
+        VogelPeukert { rate, threshold }
+    }
+
+    /// Cumulative hazard of one impact at reduced energy w = W/W_θ.
+    pub fn hazard(&self, w: f64) -> f64 {
+        self.rate * (w - self.threshold).max(0.0)
+    }
+}
+
+/// Damage D of one impact at ratio x = E_k/E_m < 1 (fixed point of the Tavares–King relation);
+/// None when there is no fixed point below 1 (the particle breaks).
+pub fn tk_damage(x: f64, gamma: f64) -> Option<f64> {
+    let e = 2.0 * gamma / 5.0;
+    let mut d = 0.0f64;
+    for _ in 0..200 {
+        let denom = 2.0 * gamma - 5.0 * d + 5.0;
+        if denom <= 0.0 {
+            return None;
+        }
+        let next = (2.0 * gamma / denom * x).powf(e);
+        if !(next < 1.0) {
+            return None;
+        }
+        if (next - d).abs() <= 1e-14 * next.max(1e-300) {
+            return Some(next);
+        }
+        d = next;
+    }
+    Some(d)
+}
+
+/// Whether a particle with initial ratio x0 = E_k/E_m,0 breaks within `n` impacts: impact k
+/// breaks it when x_(k−1) ≥ 1, or when its damage has no fixed point below 1.
+pub fn tk_breaks_within(x0: f64, gamma: f64, n: u64) -> bool {
+    let mut x = x0;
+    for _ in 0..n {
+        if x >= 1.0 {
+            return true;
+        }
+        let Some(d) = tk_damage(x, gamma) else { return true };
+        let next = x / (1.0 - d);
+        // No measurable growth left: the ratio is stuck below 1.
+        if next - x <= 1e-15 * x {
+            return false;
+        }
+        x = next;
+    }
+    // The n impacts are over; a ratio ≥ 1 now would break the particle at impact n + 1.
+    false
+}
+
+/// The smallest initial ratio x* = E_k/E_m,0 at which a particle breaks within `n` impacts
+/// (bisection in ln x to 1e-10 relative; x* = 1 for n = 1).
+pub fn critical_ratio(gamma: f64, n: u64) -> f64 {
+    if n <= 1 {
+        return 1.0;
+    }
+    let (mut lo, mut hi) = ((1e-12f64).ln(), 0.0f64);
+    if tk_breaks_within(lo.exp(), gamma, n) {
+        return lo.exp();
+    }
+    while hi - lo > 1e-10 {
+        let mid = 0.5 * (lo + hi);
+        if tk_breaks_within(mid.exp(), gamma, n) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi.exp()
+}
+
+/// x*(N, γ) tabulated over γ for one N (linear interpolation in γ): the Tavares–King fast path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CriticalRatioTable {
+    /// Impacts N.
+    pub n: u64,
+    gamma: Vec<f64>,
+    ln_x: Vec<f64>,
+}
+
+impl CriticalRatioTable {
+    /// The table on `points` γ values spanning [lo, hi].
+    pub fn new(n: u64, lo: f64, hi: f64, points: usize) -> CriticalRatioTable {
+        use rayon::prelude::*;
+        let points = points.max(2);
+        let gamma: Vec<f64> = (0..points).map(|i| lo + (hi - lo) * i as f64 / (points - 1) as f64).collect();
+        let ln_x = gamma.par_iter().map(|&g| critical_ratio(g, n).ln()).collect();
+        CriticalRatioTable { n, gamma, ln_x }
+    }
+
+    /// x*(N, γ) (γ clamped to the table).
+    pub fn ratio(&self, gamma: f64) -> f64 {
+        let g = &self.gamma;
+        let k = g.partition_point(|&v| v <= gamma).clamp(1, g.len() - 1);
+        let t = ((gamma - g[k - 1]) / (g[k] - g[k - 1])).clamp(0.0, 1.0);
+        (self.ln_x[k - 1] + t * (self.ln_x[k] - self.ln_x[k - 1])).exp()
+    }
+}
+
+/// P_N of a damage model from the single-impact hazard H = (W/W_θ)^(m/5) at modulus m;
+/// `vp` and `x_star` are the model's constants (ignored by the others).
+pub fn breakage(model: DamageModel, hazard: f64, m: f64, n: f64, vp: &VogelPeukert, x_star: f64) -> f64 {
+    match model {
+        DamageModel::Independent => breakage_from_hazard(hazard, n),
+        DamageModel::VogelPeukert => {
+            // w = W/W_θ = H^(5/m).
+            let w = hazard.powf(5.0 / m);
+            breakage_from_hazard(vp.hazard(w), n)
+        }
+        DamageModel::TavaresKing => -(-hazard * x_star.powf(-m / 5.0)).exp_m1(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vogel_peukert_matches_the_weibull_law_at_10_and_63_percent() {
+        for k in [1.0, 1.5, 2.0, 3.0] {
+            let vp = VogelPeukert::matched(k);
+            // Weibull-in-energy hazard (w)^k at the 10 % and 63.2 % points.
+            let w10 = (-(0.9f64).ln()).powf(1.0 / k);
+            if vp.threshold > 0.0 {
+                assert!((vp.hazard(w10) - (-(0.9f64).ln())).abs() < 1e-12, "k = {k}: {vp:?}");
+            }
+            assert!((vp.hazard(1.0) - 1.0).abs() < 1e-12, "k = {k}: {vp:?}");
+        }
+        // Hand-computed, k = 2 (m = 10): w10 = √0.1053605 = 0.3245929; rate = (1 − 0.1053605)
+        // /(1 − 0.3245929) = 1.3245928; threshold = 0.3245929 − 0.1053605/1.3245928 = 0.2450510.
+        let vp = VogelPeukert::matched(2.0);
+        assert!((vp.rate - 1.3245928).abs() < 1e-6 && (vp.threshold - 0.2450510).abs() < 1e-6, "{vp:?}");
+        // k = 1: the law is exponential in energy, the master curve is exact (no threshold).
+        let vp = VogelPeukert::matched(1.0);
+        assert!((vp.rate - 1.0).abs() < 1e-12 && vp.threshold.abs() < 1e-12);
+        // Below the threshold nothing breaks, however many impacts.
+        let vp = VogelPeukert::matched(2.0);
+        assert_eq!(breakage(DamageModel::VogelPeukert, 0.2f64.powi(2), 10.0, 1e6, &vp, 1.0), 0.0);
+    }
+
+    #[test]
+    fn tavares_king_damage_by_hand() {
+        // γ = 5, x = 0.5: D = [10/(15 − 5D) · 0.5]² → D = 0.1270 (root of D(15 − 5D)² = 25 with
+        // D < 1: 25D³ − 150D² + 225D − 25 = 0 → D = 0.1206148).
+        let d = tk_damage(0.5, 5.0).unwrap();
+        assert!((d * (15.0 - 5.0 * d).powi(2) - 25.0).abs() < 1e-9, "D = {d}");
+        assert!((d - 0.1206148).abs() < 1e-6, "D = {d}");
+        // Large γ: hardly any damage below x = 1.
+        assert!(tk_damage(0.5, 200.0).unwrap() < 1e-20);
+        // One impact: breaks iff x ≥ 1.
+        assert!(tk_breaks_within(1.0, 5.0, 1) && !tk_breaks_within(0.999, 5.0, 1));
+        // Two impacts at γ = 5: x0 = 0.9 → D = fixed point, x1 = 0.9/(1 − D) ≥ 1 iff D ≥ 0.1.
+        let d = tk_damage(0.9, 5.0).unwrap();
+        assert_eq!(tk_breaks_within(0.9, 5.0, 2), 0.9 / (1.0 - d) >= 1.0);
+        // x* falls with N and rises towards 1 with γ.
+        let (a, b) = (critical_ratio(5.0, 730), critical_ratio(5.0, 7300));
+        assert!(a < 1.0 && b < a, "x*(730) = {a}, x*(7300) = {b}");
+        assert!(critical_ratio(50.0, 730) > a);
+        assert!(tk_breaks_within(a * 1.000001, 5.0, 730) && !tk_breaks_within(a * 0.99999, 5.0, 730));
+        let table = CriticalRatioTable::new(730, 2.0, 8.0, 25);
+        assert!((table.ratio(5.0) / a - 1.0).abs() < 1e-6, "{} vs {a}", table.ratio(5.0));
+        assert!((table.ratio(5.1) / critical_ratio(5.1, 730) - 1.0).abs() < 0.02);
+    }
+
+    #[test]
+    fn independent_trials_are_the_geometric_law() {
+        // P(survive n) = (1 − p)^n.
+        let p: f64 = 1e-3;
+        let h = -(1.0 - p).ln();
+        let vp = VogelPeukert::matched(2.0);
+        for n in [1.0, 730.0, 7300.0] {
+            let got = breakage(DamageModel::Independent, h, 10.0, n, &vp, 1.0);
+            assert!((1.0 - got - (1.0 - p).powf(n)).abs() < 1e-12);
+        }
+        // Tavares–King without damage (x* = 1) is the single-impact probability.
+        assert!((breakage(DamageModel::TavaresKing, h, 10.0, 7300.0, &vp, 1.0) - p).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,287 @@
+//! Uncertain inputs of the UQ study: distributions declared in the study file, the DEM
+//! impact-velocity spectrum, and the joint sampling uncertainty of the Weibull parameters.
+//!
+//! Every marginal is sampled by its inverse CDF from a uniform u ∈ [0, 1], so plain Monte Carlo,
+//! Latin hypercube and Sobol' points, and the Saltelli designs of the sensitivity analysis all
+//! use the same code.
+//!
+//! Weibull parameters (m, σ_θ) of a material are one input: u picks one of K joint draws,
+//! either a **parametric bootstrap** of the MLE (the C1239 pivotal simulation: K samples of the
+//! same size from the fitted law, refitted; [`crate::weibull::Pivotal::draws`]) or the
+//! **posterior of a Bayesian fit** (prior ∝ 1/(m σ_θ), i.e. flat in ln m and ln σ_θ, evaluated on
+//! a 240 × 240 grid over ±7 asymptotic standard errors and sampled cell by cell with uniform
+//! jitter; [`bayesian_weibull_draws`]). Both describe the same sampling uncertainty and agree
+//! on large samples (`tests/verification/uq.rs`).
+
+use std::path::Path;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::io::{col_f64, col_str, read_table};
+use crate::params::{Param, Prior};
+use crate::weibull::{Weibull, WeibullFit};
+
+/// A distribution declared in a study file (`{ distribution = "…", … }`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "distribution", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Dist {
+    /// A known value.
+    Fixed {
+        /// The value.
+        value: f64,
+    },
+    /// Uniform on [min, max].
+    Uniform {
+        /// Lower end.
+        min: f64,
+        /// Upper end.
+        max: f64,
+    },
+    /// Normal truncated to [min, max].
+    Normal {
+        /// Mean.
+        mean: f64,
+        /// Standard deviation, > 0.
+        sd: f64,
+        /// Lower truncation.
+        min: f64,
+        /// Upper truncation.
+        max: f64,
+    },
+    /// Log-normal (ln x normal) truncated to [min, max].
+    LogNormal {
+        /// Median exp(μ), > 0.
+        median: f64,
+        /// sd of ln x, > 0.
+        sd_log: f64,
+        /// Lower truncation, > 0.
+        min: f64,
+        /// Upper truncation.
+        max: f64,
+    },
+    /// (velocity only) the normal impact velocities of a DEM impact spectrum
+    /// (`partlife run` of a `kind = "dem"` study writes `impact_spectrum.csv`): its quantile
+    /// function, linear between the tabulated quantiles, from 0 at p = 0 and held at the
+    /// highest quantile above it, times `scale`.
+    Spectrum {
+        /// The spectrum file, relative to the study.
+        file: String,
+        /// `tube` or `particle`.
+        #[serde(default = "tube")]
+        target: String,
+        /// Row of the bank (0 = all rows).
+        #[serde(default)]
+        row: u32,
+        /// Factor on every velocity (a different drop height than the rig's, say).
+        #[serde(default = "one")]
+        scale: f64,
+    },
+}
+
+fn tube() -> String {
+    "tube".into()
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// A marginal ready to sample.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Marginal {
+    /// A constant.
+    Fixed(f64),
+    /// A truncated prior.
+    Param(Param),
+    /// A piecewise-linear quantile function (p ascending from 0, v ascending).
+    Quantiles(Vec<(f64, f64)>),
+    /// One of K joint Weibull draws.
+    Weibull(Vec<Weibull>),
+}
+
+impl Marginal {
+    /// Whether u matters.
+    pub fn varies(&self) -> bool {
+        !matches!(self, Marginal::Fixed(_))
+    }
+
+    /// The value at u ∈ [0, 1] (for Weibull draws: the draw's index).
+    pub fn quantile(&self, u: f64) -> f64 {
+        match self {
+            Marginal::Fixed(v) => *v,
+            Marginal::Param(p) => p.quantile(u),
+            Marginal::Quantiles(q) => {
+                let k = q.partition_point(|&(p, _)| p <= u).clamp(1, q.len() - 1);
+                let ((p0, v0), (p1, v1)) = (q[k - 1], q[k]);
+                if u >= q[q.len() - 1].0 {
+                    return q[q.len() - 1].1;
+                }
+                v0 + (v1 - v0) * (u - p0) / (p1 - p0)
+            }
+            Marginal::Weibull(d) => ((u * d.len() as f64) as usize).min(d.len() - 1) as f64,
+        }
+    }
+
+    /// A Weibull draw at u.
+    pub fn weibull(&self, u: f64) -> Option<Weibull> {
+        match self {
+            Marginal::Weibull(d) => Some(d[self.quantile(u) as usize]),
+            _ => None,
+        }
+    }
+}
+
+impl Dist {
+    /// Builds the marginal; `file` and `key` name the study key in errors; `resolve` maps a
+    /// study-relative path.
+    pub fn marginal(&self, file: &str, key: &str, unit: &str, resolve: &dyn Fn(&str) -> std::path::PathBuf) -> Result<Marginal> {
+        let bad = |rule: String| Err(Error::config(file, key, rule));
+        let param = |prior: Prior, lower: f64, upper: f64| -> Result<Marginal> {
+            let p = Param { name: key.into(), unit: unit.into(), lower, upper, prior, nominal: 0.5 * (lower + upper) };
+            p.check().map_err(|e| Error::config(file, key, e.to_string()))?;
+            Ok(Marginal::Param(p))
+        };
+        match self {
+            Dist::Fixed { value } => {
+                if !value.is_finite() {
+                    return bad(format!("the value must be finite, got {value}"));
+                }
+                Ok(Marginal::Fixed(*value))
+            }
+            Dist::Uniform { min, max } => {
+                if !(min.is_finite() && max.is_finite() && min < max) {
+                    return bad(format!("needs finite min < max, got [{min}, {max}]"));
+                }
+                param(Prior::Uniform, *min, *max)
+            }
+            Dist::Normal { mean, sd, min, max } => {
+                if !(sd.is_finite() && *sd > 0.0) {
+                    return bad(format!("sd must be a finite number > 0, got {sd}"));
+                }
+                if !(min.is_finite() && max.is_finite() && min < max && mean.is_finite()) {
+                    return bad(format!("needs a finite mean and finite min < max, got mean {mean}, [{min}, {max}]"));
+                }
+                param(Prior::Normal { mean: *mean, sd: *sd }, *min, *max)
+            }
+            Dist::LogNormal { median, sd_log, min, max } => {
+                if !(median.is_finite() && *median > 0.0) {
+                    return bad(format!("the median must be a finite number > 0, got {median}"));
+                }
+                if !(sd_log.is_finite() && *sd_log > 0.0) {
+                    return bad(format!("sd_log must be a finite number > 0, got {sd_log}"));
+                }
+                if !(*min > 0.0 && max.is_finite() && min < max) {
+                    return bad(format!("needs 0 < min < max, finite, got [{min}, {max}]"));
+                }
+                param(Prior::LogNormal { mu: median.ln(), sigma: *sd_log }, *min, *max)
+            }
+            Dist::Spectrum { file: spec, target, row, scale } => {
+                if !(scale.is_finite() && *scale > 0.0) {
+                    return bad(format!("scale must be a finite number > 0, got {scale}"));
+                }
+                let path = resolve(spec);
+                if !path.is_file() {
+                    return bad(format!("the spectrum file {} does not exist", path.display()));
+                }
+                let q = read_spectrum(&path, target, *row)?;
+                Ok(Marginal::Quantiles(q.into_iter().map(|(p, v)| (p, v * scale)).collect()))
+            }
+        }
+    }
+}
+
+/// Reads the quantile function of one target and row of a DEM impact spectrum: the columns
+/// `q<k>_v_normal_m_s` give the k % quantiles. Rejects negative or non-finite speeds, quantiles
+/// out of order, and a missing or empty row, naming file, row and rule.
+pub fn read_spectrum(path: &Path, target: &str, row: u32) -> Result<Vec<(f64, f64)>> {
+    let df = read_table(path)?;
+    let targets = col_str(&df, path, "target")?;
+    let rows = col_f64(&df, path, "row")?;
+    let impacts = col_f64(&df, path, "impacts")?;
+    let mut cols: Vec<(f64, String)> = df
+        .get_column_names()
+        .iter()
+        .filter_map(|c| {
+            let s = c.as_str();
+            let k = s.strip_prefix('q')?.strip_suffix("_v_normal_m_s")?.parse::<f64>().ok()?;
+            Some((k / 100.0, s.to_string()))
+        })
+        .collect();
+    cols.sort_by(|a, b| a.0.total_cmp(&b.0));
+    if cols.is_empty() {
+        return Err(Error::data_file(path, "columns", "no quantile columns `q<k>_v_normal_m_s`: not an impact spectrum"));
+    }
+    let Some(i) = (0..targets.len()).find(|&i| targets[i] == target && rows[i] == row as f64) else {
+        return Err(Error::data_file(path, "target/row", format!("no row with target `{target}` and row {row}")));
+    };
+    if !(impacts[i] >= 1.0) {
+        return Err(Error::data_row(path, i, "impacts", format!("the spectrum of target `{target}`, row {row} is empty ({} impacts)", impacts[i])));
+    }
+    let mut q = vec![(0.0, 0.0)];
+    for (p, c) in &cols {
+        let v = col_f64(&df, path, c)?[i];
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(Error::data_row(path, i, c, format!("a speed must be finite and ≥ 0, got {v}")));
+        }
+        if v < q[q.len() - 1].1 {
+            return Err(Error::data_row(path, i, c, format!("quantiles must not decrease ({v} after {})", q[q.len() - 1].1)));
+        }
+        q.push((*p, v));
+    }
+    Ok(q)
+}
+
+/// Source of the joint Weibull uncertainty.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WeibullUncertainty {
+    /// Parametric bootstrap of the MLE (the C1239 pivotal simulation).
+    #[default]
+    Bootstrap,
+    /// Posterior of a Bayesian fit with prior ∝ 1/(m σ_θ).
+    Bayesian,
+}
+
+/// `k` posterior draws of (m, σ_θ) for `data` (prior ∝ 1/(m σ_θ)), seeded.
+pub fn bayesian_weibull_draws(data: &[f64], fit: &WeibullFit, k: usize, seed: u64) -> Result<Vec<Weibull>> {
+    const G: usize = 240;
+    let n = data.len() as f64;
+    let (m0, s0) = (fit.mle.shape, fit.mle.scale);
+    // Asymptotic sds: sd(ln m̂) ≈ 0.78/√n, sd(ln σ̂) ≈ 1.05/(m √n).
+    let (hw_m, hw_s) = (7.0 * 0.78 / n.sqrt(), 7.0 * 1.053 / (m0 * n.sqrt()));
+    let (lm0, ls0) = (m0.ln() - hw_m, s0.ln() - hw_s);
+    let (dm, ds) = (2.0 * hw_m / G as f64, 2.0 * hw_s / G as f64);
+    let mut logp = Vec::with_capacity(G * G);
+    for i in 0..G {
+        let m = (lm0 + (i as f64 + 0.5) * dm).exp();
+        for j in 0..G {
+            let s = (ls0 + (j as f64 + 0.5) * ds).exp();
+            // Flat in (ln m, ln σ): the Jacobian cancels the 1/(m σ) prior.
+            logp.push(Weibull { shape: m, scale: s }.log_likelihood(data));
+        }
+    }
+    let max = logp.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    if !max.is_finite() {
+        return Err(Error::numerical("Bayesian Weibull fit", "the likelihood is not finite on the grid"));
+    }
+    let mut cum = Vec::with_capacity(logp.len());
+    let mut total = 0.0;
+    for l in &logp {
+        total += (l - max).exp();
+        cum.push(total);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    Ok((0..k)
+        .map(|_| {
+            let u = rng.random::<f64>() * total;
+            let c = cum.partition_point(|&x| x < u).min(cum.len() - 1);
+            let (i, j) = (c / G, c % G);
+            let m = (lm0 + (i as f64 + rng.random::<f64>()) * dm).exp();
+            let s = (ls0 + (j as f64 + rng.random::<f64>()) * ds).exp();
+            Weibull { shape: m, scale: s }
+        })
+        .collect())
+}

@@ -340,3 +340,46 @@ pub fn external_chain_ess(path: &Path) -> Result<f64> {
     }
     Ok(ess)
 }
+
+/// UQ speed figures.
+#[derive(Debug, Clone)]
+pub struct UqSpeed {
+    /// Wall time of 10⁶ Monte Carlo samples of the full chain, both materials, every horizon and
+    /// damage model of the main study (s).
+    pub propagation_s: f64,
+    /// Samples propagated.
+    pub samples: usize,
+    /// Wall time of the Ishigami Sobol' indices at N = 2¹⁴ (81 920 runs) with 1000 bootstrap
+    /// resamples (s), and the largest |Ŝ − S| over first and total indices.
+    pub ishigami_s: f64,
+    /// Largest absolute error of the Ishigami indices.
+    pub ishigami_error: f64,
+}
+
+/// Times the propagation of the main study (`study`, normally `studies/gen4_vs_bl.toml`) with
+/// 10⁶ samples, and the Ishigami indices at N = 2¹⁴.
+pub fn uq_speed(study: &Path) -> Result<UqSpeed> {
+    let loaded = crate::study::load(study)?;
+    let crate::study::Study::Uq(s) = &loaded.study else {
+        return Err(crate::Error::config(study.display().to_string(), "kind", "the UQ benchmark needs a kind = \"uq\" study"));
+    };
+    let chain = s.prepare(&loaded.path)?;
+    let samples = 1 << 20;
+    let prop = crate::uq::run::Propagation { method: crate::uq::run::Method::Sobol, samples, replicates: 8 };
+    let start = Instant::now();
+    let out = crate::uq::run::propagate(&chain, &prop, s.seed, &|| {})?;
+    let propagation_s = start.elapsed().as_secs_f64();
+    std::hint::black_box(&out.blocks);
+    let ishigami = crate::testfns::Ishigami::standard();
+    let f = |u: &[f64]| -> Result<Vec<f64>> {
+        use crate::model::Simulator;
+        let x: Vec<f64> = u.iter().map(|v| std::f64::consts::PI * (2.0 * v - 1.0)).collect();
+        ishigami.simulate(&x)
+    };
+    let start = Instant::now();
+    let ind = crate::uq::sobol::sobol_indices(f, 3, 1 << 14, 1, 1000, 0.95)?;
+    let ishigami_s = start.elapsed().as_secs_f64();
+    let (s1, st) = ([0.313905, 0.442411, 0.0], [0.557589, 0.442411, 0.243684]);
+    let ishigami_error = (0..3).map(|i| (ind[0].first[i] - s1[i]).abs().max((ind[0].total[i] - st[i]).abs())).fold(0.0, f64::max);
+    Ok(UqSpeed { propagation_s, samples, ishigami_s, ishigami_error })
+}

@@ -39,7 +39,8 @@
 //! | [`dem`] | native DEM of the tube bank: Hertz–Mindlin, cell lists, impacts, profiles, VTK; `TubeBankModel` |
 //! | [`fem`] | native crush FE: axisymmetric/plane-strain explicit quads, JH-2, platens, fields, VTU; `CrushModel` |
 //! | [`design`] | Sobol' sequences (Joe–Kuo, 64 dimensions), Latin hypercubes |
-//! | [`calibrate`] | noise models; multi-start Levenberg–Marquardt with covariance and identifiability; ensemble and adaptive-Metropolis MCMC with R̂/ESS; GP emulator; evaluation cache |
+//! | [`calibrate`] | noise models; multi-start Levenberg–Marquardt (or argmin Nelder–Mead / L-BFGS) with covariance and identifiability; ensemble and adaptive-Metropolis MCMC with R̂/ESS; GP emulator; evaluation cache; the `calibrate` study (crush FE and tube-bank DEM); synthetic curve and rig generators |
+//! | [`uq`] | the main study (`kind = "uq"`): Monte Carlo propagation of the lifetime chain, damage models (independent, Vogel–Peukert, Tavares–King), Sobol' indices with bootstrap intervals |
 //! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation |
 //! | [`synth`] | the documented generator of the synthetic crush datasets |
 //! | [`stats`] | median, Pearson correlation with p-value |

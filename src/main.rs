@@ -64,6 +64,10 @@ enum Command {
         /// A chain CSV (step, walker, x1, x2) and its sampling time in seconds, `FILE:SECONDS`.
         #[arg(long)]
         chain: Option<String>,
+        /// Run the UQ benchmark instead: 2²⁰ Monte Carlo samples of the main study's chain and
+        /// Sobol' indices of Ishigami at N = 2¹⁴ (compare tests/bench/salib/ishigami.py).
+        #[arg(long)]
+        uq: bool,
     },
 }
 
@@ -236,6 +240,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 let ess = partlife::bench::external_chain_ess(std::path::Path::new(file))?;
                 out!("external chain {file}: bulk ESS {ess:.0} in {secs:.2} s → ESS/s {:.1}; ratio ours/theirs {:.1}×", ess / secs, m.ess_per_second / (ess / secs));
             }
+        }
+        Command::Bench { uq: true, .. } => {
+            out!("machine: {} threads available to rayon", rayon::current_num_threads());
+            let u = partlife::bench::uq_speed(std::path::Path::new("studies/gen4_vs_bl.toml"))?;
+            out!(
+                "main-study chain, {} Sobol' samples × 2 materials × 2 horizons × 3 damage models: {:.3} s ({:.2e} samples/s; goal 10⁶ in < 2 s)",
+                u.samples,
+                u.propagation_s,
+                u.samples as f64 / u.propagation_s
+            );
+            out!("Sobol' indices of Ishigami, N = 2¹⁴ (81 920 runs) + 1000 bootstrap resamples: {:.3} s, largest |Ŝ − S| = {:.4}", u.ishigami_s, u.ishigami_error);
         }
         Command::Bench { fem: true, .. } => {
             out!("machine: {} threads available to rayon", rayon::current_num_threads());

@@ -297,3 +297,11 @@ fn uq_study_bad_input() {
     let median: f64 = v.split(',').nth(3).unwrap().parse().unwrap();
     assert!((median - 2.0).abs() < 1e-9, "median of 10 × the spectrum = 2 m/s: {v}");
 }
+
+#[test]
+fn uq_study_rejects_unknown_material_keys() {
+    let s = Scratch::new();
+    let study = "studies/gen4_vs_bl.toml";
+    s.write(study, &std::fs::read_to_string(common::root().join(study)).unwrap());
+    s.expect_bad_study(study, "density_kg_m3 = 3600\n", "density_kg_m3 = 3600\ncolour = \"red\"\n", &["material[1].colour", "unknown key"]);
+}

@@ -43,11 +43,11 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
 }
 
 /// Distinct values of a column in order of appearance.
-fn distinct(v: &[f64]) -> Vec<f64> {
-    let mut out: Vec<f64> = Vec::new();
-    for &x in v {
-        if !out.contains(&x) {
-            out.push(x);
+fn distinct<T: PartialEq + Clone>(v: &[T]) -> Vec<T> {
+    let mut out: Vec<T> = Vec::new();
+    for x in v {
+        if !out.contains(x) {
+            out.push(x.clone());
         }
     }
     out
@@ -157,12 +157,7 @@ fn sobol(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let (out, n, input) = (t.s("output")?, t.f("n")?, t.s("input")?);
     let (s1, s1l, s1h, st, stl, sth) = (t.f("s1")?, t.f("s1_lo")?, t.f("s1_hi")?, t.f("st")?, t.f("st_lo")?, t.f("st_hi")?);
     let nmax = n.iter().cloned().fold(0.0, f64::max);
-    let mut outputs: Vec<String> = Vec::new();
-    for (i, o) in out.iter().enumerate() {
-        if n[i] == nmax && !outputs.contains(o) {
-            outputs.push(o.clone());
-        }
-    }
+    let outputs = distinct(&out);
     let mut panels = Vec::new();
     for (oi, o) in outputs.iter().enumerate() {
         let rows: Vec<usize> = (0..out.len()).filter(|&i| &out[i] == o && n[i] == nmax).collect();
@@ -226,12 +221,7 @@ fn sobol_convergence(dir: &Path, width_cm: f64) -> Result<Drawn> {
 fn model_form(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[String; 2]) -> Result<Drawn> {
     let t = Table::load(dir, "breakage")?;
     let (model, mat, yrs, q05, q50, q95) = (t.s("model")?, t.s("material")?, t.f("years")?, t.f("q05")?, t.f("median")?, t.f("q95")?);
-    let mut models: Vec<String> = Vec::new();
-    for m in &model {
-        if !models.contains(m) {
-            models.push(m.clone());
-        }
-    }
+    let models = distinct(&model);
     let horizons = distinct(&yrs);
     let mut panels = Vec::new();
     for (hi, &h) in horizons.iter().enumerate() {

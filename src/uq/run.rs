@@ -52,7 +52,7 @@ use crate::data::read_crush;
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
 use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
-use crate::study::{ContactOptions, FigureOptions, LoadedStudy};
+use crate::study::{ContactOptions, FigureOptions, LoadedStudy, MaterialSpec};
 use crate::weibull::{Weibull, fit_mle, simulate_pivotal};
 
 /// Impacts and the shared uncertain inputs.
@@ -166,27 +166,19 @@ impl Default for Sensitivity {
     }
 }
 
-/// One particle type.
+/// One particle type: a lifetime study's material plus its shape distributions.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
 pub struct UqMaterial {
-    /// Key in tables.
-    pub key: String,
-    /// Label in figures.
-    pub label: String,
-    /// Crush data (CSV), relative to the study.
-    pub data: PathBuf,
-    /// Elastic constants.
-    pub elastic: Elastic,
-    /// Density (kg/m³).
-    pub density_kg_m3: f64,
-    /// Impact diameter (m); default the median of the crush data.
-    #[serde(default)]
-    pub impact_diameter_m: Option<f64>,
+    /// Key, label, crush data, elastic constants, density, impact diameter.
+    #[serde(flatten)]
+    pub spec: MaterialSpec,
     /// Wadell roundness distribution (0, 1].
     pub roundness: Dist,
     /// Sphericity distribution (0, 1].
     pub sphericity: Dist,
+    /// Keys nobody took (serde cannot deny unknown fields through `flatten`): rejected at load.
+    #[serde(flatten, skip_serializing)]
+    pub unknown: BTreeMap<String, toml::Value>,
 }
 
 /// Which material is compared with which.
@@ -374,7 +366,7 @@ impl UqStudy {
             return bad("material", format!("a UQ study compares exactly two [[material]]s, got {}", self.material.len()));
         }
         let pos = |k: &str, key: &str| -> Result<usize> {
-            self.material.iter().position(|m| m.key == k).ok_or_else(|| Error::config(&file, key, format!("`{k}` is not a material key ({}, {})", self.material[0].key, self.material[1].key)))
+            self.material.iter().position(|m| m.spec.key == k).ok_or_else(|| Error::config(&file, key, format!("`{k}` is not a material key ({}, {})", self.material[0].spec.key, self.material[1].spec.key)))
         };
         let (ic, ir) = (pos(&self.compare.candidate, "compare.candidate")?, pos(&self.compare.reference, "compare.reference")?);
         if ic == ir {
@@ -420,8 +412,11 @@ impl UqStudy {
         let order = [ic, ir];
         let mut shape_inputs = Vec::new();
         for (slot, &i) in order.iter().enumerate() {
-            let mm = &self.material[i];
+            let (mm, shape) = (&self.material[i].spec, &self.material[i]);
             let key = |k: &str| format!("material[{i}].{k}");
+            if let Some(k) = shape.unknown.keys().next() {
+                return bad(&key(k), "unknown key (known: key, label, data, elastic, density_kg_m3, impact_diameter_m, roundness, sphericity)".into());
+            }
             crate::study::elastic_checked(&file, &key("elastic"), &mm.elastic)?;
             if !(mm.density_kg_m3 > 0.0 && mm.density_kg_m3.is_finite()) {
                 return bad(&key("density_kg_m3"), format!("must be > 0, got {}", mm.density_kg_m3));
@@ -453,9 +448,9 @@ impl UqStudy {
                 None => crate::stats::quantiles(&mut data.diameters(), &[0.5])[0],
             };
             inputs.push(Input { name: format!("weibull_{}", mm.key), unit: "m (-)".into(), marginal: Marginal::Weibull(draws) });
-            let r = m(&mm.roundness, &key("roundness"), "-")?;
+            let r = m(&shape.roundness, &key("roundness"), "-")?;
             in_range(&r, &key("roundness"), 1e-3, 1.0)?;
-            let sp = m(&mm.sphericity, &key("sphericity"), "-")?;
+            let sp = m(&shape.sphericity, &key("sphericity"), "-")?;
             in_range(&sp, &key("sphericity"), 1e-3, 1.0)?;
             shape_inputs.push(Input { name: format!("roundness_{}", mm.key), unit: "-".into(), marginal: r });
             shape_inputs.push(Input { name: format!("sphericity_{}", mm.key), unit: "-".into(), marginal: sp });
@@ -465,8 +460,8 @@ impl UqStudy {
             mats.push(PreparedMaterial { key: mm.key.clone(), label: mm.label.clone(), sphere: Sphere { diameter, density: mm.density_kg_m3, elastic: mm.elastic }, fit: (fit.n, fit.mle.shape, fit.mle.scale), path: dpath });
         }
         // One ratio: both materials' ν enter the tensile zone; they must agree for one r.
-        let ratio = zone_ratio(self.material[ic].elastic.poisson_ratio).unwrap_or(f64::NAN);
-        let ratio_b = zone_ratio(self.material[ir].elastic.poisson_ratio).unwrap_or(f64::NAN);
+        let ratio = zone_ratio(self.material[ic].spec.elastic.poisson_ratio).unwrap_or(f64::NAN);
+        let ratio_b = zone_ratio(self.material[ir].spec.elastic.poisson_ratio).unwrap_or(f64::NAN);
         if (ratio / ratio_b - 1.0).abs() > 1e-12 {
             return bad("material", "both materials need the same Poisson's ratio (one averaging ratio σ̄/p0)".into());
         }

@@ -298,6 +298,11 @@ pub struct Evaluated {
 }
 
 impl Chain {
+    /// Index into [`Evaluated::p`] of material j (0 candidate, 1 reference), horizon h, model k.
+    pub fn slot(&self, j: usize, h: usize, k: usize) -> usize {
+        (j * self.years.len() + h) * self.models.len() + k
+    }
+
     /// The varying inputs' indices (the dimensions of the unit points).
     pub fn varying(&self) -> Vec<usize> {
         (0..self.inputs.len()).filter(|&i| self.inputs[i].marginal.varies()).collect()
@@ -348,7 +353,7 @@ impl Chain {
             for h in 0..y {
                 let n = self.years[h] * x[idx::PER_YEAR];
                 for (k, &model) in self.models.iter().enumerate() {
-                    p[(j * y + h) * d + k] = self.p(model, hazard[j], ln_v, n, x[idx::GAMMA], h);
+                    p[self.slot(j, h, k)] = self.p(model, hazard[j], ln_v, n, x[idx::GAMMA], h);
                 }
             }
         }
@@ -570,46 +575,101 @@ pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<Ru
     pb.set_message("Monte Carlo propagation");
     let prop = propagate(&chain, &s.propagation, s.seed, &|| pb.inc(1))?;
 
-    let (y, dm) = (chain.years.len(), chain.models.len());
-    let at = |j: usize, h: usize, k: usize| (j * y + h) * dm + k;
-    let names = [chain.materials[0].label.clone(), chain.materials[1].label.clone()];
     let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    let headline = write_headline(&mut dir, &chain, &prop)?;
+    write_convergence(&mut dir, &chain, &prop)?;
+    write_distributions(&mut dir, &chain, &prop)?;
+    write_breakage_vs_velocity(&mut dir, &chain, &prop, s.impact.velocity_range)?;
+    pb.inc(1);
+    pb.set_message("Sobol' indices");
+    let (final_indices, outputs) = write_sobol(&mut dir, &chain, s, &sens_sizes, &|| pb.inc(1))?;
+    write_inputs(&mut dir, &chain)?;
+    let varying = chain.varying();
+    let md = summary(s, &chain, &prop, &final_indices, &varying, &outputs, &headline);
+    dir.write_bytes("summary.md", md.as_bytes())?;
+    pb.set_message("figures");
+    let mut failures = Vec::new();
+    let rendered = crate::report::uq::render(dir.path(), s.figures.width_cm)?;
+    record_figures(&mut dir, rendered, &mut failures);
+    pb.inc(1);
+    let mut evaluations = BTreeMap::new();
+    evaluations.insert("propagation_samples".to_string(), prop.count() as u64);
+    evaluations.insert("sobol_model_runs".to_string(), sens_sizes.iter().map(|n| (n * (varying.len() + 2)) as u64).sum());
+    let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
+    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
+    pb.finish_and_clear();
+    Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: headline.lines })
+}
 
-    // Headline: P(candidate worse) per horizon and model, with block SEs; quantiles of P.
-    let mut rows: (Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
+/// Quantiles `ps` of `v` (interpolated, as C1239's tables).
+fn quantiles_of(mut v: Vec<f64>, ps: &[f64]) -> Vec<f64> {
+    v.sort_by(f64::total_cmp);
+    ps.iter().map(|&p| crate::weibull::sorted_quantile(&v, p)).collect()
+}
+
+impl Propagated {
+    /// Every sample.
+    pub fn all(&self) -> impl Iterator<Item = &Evaluated> {
+        self.blocks.iter().flatten()
+    }
+
+    /// Number of samples.
+    pub fn count(&self) -> usize {
+        self.blocks.iter().map(|b| b.len()).sum()
+    }
+
+    /// P at `slot` over every sample.
+    pub fn values(&self, slot: usize) -> Vec<f64> {
+        self.all().map(|e| e.p[slot]).collect()
+    }
+
+    /// Per block, the fraction of its first `first` samples in which the candidate's P (slot
+    /// `a`) exceeds the reference's (slot `b`).
+    pub fn fraction_worse(&self, a: usize, b: usize, first: usize) -> Vec<f64> {
+        self.blocks.iter().map(|bl| bl[..first.min(bl.len())].iter().filter(|e| e.p[a] > e.p[b]).count() as f64 / first.min(bl.len()) as f64).collect()
+    }
+}
+
+/// The headline lines and, per model and horizon, (model, years, P(candidate worse), its se,
+/// fraction of ties, median P of candidate and reference).
+pub struct Headline {
+    /// Printed lines (primary model).
+    pub lines: Vec<String>,
+    /// Per model and horizon.
+    pub rows: Vec<(DamageModel, f64, f64, f64, f64, f64, f64)>,
+}
+
+fn write_headline(dir: &mut ReportDir, chain: &Chain, prop: &Propagated) -> Result<Headline> {
+    let names = [&chain.materials[0].label, &chain.materials[1].label];
+    let nb = prop.blocks[0].len();
+    let mut out = Headline { lines: Vec::new(), rows: Vec::new() };
     let mut q_rows: (Vec<String>, Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
-    let mut headline = Vec::new();
     for (k, model) in chain.models.iter().enumerate() {
-        for h in 0..y {
-            let fr: Vec<f64> = prop.blocks.iter().map(|b| b.iter().filter(|e| e.p[at(0, h, k)] > e.p[at(1, h, k)]).count() as f64 / b.len() as f64).collect();
-            let ties: f64 = prop.blocks.iter().map(|b| b.iter().filter(|e| e.p[at(0, h, k)] == e.p[at(1, h, k)]).count()).sum::<usize>() as f64 / (prop.blocks.len() * prop.blocks[0].len()) as f64;
-            let (mean, se) = mean_se(&fr);
-            rows.0.push(model.name().into());
-            rows.1.push(chain.years[h]);
-            rows.2.push(mean);
-            rows.3.push(se);
-            rows.4.push(ties);
+        for (h, &years) in chain.years.iter().enumerate() {
+            let (a, b) = (chain.slot(0, h, k), chain.slot(1, h, k));
+            let (mean, se) = mean_se(&prop.fraction_worse(a, b, nb));
+            let ties = prop.all().filter(|e| e.p[a] == e.p[b]).count() as f64 / prop.count() as f64;
             if k == 0 {
-                headline.push(format!("P({} breaks more than {} in {} yr) = {:.4} ± {:.4} (Monte Carlo se)", names[0], names[1], chain.years[h], mean, se));
+                out.lines.push(format!("P({} breaks more than {} in {} yr) = {:.4} ± {:.4} (Monte Carlo se)", names[0], names[1], years, mean, se));
             }
+            let mut medians = [0.0; 2];
             for j in 0..2 {
-                let mut all: Vec<f64> = prop.blocks.iter().flatten().map(|e| e.p[at(j, h, k)]).collect();
-                all.sort_by(f64::total_cmp);
-                let meds: Vec<f64> = prop.blocks.iter().map(|b| {
-                    let mut v: Vec<f64> = b.iter().map(|e| e.p[at(j, h, k)]).collect();
-                    v.sort_by(f64::total_cmp);
-                    crate::weibull::sorted_quantile(&v, 0.5)
-                }).collect();
-                let q = |p: f64| crate::weibull::sorted_quantile(&all, p);
+                let slot = chain.slot(j, h, k);
+                let all = prop.values(slot);
+                let block_medians: Vec<f64> = prop.blocks.iter().map(|bl| quantiles_of(bl.iter().map(|e| e.p[slot]).collect(), &[0.5])[0]).collect();
+                let mean_p = all.iter().sum::<f64>() / all.len() as f64;
+                let q = quantiles_of(all, &[0.05, 0.5, 0.95]);
+                medians[j] = q[1];
                 q_rows.0.push(model.name().into());
                 q_rows.1.push(chain.materials[j].key.clone());
-                q_rows.2.push(chain.years[h]);
-                q_rows.3.push(q(0.05));
-                q_rows.4.push(q(0.5));
-                q_rows.5.push(mean_se(&meds).1);
-                q_rows.6.push(q(0.95));
-                q_rows.7.push(all.iter().sum::<f64>() / all.len() as f64);
+                q_rows.2.push(years);
+                q_rows.3.push(q[0]);
+                q_rows.4.push(q[1]);
+                q_rows.5.push(mean_se(&block_medians).1);
+                q_rows.6.push(q[2]);
+                q_rows.7.push(mean_p);
             }
+            out.rows.push((*model, years, mean, se, ties, medians[0], medians[1]));
         }
     }
     dir.write_table(
@@ -624,21 +684,34 @@ pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<Ru
             fcol("impact_diameter_m", chain.materials.iter().map(|m| m.sphere.diameter).collect()),
         ])?,
     )?;
-    dir.write_table("comparison", &mut table(vec![scol("model", rows.0), fcol("years", rows.1), fcol("p_candidate_worse", rows.2), fcol("mc_se", rows.3), fcol("ties", rows.4)])?)?;
+    let r = &out.rows;
+    dir.write_table(
+        "comparison",
+        &mut table(vec![
+            scol("model", r.iter().map(|x| x.0.name().to_string()).collect()),
+            fcol("years", r.iter().map(|x| x.1).collect()),
+            fcol("p_candidate_worse", r.iter().map(|x| x.2).collect()),
+            fcol("mc_se", r.iter().map(|x| x.3).collect()),
+            fcol("ties", r.iter().map(|x| x.4).collect()),
+        ])?,
+    )?;
     dir.write_table(
         "breakage",
         &mut table(vec![scol("model", q_rows.0), scol("material", q_rows.1), fcol("years", q_rows.2), fcol("q05", q_rows.3), fcol("median", q_rows.4), fcol("median_mc_se", q_rows.5), fcol("q95", q_rows.6), fcol("mean", q_rows.7)])?,
     )?;
+    Ok(out)
+}
 
-    // Convergence of P(candidate worse), primary model, every horizon.
+/// Convergence of P(candidate worse), primary model, every horizon, on the first k samples of
+/// every block (k doubling from 16).
+fn write_convergence(dir: &mut ReportDir, chain: &Chain, prop: &Propagated) -> Result<()> {
     let nb = prop.blocks[0].len();
     let mut conv: (Vec<f64>, Vec<u64>, Vec<f64>, Vec<f64>) = Default::default();
-    let mut k = 16usize;
-    while k <= nb {
-        for h in 0..y {
-            let fr: Vec<f64> = prop.blocks.iter().map(|b| b[..k].iter().filter(|e| e.p[at(0, h, 0)] > e.p[at(1, h, 0)]).count() as f64 / k as f64).collect();
-            let (m, se) = mean_se(&fr);
-            conv.0.push(chain.years[h]);
+    let mut k = 16usize.min(nb);
+    loop {
+        for (h, &years) in chain.years.iter().enumerate() {
+            let (m, se) = mean_se(&prop.fraction_worse(chain.slot(0, h, 0), chain.slot(1, h, 0), k));
+            conv.0.push(years);
             conv.1.push((k * prop.blocks.len()) as u64);
             conv.2.push(m);
             conv.3.push(se);
@@ -648,70 +721,75 @@ pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<Ru
         }
         k = (k * 2).min(nb);
     }
-    dir.write_table("convergence", &mut table(vec![fcol("years", conv.0), ucol("samples", conv.1), fcol("p_candidate_worse", conv.2), fcol("mc_se", conv.3)])?)?;
+    dir.write_table("convergence", &mut table(vec![fcol("years", conv.0), ucol("samples", conv.1), fcol("p_candidate_worse", conv.2), fcol("mc_se", conv.3)])?)
+}
 
-    // Distributions: log10 P per material and horizon (primary), 60 bins over the pooled range.
+/// Densities of log₁₀ P per material and horizon (primary model), 60 bins over the pooled range.
+fn write_distributions(dir: &mut ReportDir, chain: &Chain, prop: &Propagated) -> Result<()> {
     let mut hist: (Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
-    for h in 0..y {
-        let vals: Vec<Vec<f64>> = (0..2).map(|j| prop.blocks.iter().flatten().map(|e| lg(e.p[at(j, h, 0)])).collect()).collect();
+    for (h, &years) in chain.years.iter().enumerate() {
+        let vals: Vec<Vec<f64>> = (0..2).map(|j| prop.values(chain.slot(j, h, 0)).into_iter().map(lg).collect()).collect();
         let lo = vals.iter().flatten().cloned().fold(f64::INFINITY, f64::min).max(-30.0);
         let hi = vals.iter().flatten().cloned().fold(f64::NEG_INFINITY, f64::max).max(lo + 1e-6);
         let bins = 60;
+        let width = (hi - lo) / bins as f64;
         for (j, v) in vals.iter().enumerate() {
             let mut c = vec![0usize; bins];
             for &x in v {
-                let b = (((x - lo) / (hi - lo)) * bins as f64).floor().clamp(0.0, bins as f64 - 1.0) as usize;
-                c[b] += 1;
+                c[((x - lo) / width).floor().clamp(0.0, bins as f64 - 1.0) as usize] += 1;
             }
             for (b, n) in c.iter().enumerate() {
                 hist.0.push(chain.materials[j].key.clone());
-                hist.1.push(chain.years[h]);
-                hist.2.push(lo + (b as f64 + 0.5) * (hi - lo) / bins as f64);
-                hist.3.push(*n as f64 / v.len() as f64 / ((hi - lo) / bins as f64));
+                hist.1.push(years);
+                hist.2.push(lo + (b as f64 + 0.5) * width);
+                hist.3.push(*n as f64 / v.len() as f64 / width);
             }
         }
     }
-    dir.write_table("distributions", &mut table(vec![scol("material", hist.0), fcol("years", hist.1), fcol("log10_p", hist.2), fcol("density", hist.3)])?)?;
+    dir.write_table("distributions", &mut table(vec![scol("material", hist.0), fcol("years", hist.1), fcol("log10_p", hist.2), fcol("density", hist.3)])?)
+}
 
-    // Breakage vs velocity with bands (primary model), from up to 4000 samples' hazards.
-    let [vlo, vhi] = s.impact.velocity_range;
+/// P_break vs velocity with its 90 % band (primary model) from up to 4000 samples' hazards:
+/// H(V) = H(1 m/s)·V^(2m/5).
+fn write_breakage_vs_velocity(dir: &mut ReportDir, chain: &Chain, prop: &Propagated, [vlo, vhi]: [f64; 2]) -> Result<()> {
     let sub: Vec<&Evaluated> = prop.blocks.iter().flat_map(|b| b.iter().take(4000 / prop.blocks.len())).collect();
     let mut vv: (Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
     for j in 0..2 {
-        for h in 0..y {
+        for (h, &years) in chain.years.iter().enumerate() {
             for i in 0..48 {
                 let v = vlo * (vhi / vlo).powf(i as f64 / 47.0);
-                let mut ps: Vec<f64> = sub.iter().map(|e| chain.p(chain.models[0], e.hazard[j], v.ln(), chain.years[h] * e.per_year, e.gamma, h)).collect();
-                ps.sort_by(f64::total_cmp);
-                let q = |p: f64| crate::weibull::sorted_quantile(&ps, p);
+                let ps: Vec<f64> = sub.iter().map(|e| chain.p(chain.models[0], e.hazard[j], v.ln(), years * e.per_year, e.gamma, h)).collect();
+                let q = quantiles_of(ps, &[0.05, 0.5, 0.95]);
                 vv.0.push(chain.materials[j].key.clone());
-                vv.1.push(chain.years[h]);
+                vv.1.push(years);
                 vv.2.push(v);
-                vv.3.push(q(0.05));
-                vv.4.push(q(0.5));
-                vv.5.push(q(0.95));
+                vv.3.push(q[0]);
+                vv.4.push(q[1]);
+                vv.5.push(q[2]);
             }
         }
     }
-    dir.write_table("breakage_vs_velocity", &mut table(vec![scol("material", vv.0), fcol("years", vv.1), fcol("velocity_m_s", vv.2), fcol("q05", vv.3), fcol("median", vv.4), fcol("q95", vv.5)])?)?;
-    pb.inc(1);
+    dir.write_table("breakage_vs_velocity", &mut table(vec![scol("material", vv.0), fcol("years", vv.1), fcol("velocity_m_s", vv.2), fcol("q05", vv.3), fcol("median", vv.4), fcol("q95", vv.5)])?)
+}
 
-    // Sobol' indices (primary model, last horizon), with their convergence in n.
-    pb.set_message("Sobol' indices");
-    let h = y - 1;
+/// Sobol' indices of the primary model at the last horizon for every base size in `sizes`
+/// (the last is the study's n); returns the final indices and the output names.
+fn write_sobol(dir: &mut ReportDir, chain: &Chain, s: &UqStudy, sizes: &[usize], tick: &dyn Fn()) -> Result<(Vec<SobolIndices>, Vec<String>)> {
+    let h = chain.years.len() - 1;
+    let at = |j: usize, h: usize, k: usize| chain.slot(j, h, k);
     let varying = chain.varying();
     let f = |u: &[f64]| -> Result<Vec<f64>> {
         let e = chain.evaluate(u);
         Ok(vec![lg(e.p[at(0, h, 0)]), lg(e.p[at(1, h, 0)]), e.p[at(0, h, 0)] - e.p[at(1, h, 0)]])
     };
-    let outputs = [
+    let outputs = vec![
         format!("log10_p_{}", chain.materials[0].key),
         format!("log10_p_{}", chain.materials[1].key),
         format!("p_{}_minus_p_{}", chain.materials[0].key, chain.materials[1].key),
     ];
     let mut sob: (Vec<String>, Vec<u64>, Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<String>) = Default::default();
     let mut final_indices: Vec<SobolIndices> = Vec::new();
-    for &n in &sens_sizes {
+    for &n in sizes {
         let ind = sobol_indices(f, varying.len(), n, s.seed ^ 0x50B0, s.sensitivity.bootstrap, s.sensitivity.level)?;
         for (o, si) in ind.iter().enumerate() {
             for (k, &i) in varying.iter().enumerate() {
@@ -730,7 +808,7 @@ pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<Ru
         if n == s.sensitivity.n {
             final_indices = ind;
         }
-        pb.inc(1);
+        tick();
     }
     dir.write_table(
         "sobol",
@@ -747,7 +825,11 @@ pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<Ru
             scol("flag", sob.9),
         ])?,
     )?;
-    // Inputs table.
+    Ok((final_indices, outputs))
+}
+
+/// The inputs' 5/50/95 % quantiles (Weibull draws: of the modulus m).
+fn write_inputs(dir: &mut ReportDir, chain: &Chain) -> Result<()> {
     let mut it: (Vec<String>, Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
     for i in &chain.inputs {
         it.0.push(i.name.clone());
@@ -755,9 +837,8 @@ pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<Ru
         // Weibull draws: the quantiles of the modulus m over the draws.
         let qs = match &i.marginal {
             Marginal::Weibull(d) => {
-                let mut m: Vec<f64> = d.iter().map(|w| w.shape).collect();
-                m.sort_by(f64::total_cmp);
-                [0.05, 0.5, 0.95].map(|u| crate::weibull::sorted_quantile(&m, u))
+                let q = quantiles_of(d.iter().map(|w| w.shape).collect(), &[0.05, 0.5, 0.95]);
+                [q[0], q[1], q[2]]
             }
             m => [0.05, 0.5, 0.95].map(|u| m.quantile(u)),
         };
@@ -765,49 +846,29 @@ pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<Ru
         it.3.push(qs[1]);
         it.4.push(qs[2]);
     }
-    dir.write_table("inputs", &mut table(vec![scol("input", it.0), scol("unit", it.1), fcol("q05", it.2), fcol("median", it.3), fcol("q95", it.4)])?)?;
-
-    // Summary.
-    let md = summary(s, &chain, &prop, &final_indices, &varying, &outputs, &headline);
-    dir.write_bytes("summary.md", md.as_bytes())?;
-    pb.set_message("figures");
-    let mut failures = Vec::new();
-    let rendered = crate::report::uq::render(dir.path(), s.figures.width_cm)?;
-    record_figures(&mut dir, rendered, &mut failures);
-    pb.inc(1);
-    let mut evaluations = BTreeMap::new();
-    evaluations.insert("propagation_samples".to_string(), (prop.blocks.len() * prop.blocks[0].len()) as u64);
-    evaluations.insert("sobol_model_runs".to_string(), sens_sizes.iter().map(|n| (n * (varying.len() + 2)) as u64).sum());
-    let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
-    pb.finish_and_clear();
-    Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: headline })
+    dir.write_table("inputs", &mut table(vec![scol("input", it.0), scol("unit", it.1), fcol("q05", it.2), fcol("median", it.3), fcol("q95", it.4)])?)
 }
 
 /// The plain-language summary.
-fn summary(s: &UqStudy, chain: &Chain, prop: &Propagated, ind: &[SobolIndices], varying: &[usize], outputs: &[String], headline: &[String]) -> String {
-    let (y, dm) = (chain.years.len(), chain.models.len());
-    let at = |j: usize, h: usize, k: usize| (j * y + h) * dm + k;
+fn summary(s: &UqStudy, chain: &Chain, prop: &Propagated, ind: &[SobolIndices], varying: &[usize], outputs: &[String], headline: &Headline) -> String {
     let [a, b] = [&chain.materials[0], &chain.materials[1]];
     let mut md = format!("# {} against {}: breakage over {} years, with its uncertainty\n\n", a.label, b.label, chain.years.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" and "));
     md.push_str(&format!(
         "{} Monte Carlo samples ({:?}, {} independent blocks for the standard errors) of every uncertain input; damage model of the headline: {}.\n\n",
-        prop.blocks.len() * prop.blocks[0].len(),
+        prop.count(),
         s.propagation.method,
         prop.blocks.len(),
         chain.models[0].label()
     ));
     md.push_str("## Headline\n\n");
-    for l in headline {
+    for l in &headline.lines {
         md.push_str(&format!("* {l}\n"));
     }
     md.push_str("\n| material | horizon | median P | 90 % band |\n|---|---|---|---|\n");
     for j in 0..2 {
-        for h in 0..y {
-            let mut v: Vec<f64> = prop.blocks.iter().flatten().map(|e| e.p[at(j, h, 0)]).collect();
-            v.sort_by(f64::total_cmp);
-            let q = |p: f64| crate::weibull::sorted_quantile(&v, p);
-            md.push_str(&format!("| {} | {} yr | {:.2e} | {:.1e} – {:.1e} |\n", chain.materials[j].label, chain.years[h], q(0.5), q(0.05), q(0.95)));
+        for (h, years) in chain.years.iter().enumerate() {
+            let q = quantiles_of(prop.values(chain.slot(j, h, 0)), &[0.05, 0.5, 0.95]);
+            md.push_str(&format!("| {} | {} yr | {:.2e} | {:.1e} – {:.1e} |\n", chain.materials[j].label, years, q[1], q[0], q[2]));
         }
     }
     md.push_str("\n## What drives it (Sobol' total indices, last horizon)\n\n");
@@ -823,18 +884,8 @@ fn summary(s: &UqStudy, chain: &Chain, prop: &Propagated, ind: &[SobolIndices], 
     }
     md.push_str("\n## Damage models side by side\n\n| model | horizon | P(candidate worse) | both equal | ");
     md.push_str(&format!("median P {} | median P {} |\n|---|---|---|---|---|---|\n", a.label, b.label));
-    for (k, model) in chain.models.iter().enumerate() {
-        for h in 0..y {
-            let total = (prop.blocks.len() * prop.blocks[0].len()) as f64;
-            let fr = prop.blocks.iter().flatten().filter(|e| e.p[at(0, h, k)] > e.p[at(1, h, k)]).count() as f64 / total;
-            let ties = prop.blocks.iter().flatten().filter(|e| e.p[at(0, h, k)] == e.p[at(1, h, k)]).count() as f64 / total;
-            let med = |j: usize| {
-                let mut v: Vec<f64> = prop.blocks.iter().flatten().map(|e| e.p[at(j, h, k)]).collect();
-                v.sort_by(f64::total_cmp);
-                crate::weibull::sorted_quantile(&v, 0.5)
-            };
-            md.push_str(&format!("| {} | {} yr | {:.3} | {:.3} | {:.2e} | {:.2e} |\n", model.label(), chain.years[h], fr, ties, med(0), med(1)));
-        }
+    for &(model, years, worse, _, ties, med_a, med_b) in &headline.rows {
+        md.push_str(&format!("| {} | {} yr | {:.3} | {:.3} | {:.2e} | {:.2e} |\n", model.label(), years, worse, ties, med_a, med_b));
     }
     md.push_str(&format!(
         "\nCrush data: {} N = {} (m̂ = {:.2}, σ̂_θ = {:.0} MPa), {} N = {} (m̂ = {:.2}, σ̂_θ = {:.0} MPa); Weibull uncertainty by {:?}.\n",

@@ -208,7 +208,7 @@ fn main_uq_study_writes_the_headline_deterministically() {
     };
     let (a, b) = (run("2"), run("1"));
     let dir = "reports/gen4_vs_bl";
-    for t in ["materials", "comparison", "breakage", "convergence", "distributions", "breakage_vs_velocity", "sobol", "inputs"] {
+    for t in ["materials", "comparison", "breakage", "convergence", "distributions", "breakage_vs_velocity", "sobol", "inputs", "averaging"] {
         assert_eq!(a.read(&format!("{dir}/{t}.csv")), b.read(&format!("{dir}/{t}.csv")), "{t}.csv differs between 2 threads and 1");
     }
     for f in ["uq_breakage_vs_velocity", "uq_distributions", "uq_convergence", "uq_sobol", "uq_sobol_convergence", "uq_model_form"] {

@@ -47,7 +47,7 @@ use serde::{Deserialize, Serialize};
 use super::damage::{CriticalRatioTable, DamageModel, VogelPeukert, breakage};
 use super::inputs::{Dist, Marginal, WeibullUncertainty, bayesian_weibull_draws};
 use super::sobol::{SobolIndices, sobol_indices};
-use crate::contact::{ContactStress, Elastic, Hertz, Impact, Sphere, TensileZone};
+use crate::contact::{AveragingDomain, ContactStress, Elastic, Hertz, Impact, Sphere, TensileZone};
 use crate::data::read_crush;
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
@@ -181,6 +181,15 @@ pub struct UqMaterial {
     pub unknown: BTreeMap<String, toml::Value>,
 }
 
+/// Model-form alternatives (the damage models are compared in every run).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ModelForm {
+    /// Other averaging domains of σ̄: each reruns the whole chain (Weibull refit of the crush
+    /// data included) with a quarter of the samples; `averaging.csv` compares them.
+    pub averaging: Vec<AveragingDomain>,
+}
+
 /// Which material is compared with which.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -218,6 +227,9 @@ pub struct UqStudy {
     /// Sobol' indices.
     #[serde(default)]
     pub sensitivity: Sensitivity,
+    /// Model-form alternatives run besides the main chain.
+    #[serde(default)]
+    pub model_form: ModelForm,
     /// Figures.
     #[serde(default)]
     pub figures: FigureOptions,
@@ -259,8 +271,12 @@ pub struct Chain {
     pub inputs: Vec<Input>,
     /// The two materials: candidate first, reference second.
     pub materials: [PreparedMaterial; 2],
-    /// σ̄/p0 of the averaging domain.
-    pub ratio: f64,
+    /// The averaging domain of σ̄ (crush and impact alike).
+    pub domain: AveragingDomain,
+    /// σ̄/p0 of the domain when constant (outer limit a multiple of a): the fast path.
+    pub ratio: Option<f64>,
+    /// Tensile zones of the two materials (their ν).
+    pub zones: [TensileZone; 2],
     /// Tube.
     pub wall: Elastic,
     /// Horizons (years).
@@ -282,11 +298,27 @@ mod idx {
     pub const GAMMA: usize = 9;
 }
 
-/// One evaluated sample: per material (m, ln H at 1 m/s) and P[material][horizon][model].
+/// What the single-impact hazard of one sample needs: H(V) = (σ̄(p0, a)/σ_θ)^m with
+/// p0 = c_p V^(2/5) and a = c_a V^(2/5) (Hertz impact).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hazard {
+    /// Weibull modulus m.
+    pub m: f64,
+    /// ln σ_θ.
+    pub ln_scale: f64,
+    /// Peak pressure at 1 m/s (Pa).
+    pub c_p: f64,
+    /// Contact radius at 1 m/s (m).
+    pub c_a: f64,
+    /// Particle radius (m).
+    pub radius: f64,
+}
+
+/// One evaluated sample: per material its hazard parameters and P[material][horizon][model].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Evaluated {
-    /// (m, ln H(1 m/s)) per material.
-    pub hazard: [(f64, f64); 2],
+    /// Hazard parameters per material.
+    pub hazard: [Hazard; 2],
     /// ln V.
     pub ln_v: f64,
     /// Impacts per year.
@@ -317,8 +349,8 @@ impl Chain {
         x
     }
 
-    /// Single-impact hazard parameters of material j at inputs x: (m, ln H at 1 m/s).
-    pub fn hazard(&self, j: usize, x: &[f64]) -> (f64, f64) {
+    /// Single-impact hazard parameters of material j at inputs x.
+    pub fn hazard(&self, j: usize, x: &[f64]) -> Hazard {
         let mat = &self.materials[j];
         let w: Weibull = match &self.inputs[idx::WEIBULL + j].marginal {
             Marginal::Weibull(d) => d[x[idx::WEIBULL + j] as usize],
@@ -326,13 +358,27 @@ impl Chain {
         };
         let c = x[idx::ROUNDNESS + 2 * j] * x[idx::SPHERICITY + 2 * j];
         let impact = Impact::sphere_on_wall(&mat.sphere, &self.wall, c * mat.sphere.radius(), x[idx::ETA]);
-        let p0 = impact.hertz.peak_pressure(impact.max_force(1.0));
-        (w.shape, w.shape * ((self.ratio * p0).ln() - w.scale.ln()))
+        let f1 = impact.max_force(1.0);
+        Hazard { m: w.shape, ln_scale: w.scale.ln(), c_p: impact.hertz.peak_pressure(f1), c_a: impact.hertz.contact_radius(f1), radius: mat.sphere.radius() }
     }
 
-    /// P_N of model `d` for hazard (m, ln H1) at ln V, N impacts and γ (horizon h).
-    pub fn p(&self, model: DamageModel, (m, ln_h1): (f64, f64), ln_v: f64, n: f64, gamma: f64, h: usize) -> f64 {
-        let hz = (ln_h1 + 0.4 * m * ln_v).exp();
+    /// ln H at ln V for material j: σ̄ = r·p0 on the fast path, else the domain's formula at
+    /// (p0, a, R); a contact larger than the domain (a > R, far beyond 100 m/s) counts as a
+    /// certain break.
+    pub fn ln_hazard(&self, j: usize, hz: &Hazard, ln_v: f64) -> f64 {
+        let ln_sigma = match self.ratio {
+            Some(r) => (r * hz.c_p).ln() + 0.4 * ln_v,
+            None => {
+                let t = (0.4 * ln_v).exp();
+                self.domain.mean_tensile_stress(&self.zones[j], hz.c_p * t, hz.c_a * t, hz.radius).map(f64::ln).unwrap_or(f64::INFINITY)
+            }
+        };
+        hz.m * (ln_sigma - hz.ln_scale)
+    }
+
+    /// P_N of model `d` for modulus m and ln H, N impacts and γ (horizon h).
+    pub fn p(&self, model: DamageModel, m: f64, ln_h: f64, n: f64, gamma: f64, h: usize) -> f64 {
+        let hz = ln_h.exp();
         let vp = if model == DamageModel::VogelPeukert { VogelPeukert::matched(m / 5.0) } else { VogelPeukert { rate: 0.0, threshold: 0.0 } };
         let x_star = match (model, &self.tk[h]) {
             (DamageModel::TavaresKing, Some(t)) => t.ratio(gamma),
@@ -347,13 +393,14 @@ impl Chain {
         let hazard = [self.hazard(0, &x), self.hazard(1, &x)];
         let v = x[idx::VELOCITY];
         let ln_v = if v > 0.0 { v.ln() } else { f64::NEG_INFINITY };
+        let ln_h = [self.ln_hazard(0, &hazard[0], ln_v), self.ln_hazard(1, &hazard[1], ln_v)];
         let (y, d) = (self.years.len(), self.models.len());
         let mut p = vec![0.0; 2 * y * d];
         for j in 0..2 {
             for h in 0..y {
                 let n = self.years[h] * x[idx::PER_YEAR];
                 for (k, &model) in self.models.iter().enumerate() {
-                    p[self.slot(j, h, k)] = self.p(model, hazard[j], ln_v, n, x[idx::GAMMA], h);
+                    p[self.slot(j, h, k)] = self.p(model, hazard[j].m, ln_h[j], n, x[idx::GAMMA], h);
                 }
             }
         }
@@ -459,16 +506,18 @@ impl UqStudy {
             in_range(&sp, &key("sphericity"), 1e-3, 1.0)?;
             shape_inputs.push(Input { name: format!("roundness_{}", mm.key), unit: "-".into(), marginal: r });
             shape_inputs.push(Input { name: format!("sphericity_{}", mm.key), unit: "-".into(), marginal: sp });
-            if zone_ratio(mm.elastic.poisson_ratio).is_none() {
-                return bad("contact.averaging", "the UQ study needs an averaging domain whose outer limit is a multiple of the contact radius (σ̄ ∝ p0)".into());
-            }
             mats.push(PreparedMaterial { key: mm.key.clone(), label: mm.label.clone(), sphere: Sphere { diameter, density: mm.density_kg_m3, elastic: mm.elastic }, fit: (fit.n, fit.mle.shape, fit.mle.scale), path: dpath });
         }
         // One ratio: both materials' ν enter the tensile zone; they must agree for one r.
-        let ratio = zone_ratio(self.material[ic].spec.elastic.poisson_ratio).unwrap_or(f64::NAN);
-        let ratio_b = zone_ratio(self.material[ir].spec.elastic.poisson_ratio).unwrap_or(f64::NAN);
-        if (ratio / ratio_b - 1.0).abs() > 1e-12 {
-            return bad("material", "both materials need the same Poisson's ratio (one averaging ratio σ̄/p0)".into());
+        let nus = [self.material[ic].spec.elastic.poisson_ratio, self.material[ir].spec.elastic.poisson_ratio];
+        let zones = nus.map(TensileZone::new);
+        // The fast path needs one constant σ̄/p0 for both materials.
+        let ratio = match (zone_ratio(nus[0]), zone_ratio(nus[1])) {
+            (Some(a), Some(b)) if (a / b - 1.0).abs() < 1e-12 => Some(a),
+            _ => None,
+        };
+        for (i, d) in self.model_form.averaging.iter().enumerate() {
+            d.validate(&file, &format!("model_form.averaging[{i}]"))?;
         }
         inputs.extend(shape_inputs);
         let eta = m(&self.impact.energy_fraction, "impact.energy_fraction", "-")?;
@@ -506,7 +555,7 @@ impl UqStudy {
             return bad("figures.width_cm", format!("must lie in [4, 40], got {}", self.figures.width_cm));
         }
         let [a, b]: [PreparedMaterial; 2] = mats.try_into().map_err(|_| Error::config(&file, "material", "two materials"))?;
-        Ok(Chain { inputs, materials: [a, b], ratio, wall: self.impact.target, years: self.impact.years.clone(), models, tk })
+        Ok(Chain { inputs, materials: [a, b], domain: self.contact.averaging, ratio, zones, wall: self.impact.target, years: self.impact.years.clone(), models, tk })
     }
 }
 
@@ -584,8 +633,17 @@ pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<Ru
     pb.set_message("Sobol' indices");
     let (final_indices, outputs) = write_sobol(&mut dir, &chain, s, &sens_sizes, &|| pb.inc(1))?;
     write_inputs(&mut dir, &chain)?;
+    pb.set_message("averaging-domain alternatives");
+    let averaging = write_averaging(&mut dir, s, &loaded.path, &chain, &prop)?;
     let varying = chain.varying();
-    let md = summary(s, &chain, &prop, &final_indices, &varying, &outputs, &headline);
+    let mut md = summary(s, &chain, &prop, &final_indices, &varying, &outputs, &headline);
+    if averaging.len() > chain.years.len() {
+        md.push_str("\n## Averaging domain of σ̄ (independent trials)\n\n| domain | horizon | P(candidate worse) | median P candidate | median P reference |\n|---|---|---|---|---|\n");
+        for (d, years, worse, se, a, b) in &averaging {
+            md.push_str(&format!("| {d} | {years} yr | {worse:.4} ± {se:.4} | {a:.2e} | {b:.2e} |\n"));
+        }
+        md.push_str("\nEvery domain whose outer limit is a multiple of the contact radius gives σ̄ = r·p0 in the crush test and in the impact alike, so r cancels between the Weibull scale and the impact stress: those domains give identical answers. Only a domain reaching the particle radius (σ̄ depends on a/R, which differs between the crush at break and a 5 m/s impact) changes them.\n");
+    }
     dir.write_bytes("summary.md", md.as_bytes())?;
     pb.set_message("figures");
     let mut failures = Vec::new();
@@ -599,6 +657,54 @@ pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<Ru
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: headline.lines })
+}
+
+/// A domain in words.
+fn describe(d: &AveragingDomain) -> String {
+    let m = match d.measure {
+        crate::contact::AveragingMeasure::Line => "line",
+        crate::contact::AveragingMeasure::Area => "area",
+    };
+    match d.outer {
+        crate::contact::OuterLimit::ContactMultiple => format!("{m} average to {}·a", d.kappa),
+        crate::contact::OuterLimit::ParticleRadius => format!("{m} average to R"),
+    }
+}
+
+/// The study's domain and every `[model_form] averaging` alternative (each a rerun of the
+/// chain with its own Weibull fit, a quarter of the samples): P(candidate worse) and the
+/// medians, primary model, per horizon.
+#[allow(clippy::type_complexity)]
+fn write_averaging(dir: &mut ReportDir, s: &UqStudy, path: &std::path::Path, chain: &Chain, prop: &Propagated) -> Result<Vec<(String, f64, f64, f64, f64, f64)>> {
+    let mut rows = Vec::new();
+    let mut add = |c: &Chain, p: &Propagated, d: &AveragingDomain| {
+        for (h, &years) in c.years.iter().enumerate() {
+            let (a, b) = (c.slot(0, h, 0), c.slot(1, h, 0));
+            let (worse, se) = mean_se(&p.fraction_worse(a, b, p.blocks[0].len()));
+            rows.push((describe(d), years, worse, se, quantiles_of(p.values(a), &[0.5])[0], quantiles_of(p.values(b), &[0.5])[0]));
+        }
+    };
+    add(chain, prop, &chain.domain);
+    for d in &s.model_form.averaging {
+        let mut alt = s.clone();
+        alt.contact.averaging = *d;
+        let c = alt.prepare(path)?;
+        let opts = Propagation { samples: (s.propagation.samples / 4).max(64 * s.propagation.replicates), ..s.propagation.clone() };
+        let p = propagate(&c, &opts, s.seed, &|| {})?;
+        add(&c, &p, d);
+    }
+    dir.write_table(
+        "averaging",
+        &mut table(vec![
+            scol("domain", rows.iter().map(|r| r.0.clone()).collect()),
+            fcol("years", rows.iter().map(|r| r.1).collect()),
+            fcol("p_candidate_worse", rows.iter().map(|r| r.2).collect()),
+            fcol("mc_se", rows.iter().map(|r| r.3).collect()),
+            fcol("median_p_candidate", rows.iter().map(|r| r.4).collect()),
+            fcol("median_p_reference", rows.iter().map(|r| r.5).collect()),
+        ])?,
+    )?;
+    Ok(rows)
 }
 
 /// Quantiles `ps` of `v` (interpolated, as C1239's tables).
@@ -758,7 +864,7 @@ fn write_breakage_vs_velocity(dir: &mut ReportDir, chain: &Chain, prop: &Propaga
         for (h, &years) in chain.years.iter().enumerate() {
             for i in 0..48 {
                 let v = vlo * (vhi / vlo).powf(i as f64 / 47.0);
-                let ps: Vec<f64> = sub.iter().map(|e| chain.p(chain.models[0], e.hazard[j], v.ln(), years * e.per_year, e.gamma, h)).collect();
+                let ps: Vec<f64> = sub.iter().map(|e| chain.p(chain.models[0], e.hazard[j].m, chain.ln_hazard(j, &e.hazard[j], v.ln()), years * e.per_year, e.gamma, h)).collect();
                 let q = quantiles_of(ps, &[0.05, 0.5, 0.95]);
                 vv.0.push(chain.materials[j].key.clone());
                 vv.1.push(years);

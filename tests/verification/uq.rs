@@ -5,7 +5,7 @@
 //! the MLE on a large sample. Vogel–Peukert and Tavares–King against hand-computed cases are the
 //! unit tests of `uq::damage`.
 
-use partlife::contact::{AveragingDomain, Elastic, Sphere};
+use partlife::contact::{AveragingDomain, Elastic, OuterLimit, Sphere};
 use partlife::lifetime::{ImpactLoad, Lifetime};
 use partlife::uq::damage::{DamageModel, VogelPeukert, breakage};
 use partlife::uq::inputs::bayesian_weibull_draws;
@@ -15,10 +15,21 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use statrs::distribution::{ContinuousCDF, Normal};
 
-/// The study's chain at fixed inputs (c = 1) against `Lifetime::p_after`.
+/// The study's chain at fixed inputs (c = 1) against `Lifetime::p_after`, on the fast path
+/// (σ̄ ∝ p0) and the general one (average to the particle radius).
 #[test]
 fn chain_at_fixed_inputs_is_the_lifetime_chain() {
-    let study = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/studies/gen4_vs_bl.toml")).unwrap();
+    let base = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/studies/gen4_vs_bl.toml")).unwrap();
+    let line_2a = "averaging = { measure = \"line\", outer = \"contact_multiple\", kappa = 2.0 }";
+    for (toml_domain, domain) in [
+        (line_2a, AveragingDomain::default()),
+        ("averaging = { measure = \"line\", outer = \"particle_radius\" }", AveragingDomain { outer: OuterLimit::ParticleRadius, ..AveragingDomain::default() }),
+    ] {
+        check_fixed_chain(&base.replace(line_2a, toml_domain), domain);
+    }
+}
+
+fn check_fixed_chain(study: &str, domain: AveragingDomain) {
     // Fix every shared input and both shapes at 1 (a sphere).
     let fixed = study
         .replace("roundness = { distribution = \"normal\", mean = 0.72, sd = 0.05, min = 0.5, max = 1.0 }", "roundness = { distribution = \"fixed\", value = 1.0 }")
@@ -48,7 +59,7 @@ fn chain_at_fixed_inputs_is_the_lifetime_chain() {
         for j in 0..2 {
             let w: Weibull = chain.inputs[j].marginal.weibull(u[j]).unwrap();
             let sphere: Sphere = chain.materials[j].sphere;
-            let life = Lifetime { load: ImpactLoad::on_wall(&sphere, &steel, 0.1, AveragingDomain::default()), strength: w };
+            let life = Lifetime { load: ImpactLoad::on_wall(&sphere, &steel, 0.1, domain), strength: w };
             for (h, n) in [(0, 730.0), (1, 7300.0)] {
                 let want = life.p_after(5.0, n).unwrap();
                 let got = e.p[(j * 2 + h) * 3];

@@ -139,7 +139,11 @@ fn convergence(dir: &Path, width_cm: f64, labels: &[String; 2]) -> Result<Drawn>
         x_desc: "Monte Carlo samples (log₁₀)".into(),
         y_desc: format!("P({} breaks more)", labels[0]),
         x_range: padded(n.iter().map(|v| v.log10()), 0.0, 0.02),
-        y_range: padded((0..p.len()).flat_map(|i| [p[i] - 2.0 * se[i], p[i] + 2.0 * se[i]]).map(|v| v.clamp(0.0, 1.0)), 0.1, 0.6),
+        // A probability axis ends at 1 (the legend sits in the padding above the data).
+        y_range: {
+            let (lo, hi) = padded((0..p.len()).flat_map(|i| [p[i] - 2.0 * se[i], p[i] + 2.0 * se[i]]).map(|v| v.clamp(0.0, 1.0)), 0.1, 0.6);
+            (lo.max(0.0), hi.min(1.0))
+        },
         y_log: false,
         series,
         legend: Some(SeriesLabelPosition::LowerRight),

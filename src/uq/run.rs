@@ -366,6 +366,9 @@ impl Chain {
     /// (p0, a, R); a contact larger than the domain (a > R, far beyond 100 m/s) counts as a
     /// certain break.
     pub fn ln_hazard(&self, j: usize, hz: &Hazard, ln_v: f64) -> f64 {
+        if ln_v == f64::NEG_INFINITY {
+            return f64::NEG_INFINITY; // V = 0: no contact, no hazard
+        }
         let ln_sigma = match self.ratio {
             Some(r) => (r * hz.c_p).ln() + 0.4 * ln_v,
             None => {

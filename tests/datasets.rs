@@ -92,3 +92,33 @@ fn table1_is_transcribed_completely() {
     let filled = rows.iter().flat_map(|r| &r.cells).filter(|c| c.min.is_some() || c.max.is_some()).count();
     assert_eq!(filled, 15 * 10 - 6 - 3);
 }
+
+/// The synthetic tube-bank measurements are what `partlife datasets synth-dem` makes from the
+/// committed settings (one 0.7 s DEM run, ≈ 15 s).
+#[test]
+fn synth_dem_reproduces_the_committed_file() {
+    use partlife::calibrate::synth_dem::{DemSynthSettings, synthesize};
+    let (settings, model) = DemSynthSettings::load(&root().join("datasets/synth_dem.toml")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let (path, obs) = synthesize(&settings, &model, dir.path()).unwrap();
+    assert_eq!(obs.len(), settings.heights.len() + 1);
+    let old = std::fs::read(root().join("datasets").join(&settings.file)).unwrap();
+    assert!(std::fs::read(path).unwrap() == old, "datasets/{} differs from what `partlife datasets synth-dem` generates", settings.file);
+}
+
+/// The synthetic force–displacement curves are what `partlife datasets synth-curves` makes from
+/// the committed settings (24 fine-mesh FE crushes).
+#[test]
+#[ignore = "slow: regenerates the three crush-curve datasets, about 2 min on 2 cores"]
+fn synth_curves_reproduce_the_committed_files() {
+    use partlife::calibrate::synth::{CurveSynthSettings, synthesize};
+    let settings = CurveSynthSettings::load(&root().join("datasets/synth_curves.toml")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let out = synthesize(&settings, dir.path(), &|| {}).unwrap();
+    assert_eq!(out.len(), settings.case.len());
+    for c in &settings.case {
+        let new = std::fs::read(dir.path().join(&c.file)).unwrap();
+        let old = std::fs::read(root().join("datasets").join(&c.file)).unwrap();
+        assert!(new == old, "datasets/{} differs from what `partlife datasets synth-curves` generates", c.file);
+    }
+}

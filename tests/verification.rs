@@ -4,6 +4,7 @@
 
 mod verification {
     mod crush_fe;
+    mod discrepancy;
     mod dem;
     mod gp;
     mod hertz;

@@ -1,0 +1,142 @@
+//! Diagnosis of a fitted Weibull strength model (issue 7, step 1 "Diagnose"): quantile
+//! residuals, Anderson–Darling and Kolmogorov–Smirnov statistics with p-values calibrated by a
+//! parametric bootstrap (the parameters were fitted, so the textbook tables for a fully
+//! specified law would be far too lenient), and tests of residual structure against a covariate.
+//!
+//! * Quantile residuals: r_i = Φ⁻¹(F̂(x_i)) with F̂ the fitted Weibull CDF. For a continuous law
+//!   the randomised quantile residuals of Dunn & Smyth (1996) reduce to these; under the model
+//!   they are i.i.d. N(0, 1) (up to the fitting).
+//! * AD = −n − (1/n) Σ (2i − 1)[ln u_(i) + ln(1 − u_(n+1−i))], KS = max_i max(i/n − u_(i),
+//!   u_(i) − (i − 1)/n), with u = F̂(x) sorted.
+//! * Bootstrap: B samples of size n from the fitted law, each refitted by MLE and its statistics
+//!   recomputed; p = (1 + #{T* ≥ T})/(B + 1). Seeded; one stream per replicate, so the result
+//!   does not depend on the thread count.
+//! * Covariate structure: Spearman's rank correlation of the residuals with a covariate, its
+//!   p-value by a seeded permutation test (exact for ties and small n).
+//!
+//! Verified in `tests/verification/discrepancy.rs`: the bootstrap p-value is uniform under the
+//! model (false-positive rate at 5 % within binomial error over 200 data sets), the 5 % AD
+//! critical value matches Stephens' table for the Weibull with estimated parameters, and a
+//! hidden diameter effect is found by the covariate test.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use statrs::distribution::{ContinuousCDF, Normal};
+
+use crate::error::{Error, Result};
+use crate::weibull::{Weibull, fit_mle};
+
+/// Quantile residuals Φ⁻¹(F(x_i)) of `data` under `law` (clamped to ±8.3 at the extremes).
+pub fn quantile_residuals(data: &[f64], law: &Weibull) -> Vec<f64> {
+    let n = Normal::new(0.0, 1.0).unwrap_or_else(|_| unreachable!("N(0,1) is valid"));
+    data.iter().map(|&x| n.inverse_cdf(law.cdf(x).clamp(1e-16, 1.0 - 1e-16))).collect()
+}
+
+/// Anderson–Darling and Kolmogorov–Smirnov statistics of `data` under `law`.
+pub fn ad_ks(data: &[f64], law: &Weibull) -> (f64, f64) {
+    let mut u: Vec<f64> = data.iter().map(|&x| law.cdf(x).clamp(1e-300, 1.0 - 1e-16)).collect();
+    u.sort_by(f64::total_cmp);
+    let n = u.len() as f64;
+    let mut s = 0.0;
+    let mut ks = 0.0f64;
+    for (i, &ui) in u.iter().enumerate() {
+        let k = i as f64 + 1.0;
+        s += (2.0 * k - 1.0) * (ui.ln() + (1.0 - u[u.len() - 1 - i]).ln());
+        ks = ks.max(k / n - ui).max(ui - (k - 1.0) / n);
+    }
+    (-n - s / n, ks)
+}
+
+/// Goodness of fit of a Weibull MLE with bootstrap-calibrated p-values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GoodnessOfFit {
+    /// The fitted law.
+    pub fit: Weibull,
+    /// Anderson–Darling statistic.
+    pub ad: f64,
+    /// Kolmogorov–Smirnov statistic.
+    pub ks: f64,
+    /// Bootstrap p-value of AD.
+    pub p_ad: f64,
+    /// Bootstrap p-value of KS.
+    pub p_ks: f64,
+    /// Bootstrap replicates used.
+    pub replicates: usize,
+}
+
+/// Fits `data` by MLE and calibrates AD and KS by `b` parametric-bootstrap refits (seeded).
+pub fn weibull_gof(data: &[f64], b: usize, seed: u64) -> Result<GoodnessOfFit> {
+    if data.len() < 3 || b < 19 {
+        return Err(Error::config("<discrepancy>", "bootstrap", format!("needs ≥ 3 values and ≥ 19 replicates, got {} and {b}", data.len())));
+    }
+    let fit = fit_mle(data)?.mle;
+    let (ad, ks) = ad_ks(data, &fit);
+    let n = data.len();
+    let stats: Vec<Option<(f64, f64)>> = (0..b)
+        .into_par_iter()
+        .map(|r| {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            rng.set_stream(r as u64 + 1);
+            let sample: Vec<f64> = (0..n).map(|_| fit.sample(&mut rng)).collect();
+            fit_mle(&sample).ok().map(|f| ad_ks(&sample, &f.mle))
+        })
+        .collect();
+    let ok: Vec<(f64, f64)> = stats.into_iter().flatten().collect();
+    if ok.len() < b / 2 {
+        return Err(Error::numerical("goodness of fit", format!("only {} of {b} bootstrap refits converged", ok.len())));
+    }
+    let p = |t: f64, f: fn(&(f64, f64)) -> f64| (1 + ok.iter().filter(|s| f(s) >= t).count()) as f64 / (ok.len() + 1) as f64;
+    Ok(GoodnessOfFit { fit, ad, ks, p_ad: p(ad, |s| s.0), p_ks: p(ks, |s| s.1), replicates: ok.len() })
+}
+
+/// Ranks (1-based, ties averaged).
+fn ranks(x: &[f64]) -> Vec<f64> {
+    let mut idx: Vec<usize> = (0..x.len()).collect();
+    idx.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
+    let mut r = vec![0.0; x.len()];
+    let mut i = 0;
+    while i < idx.len() {
+        let mut j = i;
+        while j + 1 < idx.len() && x[idx[j + 1]] == x[idx[i]] {
+            j += 1;
+        }
+        let avg = 0.5 * (i + j) as f64 + 1.0;
+        for &k in &idx[i..=j] {
+            r[k] = avg;
+        }
+        i = j + 1;
+    }
+    r
+}
+
+/// Spearman's rank correlation of `x` and `y`.
+pub fn spearman(x: &[f64], y: &[f64]) -> f64 {
+    crate::stats::pearson(&ranks(x), &ranks(y)).0
+}
+
+/// Spearman's ρ of residuals against a covariate and its two-sided permutation p-value
+/// (`permutations` shuffles, seeded).
+pub fn covariate_trend(residuals: &[f64], covariate: &[f64], permutations: usize, seed: u64) -> Result<(f64, f64)> {
+    if residuals.len() != covariate.len() || residuals.len() < 4 {
+        return Err(Error::config("<discrepancy>", "covariate", format!("needs ≥ 4 paired values, got {} and {}", residuals.len(), covariate.len())));
+    }
+    if let Some(v) = covariate.iter().find(|v| !v.is_finite()) {
+        return Err(Error::numerical("covariate trend", format!("a covariate value is {v}")));
+    }
+    let (rr, rc) = (ranks(residuals), ranks(covariate));
+    let rho = crate::stats::pearson(&rr, &rc).0;
+    let hits: usize = (0..permutations)
+        .into_par_iter()
+        .map(|k| {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            rng.set_stream(k as u64 + 1);
+            let mut p = rc.clone();
+            for i in (1..p.len()).rev() {
+                p.swap(i, rng.random_range(0..=i));
+            }
+            usize::from(crate::stats::pearson(&rr, &p).0.abs() >= rho.abs() - 1e-12)
+        })
+        .sum();
+    Ok((rho, (1 + hits) as f64 / (permutations + 1) as f64))
+}

@@ -266,8 +266,9 @@ pub struct PreparedMaterial {
 /// Everything a run needs, checked at load.
 #[derive(Debug, Clone)]
 pub struct Chain {
-    /// Inputs in order: weibull_<a>, weibull_<b>, roundness_<a>, sphericity_<a>, roundness_<b>,
-    /// sphericity_<b>, energy_fraction, velocity, impacts_per_year, tk_gamma.
+    /// Inputs in order: `weibull_<a>`, `weibull_<b>`, `roundness_<a>`, `sphericity_<a>`,
+    /// `roundness_<b>`, `sphericity_<b>`, `energy_fraction`, `velocity`, `impacts_per_year`,
+    /// `tk_gamma` (a = candidate, b = reference).
     pub inputs: Vec<Input>,
     /// The two materials: candidate first, reference second.
     pub materials: [PreparedMaterial; 2],
@@ -314,7 +315,8 @@ pub struct Hazard {
     pub radius: f64,
 }
 
-/// One evaluated sample: per material its hazard parameters and P[material][horizon][model].
+/// One evaluated sample: per material its hazard parameters and P per material, horizon and
+/// model (index [`Chain::slot`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Evaluated {
     /// Hazard parameters per material.

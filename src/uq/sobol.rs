@@ -6,7 +6,7 @@
 //! (Cranley–Patterson) so repeated seeds give independent replicates, and d matrices A_B^(i)
 //! = A with column i from B: n(d + 2) model runs.
 //!
-//! Estimators, with V = Var[f] over the 2n runs of A and B:
+//! Estimators, with V = Var(f) over the 2n runs of A and B:
 //!
 //! ```text
 //! S_i  = (1/n) Σ_j f(B)_j (f(A_B^(i))_j − f(A)_j) / V          (Saltelli 2010)

@@ -140,3 +140,47 @@ pub fn covariate_trend(residuals: &[f64], covariate: &[f64], permutations: usize
         .sum();
     Ok((rho, (1 + hits) as f64 / (permutations + 1) as f64))
 }
+
+/// One covariate's residual trend and where the residuals depart most.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CovariateFinding {
+    /// Covariate name (`diameter_m`, `roundness`, `sphericity`, `temperature_c`).
+    pub covariate: String,
+    /// Spearman ρ of the quantile residuals against it.
+    pub rho: f64,
+    /// Permutation p-value.
+    pub p: f64,
+    /// Covariate range of the tertile whose mean residual is farthest from 0, and that mean.
+    pub worst_range: (f64, f64, f64),
+}
+
+/// Step 1 on a strength sample with covariates: the goodness of fit of the Weibull MLE and the
+/// residual trend against every covariate given (name, values; a covariate constant over the
+/// sample or shorter than the data is skipped with its reason). Findings are sorted by p.
+pub fn diagnose(strength: &[f64], covariates: &[(&str, Vec<f64>)], bootstrap: usize, permutations: usize, seed: u64) -> Result<(GoodnessOfFit, Vec<CovariateFinding>, Vec<String>)> {
+    let gof = weibull_gof(strength, bootstrap, seed)?;
+    let r = quantile_residuals(strength, &gof.fit);
+    let mut found = Vec::new();
+    let mut skipped = Vec::new();
+    for (k, (name, x)) in covariates.iter().enumerate() {
+        if x.len() != r.len() {
+            skipped.push(format!("{name}: {} values for {} particles", x.len(), r.len()));
+            continue;
+        }
+        if x.iter().all(|v| *v == x[0]) {
+            skipped.push(format!("{name}: constant over the sample"));
+            continue;
+        }
+        let (rho, p) = covariate_trend(&r, x, permutations, seed ^ (k as u64 + 1))?;
+        let mut idx: Vec<usize> = (0..x.len()).collect();
+        idx.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
+        // Tertiles of the covariate; the one whose mean residual is farthest from 0.
+        let worst = idx
+            .chunks(idx.len().div_ceil(3))
+            .map(|g| (x[g[0]], x[g[g.len() - 1]], g.iter().map(|&i| r[i]).sum::<f64>() / g.len() as f64))
+            .fold((f64::NAN, f64::NAN, 0.0f64), |b, c| if c.2.abs() > b.2.abs() { c } else { b });
+        found.push(CovariateFinding { covariate: name.to_string(), rho, p, worst_range: worst });
+    }
+    found.sort_by(|a, b| a.p.total_cmp(&b.p));
+    Ok((gof, found, skipped))
+}

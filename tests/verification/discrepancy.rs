@@ -86,3 +86,25 @@ fn residual_trend_finds_a_hidden_size_effect() {
     assert!((1..=10).contains(&false_pos), "false positives {false_pos}/{sets}");
     assert!(covariate_trend(&[1.0, 2.0, 3.0, 4.0], &[1.0, f64::NAN, 2.0, 3.0], 10, 1).is_err());
 }
+
+/// `diagnose` ranks the covariate that carries a hidden roundness effect first, locates the
+/// disagreement at an end of its range (not the middle tertile), and skips a constant covariate
+/// with its reason.
+#[test]
+fn diagnose_names_the_covariate_and_the_range() {
+    use partlife::discrepancy::gof::diagnose;
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let n = 120;
+    let d: Vec<f64> = (0..n).map(|_| 0.6e-3 + 0.6e-3 * rng.random::<f64>()).collect();
+    let round: Vec<f64> = (0..n).map(|_| 0.6 + 0.35 * rng.random::<f64>()).collect();
+    // A crush reduced as a sphere of radius R when the contact curvature is ρR: the force at
+    // break scales as ρ², so the apparent σ̄ ∝ (F/R²)^(1/3) scales as ρ^(2/3).
+    let s: Vec<f64> = round.iter().map(|&r| Weibull::new(9.0, 800e6 * (r / 0.8f64).powf(2.0 / 3.0)).unwrap().sample(&mut rng)).collect();
+    let (gof, found, skipped) = diagnose(&s, &[("diameter_m", d), ("roundness", round), ("temperature_c", vec![20.0; n])], 99, 500, 1).unwrap();
+    assert!(gof.replicates >= 90);
+    assert_eq!(found[0].covariate, "roundness", "{found:?}");
+    assert!(found[0].p < 0.01 && found[0].rho > 0.0, "{found:?}");
+    let (lo, hi, mean) = found[0].worst_range;
+    assert!(mean.abs() > 0.3 && (hi < 0.75 || lo > 0.8), "worst tertile [{lo}, {hi}], mean residual {mean}");
+    assert!(skipped.iter().any(|s| s.starts_with("temperature_c: constant")), "{skipped:?}");
+}

@@ -29,7 +29,7 @@ use argmin::solver::quasinewton::LBFGS;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-use super::Noise;
+use super::{Noise, Runner};
 use crate::design::Sobol;
 use crate::error::{Error, Result};
 use crate::model::Simulator;
@@ -114,16 +114,14 @@ pub struct LsqResult {
 }
 
 struct Problem<'a, S: Simulator> {
-    model: &'a S,
+    runs: Runner<'a, S>,
     data: &'a [f64],
     sigma: Vec<f64>,
-    evaluations: u64,
-    failures: Vec<(Vec<f64>, String)>,
 }
 
 impl<S: Simulator> Problem<'_, S> {
     fn theta(&self, u: &[f64]) -> Vec<f64> {
-        self.model.space().from_unit(u)
+        self.runs.sim.space().from_unit(u)
     }
 
     fn residuals_of(&self, y: &[f64]) -> Vec<f64> {
@@ -133,27 +131,7 @@ impl<S: Simulator> Problem<'_, S> {
     /// Residuals at several points (in parallel); None where the model failed.
     fn residuals(&mut self, us: &[Vec<f64>]) -> Result<Vec<Option<Vec<f64>>>> {
         let thetas: Vec<Vec<f64>> = us.iter().map(|u| self.theta(u)).collect();
-        let ys = self.model.simulate_batch(&thetas);
-        self.evaluations += thetas.len() as u64;
-        let mut out = Vec::with_capacity(ys.len());
-        for (t, y) in thetas.into_iter().zip(ys) {
-            match y {
-                Ok(y) => {
-                    if y.len() != self.data.len() {
-                        return Err(Error::numerical("least squares", format!("the model returned {} outputs for {} data", y.len(), self.data.len())));
-                    }
-                    if let Some(v) = y.iter().find(|v| !v.is_finite()) {
-                        return Err(Error::numerical("least squares", format!("the model returned {v} at θ = {t:?}")));
-                    }
-                    out.push(Some(self.residuals_of(&y)));
-                }
-                Err(e) => {
-                    self.failures.push((t, e.to_string()));
-                    out.push(None);
-                }
-            }
-        }
-        Ok(out)
+        Ok(self.runs.run(&thetas)?.into_iter().map(|y| y.map(|y| self.residuals_of(&y))).collect())
     }
 
     /// Jacobian of r in u by forward differences (steps towards the cube's interior).
@@ -369,7 +347,7 @@ pub fn fit<S: Simulator>(model: &S, data: &[f64], noise: &Noise, opts: &LsqOptio
     if opts.starts == 0 || !(opts.fd_step > 0.0 && opts.fd_step < 0.1) {
         return Err(Error::config("<calibration>", "least_squares", "starts ≥ 1 and 0 < fd_step < 0.1 required"));
     }
-    let mut pb = Problem { model, data, sigma: noise.sigmas(data)?, evaluations: 0, failures: Vec::new() };
+    let mut pb = Problem { runs: Runner::new(model), data, sigma: noise.sigmas(data)? };
     let mut start_us = vec![space.to_unit(&space.nominal())];
     start_us.extend(Sobol::points(p, opts.starts.saturating_sub(1), 1)?);
     let mut starts = Vec::new();
@@ -400,7 +378,7 @@ pub fn fit<S: Simulator>(model: &S, data: &[f64], noise: &Noise, opts: &LsqOptio
         }
     }
     let Some(Best { u, r, cost: c, jac: j }) = best else {
-        return Err(Error::numerical("least squares", format!("every start failed ({} failures recorded)", pb.failures.len())));
+        return Err(Error::numerical("least squares", format!("every start failed ({} failures recorded)", pb.runs.failures.len())));
     };
     let n = r.len();
     let scale = match noise {
@@ -471,7 +449,7 @@ pub fn fit<S: Simulator>(model: &S, data: &[f64], noise: &Noise, opts: &LsqOptio
         width_ratio,
         unidentified,
         starts,
-        evaluations: pb.evaluations,
-        failures: pb.failures,
+        evaluations: pb.runs.evaluations,
+        failures: pb.runs.failures,
     })
 }

@@ -67,3 +67,39 @@ impl Noise {
         Ok(s)
     }
 }
+
+/// Runs a simulator for the calibration methods: batches in parallel, counts the evaluations,
+/// records a failing θ with its error (None in its place) and rejects a non-finite or
+/// wrong-length output as an error. Shared by least squares and the calibration loop.
+pub(crate) struct Runner<'a, S: crate::model::Simulator> {
+    pub sim: &'a S,
+    pub evaluations: u64,
+    pub failures: Vec<(Vec<f64>, String)>,
+}
+
+impl<'a, S: crate::model::Simulator> Runner<'a, S> {
+    /// A runner with no evaluations yet.
+    pub fn new(sim: &'a S) -> Self {
+        Runner { sim, evaluations: 0, failures: Vec::new() }
+    }
+
+    /// Outputs at every θ (None where the simulator failed).
+    pub fn run(&mut self, thetas: &[Vec<f64>]) -> Result<Vec<Option<Vec<f64>>>> {
+        self.evaluations += thetas.len() as u64;
+        let ys = self.sim.simulate_batch(thetas);
+        let mut out = Vec::with_capacity(ys.len());
+        for (t, y) in thetas.iter().zip(ys) {
+            match y {
+                Ok(y) => {
+                    crate::model::check_outputs("calibration", self.sim.outputs(), t, &y)?;
+                    out.push(Some(y));
+                }
+                Err(e) => {
+                    self.failures.push((t.clone(), e.to_string()));
+                    out.push(None);
+                }
+            }
+        }
+        Ok(out)
+    }
+}

@@ -33,6 +33,7 @@ use rand_distr::{Distribution, Normal};
 
 use super::data::Observations;
 use super::emulator::{Emulator, Gathered, LooCheck};
+use super::Runner;
 use super::lsq::{LsqMethod, LsqOptions, LsqResult};
 use super::mcmc::{self, AdaptiveOptions, Chains, Checkpoint, Diagnostics, EnsembleOptions};
 use super::Noise;
@@ -194,33 +195,6 @@ pub struct Calibration {
 /// Progress callback: a stage message.
 pub type Progress<'a> = &'a (dyn Fn(&str) + Sync);
 
-struct Runner<'a, S: Simulator> {
-    sim: &'a S,
-    evaluations: u64,
-    failures: Vec<(Vec<f64>, String)>,
-}
-
-impl<S: Simulator> Runner<'_, S> {
-    fn run(&mut self, thetas: &[Vec<f64>]) -> Result<Vec<Option<Vec<f64>>>> {
-        self.evaluations += thetas.len() as u64;
-        let ys = self.sim.simulate_batch(thetas);
-        let mut out = Vec::with_capacity(ys.len());
-        for (t, y) in thetas.iter().zip(ys) {
-            match y {
-                Ok(y) => {
-                    crate::model::check_outputs("calibration", self.sim.outputs(), t, &y)?;
-                    out.push(Some(y));
-                }
-                Err(e) => {
-                    self.failures.push((t.clone(), e.to_string()));
-                    out.push(None);
-                }
-            }
-        }
-        Ok(out)
-    }
-}
-
 /// The observations of each output combined into their precision-weighted mean: for Gaussian
 /// noise this carries the whole likelihood of θ (the scatter about the mean does not depend on
 /// θ), and an error common to all replicates of an output (emulator, model error) enters once,
@@ -354,7 +328,7 @@ fn epsilons(em: &Emulator, agg: &Aggregated, draws: &[Vec<f64>]) -> Vec<f64> {
 pub fn calibrate<S: Simulator>(sim: &S, obs: &Observations, opts: &PipelineOptions, seed: u64, checkpoint_dir: Option<&PathBuf>, progress: Progress) -> Result<Calibration> {
     let space = sim.space().clone();
     let d = space.len();
-    let mut runner = Runner { sim, evaluations: 0, failures: Vec::new() };
+    let mut runner = Runner::new(sim);
     let mut warnings = Vec::new();
     let agg = Aggregated::new(obs, opts.model_error);
 

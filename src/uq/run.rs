@@ -343,12 +343,20 @@ impl Chain {
     }
 
     /// Full input vector from a unit point over the varying inputs.
+    /// (The hot path of the propagation: one inverse CDF per varying input, no allocation but
+    /// the result.)
     pub fn values(&self, u: &[f64]) -> Vec<f64> {
-        let mut x: Vec<f64> = self.inputs.iter().map(|i| i.marginal.quantile(0.5)).collect();
-        for (k, &i) in self.varying().iter().enumerate() {
-            x[i] = self.inputs[i].marginal.quantile(u[k]);
-        }
-        x
+        let mut k = 0;
+        self.inputs
+            .iter()
+            .map(|i| match &i.marginal {
+                Marginal::Fixed(v) => *v,
+                m => {
+                    k += 1;
+                    m.quantile(u[k - 1])
+                }
+            })
+            .collect()
     }
 
     /// Single-impact hazard parameters of material j at inputs x.

@@ -107,11 +107,12 @@ fn linear_limit_state_by_monte_carlo() {
         let mean = est.iter().sum::<f64>() / blocks as f64;
         let se = (est.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (blocks as f64 - 1.0) / blocks as f64).sqrt();
         let binom = (exact * (1.0 - exact) / (blocks * n) as f64).sqrt();
-        assert!((mean - exact).abs() < 4.0 * se.max(binom * 0.2), "{method:?}: {mean} vs Φ(−β) = {exact} (se {se})");
         if method == Method::Plain {
+            assert!((mean - exact).abs() < 4.0 * se, "{mean} vs Φ(−β) = {exact} (block se {se})");
             assert!((se / binom - 1.0).abs() < 0.35, "block se {se} vs binomial {binom}");
         } else {
-            assert!((mean - exact).abs() < 4.0 * binom, "{method:?}: {mean} vs {exact}");
+            // At least as accurate as plain Monte Carlo of the same size.
+            assert!((mean - exact).abs() < 4.0 * binom, "{method:?}: {mean} vs Φ(−β) = {exact}");
         }
     }
 }

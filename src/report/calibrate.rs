@@ -184,14 +184,19 @@ fn residuals(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let obs = Table::load(dir, "observations")?;
     let (val, sig, q05, q50, q95) = (obs.f("value")?, obs.f("sigma")?, obs.f("predictive_q05")?, obs.f("predictive_q50")?, obs.f("predictive_q95")?);
     let n = val.len();
-    let lower: Vec<(f64, f64)> = (0..n).map(|i| ((i + 1) as f64, (q05[i] - q50[i]) / sig[i])).collect();
     let upper: Vec<f64> = (0..n).map(|i| (q95[i] - q50[i]) / sig[i]).collect();
     let z: Vec<(f64, f64)> = (0..n).map(|i| ((i + 1) as f64, (val[i] - q50[i]) / sig[i])).collect();
-    let series = vec![
-        Series { label: Some("90 % posterior predictive".into()), points: lower, colour: colour(0), kind: Kind::Band(upper.clone(), 0.25) },
-        Series::line(None, vec![(0.5, 0.0), (n as f64 + 0.5, 0.0)], RGBColor(120, 120, 120), 0.5),
-        Series { label: Some("observation".into()), points: z.clone(), colour: colour(1), kind: Kind::Markers(Marker::Circle, 1.4) },
-    ];
+    // One box per observation: the interval belongs to that observation, not to the space
+    // between neighbours.
+    let mut series: Vec<Series> = (0..n)
+        .map(|i| {
+            let (x, lo) = ((i + 1) as f64, (q05[i] - q50[i]) / sig[i]);
+            let label = if i == 0 { Some("90 % posterior predictive".to_string()) } else { None };
+            Series { label, points: vec![(x - 0.4, lo), (x + 0.4, lo)], colour: colour(0), kind: Kind::Band(vec![upper[i]; 2], 0.3) }
+        })
+        .collect();
+    series.push(Series::line(None, vec![(0.5, 0.0), (n as f64 + 0.5, 0.0)], RGBColor(120, 120, 120), 0.5));
+    series.push(Series { label: Some("observation".into()), points: z.clone(), colour: colour(1), kind: Kind::Markers(Marker::Circle, 1.4) });
     let lim = z.iter().map(|p| p.1.abs()).chain(upper.iter().map(|u| u.abs())).fold(2.0, f64::max) * 1.5;
     let panel = Panel {
         x_categories: vec![],

@@ -220,11 +220,14 @@ fn main_uq_study_writes_the_headline_deterministically() {
     assert_eq!(manifest["failures"].as_array().map(|v| v.len()), Some(0), "{}", manifest["failures"]);
     // The headline's Monte Carlo error is small, and the Sobol' first-order indices of each output
     // sum to at most 1 (+ their error); the dummy γ has no effect on the independent-trials model.
-    let cmp = read_table(&a.path(&format!("{dir}/comparison.csv"))).unwrap();
-    let se = col_f64(&cmp, &a.path("c"), "mc_se").unwrap();
+    let cmp_path = a.path(&format!("{dir}/comparison.csv"));
+    let se = col_f64(&read_table(&cmp_path).unwrap(), &cmp_path, "mc_se").unwrap();
     assert!(se[0] < 0.005 && se[1] < 0.005, "{se:?}");
-    let sob = read_table(&a.path(&format!("{dir}/sobol.csv"))).unwrap();
-    let (n, out, input, s1, st) = (col_f64(&sob, &a.path("s"), "n").unwrap(), col_str(&sob, &a.path("s"), "output").unwrap(), col_str(&sob, &a.path("s"), "input").unwrap(), col_f64(&sob, &a.path("s"), "s1").unwrap(), col_f64(&sob, &a.path("s"), "st").unwrap());
+    let sob_path = a.path(&format!("{dir}/sobol.csv"));
+    let sob = read_table(&sob_path).unwrap();
+    let f = |c: &str| col_f64(&sob, &sob_path, c).unwrap();
+    let t = |c: &str| col_str(&sob, &sob_path, c).unwrap();
+    let (n, out, input, s1, st) = (f("n"), t("output"), t("input"), f("s1"), f("st"));
     let nmax = n.iter().cloned().fold(0.0, f64::max);
     for o in ["log10_p_gen4", "log10_p_bl1630", "p_gen4_minus_p_bl1630"] {
         let rows: Vec<usize> = (0..n.len()).filter(|&i| n[i] == nmax && out[i] == o).collect();

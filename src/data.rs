@@ -15,6 +15,7 @@
 //! | `roundness` | – | optional column; empty cell = unknown; else 0 < r ≤ 1 |
 //! | `sphericity` | – | optional column; empty cell = unknown; else 0 < s ≤ 1 |
 //! | `temperature_c` | °C | optional column; empty cell = unknown; else finite, ≥ −273.15 |
+//! | `impacts` | – | optional column: impacts before the crush test; empty = unknown; else a whole number in [0, 10⁶] |
 //!
 //! Verified by the unit tests below and `tests/bad_input.rs`.
 
@@ -42,6 +43,9 @@ pub struct CrushRecord {
     pub sphericity: Option<f64>,
     /// Test temperature (°C), if recorded.
     pub temperature_c: Option<f64>,
+    /// Impacts the particle received before the crush test, if recorded (optional column
+    /// `impacts`, not written by the synthetic generator).
+    pub impacts: Option<u64>,
 }
 
 /// A crush dataset read from one file.
@@ -158,7 +162,7 @@ pub fn read_crush(path: &Path) -> Result<CrushData> {
                 path,
                 "header",
                 format!(
-                    "missing column `{c}` (required: {}; optional: roundness, sphericity, temperature_c)",
+                    "missing column `{c}` (required: {}; optional: roundness, sphericity, temperature_c, impacts)",
                     CRUSH_REQUIRED.join(", ")
                 ),
             ));
@@ -175,6 +179,7 @@ pub fn read_crush(path: &Path) -> Result<CrushData> {
     let round = get("roundness")?;
     let spher = get("sphericity")?;
     let temp = get("temperature_c")?;
+    let imp = get("impacts")?;
 
     let mut seen = HashSet::new();
     let mut records = Vec::with_capacity(df.height());
@@ -219,6 +224,10 @@ pub fn read_crush(path: &Path) -> Result<CrushData> {
         if let Some(t) = temperature_c {
             require(path, row, "temperature_c", t >= -273.15, "temperature must be ≥ −273.15 °C", t)?;
         }
+        let impacts = optional(&imp, "impacts")?;
+        if let Some(k) = impacts {
+            require(path, row, "impacts", (0.0..=1e6).contains(&k) && k.fract() == 0.0, "impacts must be a whole number in [0, 10⁶]", k)?;
+        }
         records.push(CrushRecord {
             id,
             material,
@@ -227,6 +236,7 @@ pub fn read_crush(path: &Path) -> Result<CrushData> {
             roundness,
             sphericity,
             temperature_c,
+            impacts: impacts.map(|k| k as u64),
         });
     }
     Ok(CrushData { path: path.to_path_buf(), records })

@@ -41,6 +41,26 @@ enum Command {
         #[arg(long, default_value = "reports")]
         reports_dir: PathBuf,
     },
+    /// Find where the strength model and crush data disagree, name the missing effect, add it
+    /// and show the gap shrink. Either a study file (kind = "discrepancy") or `--data`.
+    Discrepancy {
+        /// Study file, e.g. studies/discrepancy_crush.toml.
+        #[arg(required_unless_present = "data", conflicts_with = "data")]
+        study: Option<PathBuf>,
+        /// A crush CSV with the dataset columns (quick run with the default study settings).
+        #[arg(long)]
+        data: Option<PathBuf>,
+        /// Model to diagnose (the deliverable's Weibull law of the Hertz σ̄ at break).
+        #[arg(long, value_enum, default_value = "weibull-hertz", requires = "data")]
+        model: DiscrepancyModel,
+        /// Output directory (default: reports/discrepancy-<file stem>/ with --data,
+        /// reports/<study name>/ with a study file).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Dataset tools.
     Datasets {
         #[command(subcommand)]
@@ -69,6 +89,13 @@ enum Command {
         #[arg(long)]
         uq: bool,
     },
+}
+
+/// Models `partlife discrepancy --data` can diagnose.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum DiscrepancyModel {
+    /// Weibull law of the average Hertzian tensile stress at break (R = d/2).
+    WeibullHertz,
 }
 
 #[derive(Debug, Subcommand)]
@@ -137,6 +164,30 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Run { study, reports_dir, quiet } => {
             let opts = partlife::runner::RunOptions { reports_root: reports_dir, progress: !quiet };
             let summary = partlife::runner::run_file(&study, &opts)?;
+            for line in &summary.headlines {
+                out!("{line}");
+            }
+            out!("wrote {} in {:.2} s", summary.report_dir.display(), summary.wall_time_s);
+        }
+        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, out, quiet } => {
+            let mut loaded = match (&study, &data) {
+                (_, Some(d)) => partlife::discrepancy::run::quick_study(d)?,
+                (Some(s), None) => partlife::study::load(s)?,
+                (None, None) => anyhow::bail!("give a study file or --data <crush.csv>"),
+            };
+            if study.is_some() && !matches!(loaded.study, partlife::study::Study::Discrepancy(_)) {
+                return Err(partlife::Error::config(loaded.path.display().to_string(), "kind", "`partlife discrepancy` runs studies of kind \"discrepancy\"").into());
+            }
+            let reports_root = match &out {
+                Some(dir) => {
+                    let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).context("--out needs a directory name")?;
+                    loaded.name = name;
+                    dir.parent().map(|p| if p.as_os_str().is_empty() { PathBuf::from(".") } else { p.to_path_buf() }).unwrap_or_else(|| PathBuf::from("."))
+                }
+                None => PathBuf::from("reports"),
+            };
+            let opts = partlife::runner::RunOptions { reports_root, progress: !quiet };
+            let summary = partlife::runner::run(&loaded, &opts)?;
             for line in &summary.headlines {
                 out!("{line}");
             }

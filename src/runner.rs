@@ -21,13 +21,13 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::contact::{ContactState, ContactStress, Hertz, Sphere, TensileZone};
-use crate::data::{CrushData, read_crush};
+use crate::contact::{ContactState, ContactStress, Elastic, Hertz, Sphere, TensileZone};
+use crate::data::{CrushData, CrushRecord, read_crush};
 use crate::error::{Error, Result};
 use crate::io::{InputFile, Manifest, ReportDir, fcol, git_state, scol, table, ucol};
 use crate::lifetime::{LifetimeChain, breakage_from_hazard, impacts_in, theta};
 use crate::model::Simulator;
-use crate::study::{LifetimeStudy, LoadedStudy, ShapeEstimate, Study};
+use crate::study::{ContactOptions, LifetimeStudy, LoadedStudy, ShapeEstimate, Study};
 use crate::stats::{fit_line, median};
 use crate::weibull::{FisherBounds, PivotalBounds, Weibull, WeibullFit, fisher_bounds, fit_mle, probability_plot, simulate_pivotal, sorted_quantile};
 
@@ -59,6 +59,7 @@ pub fn run(study: &LoadedStudy, opts: &RunOptions) -> Result<RunSummary> {
         Study::Crush(s) => crate::fem::run::run_crush(study, s, opts),
         Study::Calibrate(s) => crate::calibrate::run::run_calibrate(study, s, opts),
         Study::Uq(s) => crate::uq::run::run_uq(study, s, opts),
+        Study::Discrepancy(s) => crate::discrepancy::run::run_discrepancy(study, s, opts),
     }
 }
 
@@ -98,6 +99,20 @@ fn pivotal_seed(seed: u64, n: usize) -> u64 {
     seed ^ (n as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
 }
 
+/// Hertz contact state of each crushed particle at its force at break: sphere of radius d/2 on
+/// the platen, σ̄ over the contact options' averaging domain (the deliverable's reduction).
+pub fn contact_at_break(records: &[CrushRecord], elastic: &Elastic, contact: &ContactOptions) -> Result<Vec<ContactState>> {
+    let zone = TensileZone::new(elastic.poisson_ratio);
+    records
+        .iter()
+        .map(|r| {
+            let radius = 0.5 * r.diameter_m;
+            let hertz = Hertz::sphere_on_flat(elastic, &contact.platen, radius);
+            ContactStress { hertz, zone, domain: contact.averaging, particle_radius: radius }.at_force(r.crush_force_n)
+        })
+        .collect()
+}
+
 /// Runs a lifetime study.
 pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) -> Result<RunSummary> {
     let clock = RunClock::start();
@@ -119,16 +134,7 @@ pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) 
     let mut runs = Vec::new();
     for (m, data) in s.material.iter().zip(datasets) {
         pb.set_message(format!("{}: contact stresses and Weibull fit", m.label));
-        let zone = TensileZone::new(m.elastic.poisson_ratio);
-        let at_break = data
-            .records
-            .iter()
-            .map(|r| {
-                let radius = 0.5 * r.diameter_m;
-                let hertz = Hertz::sphere_on_flat(&m.elastic, &s.contact.platen, radius);
-                ContactStress { hertz, zone, domain: s.contact.averaging, particle_radius: radius }.at_force(r.crush_force_n)
-            })
-            .collect::<Result<Vec<ContactState>>>()?;
+        let at_break = contact_at_break(&data.records, &m.elastic, &s.contact)?;
         let sigma_bar: Vec<f64> = at_break.iter().map(|c| c.mean_tensile).collect();
         let fit = fit_mle(&sigma_bar).map_err(|e| {
             Error::data_file(&data.path, "all rows", format!("Weibull fit of the average tensile stress failed: {e}"))

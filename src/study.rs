@@ -165,7 +165,7 @@ pub struct MaterialSpec {
 }
 
 /// The kinds of study this version can run.
-pub const KINDS: [&str; 5] = ["lifetime", "dem", "crush", "calibrate", "uq"];
+pub const KINDS: [&str; 6] = ["lifetime", "dem", "crush", "calibrate", "uq", "discrepancy"];
 
 /// A lifetime study (kind = "lifetime"): the deliverable's §6 chain for several materials.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -205,6 +205,8 @@ pub enum Study {
     Calibrate(Box<crate::calibrate::run::CalibrateStudy>),
     /// kind = "uq": Monte Carlo propagation and Sobol' indices of the lifetime chain.
     Uq(Box<crate::uq::run::UqStudy>),
+    /// kind = "discrepancy": find, name and add what the strength model misses.
+    Discrepancy(Box<crate::discrepancy::run::DiscrepancyStudy>),
 }
 
 /// A study file loaded from disk.
@@ -287,6 +289,11 @@ pub fn load(path: &Path) -> Result<LoadedStudy> {
             let s: crate::uq::run::UqStudy = parse_toml(path, &text)?;
             s.prepare(path)?;
             Study::Uq(Box::new(s))
+        }
+        "discrepancy" => {
+            let s: crate::discrepancy::run::DiscrepancyStudy = parse_toml(path, &text)?;
+            s.validate(&file)?;
+            Study::Discrepancy(Box::new(s))
         }
         other => {
             return Err(Error::config(&file, "kind", format!("unknown kind \"{other}\"; known: {}", KINDS.join(", "))));

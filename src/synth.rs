@@ -17,7 +17,12 @@
 //! 4. **Measurement.** Diameter, roundness and sphericity are measured with Gaussian errors and
 //!    rounded to the instrument resolution; the force has a relative Gaussian error.
 //!
-//! Sphericity is recorded but has no effect in this nature (a null covariate).
+//! 5. **Optional temperature softening** (`[material.nature] softening`): particles tested
+//!    above `reference_c` have strength and Young's modulus reduced linearly with temperature;
+//!    `temperature_c` may be a list the particles cycle through (temperatures mixed in a file).
+//!
+//! Sphericity is recorded but has no effect in this nature (a null covariate). The hidden
+//! effects are switched off by a zero exponent (and no softening).
 //!
 //! The settings are the generator's truth. They are documented in `datasets/README.md` and
 //! never read by fitting code: the lifetime chain reads only the CSV files.
@@ -65,8 +70,9 @@ pub struct SynthMaterial {
     pub id_prefix: String,
     /// Number of particles.
     pub count: usize,
-    /// Test temperature written to every row (°C).
-    pub temperature_c: f64,
+    /// Test temperature (°C): one value for every row, or a list the particles cycle through
+    /// (particle i is tested at list[i mod len]: temperatures mixed in one file).
+    pub temperature_c: Temperatures,
     /// Particle elastic constants.
     pub elastic: Elastic,
     /// Diameter distribution: normal truncated to [min, max] (m).
@@ -79,6 +85,54 @@ pub struct SynthMaterial {
     pub nature: Nature,
     /// Measurement errors and resolutions.
     pub measurement: Measurement,
+}
+
+/// One test temperature or a cycle of them (°C).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Temperatures {
+    /// Every particle at this temperature.
+    One(f64),
+    /// Particle i at list[i mod len].
+    Cycle(Vec<f64>),
+}
+
+impl Temperatures {
+    /// Temperature of particle i.
+    pub fn of(&self, i: usize) -> f64 {
+        match self {
+            Temperatures::One(t) => *t,
+            Temperatures::Cycle(v) => v[i % v.len()],
+        }
+    }
+
+    fn all(&self) -> Vec<f64> {
+        match self {
+            Temperatures::One(t) => vec![*t],
+            Temperatures::Cycle(v) => v.clone(),
+        }
+    }
+}
+
+/// Temperature softening of the hidden physics: above `reference_c` strength and Young's
+/// modulus fall linearly, by the given fractions per 100 °C.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Softening {
+    /// Temperature below which nothing changes (°C).
+    pub reference_c: f64,
+    /// Fractional strength loss per 100 °C above the reference.
+    pub strength_per_100c: f64,
+    /// Fractional Young's-modulus loss per 100 °C above the reference.
+    pub stiffness_per_100c: f64,
+}
+
+impl Softening {
+    /// (strength factor, stiffness factor) at temperature t.
+    pub fn factors(&self, t: f64) -> (f64, f64) {
+        let k = (t - self.reference_c).max(0.0) / 100.0;
+        (1.0 - self.strength_per_100c * k, 1.0 - self.stiffness_per_100c * k)
+    }
 }
 
 /// A normal distribution truncated to [min, max].
@@ -119,6 +173,9 @@ pub struct Nature {
     pub size_exponent: f64,
     /// Exponent q in ρ = roundness^q, R_c = ρ d/2.
     pub curvature_exponent: f64,
+    /// Temperature softening (none: strength and stiffness do not depend on temperature).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub softening: Option<Softening>,
 }
 
 /// Measurement model.
@@ -195,6 +252,22 @@ impl SynthSettings {
             if !(n.strength_shape > 0.0 && n.strength_scale_pa > 0.0 && n.reference_diameter_m > 0.0) {
                 return Err(bad(file, k("nature"), format!("strength shape, scale and reference diameter must be > 0 (got {n:?})")));
             }
+            if let Temperatures::Cycle(v) = &m.temperature_c
+                && v.is_empty()
+            {
+                return Err(bad(file, k("temperature_c"), "a list of temperatures must not be empty".into()));
+            }
+            if let Some(t) = m.temperature_c.all().iter().find(|t| !(t.is_finite() && **t >= -273.15)) {
+                return Err(bad(file, k("temperature_c"), format!("temperatures must be finite and ≥ −273.15 °C (got {t})")));
+            }
+            if let Some(sf) = n.softening {
+                for t in m.temperature_c.all() {
+                    let (a, b) = sf.factors(t);
+                    if !(a > 0.0 && b > 0.0 && a <= 1.0 && b <= 1.0) {
+                        return Err(bad(file, k("nature.softening"), format!("strength and stiffness factors must stay in (0, 1] (at {t} °C: {a}, {b})")));
+                    }
+                }
+            }
             let ms = m.measurement;
             if [ms.force_rel_sd, ms.force_resolution_n, ms.diameter_sd_m, ms.diameter_resolution_m, ms.shape_sd, ms.shape_resolution]
                 .iter()
@@ -266,10 +339,18 @@ pub fn generate(settings: &SynthSettings, index: usize) -> Result<Vec<SynthParti
         let roundness = round_dist.sample(&mut rng);
         let sphericity = spher_dist.sample(&mut rng);
         let n = m.nature;
-        let scale = n.strength_scale_pa * (d / n.reference_diameter_m).powf(-n.size_exponent);
+        let temperature = m.temperature_c.of(i);
+        let (soft_strength, soft_stiffness) = n.softening.map_or((1.0, 1.0), |sf| sf.factors(temperature));
+        let scale = soft_strength * n.strength_scale_pa * (d / n.reference_diameter_m).powf(-n.size_exponent);
         let strength = Weibull::new(n.strength_shape, scale)?.sample(&mut rng);
         let rc = roundness.powf(n.curvature_exponent) * 0.5 * d;
         let p0 = 3.0 * strength / (1.0 - 2.0 * nu);
+        let e_star = if soft_stiffness == 1.0 {
+            e_star
+        } else {
+            let soft = Elastic { youngs_modulus_pa: m.elastic.youngs_modulus_pa * soft_stiffness, ..m.elastic };
+            effective_modulus(&soft, &settings.platen)
+        };
         let force = std::f64::consts::PI.powi(3) * rc * rc * p0.powi(3) / (6.0 * e_star * e_star);
         let e_f = std_normal.sample(&mut rng);
         let e_d = std_normal.sample(&mut rng);
@@ -284,7 +365,8 @@ pub fn generate(settings: &SynthSettings, index: usize) -> Result<Vec<SynthParti
                 crush_force_n: round_to(force * (1.0 + meas.force_rel_sd * e_f), meas.force_resolution_n),
                 roundness: Some(shape(roundness, e_r)),
                 sphericity: Some(shape(sphericity, e_s)),
-                temperature_c: Some(m.temperature_c),
+                temperature_c: Some(temperature),
+                impacts: None,
             },
             diameter_true: d,
             roundness_true: roundness,
@@ -308,11 +390,15 @@ pub fn write_crush_csv(path: &Path, records: &[CrushRecord], meas: &Measurement)
         records.iter().map(|r| fmt(r.sphericity, meas.shape_resolution)).collect(),
         records.iter().map(|r| fmt(r.temperature_c, 1.0)).collect(),
     ];
-    let columns: Vec<Column> = CRUSH_COLUMNS
+    let mut columns: Vec<Column> = CRUSH_COLUMNS
         .iter()
         .zip(cols)
         .map(|(name, values)| Column::new((*name).into(), values))
         .collect();
+    if records.iter().any(|r| r.impacts.is_some()) {
+        let v: Vec<String> = records.iter().map(|r| r.impacts.map(|k| k.to_string()).unwrap_or_default()).collect();
+        columns.push(Column::new("impacts".into(), v));
+    }
     let mut df = DataFrame::new_infer_height(columns).map_err(|e| Error::numerical("building crush table", e.to_string()))?;
     let mut buf = Vec::new();
     CsvWriter::new(&mut buf)

@@ -29,13 +29,20 @@ use crate::weibull::{Weibull, fit_mle};
 
 /// Quantile residuals Φ⁻¹(F(x_i)) of `data` under `law` (clamped to ±8.3 at the extremes).
 pub fn quantile_residuals(data: &[f64], law: &Weibull) -> Vec<f64> {
-    let n = Normal::new(0.0, 1.0).unwrap_or_else(|_| unreachable!("N(0,1) is valid"));
-    data.iter().map(|&x| n.inverse_cdf(law.cdf(x).clamp(1e-16, 1.0 - 1e-16))).collect()
+    normal_scores(data.iter().map(|&x| law.cdf(x)))
 }
 
 /// Anderson–Darling and Kolmogorov–Smirnov statistics of `data` under `law`.
 pub fn ad_ks(data: &[f64], law: &Weibull) -> (f64, f64) {
-    let mut u: Vec<f64> = data.iter().map(|&x| law.cdf(x).clamp(1e-300, 1.0 - 1e-16)).collect();
+    ad_ks_of_u(data.iter().map(|&x| law.cdf(x)).collect())
+}
+
+/// Anderson–Darling and Kolmogorov–Smirnov statistics of probability-integral transforms
+/// u_i = F_i(x_i) (each particle may have its own fitted law).
+pub fn ad_ks_of_u(mut u: Vec<f64>) -> (f64, f64) {
+    for v in &mut u {
+        *v = v.clamp(1e-300, 1.0 - 1e-16);
+    }
     u.sort_by(f64::total_cmp);
     let n = u.len() as f64;
     let mut s = 0.0;
@@ -46,6 +53,12 @@ pub fn ad_ks(data: &[f64], law: &Weibull) -> (f64, f64) {
         ks = ks.max(k / n - ui).max(ui - (k - 1.0) / n);
     }
     (-n - s / n, ks)
+}
+
+/// Standard-normal quantiles of probabilities (clamped to ±8.3 at the extremes).
+pub fn normal_scores(u: impl Iterator<Item = f64>) -> Vec<f64> {
+    let n = Normal::new(0.0, 1.0).unwrap_or_else(|_| unreachable!("N(0,1) is valid"));
+    u.map(|p| n.inverse_cdf(p.clamp(1e-16, 1.0 - 1e-16))).collect()
 }
 
 /// Goodness of fit of a Weibull MLE with bootstrap-calibrated p-values.
@@ -160,6 +173,13 @@ pub struct CovariateFinding {
 pub fn diagnose(strength: &[f64], covariates: &[(&str, Vec<f64>)], bootstrap: usize, permutations: usize, seed: u64) -> Result<(GoodnessOfFit, Vec<CovariateFinding>, Vec<String>)> {
     let gof = weibull_gof(strength, bootstrap, seed)?;
     let r = quantile_residuals(strength, &gof.fit);
+    let (found, skipped) = covariate_findings(&r, covariates, permutations, seed)?;
+    Ok((gof, found, skipped))
+}
+
+/// Residual trend against every covariate given (name, values; a covariate constant over the
+/// sample or of the wrong length is skipped with its reason), sorted by p.
+pub fn covariate_findings(r: &[f64], covariates: &[(&str, Vec<f64>)], permutations: usize, seed: u64) -> Result<(Vec<CovariateFinding>, Vec<String>)> {
     let mut found = Vec::new();
     let mut skipped = Vec::new();
     for (k, (name, x)) in covariates.iter().enumerate() {
@@ -171,7 +191,7 @@ pub fn diagnose(strength: &[f64], covariates: &[(&str, Vec<f64>)], bootstrap: us
             skipped.push(format!("{name}: constant over the sample"));
             continue;
         }
-        let (rho, p) = covariate_trend(&r, x, permutations, seed ^ (k as u64 + 1))?;
+        let (rho, p) = covariate_trend(r, x, permutations, seed ^ (k as u64 + 1))?;
         let mut idx: Vec<usize> = (0..x.len()).collect();
         idx.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
         // Tertiles of the covariate; the one whose mean residual is farthest from 0.
@@ -182,5 +202,5 @@ pub fn diagnose(strength: &[f64], covariates: &[(&str, Vec<f64>)], bootstrap: us
         found.push(CovariateFinding { covariate: name.to_string(), rho, p, worst_range: worst });
     }
     found.sort_by(|a, b| a.p.total_cmp(&b.p));
-    Ok((gof, found, skipped))
+    Ok((found, skipped))
 }

@@ -1,11 +1,19 @@
 //! The discrepancy workflow (issue 7): find where a fitted model and measurements disagree,
 //! name the missing effect, add it, and show the gap shrink.
 //!
-//! * [`gof`]: step 1, diagnosis of a Weibull strength fit — quantile residuals, AD/KS with
-//!   parametric-bootstrap p-values, residual trends against covariates, and `diagnose`, which
-//!   ranks the covariates by their trend and names the tertile where the residuals depart most.
+//! * [`gof`]: diagnosis tools — quantile residuals, AD/KS with parametric-bootstrap p-values,
+//!   residual trends against covariates with permutation p-values.
+//! * [`regress`]: the Weibull strength model with covariates (log-location-scale regression).
+//! * [`effects`]: the library of candidate effects, their equations and covariate signatures.
+//! * [`workflow`]: the name → add → diagnose-again loop with the bootstrap-calibrated
+//!   false-discovery guard and the gap measure.
+//! * [`run`]: the study (`kind = "discrepancy"`, `partlife discrepancy`): lifetime before and
+//!   after, detection power vs number of particles, tables, figures and `verdict.json`.
 //!
-//! Still to come: the candidate-effect library, evidence ranking with a false-discovery guard,
-//! the before/after report, the force–displacement GP discrepancy and the CLI.
+//! Still to come: the force–displacement GP discrepancy.
 
+pub mod effects;
 pub mod gof;
+pub mod regress;
+pub mod run;
+pub mod workflow;

@@ -20,6 +20,7 @@ pub mod dem;
 pub mod map;
 pub mod panel;
 pub mod uq;
+pub mod discrepancy;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -161,6 +162,7 @@ pub fn redraw(report_dir: &Path) -> Result<Rendered> {
         Some("crush") => return crush::render(report_dir, width),
         Some("calibrate") => return calibrate::render(report_dir, width),
         Some("uq") => return uq::render(report_dir, width),
+        Some("discrepancy") => return discrepancy::render(report_dir, width),
         _ => {}
     }
     render(report_dir, width)

@@ -1,0 +1,306 @@
+//! Figures of a discrepancy report (`kind = "discrepancy"`), drawn from its tables only.
+//!
+//! | file stem | content | table |
+//! |---|---|---|
+//! | `discrepancy_residuals_<key>` | quantile residuals vs every covariate diagnosed, base model (left) and final model (right), with the binned mean | `residuals.csv` |
+//! | `discrepancy_probability_<key>` | Weibull probability plot before (σ̄ as reduced) and after (σ̄ adjusted to the average covariates), with the fitted lines | `residuals.csv`, `fits.csv` |
+//! | `discrepancy_gap` | gap measure G per round and material, with its expectation when nothing is missing | `stages.csv` |
+//! | `discrepancy_evidence` | likelihood ratio of every candidate per round against the round's critical value | `evidence.csv` |
+//! | `discrepancy_lifetime` | breaking probability of the population, base vs final model, 90 % bands | `lifetime.csv` |
+//! | `discrepancy_power` | detection power and false-positive rate vs number of crush tests | `power.csv` |
+
+use std::path::Path;
+
+use plotters::prelude::{BLACK, RGBColor, SeriesLabelPosition};
+
+use super::canvas::{Encoded, colour};
+use super::panel::{Kind, Marker, Panel, Series, figure, figure_grid, padded};
+use super::{Rendered, Table};
+use crate::error::Result;
+
+type Drawn = (Encoded, usize);
+
+const GREY: RGBColor = RGBColor(150, 150, 150);
+
+/// Draws every discrepancy figure in `dir`.
+pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
+    let m = Table::load(dir, "materials")?;
+    let (keys, labels) = (m.s("key")?, m.s("label")?);
+    let mut names: Vec<String> = Vec::new();
+    let mut drawn: Vec<Drawn> = Vec::new();
+    for (k, key) in keys.iter().enumerate() {
+        names.push(format!("discrepancy_residuals_{key}"));
+        drawn.push(residuals(dir, width_cm, key)?);
+        names.push(format!("discrepancy_probability_{key}"));
+        drawn.push(probability(dir, width_cm, key, &labels[k], colour(k))?);
+    }
+    names.push("discrepancy_gap".into());
+    drawn.push(gap(dir, width_cm, &keys, &labels)?);
+    names.push("discrepancy_evidence".into());
+    drawn.push(evidence(dir, width_cm, &keys, &labels)?);
+    names.push("discrepancy_lifetime".into());
+    drawn.push(lifetime(dir, width_cm, &keys, &labels)?);
+    let power_rows = Table::load(dir, "power")?;
+    if !power_rows.s("material")?.is_empty() {
+        names.push("discrepancy_power".into());
+        drawn.push(power(dir, width_cm, &keys, &labels)?);
+    }
+    super::write_figures(dir, names.iter().map(|n| n.as_str()).zip(drawn).collect())
+}
+
+/// Axis label and display factor of a covariate column.
+fn covariate_axis(name: &str) -> (&'static str, f64) {
+    match name {
+        "diameter_m" => ("Diameter d (mm)", 1e3),
+        "roundness" => ("Roundness (–)", 1.0),
+        "sphericity" => ("Sphericity (–)", 1.0),
+        "temperature_c" => ("Temperature (°C)", 1.0),
+        _ => ("Prior impacts (–)", 1.0),
+    }
+}
+
+/// Means of y over `bins` equal-count bins of x, at the bins' mean x.
+fn binned(x: &[f64], y: &[f64], bins: usize) -> Vec<(f64, f64)> {
+    let mut idx: Vec<usize> = (0..x.len()).collect();
+    idx.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
+    idx.chunks(idx.len().div_ceil(bins).max(1))
+        .map(|g| (g.iter().map(|&i| x[i]).sum::<f64>() / g.len() as f64, g.iter().map(|&i| y[i]).sum::<f64>() / g.len() as f64))
+        .collect()
+}
+
+fn residuals(dir: &Path, width_cm: f64, key: &str) -> Result<Drawn> {
+    let t = Table::load(dir, "residuals")?;
+    let (mat, stage, r) = (t.s("material")?, t.s("stage")?, t.f("residual")?);
+    let rows: Vec<usize> = (0..mat.len()).filter(|&i| mat[i] == key).collect();
+    let fits = Table::load(dir, "fits")?;
+    let (fm, fs, fe) = (fits.s("material")?, fits.s("stage")?, fits.s("effects")?);
+    let effects_after = (0..fm.len()).find(|&i| fm[i] == key && fs[i] == "after").map(|i| fe[i].clone()).unwrap_or_default();
+    let y_range = padded(rows.iter().map(|&i| r[i]), 0.05, 0.05);
+    let mut panels = Vec::new();
+    for name in crate::discrepancy::workflow::DIAGNOSED {
+        if !t.has(name) {
+            continue;
+        }
+        let v = t.f(name)?;
+        let vals: Vec<f64> = rows.iter().map(|&i| v[i]).collect();
+        if vals.iter().any(|x| !x.is_finite()) || vals.iter().all(|x| *x == vals[0]) {
+            continue;
+        }
+        let (label, factor) = covariate_axis(name);
+        for (si, st) in ["before", "after"].iter().enumerate() {
+            let idx: Vec<usize> = rows.iter().copied().filter(|&i| stage[i] == *st).collect();
+            let x: Vec<f64> = idx.iter().map(|&i| v[i] * factor).collect();
+            let y: Vec<f64> = idx.iter().map(|&i| r[i]).collect();
+            let xr = padded(x.iter().copied(), 0.04, 0.04);
+            let c = if si == 0 { GREY } else { colour(0) };
+            panels.push(Some(Panel {
+                x_categories: vec![],
+                x_desc: label.into(),
+                y_desc: if si == 0 { "Residual, base model".into() } else { format!("Residual, + {}", effects_after.replace(" then ", " + ")) },
+                x_range: xr,
+                y_range,
+                y_log: false,
+                series: vec![
+                    Series { label: None, points: vec![(xr.0, 0.0), (xr.1, 0.0)], colour: BLACK, kind: Kind::Dashed(0.6, 3.0, 2.0) },
+                    Series { label: None, points: x.iter().copied().zip(y.iter().copied()).collect(), colour: c, kind: Kind::Markers(Marker::Circle, 1.4) },
+                    Series::line(None, binned(&x, &y, 5), if si == 0 { BLACK } else { colour(1) }, 1.3),
+                ],
+                legend: None,
+            }));
+        }
+    }
+    let rows_n = (panels.len() / 2).max(1);
+    figure_grid(&format!("discrepancy_residuals_{key}"), 2.0 * width_cm, 0.3 * rows_n as f64, 2, &panels)
+}
+
+fn probability(dir: &Path, width_cm: f64, key: &str, label: &str, c: RGBColor) -> Result<Drawn> {
+    let t = Table::load(dir, "residuals")?;
+    let (mat, stage, raw, adj) = (t.s("material")?, t.s("stage")?, t.f("strength_pa")?, t.f("adjusted_pa")?);
+    let fits = Table::load(dir, "fits")?;
+    let (fm, fs, fe, shape, scale) = (fits.s("material")?, fits.s("stage")?, fits.s("effects")?, fits.f("weibull_modulus")?, fits.f("scale_pa")?);
+    let mut series = Vec::new();
+    let mut xs = Vec::new();
+    for (si, st) in ["before", "after"].iter().enumerate() {
+        let mut v: Vec<f64> = (0..mat.len()).filter(|&i| mat[i] == key && stage[i] == *st).map(|i| if si == 0 { raw[i] } else { adj[i] } / 1e6).collect();
+        v.sort_by(f64::total_cmp);
+        let n = v.len() as f64;
+        let pts: Vec<(f64, f64)> = v.iter().enumerate().map(|(i, x)| (x.ln(), (-(1.0 - (i as f64 + 0.5) / n).ln()).ln())).collect();
+        xs.extend(pts.iter().map(|p| p.0));
+        let Some(j) = (0..fm.len()).find(|&i| fm[i] == key && fs[i] == *st) else { continue };
+        let (m, s) = (shape[j], (scale[j] / 1e6).ln());
+        let (lo, hi) = (pts.first().map_or(s - 0.3, |p| p.0) - 0.05, pts.last().map_or(s + 0.3, |p| p.0) + 0.05);
+        let colour_st = if si == 0 { GREY } else { c };
+        let name = if si == 0 { "base model".to_string() } else { format!("+ {}", fe[j].replace(" then ", " + ")) };
+        series.push(Series { label: Some(format!("{name}: m = {m:.1}")), points: pts, colour: colour_st, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 1.6) });
+        series.push(Series::line(None, vec![(lo, m * (lo - s)), (hi, m * (hi - s))], colour_st, 1.0));
+    }
+    let xr = padded(xs.iter().copied(), 0.05, 0.05);
+    let p = Panel {
+        x_categories: vec![],
+        x_desc: format!("ln(σ̄ at break / 1 MPa), {label}"),
+        y_desc: "ln(−ln(1 − F))".into(),
+        x_range: xr,
+        y_range: padded(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)).filter(|_| true), 0.05, 0.05),
+        y_log: false,
+        series,
+        legend: Some(SeriesLabelPosition::UpperLeft),
+    };
+    figure(&format!("discrepancy_probability_{key}"), width_cm, 0.8, &[(p, 1.0)])
+}
+
+fn gap(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<Drawn> {
+    let t = Table::load(dir, "stages")?;
+    let (mat, round, g, ncov) = (t.s("material")?, t.f("round")?, t.f("gap")?, t.f("covariates_diagnosed")?);
+    let mut series = Vec::new();
+    let mut max_round: f64 = 0.0;
+    for (k, key) in keys.iter().enumerate() {
+        let rows: Vec<usize> = (0..mat.len()).filter(|&i| &mat[i] == key).collect();
+        let pts: Vec<(f64, f64)> = rows.iter().map(|&i| (round[i] + 1.0, g[i])).collect();
+        max_round = max_round.max(rows.iter().map(|&i| round[i]).fold(0.0, f64::max));
+        series.push(Series::line(Some(labels[k].clone()), pts.clone(), colour(k), 1.2));
+        series.push(Series { label: None, points: pts, colour: colour(k), kind: Kind::Markers([Marker::Circle, Marker::Triangle, Marker::Cross][k % 3], 2.0) });
+        if let Some(&i) = rows.first() {
+            series.push(Series { label: Some(format!("{}: no missing effect (≈ {})", labels[k], ncov[i])), points: vec![(0.7, ncov[i]), (max_round + 1.3, ncov[i])], colour: colour(k), kind: Kind::Dashed(0.8, 3.0, 2.0) });
+        }
+    }
+    let cats: Vec<String> = (0..=max_round as usize).map(|r| if r == 0 { "base".into() } else { format!("+{r} effect{}", if r > 1 { "s" } else { "" }) }).collect();
+    let p = Panel {
+        x_categories: cats,
+        x_desc: "Model (effects added by the workflow)".into(),
+        y_desc: "Gap G = n Σ ρ² (–)".into(),
+        x_range: (0.6, max_round + 1.4),
+        y_range: (0.0, g.iter().copied().fold(0.0, f64::max) * 1.45 + 1.0),
+        y_log: false,
+        series,
+        legend: Some(SeriesLabelPosition::UpperRight),
+    };
+    figure("discrepancy_gap", width_cm, 0.75, &[(p, 1.0)])
+}
+
+fn evidence(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<Drawn> {
+    let t = Table::load(dir, "evidence")?;
+    let (mat, round, cand, skipped, lr, crit) = (t.s("material")?, t.f("round")?, t.s("candidate")?, t.s("skipped")?, t.f("likelihood_ratio")?, t.f("likelihood_ratio_critical")?);
+    let mut panels = Vec::new();
+    for (k, key) in keys.iter().enumerate() {
+        let rows: Vec<usize> = (0..mat.len()).filter(|&i| &mat[i] == key && skipped[i].is_empty()).collect();
+        let mut cats: Vec<String> = Vec::new();
+        for &i in &rows {
+            if !cats.contains(&cand[i]) {
+                cats.push(cand[i].clone());
+            }
+        }
+        let rounds = rows.iter().map(|&i| round[i] as usize).max().map_or(0, |r| r + 1);
+        let mut series = Vec::new();
+        for r in 0..rounds {
+            let idx: Vec<usize> = rows.iter().copied().filter(|&i| round[i] as usize == r).collect();
+            let off = 0.12 * (r as f64 - 0.5 * (rounds as f64 - 1.0));
+            let pts: Vec<(f64, f64)> = idx.iter().map(|&i| (cats.iter().position(|c| *c == cand[i]).unwrap_or(0) as f64 + 1.0 + off, lr[i])).collect();
+            let c = colour(r);
+            series.push(Series { label: Some(format!("round {} Λ", r + 1)), points: pts, colour: c, kind: Kind::Markers([Marker::Circle, Marker::Triangle, Marker::Cross][r % 3], 2.2) });
+            if let Some(&i) = idx.first() {
+                series.push(Series { label: Some(format!("round {} critical", r + 1)), points: vec![(0.5, crit[i]), (cats.len() as f64 + 0.5, crit[i])], colour: c, kind: Kind::Dashed(0.8, 3.0, 2.0) });
+            }
+        }
+        let top = rows.iter().map(|&i| lr[i]).filter(|v| v.is_finite()).fold(1.0, f64::max);
+        panels.push((
+            Panel {
+                x_categories: cats.clone(),
+                x_desc: if k + 1 == keys.len() { "Candidate effect".into() } else { String::new() },
+                y_desc: format!("Λ, {}", labels[k]),
+                x_range: (0.5, cats.len() as f64 + 0.5),
+                y_range: (0.0, top * 1.6),
+                y_log: false,
+                series,
+                legend: Some(SeriesLabelPosition::UpperRight),
+            },
+            1.0 / keys.len() as f64,
+        ));
+    }
+    figure("discrepancy_evidence", width_cm, 0.6 * keys.len() as f64, &panels)
+}
+
+fn lg(p: f64) -> f64 {
+    p.max(1e-300).log10().max(-12.0)
+}
+
+fn lifetime(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<Drawn> {
+    let t = Table::load(dir, "lifetime")?;
+    let (mat, stage, years, p, q05, q95) = (t.s("material")?, t.s("stage")?, t.f("years")?, t.f("p_break")?, t.f("q05")?, t.f("q95")?);
+    let mut horizons: Vec<f64> = Vec::new();
+    for y in &years {
+        if !horizons.contains(y) {
+            horizons.push(*y);
+        }
+    }
+    let mut panels = Vec::new();
+    for (hi, h) in horizons.iter().enumerate() {
+        let mut series = Vec::new();
+        let mut ys = Vec::new();
+        for (si, st) in ["before", "after"].iter().enumerate() {
+            let c = if si == 0 { GREY } else { colour(0) };
+            let off = if si == 0 { -0.12 } else { 0.12 };
+            let mut pts = Vec::new();
+            for (k, key) in keys.iter().enumerate() {
+                if let Some(i) = (0..mat.len()).find(|&i| &mat[i] == key && stage[i] == *st && years[i] == *h) {
+                    let x = k as f64 + 1.0 + off;
+                    pts.push((x, lg(p[i])));
+                    series.push(Series::line(None, vec![(x, lg(q05[i])), (x, lg(q95[i]))], c, 1.2));
+                    ys.extend([lg(q05[i]), lg(q95[i]), lg(p[i])]);
+                }
+            }
+            let label = if si == 0 { "base model, 90 % band" } else { "with the named effects" };
+            series.push(Series { label: Some(label.into()), points: pts, colour: c, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 2.2) });
+        }
+        let (lo, top) = padded(ys.iter().copied(), 0.1, 0.6);
+        panels.push((
+            Panel {
+                x_categories: labels.to_vec(),
+                x_desc: if hi + 1 == horizons.len() { "Material".into() } else { String::new() },
+                y_desc: format!("P break, {h} yr"),
+                x_range: (0.5, keys.len() as f64 + 0.5),
+                y_range: (lo.floor(), top.min(0.3).max(lo.floor() + 1.0)),
+                y_log: true,
+                series,
+                legend: if hi == 0 { Some(SeriesLabelPosition::LowerRight) } else { None },
+            },
+            1.0 / horizons.len() as f64,
+        ));
+    }
+    figure("discrepancy_lifetime", width_cm, 0.55 * horizons.len() as f64, &panels)
+}
+
+fn power(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<Drawn> {
+    let t = Table::load(dir, "power")?;
+    let (mat, scen, eff, n, all, lo, hi) = (t.s("material")?, t.s("scenario")?, t.s("effects")?, t.f("particles")?, t.f("rate_all")?, t.f("rate_all_lo90")?, t.f("rate_all_hi90")?);
+    let mut series = Vec::new();
+    for (k, key) in keys.iter().enumerate() {
+        for sc in ["effects", "none"] {
+            let rows: Vec<usize> = (0..mat.len()).filter(|&i| &mat[i] == key && scen[i] == sc).collect();
+            if rows.is_empty() {
+                continue;
+            }
+            let pts: Vec<(f64, f64)> = rows.iter().map(|&i| (n[i], all[i])).collect();
+            if sc == "effects" {
+                series.push(Series { label: None, points: rows.iter().map(|&i| (n[i], lo[i])).collect(), colour: colour(k), kind: Kind::Band(rows.iter().map(|&i| hi[i]).collect(), 0.18) });
+                series.push(Series::line(Some(format!("{}: {} found", labels[k], eff[rows[0]].replace(" then ", " + "))), pts.clone(), colour(k), 1.3));
+                series.push(Series { label: None, points: pts, colour: colour(k), kind: Kind::Markers(Marker::Circle, 2.0) });
+            } else {
+                series.push(Series { label: Some(format!("{}: false positives", labels[k])), points: pts.clone(), colour: colour(k), kind: Kind::Dashed(1.0, 3.0, 2.0) });
+                series.push(Series { label: None, points: pts, colour: colour(k), kind: Kind::Markers(Marker::Cross, 2.0) });
+            }
+        }
+    }
+    let xr = padded(n.iter().copied(), 0.04, 0.04);
+    series.push(Series { label: Some("5 % guard level".into()), points: vec![(xr.0, 0.05), (xr.1, 0.05)], colour: BLACK, kind: Kind::Dashed(0.6, 1.0, 1.5) });
+    let p = Panel {
+        x_categories: vec![],
+        x_desc: "Crush tests per material (particles)".into(),
+        y_desc: "Rate over synthetic datasets (–)".into(),
+        x_range: xr,
+        y_range: (0.0, 1.55),
+        y_log: false,
+        series,
+        legend: Some(SeriesLabelPosition::UpperLeft),
+    };
+    figure("discrepancy_power", width_cm, 0.85, &[(p, 1.0)])
+}

@@ -383,3 +383,45 @@ pub fn uq_speed(study: &Path) -> Result<UqSpeed> {
     let ishigami_error = (0..3).map(|i| (ind[0].first[i] - s1[i]).abs().max((ind[0].total[i] - st[i]).abs())).fold(0.0, f64::max);
     Ok(UqSpeed { propagation_s, samples, ishigami_s, ishigami_error })
 }
+
+/// Speed of the discrepancy workflow on 100 particles.
+#[derive(Debug, Clone)]
+pub struct DiscrepancySpeed {
+    /// Particles.
+    pub particles: usize,
+    /// Effects the loop named.
+    pub named: Vec<&'static str>,
+    /// Wall time of the naming loop alone: every candidate, 499 bootstrap replicates per round,
+    /// 999 permutations per residual trend (s).
+    pub loop_s: f64,
+    /// Wall time of the whole `partlife discrepancy --data` run: loop, lifetime bands, the
+    /// detection-power study (320 synthetic datasets), tables and figures (s).
+    pub report_s: f64,
+}
+
+/// Times the discrepancy workflow on 100 synthetic BL 16/30 particles (the shipped generator
+/// settings with `count = 100`: size effect and roundness hidden).
+pub fn discrepancy_speed(settings: &Path) -> Result<DiscrepancySpeed> {
+    let mut gen_settings = crate::synth::SynthSettings::load(settings)?;
+    gen_settings.material.truncate(1);
+    gen_settings.material[0].count = 100;
+    gen_settings.material[0].file = "bench_crush_100.csv".into();
+    let dir = std::env::temp_dir().join(format!("partlife-bench-discrepancy-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| crate::Error::write(&dir, e))?;
+    crate::synth::synthesize(&gen_settings, &dir)?;
+    let data = dir.join("bench_crush_100.csv");
+    let loaded = crate::discrepancy::run::quick_study(&data)?;
+    let crate::study::Study::Discrepancy(s) = &loaded.study else { unreachable!("quick_study builds a discrepancy study") };
+    let crush = crate::data::read_crush(&data)?;
+    let sample = crate::discrepancy::run::sample_of(&crush, &s.material[0], &s.contact)?;
+    let settings = crate::discrepancy::workflow::Settings { seed: s.seed, ..Default::default() };
+    let start = Instant::now();
+    let outcome = crate::discrepancy::workflow::analyse(&sample, &settings, true)?;
+    let loop_s = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    let opts = crate::runner::RunOptions { reports_root: dir.join("reports"), progress: false };
+    crate::runner::run(&loaded, &opts)?;
+    let report_s = start.elapsed().as_secs_f64();
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(DiscrepancySpeed { particles: sample.strength.len(), named: outcome.named.iter().map(|c| c.name()).collect(), loop_s, report_s })
+}

@@ -88,6 +88,10 @@ enum Command {
         /// Sobol' indices of Ishigami at N = 2¹⁴ (compare tests/bench/salib/ishigami.py).
         #[arg(long)]
         uq: bool,
+        /// Run the discrepancy benchmark instead: the naming loop and the full report on 100
+        /// synthetic particles.
+        #[arg(long)]
+        discrepancy: bool,
     },
 }
 
@@ -291,6 +295,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 let ess = partlife::bench::external_chain_ess(std::path::Path::new(file))?;
                 out!("external chain {file}: bulk ESS {ess:.0} in {secs:.2} s → ESS/s {:.1}; ratio ours/theirs {:.1}×", ess / secs, m.ess_per_second / (ess / secs));
             }
+        }
+        Command::Bench { discrepancy: true, .. } => {
+            out!("machine: {} threads available to rayon", rayon::current_num_threads());
+            let d = partlife::bench::discrepancy_speed(std::path::Path::new("datasets/synth_crush.toml"))?;
+            out!(
+                "discrepancy workflow, {} particles (named: {}): naming loop with every candidate, 499 bootstrap replicates per round and 999 permutations per trend {:.3} s; whole report with lifetime bands, 320-dataset power study and figures {:.2} s (goal < 30 s)",
+                d.particles,
+                d.named.join(", "),
+                d.loop_s,
+                d.report_s
+            );
         }
         Command::Bench { uq: true, .. } => {
             out!("machine: {} threads available to rayon", rayon::current_num_threads());

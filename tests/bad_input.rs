@@ -305,3 +305,21 @@ fn uq_study_rejects_unknown_material_keys() {
     s.write(study, &std::fs::read_to_string(common::root().join(study)).unwrap());
     s.expect_bad_study(study, "density_kg_m3 = 3600\n", "density_kg_m3 = 3600\ncolour = \"red\"\n", &["material[1].colour", "unknown key"]);
 }
+
+#[test]
+fn discrepancy_study_bad_input() {
+    let s = Scratch::new();
+    let study = "studies/discrepancy_crush.toml";
+    let text = std::fs::read_to_string(common::root().join(study)).unwrap();
+    let reset = |s: &Scratch| s.write(study, &text);
+    reset(&s);
+    s.expect_bad_study(study, "alpha = 0.05", "alpha = 2.0", &["discrepancy.alpha", "(0, 0.5]"]);
+    reset(&s);
+    s.expect_bad_study(study, "\"damage\"]", "\"colour\"]", &["colour"]);
+    reset(&s);
+    s.expect_bad_study(study, "bootstrap = 499", "bootstrap = 10", &["discrepancy.bootstrap", "≥ 99"]);
+    reset(&s);
+    s.expect_bad_study(study, "particles = [20, 40, 80, 160]", "particles = [5, 40]", &["power.particles", "[10, 100000]"]);
+    reset(&s);
+    s.expect_bad_study(study, "cv_folds = 10", "cv_folds = 10\nfolds = 3", &["folds"]);
+}

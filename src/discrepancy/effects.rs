@@ -123,8 +123,8 @@ impl Candidate {
     /// The candidate's term for this sample, or the reason it cannot be fitted.
     pub fn term(self, covariates: &Covariates, gamma: f64) -> std::result::Result<Term, String> {
         let name = self.covariate();
-        let Some((_, col)) = covariates.iter().find(|(n, _)| n == name) else {
-            return Err(format!("the dataset has no `{name}` column"));
+        let Some((_, col)) = covariates.iter().find(|(n, _)| n == name).filter(|(_, c)| c.iter().any(|v| v.is_some())) else {
+            return Err(format!("the dataset has no `{name}` values (no such column, or every cell empty)"));
         };
         let missing = col.iter().filter(|v| v.is_none()).count();
         if missing > 0 {
@@ -180,7 +180,7 @@ impl Candidate {
                 } else {
                     format!("stronger than weakest-link scaling (volume 3/m = {vol:.3}, surface 2/m = {surf:.3})")
                 };
-                ("alpha", a, format!("σ_θ ∝ d^(−{a:.3}); {kind}"))
+                ("alpha", a, format!("σ_θ ∝ d^(−α), α = {a:.3}: {kind}"))
             }
             Candidate::Temperature => {
                 let r = (beta / 10.0).exp();
@@ -329,7 +329,7 @@ mod tests {
         let c = vec![cov("temperature_c", vec![20.0; 12]), ("roundness".into(), vec![Some(0.7), None, Some(0.8)])];
         assert!(Candidate::Temperature.term(&c, 5.0).unwrap_err().contains("same on every row"));
         assert!(Candidate::Roundness.term(&c, 5.0).unwrap_err().contains("empty on 1 of 3"));
-        assert!(Candidate::Damage.term(&c, 5.0).unwrap_err().contains("no `impacts` column"));
+        assert!(Candidate::Damage.term(&c, 5.0).unwrap_err().contains("no `impacts` values"));
     }
 
     #[test]

@@ -20,7 +20,7 @@
 //!
 //! The gap measure is the residual-structure statistic G = n Σ_c ρ_c² over the covariates the
 //! data carry (ρ_c Spearman's correlation of the quantile residuals with covariate c). Under a
-//! model that misses nothing each term is ≈ χ²₁, so E[G] ≈ the number of covariates; a missing
+//! model that misses nothing each term is ≈ χ²₁, so E(G) ≈ the number of covariates; a missing
 //! effect with covariate c adds ≈ n ρ_c².
 //!
 //! Deterministic for a seed and any thread count: every replicate has its own ChaCha8 stream.
@@ -200,6 +200,7 @@ fn diagnosable(sample: &Sample) -> (Vec<(&'static str, Vec<f64>)>, Vec<String>) 
     let mut skipped = Vec::new();
     for name in DIAGNOSED {
         match sample.covariates.iter().find(|(n, _)| n == name) {
+            Some((_, col)) if col.iter().all(|v| v.is_none()) => skipped.push(format!("{name}: no values in the dataset")),
             None => skipped.push(format!("{name}: not in the dataset")),
             Some((_, col)) if col.iter().any(|v| v.is_none()) => {
                 skipped.push(format!("{name}: empty on {} rows", col.iter().filter(|v| v.is_none()).count()))

@@ -1,0 +1,248 @@
+//! The discrepancy workflow on data with hidden effects (issue 7, item 6), end to end: the data
+//! are made by `partlife datasets synth` with an effect switched on in the generator, and
+//! `partlife discrepancy --data` (the Weibull–Hertz model, which lacks every effect) must name it
+//! and shrink the gap. The false-positive rate uses the same generator through the library.
+
+mod common;
+
+use common::{Scratch, root};
+use partlife::discrepancy::run::sample_of;
+use partlife::discrepancy::workflow::{Settings, analyse};
+use partlife::study::{ContactOptions, MaterialSpec};
+use partlife::synth::{SynthSettings, generate};
+
+/// Generator settings of one BL-16/30-like material with the chosen hidden physics
+/// (`q` roundness curvature exponent, `alpha` size exponent, `temperatures`/`softening` TOML
+/// fragments), `count` particles, `seed`.
+fn settings(q: f64, alpha: f64, count: usize, seed: u64, temperature: &str, softening: &str) -> String {
+    format!(
+        r#"seed = {seed}
+platen = {{ youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }}
+[[material]]
+file = "hidden.csv"
+label = "BL 16/30"
+id_prefix = "BL"
+count = {count}
+temperature_c = {temperature}
+elastic = {{ youngs_modulus_pa = 112e9, poisson_ratio = 0.25 }}
+diameter = {{ mean = 0.00089, sd = 0.00014, min = 0.00059, max = 0.00119 }}
+roundness = {{ mean = 0.72, sd = 0.05 }}
+sphericity = {{ mean = 0.87, sd = 0.04 }}
+[material.nature]
+strength_shape = 22.0
+strength_scale_pa = 1.99e9
+reference_diameter_m = 0.0009
+size_exponent = {alpha}
+curvature_exponent = {q}
+{softening}
+[material.measurement]
+force_rel_sd = 0.01
+force_resolution_n = 0.1
+diameter_sd_m = 5e-6
+diameter_resolution_m = 1e-6
+shape_sd = 0.01
+shape_resolution = 0.001
+"#
+    )
+}
+
+/// Generates with the CLI, runs `partlife discrepancy --data`, returns the verdict.
+fn verdict_of(s: &Scratch, generator: &str) -> serde_json::Value {
+    s.write("datasets/hidden.toml", generator);
+    let out = s.run(&["datasets", "synth", "--settings", "datasets/hidden.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let out = s.run(&["discrepancy", "--data", "datasets/hidden.csv", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    serde_json::from_str(&s.read("reports/discrepancy-hidden/verdict.json")).unwrap()
+}
+
+fn named(v: &serde_json::Value) -> Vec<String> {
+    v["effects_named"]["hidden"].as_array().unwrap().iter().map(|x| x.as_str().unwrap().to_string()).collect()
+}
+
+fn gaps(v: &serde_json::Value) -> (f64, f64) {
+    (v["gap_before"]["hidden"].as_f64().unwrap(), v["gap_after"]["hidden"].as_f64().unwrap())
+}
+
+fn modulus(v: &serde_json::Value, stage: usize) -> f64 {
+    v["materials"][0]["stages"][stage]["weibull_modulus"].as_f64().unwrap()
+}
+
+#[test]
+fn hidden_roundness_is_named_and_the_gap_halves() {
+    let s = Scratch::new();
+    let v = verdict_of(&s, &settings(1.0, 0.0, 60, 71, "20.0", ""));
+    // Named first. (This seed also adds sphericity in round 2 at p_family = 0.034: a false
+    // discovery after the true effect, which the guard allows at 5 %; its rate is checked
+    // below over 40 seeds.)
+    assert_eq!(named(&v)[0], "roundness", "{}", v["evidence"]);
+    let (before, after) = gaps(&v);
+    assert!(after <= 0.5 * before, "gap {before} → {after}");
+    // The modulus rises once the roundness scatter is explained (truth m = 22).
+    let (m0, m1) = (modulus(&v, 0), modulus(&v, 1));
+    assert!(m1 > m0 + 2.0 && (m1 - 22.0).abs() < 7.0, "m {m0} → {m1}");
+    // The fitted curvature exponent covers the truth q = 1 within 3 standard errors.
+    let e = v["evidence"]["hidden"].as_array().unwrap().iter().find(|e| e["named"] == true).unwrap();
+    let (q, se) = (e["parameter"]["value"].as_f64().unwrap(), e["parameter"]["se"].as_f64().unwrap());
+    assert!((q - 1.0).abs() < 3.0 * se, "q = {q} ± {se}");
+    // Every figure of the report exists in the three formats.
+    for f in ["discrepancy_residuals_hidden", "discrepancy_probability_hidden", "discrepancy_gap", "discrepancy_evidence", "discrepancy_lifetime", "discrepancy_power"] {
+        for ext in ["svg", "png", "pdf"] {
+            assert!(s.path(&format!("reports/discrepancy-hidden/{f}.{ext}")).is_file(), "{f}.{ext}");
+        }
+    }
+}
+
+#[test]
+fn hidden_size_effect_is_named() {
+    let s = Scratch::new();
+    let v = verdict_of(&s, &settings(0.0, 0.5, 60, 72, "20.0", ""));
+    assert_eq!(named(&v), ["size"], "{}", v["evidence"]);
+    let (before, after) = gaps(&v);
+    assert!(after <= 0.5 * before, "gap {before} → {after}");
+}
+
+#[test]
+fn two_hidden_effects_are_named_in_order_of_strength() {
+    // ln-scale spread of the size effect 0.5 · sd(ln d) ≈ 0.079 against (2/3) · sd(ln r) ≈ 0.046
+    // for roundness: size is the stronger and must come first.
+    let s = Scratch::new();
+    let v = verdict_of(&s, &settings(1.0, 0.5, 60, 73, "20.0", ""));
+    assert_eq!(named(&v), ["size", "roundness"], "{}", v["evidence"]);
+    let (before, after) = gaps(&v);
+    assert!(after <= 0.5 * before, "gap {before} → {after}");
+}
+
+#[test]
+fn temperatures_mixed_in_one_file_are_named() {
+    let s = Scratch::new();
+    let soft = "softening = { reference_c = 20.0, strength_per_100c = 0.04, stiffness_per_100c = 0.03 }";
+    let v = verdict_of(&s, &settings(0.0, 0.0, 60, 74, "[20.0, 800.0]", soft));
+    assert_eq!(named(&v), ["temperature"], "{}", v["evidence"]);
+    let e = v["evidence"]["hidden"].as_array().unwrap().iter().find(|e| e["named"] == true).unwrap();
+    assert!(e["parameter"]["value"].as_f64().unwrap() < 1.0, "strength falls with temperature: {}", e["parameter"]);
+}
+
+/// Runs the naming loop on `seeds` datasets with roundness hidden at exponent `q` (0: nothing
+/// hidden); returns how many named anything other than roundness.
+fn false_positives(seeds: std::ops::Range<u64>, count: usize, q: f64) -> usize {
+    let text = settings(q, 0.0, count, 0, "20.0", "");
+    let mut generator: SynthSettings = toml::from_str(&text).unwrap();
+    let spec = MaterialSpec {
+        key: "bl".into(),
+        label: "BL 16/30".into(),
+        data: "hidden.csv".into(),
+        elastic: partlife::contact::Elastic { youngs_modulus_pa: 112e9, poisson_ratio: 0.25 },
+        density_kg_m3: 3060.0,
+        impact_diameter_m: None,
+    };
+    let mut hits = 0;
+    for seed in seeds {
+        generator.seed = 5000 + seed;
+        let records = generate(&generator, 0).unwrap().into_iter().map(|p| p.record).collect();
+        let data = partlife::data::CrushData { path: "hidden.csv".into(), records };
+        let sample = sample_of(&data, &spec, &ContactOptions::default()).unwrap();
+        let o = analyse(&sample, &Settings { bootstrap: 199, seed, ..Settings::default() }, false).unwrap();
+        hits += usize::from(o.named.iter().any(|c| *c != partlife::discrepancy::effects::Candidate::Roundness));
+    }
+    hits
+}
+
+#[test]
+fn nothing_hidden_names_nothing_in_at_least_95_percent_of_40_seeds() {
+    let fp = false_positives(0..40, 50, 0.0);
+    assert!(fp <= 2, "{fp} of 40 datasets without a hidden effect had one named");
+}
+
+#[test]
+fn after_the_hidden_effect_no_spurious_one_is_added_in_at_least_95_percent_of_40_seeds() {
+    let fp = false_positives(100..140, 50, 1.0);
+    assert!(fp <= 2, "{fp} of 40 datasets with roundness hidden had another effect named");
+}
+
+#[test]
+fn false_positive_rate_over_400_seeds_is_at_the_guard_level() {
+    let fp = false_positives(1000..1400, 50, 0.0);
+    let rate = fp as f64 / 400.0;
+    eprintln!("false-positive rate over 400 seeds: {fp}/400 = {rate:.4}");
+    // 5 % plus two binomial standard errors at n = 400.
+    assert!(rate <= 0.05 + 2.0 * (0.05f64 * 0.95 / 400.0).sqrt(), "false-positive rate {rate}");
+}
+
+#[test]
+fn missing_covariates_skip_their_candidates_and_few_particles_are_refused() {
+    let s = Scratch::new();
+    // No roundness and sphericity columns: those candidates are skipped with the reason.
+    let text = std::fs::read_to_string(root().join("datasets/crush_gen4.csv")).unwrap();
+    let stripped: String = text
+        .lines()
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            format!("{},{},{},{},{}\n", f[0], f[1], f[2], f[3], f[6])
+        })
+        .collect();
+    s.write("datasets/bare.csv", &stripped);
+    let out = s.run(&["discrepancy", "--data", "datasets/bare.csv", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v: serde_json::Value = serde_json::from_str(&s.read("reports/discrepancy-bare/verdict.json")).unwrap();
+    let ev = v["evidence"]["bare"].as_array().unwrap();
+    for c in ["roundness", "sphericity"] {
+        let e = ev.iter().find(|e| e["candidate"] == c).unwrap();
+        assert!(e["skipped"].as_str().unwrap().contains(&format!("no `{c}` values")), "{e}");
+    }
+    // Nine particles: refused, exit 2, nothing written.
+    let nine: String = text.lines().take(10).map(|l| format!("{l}\n")).collect();
+    s.write("datasets/nine.csv", &nine);
+    let out = s.run(&["discrepancy", "--data", "datasets/nine.csv", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("nine.csv") && out.stderr.contains("too few"), "{}", out.stderr);
+    assert!(!s.path("reports/discrepancy-nine").exists());
+    // A non-finite value: exit 2 naming the file, row and column.
+    let bad = text.replacen("0.853", "inf", 1);
+    s.write("datasets/bad.csv", &bad);
+    let out = s.run(&["discrepancy", "--data", "datasets/bad.csv", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("bad.csv") && out.stderr.contains("row 1") && out.stderr.contains("roundness"), "{}", out.stderr);
+    assert!(!out.stderr.contains("panicked"));
+}
+
+#[test]
+fn shipped_crush_data_reveal_the_generators_hidden_effects() {
+    // datasets/synth_crush.toml hides a size effect (α = 0.5) and roundness curvature (q = 1) in
+    // both files; Gen 4's modulus 8.5 leaves its roundness effect below the 45-particle power.
+    let s = Scratch::new();
+    s.write("studies/discrepancy_crush.toml", &std::fs::read_to_string(root().join("studies/discrepancy_crush.toml")).unwrap());
+    let out = s.run(&["discrepancy", "studies/discrepancy_crush.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v: serde_json::Value = serde_json::from_str(&s.read("reports/discrepancy_crush/verdict.json")).unwrap();
+    assert_eq!(v["effects_named"]["bl1630"], serde_json::json!(["size", "roundness"]));
+    assert_eq!(v["effects_named"]["gen4"][0], "size");
+    for k in ["bl1630", "gen4"] {
+        let (b, a) = (v["gap_before"][k].as_f64().unwrap(), v["gap_after"][k].as_f64().unwrap());
+        assert!(a < 0.5 * b, "{k}: gap {b} → {a}");
+    }
+    let manifest: serde_json::Value = serde_json::from_str(&s.read("reports/discrepancy_crush/manifest.json")).unwrap();
+    assert_eq!(manifest["failures"].as_array().map(|f| f.len()), Some(0), "{}", manifest["failures"]);
+    // The power-vs-sample-size figure is in the report; power rises with the number of tests.
+    assert!(s.path("reports/discrepancy_crush/discrepancy_power.pdf").is_file());
+    let p = partlife::io::read_table(&s.path("reports/discrepancy_crush/power.csv")).unwrap();
+    let path = s.path("reports/discrepancy_crush/power.csv");
+    let (sc, rate) = (partlife::io::col_str(&p, &path, "scenario").unwrap(), partlife::io::col_f64(&p, &path, "rate_all").unwrap());
+    let eff: Vec<f64> = (0..sc.len()).filter(|&i| sc[i] == "effects").map(|i| rate[i]).collect();
+    assert!(eff.len() == 8 && eff[0] < eff[3] && eff[3] >= 0.9 && eff[4] < eff[7], "{eff:?}");
+    // Redrawn from the tables alone: the same figures.
+    let before = s.read("reports/discrepancy_crush/discrepancy_gap.svg");
+    let out = s.run(&["report", "discrepancy_crush"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert_eq!(before, s.read("reports/discrepancy_crush/discrepancy_gap.svg"));
+    // Deterministic on one thread too.
+    let t = Scratch::new();
+    t.write("studies/discrepancy_crush.toml", &s.read("studies/discrepancy_crush.toml"));
+    let out = t.run(&["discrepancy", "studies/discrepancy_crush.toml", "--quiet", "--threads", "1"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    for f in ["verdict.json", "evidence.csv", "stages.csv", "power.csv", "lifetime.csv", "residuals.csv"] {
+        let a = s.read(&format!("reports/discrepancy_crush/{f}"));
+        let b = t.read(&format!("reports/discrepancy_crush/{f}"));
+        assert_eq!(a, b, "{f} differs between 2 threads and 1");
+    }
+}

@@ -9,6 +9,7 @@ mod verification {
     mod gp;
     mod hertz;
     mod jh2;
+    mod koh;
     mod lsq;
     mod mcmc;
     mod lifetime;

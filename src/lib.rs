@@ -40,7 +40,7 @@
 //! | [`fem`] | native crush FE: axisymmetric/plane-strain explicit quads, JH-2, platens, fields, VTU; `CrushModel` |
 //! | [`design`] | Sobol' sequences (Joe–Kuo, 64 dimensions), Latin hypercubes |
 //! | [`calibrate`] | noise models; multi-start Levenberg–Marquardt (or argmin Nelder–Mead / L-BFGS) with covariance and identifiability; ensemble and adaptive-Metropolis MCMC with R̂/ESS; GP emulator; evaluation cache; the `calibrate` study (crush FE and tube-bank DEM); synthetic curve and rig generators |
-//! | [`discrepancy`] | the discrepancy workflow: diagnosis (quantile residuals, bootstrap AD/KS, residual trends), candidate effects as Weibull regression terms, the name → add → diagnose loop with a max-T bootstrap guard, lifetime before/after, detection power; `partlife discrepancy` (the force–displacement GP discrepancy is still to come) |
+//! | [`discrepancy`] | the discrepancy workflow: diagnosis (quantile residuals, bootstrap AD/KS, residual trends), candidate effects as Weibull regression terms, the name → add → diagnose loop with a max-T bootstrap guard, lifetime before/after, detection power; `partlife discrepancy`; Kennedy–O'Hagan GP discrepancy with BIC comparison of model terms (not yet run on crush curves) |
 //! | [`uq`] | the main study (`kind = "uq"`): Monte Carlo propagation of the lifetime chain, damage models (independent, Vogel–Peukert, Tavares–King), Sobol' indices with bootstrap intervals |
 //! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation |
 //! | [`synth`] | the documented generator of the synthetic crush datasets |

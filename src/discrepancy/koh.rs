@@ -133,7 +133,7 @@ impl Problem<'_> {
         if self.constrain_origin && self.dim_x() != 1 {
             return Err(Error::numerical("discrepancy GP", "the δ(0) = 0, δ′(0) = 0 constraint needs one input"));
         }
-        if self.bounds.len() != self.names.len() || self.bounds.iter().any(|(a, b)| !(a < b)) || !(self.noise_sd > 0.0) {
+        if self.bounds.len() != self.names.len() || self.bounds.iter().any(|(a, b)| a.partial_cmp(b) != Some(std::cmp::Ordering::Less)) || self.noise_sd.is_nan() || self.noise_sd <= 0.0 {
             return Err(Error::numerical("discrepancy GP", "θ bounds must be ordered and the noise sd > 0"));
         }
         Ok(())

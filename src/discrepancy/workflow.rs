@@ -28,7 +28,7 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::effects::{Candidate, ModelFit, Term, fit_model};
 use super::gof::{CovariateFinding, ad_ks_of_u, covariate_findings, normal_scores};
@@ -40,24 +40,27 @@ pub const MIN_PARTICLES: usize = 10;
 /// Covariate columns the diagnosis looks at, in order.
 pub const DIAGNOSED: [&str; 5] = ["diameter_m", "roundness", "sphericity", "temperature_c", "impacts"];
 
-/// Settings of the loop.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// Settings of the loop: the `[discrepancy]` section of a study (the seed is the study's).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct Settings {
-    /// Candidates to consider.
+    /// Candidates to consider (default: all).
     pub candidates: Vec<Candidate>,
-    /// Bootstrap replicates per round (LR calibration and AD/KS p-values).
+    /// Bootstrap replicates per round: LR calibration and AD/KS p-values (default 499).
     pub bootstrap: usize,
-    /// Permutations of each residual-trend test.
+    /// Permutations of each residual-trend test (default 999).
     pub permutations: usize,
-    /// Family-wise error rate of the guard.
+    /// Family-wise error rate of the guard (default 0.05).
     pub alpha: f64,
-    /// Folds of the cross-validated log score.
+    /// Folds of the cross-validated log score (default 10).
     pub cv_folds: usize,
-    /// Most effects to name.
+    /// Most effects to name (default 3).
     pub max_effects: usize,
-    /// Tavares–King γ of the damage candidate.
+    /// Tavares–King γ of the damage candidate (default 5).
+    #[serde(rename = "tavares_king_gamma")]
     pub gamma: f64,
-    /// Seed.
+    /// Seed (set from the study's seed, not read from the section).
+    #[serde(skip)]
     pub seed: u64,
 }
 
@@ -407,7 +410,8 @@ pub fn analyse(sample: &Sample, settings: &Settings, diagnose: bool) -> Result<O
             };
             let (beta, se) = m.coefficient(*c).unwrap_or((f64::NAN, f64::NAN));
             let (sym, val, meaning) = c.parameter(beta, m.shape());
-            let val_se = if *c == Candidate::Damage { f64::NAN } else { se * (val / beta).abs() };
+            // Delta method by a central difference of the reported parameter in β.
+            let val_se = if *c == Candidate::Damage { f64::NAN } else { 0.5 * (c.parameter(beta + se, m.shape()).1 - c.parameter(beta - se, m.shape()).1).abs() };
             round_ev.push(Evidence {
                 round,
                 candidate: *c,

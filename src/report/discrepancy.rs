@@ -297,10 +297,10 @@ fn power(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Resul
         x_desc: "Crush tests per material (particles)".into(),
         y_desc: "Rate over synthetic datasets (–)".into(),
         x_range: xr,
-        y_range: (0.0, 1.55),
+        y_range: (0.0, 1.05),
         y_log: false,
         series,
-        legend: Some(SeriesLabelPosition::UpperLeft),
+        legend: Some(SeriesLabelPosition::MiddleRight),
     };
     figure("discrepancy_power", width_cm, 0.85, &[(p, 1.0)])
 }

@@ -1,7 +1,7 @@
 //! Kennedy–O'Hagan discrepancy: the simple machine of Brynjarsdóttir & O'Hagan (2014) and the
 //! ball drop of SEPIA/GPMSA (`../shared/reference/verification.md` §3.1–3.2).
 
-use partlife::discrepancy::koh::{KohOptions, Problem, compare, fit, least_squares};
+use partlife::discrepancy::koh::{KohOptions, Problem, compare, least_squares};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};

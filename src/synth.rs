@@ -21,6 +21,10 @@
 //!    above `reference_c` have strength and Young's modulus reduced linearly with temperature;
 //!    `temperature_c` may be a list the particles cycle through (temperatures mixed in a file).
 //!
+//! 6. **Optional prior impacts** (`[material.nature] prior_impacts`): Tavares–King damage from
+//!    a random number of earlier impacts lowers the strength ([`PriorImpacts`]); the counts go
+//!    to an `impacts` column.
+//!
 //! Sphericity is recorded but has no effect in this nature (a null covariate). The hidden
 //! effects are switched off by a zero exponent (and no softening).
 //!
@@ -34,7 +38,7 @@
 use std::path::{Path, PathBuf};
 
 use polars::prelude::*;
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Beta, Distribution, Normal};
 use serde::{Deserialize, Serialize};
@@ -176,6 +180,40 @@ pub struct Nature {
     /// Temperature softening (none: strength and stiffness do not depend on temperature).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub softening: Option<Softening>,
+    /// Damage from impacts before the crush test (none: no particle was impacted).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior_impacts: Option<PriorImpacts>,
+}
+
+/// Tavares–King damage before the crush test: particle i received k_i impacts, k_i uniform on
+/// {0, …, `max`}, each at the energy ratio x = E_k/E_m (`ratio`, relative to its current fracture
+/// energy at the first impact) with damage exponent γ; its fracture energy fell to
+/// E_m,0 Π(1 − D_j) and, since the Hertz fracture energy scales as the strength⁵, its strength
+/// by the fifth root of that. The counts are written to the `impacts` column.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PriorImpacts {
+    /// Most prior impacts of a particle.
+    pub max: u32,
+    /// Energy ratio x = E_k/E_m,0 of each impact.
+    pub ratio: f64,
+    /// Tavares–King γ.
+    pub gamma: f64,
+}
+
+impl PriorImpacts {
+    /// Strength factor (E_m,k/E_m,0)^(1/5) after k impacts; None if the particle breaks.
+    pub fn strength_factor(&self, k: u32) -> Option<f64> {
+        let mut x = self.ratio;
+        for _ in 0..k {
+            if x >= 1.0 {
+                return None;
+            }
+            let d = crate::uq::damage::tk_damage(x, self.gamma)?;
+            x /= 1.0 - d;
+        }
+        Some((self.ratio / x).powf(0.2))
+    }
 }
 
 /// Measurement model.
@@ -268,6 +306,11 @@ impl SynthSettings {
                     }
                 }
             }
+            if let Some(pi) = n.prior_impacts
+                && !(pi.ratio > 0.0 && pi.gamma > 0.0 && pi.strength_factor(pi.max).is_some())
+            {
+                return Err(bad(file, k("nature.prior_impacts"), format!("needs ratio > 0, γ > 0 and no particle broken within {} impacts (got {pi:?})", pi.max)));
+            }
             let ms = m.measurement;
             if [ms.force_rel_sd, ms.force_resolution_n, ms.diameter_sd_m, ms.diameter_resolution_m, ms.shape_sd, ms.shape_resolution]
                 .iter()
@@ -343,6 +386,18 @@ pub fn generate(settings: &SynthSettings, index: usize) -> Result<Vec<SynthParti
         let (soft_strength, soft_stiffness) = n.softening.map_or((1.0, 1.0), |sf| sf.factors(temperature));
         let scale = soft_strength * n.strength_scale_pa * (d / n.reference_diameter_m).powf(-n.size_exponent);
         let strength = Weibull::new(n.strength_shape, scale)?.sample(&mut rng);
+        let e_f = std_normal.sample(&mut rng);
+        let e_d = std_normal.sample(&mut rng);
+        let e_r = std_normal.sample(&mut rng);
+        let e_s = std_normal.sample(&mut rng);
+        // Prior impacts (drawn last, so files without them are unchanged).
+        let impacts = n.prior_impacts.map(|pi| rng.random_range(0..=pi.max));
+        let strength = match (n.prior_impacts, impacts) {
+            (Some(pi), Some(k)) => strength * pi.strength_factor(k).ok_or_else(|| {
+                Error::config("<generator settings>", format!("material[{index}].nature.prior_impacts"), format!("ratio {} breaks a particle within {k} impacts", pi.ratio))
+            })?,
+            _ => strength,
+        };
         let rc = roundness.powf(n.curvature_exponent) * 0.5 * d;
         let p0 = 3.0 * strength / (1.0 - 2.0 * nu);
         let e_star = if soft_stiffness == 1.0 {
@@ -352,10 +407,6 @@ pub fn generate(settings: &SynthSettings, index: usize) -> Result<Vec<SynthParti
             effective_modulus(&soft, &settings.platen)
         };
         let force = std::f64::consts::PI.powi(3) * rc * rc * p0.powi(3) / (6.0 * e_star * e_star);
-        let e_f = std_normal.sample(&mut rng);
-        let e_d = std_normal.sample(&mut rng);
-        let e_r = std_normal.sample(&mut rng);
-        let e_s = std_normal.sample(&mut rng);
         let shape = |x: f64, e: f64| round_to((x + meas.shape_sd * e).clamp(meas.shape_resolution.max(1e-3), 1.0), meas.shape_resolution);
         out.push(SynthParticle {
             record: CrushRecord {
@@ -366,7 +417,7 @@ pub fn generate(settings: &SynthSettings, index: usize) -> Result<Vec<SynthParti
                 roundness: Some(shape(roundness, e_r)),
                 sphericity: Some(shape(sphericity, e_s)),
                 temperature_c: Some(temperature),
-                impacts: None,
+                impacts: impacts.map(u64::from),
             },
             diameter_true: d,
             roundness_true: roundness,

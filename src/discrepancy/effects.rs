@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 
 use super::regress::{Design, RegFit, fit};
 use crate::error::{Error, Result};
-use crate::uq::damage::{critical_ratio, tk_damage};
+use crate::uq::damage::tk_damage;
 
 /// A candidate effect.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -191,22 +191,29 @@ impl Candidate {
     }
 }
 
-/// ln(x0/x_n)/5 for a particle after n impacts at the initial ratio x0 (Tavares–King, γ);
-/// None if it would have broken.
-pub(crate) fn damage_offset(x0: f64, gamma: f64, n: u64) -> Option<f64> {
+/// ln x_k, k = 0..=n, of the Tavares–King ratio x_k = E_k/E_m,k over n impacts from x0 (γ);
+/// None if the particle would break within them.
+fn damage_path(x0: f64, gamma: f64, n: u64) -> Option<Vec<f64>> {
+    let mut path = Vec::with_capacity(n as usize + 1);
     let mut x = x0;
+    path.push(x.ln());
     for _ in 0..n {
         if x >= 1.0 {
             return None;
         }
         let d = tk_damage(x, gamma)?;
-        let next = x / (1.0 - d);
-        if next - x <= 1e-15 * x {
-            break;
-        }
-        x = next;
+        x /= 1.0 - d;
+        path.push(x.ln());
     }
-    Some((x0.ln() - x.ln()) / 5.0)
+    Some(path)
+}
+
+/// ln(x0/x_n)/5 for a particle after n impacts at the initial ratio x0 (Tavares–King, γ): the
+/// ln-strength change, since the Hertz fracture energy scales as the strength⁵. None if it
+/// would have broken.
+pub(crate) fn damage_offset(x0: f64, gamma: f64, n: u64) -> Option<f64> {
+    let path = damage_path(x0, gamma, n)?;
+    Some((path[0] - path[n as usize]) / 5.0)
 }
 
 /// A fitted model: the base Weibull plus zero or more effects.
@@ -265,6 +272,12 @@ impl ModelFit {
 
 /// Fits the base model plus `terms` to the strengths `x`.
 pub fn fit_model(x: &[f64], terms: &[(Candidate, Term)]) -> Result<ModelFit> {
+    fit_model_near(x, terms, None)
+}
+
+/// [`fit_model`] with a hint for the damage ratio (that of a fit to similar data, as in a
+/// bootstrap refit): the profile search then starts near it, which is several times faster.
+pub fn fit_model_near(x: &[f64], terms: &[(Candidate, Term)], hint: Option<f64>) -> Result<ModelFit> {
     let mut columns = Vec::new();
     let mut damage = None;
     let mut effects = Vec::new();
@@ -281,32 +294,56 @@ pub fn fit_model(x: &[f64], terms: &[(Candidate, Term)]) -> Result<ModelFit> {
         return Ok(ModelFit { effects, reg, columns, offset: None, damage_ratio: None });
     };
     let n_max = impacts.iter().copied().max().unwrap_or(0);
-    let hi = if n_max >= 1 { critical_ratio(gamma, n_max) * (1.0 - 1e-6) } else { 0.99 };
-    let offsets = |lx: f64| -> Option<Vec<f64>> { impacts.iter().map(|&n| damage_offset(lx.exp(), gamma, n)).collect() };
+    // One Tavares–King trajectory per trial ratio serves every particle.
+    let offsets = |lx: f64| -> Option<Vec<f64>> {
+        let path = damage_path(lx.exp(), gamma, n_max)?;
+        Some(impacts.iter().map(|&n| (lx - path[n as usize]) / 5.0).collect())
+    };
     let profile = |lx: f64| -> f64 {
         offsets(lx)
             .and_then(|o| fit(x, &Design { columns: &columns, offset: Some(&o) }).ok())
             .map_or(f64::NEG_INFINITY, |r| r.loglik)
     };
-    // Golden-section search on ln x over [ln 1e-4, ln hi], after a coarse scan.
-    let (lo, hi) = ((1e-4f64).ln(), hi.ln());
-    if hi <= lo {
-        return Err(Error::numerical("damage candidate", "the impact counts leave no admissible damage ratio"));
-    }
-    let grid: Vec<f64> = (0..=24).map(|k| lo + (hi - lo) * k as f64 / 24.0).collect();
-    let vals: Vec<f64> = grid.iter().map(|&g| profile(g)).collect();
-    let best = (0..grid.len()).max_by(|&a, &b| vals[a].total_cmp(&vals[b])).unwrap_or(0);
-    let (mut a, mut b) = (grid[best.saturating_sub(1)], grid[(best + 1).min(grid.len() - 1)]);
-    let phi = 0.5 * (5f64.sqrt() - 1.0);
-    for _ in 0..40 {
-        let (c, d) = (b - phi * (b - a), a + phi * (b - a));
-        if profile(c) >= profile(d) {
-            b = d;
-        } else {
-            a = c;
+    let (lo, hi) = ((1e-4f64).ln(), (0.99f64).ln());
+    let golden = |mut a: f64, mut b: f64, tol: f64| -> f64 {
+        let phi = 0.5 * (5f64.sqrt() - 1.0);
+        let (mut c, mut d) = (b - phi * (b - a), a + phi * (b - a));
+        let (mut fc, mut fd) = (profile(c), profile(d));
+        while b - a > tol {
+            if fc >= fd {
+                (b, d, fd) = (d, c, fc);
+                c = b - phi * (b - a);
+                fc = profile(c);
+            } else {
+                (a, c, fc) = (c, d, fd);
+                d = a + phi * (b - a);
+                fd = profile(d);
+            }
         }
-    }
-    let lx = 0.5 * (a + b);
+        0.5 * (a + b)
+    };
+    // Near a hint (a bootstrap refit of a fitted ratio): golden section on ln x ± 1, kept
+    // unless the optimum sits at the edge of that bracket.
+    let local = hint.filter(|h| h.is_finite() && *h > 0.0).map(|h| {
+        let (a, b) = ((h.ln() - 1.0).max(lo), (h.ln() + 1.0).min(hi));
+        let lx = golden(a, b, 1e-3);
+        let inside = (lx - a > 1e-2 || a == lo) && (b - lx > 1e-2 || b == hi);
+        (lx, inside && profile(lx).is_finite())
+    });
+    let lx = match local {
+        Some((lx, true)) => lx,
+        _ => {
+            // Coarse scan of ln x over [ln 10⁻⁴, ln 0.99] (ratios that break a particle score
+            // −∞), then golden section around the best point to 10⁻⁴ in ln x.
+            let grid: Vec<f64> = (0..=16).map(|k| lo + (hi - lo) * k as f64 / 16.0).collect();
+            let vals: Vec<f64> = grid.iter().map(|&g| profile(g)).collect();
+            let best = (0..grid.len()).max_by(|&a, &b| vals[a].total_cmp(&vals[b])).unwrap_or(0);
+            if !vals[best].is_finite() {
+                return Err(Error::numerical("damage candidate", "every trial damage ratio breaks a particle or fails to fit"));
+            }
+            golden(grid[best.saturating_sub(1)], grid[(best + 1).min(grid.len() - 1)], 1e-4)
+        }
+    };
     let off = offsets(lx).ok_or_else(|| Error::numerical("damage candidate", "the fitted ratio breaks a particle"))?;
     let reg = fit(x, &Design { columns: &columns, offset: Some(&off) })?;
     // `effects` keeps damage wherever it was added; β follow the linear effects' order.

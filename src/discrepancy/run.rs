@@ -42,7 +42,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::effects::{Candidate, ModelFit, Term, fit_model};
+use super::effects::{Candidate, ModelFit, Term, fit_model_near};
 use super::workflow::{GAP_MEASURE, MIN_PARTICLES, Outcome, Sample, Settings, analyse, validate};
 use crate::contact::Sphere;
 use crate::data::{CrushData, read_crush};
@@ -266,7 +266,7 @@ fn lifetime_bands(model: &ModelFit, sample: &Sample, gamma: f64, impact_stress: 
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             rng.set_stream(r as u64 + 1);
             let xs = model.reg.sample(&design, n, &mut rng);
-            let refit = fit_model(&xs, &terms).ok()?;
+            let refit = fit_model_near(&xs, &terms, model.damage_ratio).ok()?;
             Some(counts.iter().map(|(_, nn)| population_breakage(&refit, impact_stress, *nn)).collect())
         })
         .collect();

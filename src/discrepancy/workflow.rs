@@ -30,7 +30,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::effects::{Candidate, ModelFit, Term, fit_model};
+use super::effects::{Candidate, ModelFit, Term, fit_model, fit_model_near};
 use super::gof::{CovariateFinding, ad_ks_of_u, covariate_findings, normal_scores};
 use crate::error::{Error, Result};
 
@@ -346,7 +346,7 @@ pub fn analyse(sample: &Sample, settings: &Settings, diagnose: bool) -> Result<O
                 let mut rng = ChaCha8Rng::seed_from_u64(seed);
                 rng.set_stream(r as u64 + 1);
                 let xs = model.reg.sample(&design, n, &mut rng);
-                let m0 = fit_model(&xs, &current).ok()?;
+                let m0 = fit_model_near(&xs, &current, model.damage_ratio).ok()?;
                 let (_, u) = residuals(&m0, &xs);
                 let (ad, ks) = ad_ks_of_u(u);
                 let l: Vec<f64> = remaining
@@ -358,7 +358,8 @@ pub fn analyse(sample: &Sample, settings: &Settings, diagnose: bool) -> Result<O
                         }
                         let mut terms = current.clone();
                         terms.push((*c, t.clone()));
-                        fit_model(&xs, &terms).map_or(f64::NAN, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0))
+                        let hint = e.as_ref().and_then(|m| m.damage_ratio);
+                        fit_model_near(&xs, &terms, hint).map_or(f64::NAN, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0))
                     })
                     .collect();
                 Some((ad, ks, l))

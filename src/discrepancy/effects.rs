@@ -229,6 +229,8 @@ pub struct ModelFit {
     pub offset: Option<Vec<f64>>,
     /// Fitted Tavares–King ratio x, if damage is an effect.
     pub damage_ratio: Option<f64>,
+    /// Number of particles fitted.
+    pub n: usize,
 }
 
 impl ModelFit {
@@ -261,6 +263,17 @@ impl ModelFit {
         Some((self.reg.beta[j], self.reg.beta_se[j]))
     }
 
+    /// Parametric-bootstrap replicate `r` (its own ChaCha8 stream of `seed`): strengths drawn
+    /// from this model at the sample's covariates, refitted with `terms` (the model's own terms
+    /// or more). None if the refit fails.
+    pub fn bootstrap_refit(&self, terms: &[(Candidate, Term)], seed: u64, r: usize) -> Option<(Vec<f64>, ModelFit)> {
+        let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(seed);
+        rng.set_stream(r as u64 + 1);
+        let xs = self.reg.sample(&self.design(), self.n, &mut rng);
+        let refit = fit_model_near(&xs, terms, self.damage_ratio).ok()?;
+        Some((xs, refit))
+    }
+
     /// Σ_k κ_k β_k z_ik + damage offset: the part of particle i's ln-scale that also scales the
     /// impact stress in the lifetime hazard ([`Candidate::impact_exponent`]).
     pub fn impact_shift(&self, i: usize) -> f64 {
@@ -291,7 +304,7 @@ pub fn fit_model_near(x: &[f64], terms: &[(Candidate, Term)], hint: Option<f64>)
     // Linear effects first in `effects`' β order; damage (if any) is profiled.
     let Some((impacts, gamma)) = damage else {
         let reg = fit(x, &Design { columns: &columns, offset: None })?;
-        return Ok(ModelFit { effects, reg, columns, offset: None, damage_ratio: None });
+        return Ok(ModelFit { effects, reg, columns, offset: None, damage_ratio: None, n: x.len() });
     };
     let n_max = impacts.iter().copied().max().unwrap_or(0);
     // One Tavares–King trajectory per trial ratio serves every particle.
@@ -347,7 +360,7 @@ pub fn fit_model_near(x: &[f64], terms: &[(Candidate, Term)], hint: Option<f64>)
     let off = offsets(lx).ok_or_else(|| Error::numerical("damage candidate", "the fitted ratio breaks a particle"))?;
     let reg = fit(x, &Design { columns: &columns, offset: Some(&off) })?;
     // `effects` keeps damage wherever it was added; β follow the linear effects' order.
-    Ok(ModelFit { effects, reg, columns, offset: Some(off), damage_ratio: Some(lx.exp()) })
+    Ok(ModelFit { effects, reg, columns, offset: Some(off), damage_ratio: Some(lx.exp()), n: x.len() })
 }
 
 #[cfg(test)]

@@ -42,7 +42,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::effects::{Candidate, ModelFit, Term, fit_model_near};
+use super::effects::{Candidate, ModelFit, Term};
 use super::workflow::{GAP_MEASURE, MIN_PARTICLES, Outcome, Sample, Settings, analyse, validate};
 use crate::contact::Sphere;
 use crate::data::{CrushData, read_crush};
@@ -258,15 +258,10 @@ pub struct LifetimeBand {
 
 fn lifetime_bands(model: &ModelFit, sample: &Sample, gamma: f64, impact_stress: &[f64], counts: &[(f64, f64)], b: usize, seed: u64) -> Vec<LifetimeBand> {
     let terms = terms_of(&model.effects, sample, gamma);
-    let design = model.design();
-    let n = sample.strength.len();
     let draws: Vec<Vec<f64>> = (0..b)
         .into_par_iter()
         .filter_map(|r| {
-            let mut rng = ChaCha8Rng::seed_from_u64(seed);
-            rng.set_stream(r as u64 + 1);
-            let xs = model.reg.sample(&design, n, &mut rng);
-            let refit = fit_model_near(&xs, &terms, model.damage_ratio).ok()?;
+            let (_, refit) = model.bootstrap_refit(&terms, seed, r)?;
             Some(counts.iter().map(|(_, nn)| population_breakage(&refit, impact_stress, *nn)).collect())
         })
         .collect();
@@ -541,11 +536,7 @@ fn finite(v: f64) -> serde_json::Value {
 /// average covariates (x_i · e^(mean − ln σ_i)), which the probability plot shows.
 fn reference_ln_scale(model: &ModelFit) -> f64 {
     let d = model.design();
-    let n = d.columns.first().map(|c| c.len()).or(d.offset.map(|o| o.len())).unwrap_or(0);
-    if n == 0 {
-        return model.reg.mu;
-    }
-    (0..n).map(|i| model.reg.ln_scale(&d, i)).sum::<f64>() / n as f64
+    (0..model.n).map(|i| model.reg.ln_scale(&d, i)).sum::<f64>() / model.n.max(1) as f64
 }
 
 fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> Result<()> {

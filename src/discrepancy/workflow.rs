@@ -338,15 +338,11 @@ pub fn analyse(sample: &Sample, settings: &Settings, diagnose: bool) -> Result<O
         let lr: Vec<f64> = ext.iter().map(|e| e.as_ref().map_or(f64::NAN, |m| (2.0 * (m.loglik() - model.loglik())).max(0.0))).collect();
 
         // Parametric bootstrap from the current model.
-        let design = model.design();
         let seed = settings.seed.wrapping_add(1_000_003 * round as u64);
         let reps: Vec<Option<Replicate>> = (0..settings.bootstrap)
             .into_par_iter()
             .map(|r| {
-                let mut rng = ChaCha8Rng::seed_from_u64(seed);
-                rng.set_stream(r as u64 + 1);
-                let xs = model.reg.sample(&design, n, &mut rng);
-                let m0 = fit_model_near(&xs, &current, model.damage_ratio).ok()?;
+                let (xs, m0) = model.bootstrap_refit(&current, seed, r)?;
                 let (_, u) = residuals(&m0, &xs);
                 let (ad, ks) = ad_ks_of_u(u);
                 let l: Vec<f64> = remaining

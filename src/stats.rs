@@ -130,6 +130,12 @@ mod tests {
     }
 }
 
+/// Interpolated quantiles `ps` of `v` (as C1239's tables, [`crate::weibull::sorted_quantile`]).
+pub fn interpolated_quantiles(mut v: Vec<f64>, ps: &[f64]) -> Vec<f64> {
+    v.sort_by(f64::total_cmp);
+    ps.iter().map(|&p| crate::weibull::sorted_quantile(&v, p)).collect()
+}
+
 /// Nearest-rank quantiles `qs` (each in [0, 1]) of `v`, which is sorted in place; `v` must not
 /// be empty.
 pub fn quantiles(v: &mut [f64], qs: &[f64]) -> Vec<f64> {

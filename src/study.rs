@@ -302,7 +302,8 @@ pub fn load(path: &Path) -> Result<LoadedStudy> {
     Ok(LoadedStudy { name, path: path.to_path_buf(), text, study })
 }
 
-fn check(file: &str, key: &str, ok: bool, rule: String) -> Result<()> {
+/// `Ok` if `ok`, else a configuration error naming `file`, `key` and `rule`.
+pub(crate) fn check(file: &str, key: &str, ok: bool, rule: String) -> Result<()> {
     if ok { Ok(()) } else { Err(Error::config(file, key, rule)) }
 }
 

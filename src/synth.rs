@@ -204,15 +204,8 @@ pub struct PriorImpacts {
 impl PriorImpacts {
     /// Strength factor (E_m,k/E_m,0)^(1/5) after k impacts; None if the particle breaks.
     pub fn strength_factor(&self, k: u32) -> Option<f64> {
-        let mut x = self.ratio;
-        for _ in 0..k {
-            if x >= 1.0 {
-                return None;
-            }
-            let d = crate::uq::damage::tk_damage(x, self.gamma)?;
-            x /= 1.0 - d;
-        }
-        Some((self.ratio / x).powf(0.2))
+        let path = crate::uq::damage::tk_ratio_path(self.ratio, self.gamma, u64::from(k))?;
+        Some(((path[0] - path[k as usize]) / 5.0).exp())
     }
 }
 

@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 
 use super::regress::{Design, RegFit, fit};
 use crate::error::{Error, Result};
-use crate::uq::damage::tk_damage;
+use crate::uq::damage::tk_ratio_path;
 
 /// A candidate effect.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -191,28 +191,11 @@ impl Candidate {
     }
 }
 
-/// ln x_k, k = 0..=n, of the Tavares–King ratio x_k = E_k/E_m,k over n impacts from x0 (γ);
-/// None if the particle would break within them.
-fn damage_path(x0: f64, gamma: f64, n: u64) -> Option<Vec<f64>> {
-    let mut path = Vec::with_capacity(n as usize + 1);
-    let mut x = x0;
-    path.push(x.ln());
-    for _ in 0..n {
-        if x >= 1.0 {
-            return None;
-        }
-        let d = tk_damage(x, gamma)?;
-        x /= 1.0 - d;
-        path.push(x.ln());
-    }
-    Some(path)
-}
-
 /// ln(x0/x_n)/5 for a particle after n impacts at the initial ratio x0 (Tavares–King, γ): the
 /// ln-strength change, since the Hertz fracture energy scales as the strength⁵. None if it
 /// would have broken.
 pub(crate) fn damage_offset(x0: f64, gamma: f64, n: u64) -> Option<f64> {
-    let path = damage_path(x0, gamma, n)?;
+    let path = tk_ratio_path(x0, gamma, n)?;
     Some((path[0] - path[n as usize]) / 5.0)
 }
 
@@ -277,8 +260,8 @@ impl ModelFit {
     /// Σ_k κ_k β_k z_ik + damage offset: the part of particle i's ln-scale that also scales the
     /// impact stress in the lifetime hazard ([`Candidate::impact_exponent`]).
     pub fn impact_shift(&self, i: usize) -> f64 {
-        let linear: Vec<Candidate> = self.effects.iter().copied().filter(|e| *e != Candidate::Damage).collect();
-        linear.iter().enumerate().map(|(j, c)| c.impact_exponent() * self.reg.beta[j] * self.columns[j][i]).sum::<f64>()
+        let linear = self.effects.iter().filter(|e| **e != Candidate::Damage);
+        linear.enumerate().map(|(j, c)| c.impact_exponent() * self.reg.beta[j] * self.columns[j][i]).sum::<f64>()
             + self.offset.as_ref().map_or(0.0, |o| o[i])
     }
 }
@@ -309,7 +292,7 @@ pub fn fit_model_near(x: &[f64], terms: &[(Candidate, Term)], hint: Option<f64>)
     let n_max = impacts.iter().copied().max().unwrap_or(0);
     // One Tavares–King trajectory per trial ratio serves every particle.
     let offsets = |lx: f64| -> Option<Vec<f64>> {
-        let path = damage_path(lx.exp(), gamma, n_max)?;
+        let path = tk_ratio_path(lx.exp(), gamma, n_max)?;
         Some(impacts.iter().map(|&n| (lx - path[n as usize]) / 5.0).collect())
     };
     let profile = |lx: f64| -> f64 {

@@ -31,8 +31,13 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::calibrate::Noise;
+use crate::calibrate::lsq::{self, LsqOptions};
 use crate::calibrate::mcmc::{EnsembleOptions, ensemble};
 use crate::error::{Error, Result};
+use crate::model::{OutputSpec, Simulator};
+use crate::params::{Param, ParamSpace};
+use crate::stats::interpolated_quantiles;
 
 /// The simulator as a function of (θ, data index).
 pub type ModelFn<'a> = dyn Fn(&[f64], usize) -> f64 + Sync + 'a;
@@ -191,76 +196,42 @@ impl Problem<'_> {
     }
 }
 
-/// Least squares of y − η(θ) without discrepancy (Nelder–Mead in the bounds, from the centre):
-/// the estimate the deliverable's style of calibration would report.
+/// The simulator of a problem at its data points, as the calibration engine's [`Simulator`].
+struct AtData<'p, 'a> {
+    problem: &'p Problem<'a>,
+    space: ParamSpace,
+    outputs: Vec<OutputSpec>,
+}
+
+impl Simulator for AtData<'_, '_> {
+    fn space(&self) -> &ParamSpace {
+        &self.space
+    }
+    fn outputs(&self) -> &[OutputSpec] {
+        &self.outputs
+    }
+    fn simulate(&self, theta: &[f64]) -> Result<Vec<f64>> {
+        Ok((0..self.problem.y.len()).map(|i| (self.problem.model)(theta, i)).collect())
+    }
+}
+
+/// Least squares of y − η(θ) without discrepancy (the calibration engine's multi-start
+/// Levenberg–Marquardt within the bounds): the estimate a calibration that ignores δ reports.
 pub fn least_squares(problem: &Problem) -> Result<Vec<f64>> {
     problem.check()?;
-    let sse = |t: &[f64]| -> f64 {
-        if t.iter().zip(&problem.bounds).any(|(v, (a, b))| v < a || v > b) {
-            return f64::INFINITY;
-        }
-        (0..problem.y.len()).map(|i| sq(problem.y[i] - (problem.model)(t, i))).sum()
+    let params = problem
+        .names
+        .iter()
+        .zip(&problem.bounds)
+        .map(|(n, (a, b))| Param::uniform(n, "-", *a, *b, 0.5 * (a + b)))
+        .collect();
+    let sim = AtData {
+        problem,
+        space: ParamSpace::new(params)?,
+        outputs: (0..problem.y.len()).map(|i| OutputSpec::new(format!("y{i}"), "-")).collect(),
     };
-    let start: Vec<f64> = problem.bounds.iter().map(|(a, b)| 0.5 * (a + b)).collect();
-    let step: Vec<f64> = problem.bounds.iter().map(|(a, b)| 0.25 * (b - a)).collect();
-    Ok(nelder_mead(&sse, start, &step, 4000))
-}
-
-/// A small Nelder–Mead minimiser with restarts (enough for a handful of parameters).
-fn nelder_mead(f: &dyn Fn(&[f64]) -> f64, start: Vec<f64>, step: &[f64], iters: usize) -> Vec<f64> {
-    let d = start.len();
-    let mut best = start;
-    for restart in 0..3 {
-        let scale = 0.5f64.powi(restart);
-        let mut s: Vec<Vec<f64>> = vec![best.clone()];
-        for k in 0..d {
-            let mut p = best.clone();
-            p[k] += step[k] * scale;
-            s.push(p);
-        }
-        let mut fs: Vec<f64> = s.iter().map(|p| f(p)).collect();
-        for _ in 0..iters {
-            let mut idx: Vec<usize> = (0..=d).collect();
-            idx.sort_by(|&a, &b| fs[a].total_cmp(&fs[b]));
-            s = idx.iter().map(|&i| s[i].clone()).collect();
-            fs = idx.iter().map(|&i| fs[i]).collect();
-            if (fs[d] - fs[0]).abs() <= 1e-15 * fs[0].abs().max(1e-300) {
-                break;
-            }
-            let c: Vec<f64> = (0..d).map(|k| s[..d].iter().map(|p| p[k]).sum::<f64>() / d as f64).collect();
-            let at = |t: f64| -> Vec<f64> { (0..d).map(|k| c[k] + t * (s[d][k] - c[k])).collect() };
-            let xr = at(-1.0);
-            let fr = f(&xr);
-            if fr < fs[0] {
-                let xe = at(-2.0);
-                let fe = f(&xe);
-                if fe < fr { s[d] = xe; fs[d] = fe } else { s[d] = xr; fs[d] = fr }
-            } else if fr < fs[d - 1] {
-                s[d] = xr;
-                fs[d] = fr;
-            } else {
-                let xc = if fr < fs[d] { at(-0.5) } else { at(0.5) };
-                let fc = f(&xc);
-                if fc < fs[d].min(fr) {
-                    s[d] = xc;
-                    fs[d] = fc;
-                } else {
-                    for i in 1..=d {
-                        s[i] = (0..d).map(|k| s[0][k] + 0.5 * (s[i][k] - s[0][k])).collect();
-                        fs[i] = f(&s[i]);
-                    }
-                }
-            }
-        }
-        let i = (0..=d).min_by(|&a, &b| fs[a].total_cmp(&fs[b])).unwrap_or(0);
-        best = s[i].clone();
-    }
-    best
-}
-
-fn quantile(v: &mut [f64], p: f64) -> f64 {
-    v.sort_by(f64::total_cmp);
-    crate::weibull::sorted_quantile(v, p)
+    let noise = Noise::Known { sigma: vec![problem.noise_sd; problem.y.len()] };
+    Ok(lsq::fit(&sim, &problem.y, &noise, &LsqOptions::default())?.theta)
 }
 
 /// Samples the posterior of (θ, σ_δ, ℓ) and summarises it.
@@ -310,14 +281,10 @@ pub fn fit(problem: &Problem, opts: &KohOptions) -> Result<KohFit> {
             }
         }
     }
-    let med = |k: usize| quantile(&mut chains.flat(k), 0.5);
+    let q = |k: usize| interpolated_quantiles(chains.flat(k), &[0.05, 0.5, 0.95]);
+    let med = |k: usize| q(k)[1];
     let theta_median: Vec<f64> = (0..nt).map(med).collect();
-    let theta_90: Vec<(f64, f64)> = (0..nt)
-        .map(|k| {
-            let mut v = chains.flat(k);
-            (quantile(&mut v, 0.05), quantile(&mut v, 0.95))
-        })
-        .collect();
+    let theta_90: Vec<(f64, f64)> = (0..nt).map(q).map(|v| (v[0], v[2])).collect();
     let sigma_delta = med(nt).exp();
     let lengths: Vec<f64> = (nt + 1..dim).map(|k| med(k).exp()).collect();
     // Posterior mean of δ over thinned draws.

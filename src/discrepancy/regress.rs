@@ -68,9 +68,19 @@ impl RegFit {
 
     /// Log density of the value x for particle i.
     pub fn ln_density(&self, design: &Design, i: usize, x: f64) -> f64 {
+        self.ln_density_at(self.ln_scale(design, i), x)
+    }
+
+    /// Log density of x under Weibull(1/b, e^ln_scale).
+    pub fn ln_density_at(&self, ln_scale: f64, x: f64) -> f64 {
         let y = x.ln();
-        let w = (y - self.ln_scale(design, i)) / self.b;
+        let w = (y - ln_scale) / self.b;
         -self.b.ln() + w - w.exp() - y
+    }
+
+    /// The value of Weibull(1/b, e^ln_scale) at probability u (inversion).
+    pub fn quantile_at(&self, ln_scale: f64, u: f64) -> f64 {
+        (ln_scale + self.b * (-(1.0 - u).ln()).ln()).exp()
     }
 
     /// Fitted CDF at x for particle i.
@@ -84,7 +94,7 @@ impl RegFit {
         (0..n)
             .map(|i| {
                 let u: f64 = rng.random();
-                (self.ln_scale(design, i) + self.b * (-(1.0 - u).ln()).ln()).exp()
+                self.quantile_at(self.ln_scale(design, i), u)
             })
             .collect()
     }

@@ -50,8 +50,7 @@ use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
 use crate::lifetime::{ImpactLoad, breakage_from_hazard, impacts_in};
 use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, contact_at_break, progress_bar, record_figures};
-use crate::study::{ContactOptions, FigureOptions, ImpactOptions, LoadedStudy, MaterialSpec, elastic_checked};
-use crate::weibull::sorted_quantile;
+use crate::study::{ContactOptions, FigureOptions, ImpactOptions, LoadedStudy, MaterialSpec, check, elastic_checked};
 
 /// Options of the lifetime bands.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -113,10 +112,6 @@ pub struct DiscrepancyStudy {
     pub figures: FigureOptions,
     /// Crush datasets, one per material.
     pub material: Vec<MaterialSpec>,
-}
-
-fn check(file: &str, key: &str, ok: bool, rule: String) -> Result<()> {
-    if ok { Ok(()) } else { Err(Error::config(file, key, rule)) }
 }
 
 impl DiscrepancyStudy {
@@ -228,19 +223,16 @@ fn terms_of(effects: &[Candidate], sample: &Sample, gamma: f64) -> Vec<(Candidat
     effects.iter().filter_map(|c| c.term(&sample.covariates, gamma).ok().map(|t| (*c, t))).collect()
 }
 
-/// Breaking probability of the population after `n_impacts` under a fitted model, given each
-/// particle's σ̄ at the reference impact.
-fn population_breakage(model: &ModelFit, impact_stress: &[f64], n_impacts: f64) -> f64 {
+/// Breaking probability of the population after each impact count of `counts` (years, N)
+/// under a fitted model, given each particle's σ̄ at the reference impact; each particle's
+/// hazard is computed once for all horizons.
+fn population_breakage(model: &ModelFit, impact_stress: &[f64], counts: &[(f64, f64)]) -> Vec<f64> {
     let m = model.shape();
-    let total: f64 = impact_stress
+    let hazards: Vec<f64> = impact_stress.iter().enumerate().map(|(i, s)| (m * (s.ln() - model.impact_shift(i) - model.reg.mu)).exp()).collect();
+    counts
         .iter()
-        .enumerate()
-        .map(|(i, s)| {
-            let ln_h = m * (s.ln() - model.impact_shift(i) - model.reg.mu);
-            breakage_from_hazard(ln_h.exp(), n_impacts)
-        })
-        .sum();
-    total / impact_stress.len() as f64
+        .map(|(_, n)| hazards.iter().map(|h| breakage_from_hazard(*h, *n)).sum::<f64>() / hazards.len() as f64)
+        .collect()
 }
 
 /// Lifetime prediction of one model: per horizon (median-free point estimate, 5 %, 95 %).
@@ -262,16 +254,16 @@ fn lifetime_bands(model: &ModelFit, sample: &Sample, gamma: f64, impact_stress: 
         .into_par_iter()
         .filter_map(|r| {
             let (_, refit) = model.bootstrap_refit(&terms, seed, r)?;
-            Some(counts.iter().map(|(_, nn)| population_breakage(&refit, impact_stress, *nn)).collect())
+            Some(population_breakage(&refit, impact_stress, counts))
         })
         .collect();
+    let estimate = population_breakage(model, impact_stress, counts);
     counts
         .iter()
         .enumerate()
-        .map(|(k, (years, nn))| {
-            let mut v: Vec<f64> = draws.iter().map(|d| d[k]).collect();
-            v.sort_by(f64::total_cmp);
-            LifetimeBand { years: *years, estimate: population_breakage(model, impact_stress, *nn), q05: sorted_quantile(&v, 0.05), q95: sorted_quantile(&v, 0.95) }
+        .map(|(k, (years, _))| {
+            let q = crate::stats::interpolated_quantiles(draws.iter().map(|d| d[k]).collect(), &[0.05, 0.95]);
+            LifetimeBand { years: *years, estimate: estimate[k], q05: q[0], q95: q[1] }
         })
         .collect()
 }
@@ -313,8 +305,7 @@ fn power_study(sample: &Sample, outcome: &Outcome, settings: &Settings, p: &Powe
                     let strength: Vec<f64> = rows_drawn
                         .iter()
                         .map(|&i| {
-                            let u: f64 = rng.random();
-                            (ln_scale[i] + model.reg.b * (-(1.0 - u).ln()).ln()).exp()
+                            model.reg.quantile_at(ln_scale[i], rng.random())
                         })
                         .collect();
                     let covariates = sample.covariates.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i]).collect())).collect();
@@ -680,7 +671,7 @@ fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> String {
     let mut md = String::from("# Discrepancy of the Weibull–Hertz strength model\n\n");
     md.push_str(&format!(
         "Each crush dataset is reduced as in the deliverable (σ̄ at break, Hertz contact with R = d/2, {}) and fitted with one Weibull law. The workflow then looks for structure the model misses, names the missing effect only when it passes the guard (family-wise bootstrap p < {}, ΔBIC < 0, better {}-fold cross-validated log score), adds it and diagnoses again.\n\nGap measure: {}.\n",
-        describe_domain(&s.contact),
+        s.contact.averaging.describe(),
         s.discrepancy.alpha,
         s.discrepancy.cv_folds,
         GAP_MEASURE
@@ -753,16 +744,4 @@ fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> String {
         }
     }
     md
-}
-
-fn describe_domain(c: &ContactOptions) -> String {
-    let d = &c.averaging;
-    let m = match d.measure {
-        crate::contact::AveragingMeasure::Line => "line",
-        crate::contact::AveragingMeasure::Area => "area",
-    };
-    match d.outer {
-        crate::contact::OuterLimit::ContactMultiple => format!("{m} average of the radial tension to {}·a", d.kappa),
-        crate::contact::OuterLimit::ParticleRadius => format!("{m} average of the radial tension to R"),
-    }
 }

@@ -261,11 +261,8 @@ fn cv_log_score(x: &[f64], terms: &[(Candidate, Term)], folds: &[usize], k: usiz
         let train: Vec<usize> = (0..x.len()).filter(|&i| folds[i] != f).collect();
         let xt: Vec<f64> = train.iter().map(|&i| x[i]).collect();
         let fit = fit_model(&xt, &subset(terms, &train)).ok()?;
-        let b = fit.reg.b;
         for i in (0..x.len()).filter(|&i| folds[i] == f) {
-            let y = x[i].ln();
-            let w = (y - predict_ln_scale(&fit, terms, i)) / b;
-            total += -b.ln() + w - w.exp() - y;
+            total += fit.reg.ln_density_at(predict_ln_scale(&fit, terms, i), x[i]);
         }
     }
     total.is_finite().then_some(total)
@@ -384,11 +381,7 @@ pub fn analyse(sample: &Sample, settings: &Settings, diagnose: bool) -> Result<O
         // Evidence.
         let cv0 = cv_log_score(x, &current, &fold, folds_k);
         let max_star: Vec<f64> = reps.iter().map(|r| r.2.iter().copied().filter(|v| v.is_finite()).fold(0.0, f64::max)).collect();
-        let lr_critical = {
-            let mut v = max_star.clone();
-            v.sort_by(f64::total_cmp);
-            crate::weibull::sorted_quantile(&v, 1.0 - settings.alpha)
-        };
+        let lr_critical = crate::stats::interpolated_quantiles(max_star.clone(), &[1.0 - settings.alpha])[0];
         let mut round_ev: Vec<Evidence> = Vec::new();
         for (j, ((c, t), e)) in remaining.iter().zip(&ext).enumerate() {
             let Some(m) = e else {

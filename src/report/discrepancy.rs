@@ -15,7 +15,7 @@ use plotters::prelude::{BLACK, RGBColor, SeriesLabelPosition};
 
 use super::canvas::{Encoded, colour};
 use super::panel::{Kind, Marker, Panel, Series, figure, figure_grid, padded};
-use super::{Rendered, Table};
+use super::{Rendered, Table, distinct, lg};
 use crate::error::Result;
 
 type Drawn = (Encoded, usize);
@@ -183,12 +183,7 @@ fn evidence(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Re
     let mut panels = Vec::new();
     for (k, key) in keys.iter().enumerate() {
         let rows: Vec<usize> = (0..mat.len()).filter(|&i| &mat[i] == key && skipped[i].is_empty()).collect();
-        let mut cats: Vec<String> = Vec::new();
-        for &i in &rows {
-            if !cats.contains(&cand[i]) {
-                cats.push(cand[i].clone());
-            }
-        }
+        let cats: Vec<String> = distinct(&rows.iter().map(|&i| cand[i].clone()).collect::<Vec<_>>());
         let rounds = rows.iter().map(|&i| round[i] as usize).max().map_or(0, |r| r + 1);
         let mut series = Vec::new();
         for r in 0..rounds {
@@ -219,19 +214,10 @@ fn evidence(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Re
     figure("discrepancy_evidence", width_cm, 0.6 * keys.len() as f64, &panels)
 }
 
-fn lg(p: f64) -> f64 {
-    p.max(1e-300).log10().max(-12.0)
-}
-
 fn lifetime(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<Drawn> {
     let t = Table::load(dir, "lifetime")?;
     let (mat, stage, years, p, q05, q95) = (t.s("material")?, t.s("stage")?, t.f("years")?, t.f("p_break")?, t.f("q05")?, t.f("q95")?);
-    let mut horizons: Vec<f64> = Vec::new();
-    for y in &years {
-        if !horizons.contains(y) {
-            horizons.push(*y);
-        }
-    }
+    let horizons = distinct(&years);
     let mut panels = Vec::new();
     for (hi, h) in horizons.iter().enumerate() {
         let mut series = Vec::new();

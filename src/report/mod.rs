@@ -108,6 +108,25 @@ fn zip(x: Vec<f64>, y: Vec<f64>) -> Vec<(f64, f64)> {
     x.into_iter().zip(y).collect()
 }
 
+/// Distinct values of a column in order of appearance.
+pub(crate) fn distinct<T: PartialEq + Clone>(v: &[T]) -> Vec<T> {
+    let mut out: Vec<T> = Vec::new();
+    for x in v {
+        if !out.contains(x) {
+            out.push(x.clone());
+        }
+    }
+    out
+}
+
+/// Lowest log₁₀ probability the figures show.
+pub(crate) const LG_FLOOR: f64 = -12.0;
+
+/// log₁₀ of a probability for a logarithmic axis, floored at [`LG_FLOOR`].
+pub(crate) fn lg(p: f64) -> f64 {
+    p.max(1e-300).log10().max(LG_FLOOR)
+}
+
 /// What [`render`] wrote.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rendered {

@@ -17,7 +17,7 @@ use plotters::prelude::SeriesLabelPosition;
 
 use super::canvas::{Encoded, colour};
 use super::panel::{Kind, Marker, Panel, Series, figure, padded};
-use super::{Rendered, Table};
+use super::{LG_FLOOR, Rendered, Table, distinct, lg};
 use crate::error::Result;
 
 type Drawn = (Encoded, usize);
@@ -40,23 +40,6 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
         ("uq_model_form", model_form(dir, width_cm, labels, keys)?),
     ];
     super::write_figures(dir, figures)
-}
-
-/// Distinct values of a column in order of appearance.
-fn distinct<T: PartialEq + Clone>(v: &[T]) -> Vec<T> {
-    let mut out: Vec<T> = Vec::new();
-    for x in v {
-        if !out.contains(x) {
-            out.push(x.clone());
-        }
-    }
-    out
-}
-
-const FLOOR: f64 = -12.0;
-
-fn lg(p: f64) -> f64 {
-    p.max(1e-300).log10().max(FLOOR)
 }
 
 fn years_label(y: f64) -> String {
@@ -239,12 +222,12 @@ fn model_form(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[String; 2
                 let lab = if k == 0 { Some(labels[j].clone()) } else { None };
                 series.push(Series { label: lab, points: vec![(x - 0.1, lg(q05[i])), (x + 0.1, lg(q05[i]))], colour: colour(j), kind: Kind::Band(vec![lg(q95[i]); 2], 0.35) });
                 series.push(Series { label: None, points: vec![(x, lg(q50[i]))], colour: colour(j), kind: Kind::Markers(Marker::Circle, 2.0) });
-                ys.extend([lg(q05[i]), lg(q95[i])].into_iter().filter(|&v| v > FLOOR));
+                ys.extend([lg(q05[i]), lg(q95[i])].into_iter().filter(|&v| v > LG_FLOOR));
             }
         }
         // P = 0 (below the Vogel–Peukert threshold) sits on the axis floor, two decades below
         // the smallest non-zero value.
-        let lo = (ys.iter().cloned().fold(0.0, f64::min) - 2.0).floor().max(FLOOR);
+        let lo = (ys.iter().cloned().fold(0.0, f64::min) - 2.0).floor().max(LG_FLOOR);
         for s in series.iter_mut() {
             for p in s.points.iter_mut() {
                 p.1 = p.1.max(lo);

@@ -114,6 +114,25 @@ pub fn tk_damage(x: f64, gamma: f64) -> Option<f64> {
     Some(d)
 }
 
+/// ln x_k, k = 0..=n, of the ratio x_k = E_k/E_m,k of a particle that survives n impacts of
+/// constant energy from x0 (x_(k+1) = x_k/(1 − D_k)); None if it breaks within them. Since the
+/// Hertz fracture energy scales as the strength⁵, its strength after k impacts is the initial one
+/// times (x0/x_k)^(1/5).
+pub fn tk_ratio_path(x0: f64, gamma: f64, n: u64) -> Option<Vec<f64>> {
+    let mut path = Vec::with_capacity(n as usize + 1);
+    let mut x = x0;
+    path.push(x.ln());
+    for _ in 0..n {
+        if x >= 1.0 {
+            return None;
+        }
+        let d = tk_damage(x, gamma)?;
+        x /= 1.0 - d;
+        path.push(x.ln());
+    }
+    Some(path)
+}
+
 /// Whether a particle with initial ratio x0 = E_k/E_m,0 breaks within `n` impacts: impact k
 /// breaks it when x_(k−1) ≥ 1, or when its damage has no fixed point below 1.
 pub fn tk_breaks_within(x0: f64, gamma: f64, n: u64) -> bool {

@@ -672,18 +672,6 @@ pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<Ru
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: headline.lines })
 }
 
-/// A domain in words.
-fn describe(d: &AveragingDomain) -> String {
-    let m = match d.measure {
-        crate::contact::AveragingMeasure::Line => "line",
-        crate::contact::AveragingMeasure::Area => "area",
-    };
-    match d.outer {
-        crate::contact::OuterLimit::ContactMultiple => format!("{m} average to {}·a", d.kappa),
-        crate::contact::OuterLimit::ParticleRadius => format!("{m} average to R"),
-    }
-}
-
 /// The study's domain and every `[model_form] averaging` alternative (each a rerun of the
 /// chain with its own Weibull fit, a quarter of the samples): P(candidate worse) and the
 /// medians, primary model, per horizon.
@@ -694,7 +682,7 @@ fn write_averaging(dir: &mut ReportDir, s: &UqStudy, path: &std::path::Path, cha
         for (h, &years) in c.years.iter().enumerate() {
             let (a, b) = (c.slot(0, h, 0), c.slot(1, h, 0));
             let (worse, se) = mean_se(&p.fraction_worse(a, b, p.blocks[0].len()));
-            rows.push((describe(d), years, worse, se, quantiles_of(p.values(a), &[0.5])[0], quantiles_of(p.values(b), &[0.5])[0]));
+            rows.push((d.describe(), years, worse, se, crate::stats::interpolated_quantiles(p.values(a), &[0.5])[0], crate::stats::interpolated_quantiles(p.values(b), &[0.5])[0]));
         }
     };
     add(chain, prop, &chain.domain);
@@ -718,12 +706,6 @@ fn write_averaging(dir: &mut ReportDir, s: &UqStudy, path: &std::path::Path, cha
         ])?,
     )?;
     Ok(rows)
-}
-
-/// Quantiles `ps` of `v` (interpolated, as C1239's tables).
-fn quantiles_of(mut v: Vec<f64>, ps: &[f64]) -> Vec<f64> {
-    v.sort_by(f64::total_cmp);
-    ps.iter().map(|&p| crate::weibull::sorted_quantile(&v, p)).collect()
 }
 
 impl Propagated {
@@ -775,9 +757,9 @@ fn write_headline(dir: &mut ReportDir, chain: &Chain, prop: &Propagated) -> Resu
             for j in 0..2 {
                 let slot = chain.slot(j, h, k);
                 let all = prop.values(slot);
-                let block_medians: Vec<f64> = prop.blocks.iter().map(|bl| quantiles_of(bl.iter().map(|e| e.p[slot]).collect(), &[0.5])[0]).collect();
+                let block_medians: Vec<f64> = prop.blocks.iter().map(|bl| crate::stats::interpolated_quantiles(bl.iter().map(|e| e.p[slot]).collect(), &[0.5])[0]).collect();
                 let mean_p = all.iter().sum::<f64>() / all.len() as f64;
-                let q = quantiles_of(all, &[0.05, 0.5, 0.95]);
+                let q = crate::stats::interpolated_quantiles(all, &[0.05, 0.5, 0.95]);
                 medians[j] = q[1];
                 q_rows.0.push(model.name().into());
                 q_rows.1.push(chain.materials[j].key.clone());
@@ -878,7 +860,7 @@ fn write_breakage_vs_velocity(dir: &mut ReportDir, chain: &Chain, prop: &Propaga
             for i in 0..48 {
                 let v = vlo * (vhi / vlo).powf(i as f64 / 47.0);
                 let ps: Vec<f64> = sub.iter().map(|e| chain.p(chain.models[0], e.hazard[j].m, chain.ln_hazard(j, &e.hazard[j], v.ln()), years * e.per_year, e.gamma, h)).collect();
-                let q = quantiles_of(ps, &[0.05, 0.5, 0.95]);
+                let q = crate::stats::interpolated_quantiles(ps, &[0.05, 0.5, 0.95]);
                 vv.0.push(chain.materials[j].key.clone());
                 vv.1.push(years);
                 vv.2.push(v);
@@ -956,7 +938,7 @@ fn write_inputs(dir: &mut ReportDir, chain: &Chain) -> Result<()> {
         // Weibull draws: the quantiles of the modulus m over the draws.
         let qs = match &i.marginal {
             Marginal::Weibull(d) => {
-                let q = quantiles_of(d.iter().map(|w| w.shape).collect(), &[0.05, 0.5, 0.95]);
+                let q = crate::stats::interpolated_quantiles(d.iter().map(|w| w.shape).collect(), &[0.05, 0.5, 0.95]);
                 [q[0], q[1], q[2]]
             }
             m => [0.05, 0.5, 0.95].map(|u| m.quantile(u)),
@@ -986,7 +968,7 @@ fn summary(s: &UqStudy, chain: &Chain, prop: &Propagated, ind: &[SobolIndices], 
     md.push_str("\n| material | horizon | median P | 90 % band |\n|---|---|---|---|\n");
     for j in 0..2 {
         for (h, years) in chain.years.iter().enumerate() {
-            let q = quantiles_of(prop.values(chain.slot(j, h, 0)), &[0.05, 0.5, 0.95]);
+            let q = crate::stats::interpolated_quantiles(prop.values(chain.slot(j, h, 0)), &[0.05, 0.5, 0.95]);
             md.push_str(&format!("| {} | {} yr | {:.2e} | {:.1e} – {:.1e} |\n", chain.materials[j].label, years, q[1], q[0], q[2]));
         }
     }

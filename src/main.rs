@@ -89,7 +89,8 @@ enum Command {
         #[arg(long)]
         uq: bool,
         /// Run the discrepancy benchmark instead: the naming loop and the full report on 100
-        /// synthetic particles.
+        /// synthetic particles, then studies/discrepancy_curves.toml (the curve level; needs
+        /// the report of studies/calibrate_gen3_rt.toml).
         #[arg(long)]
         discrepancy: bool,
     },
@@ -179,8 +180,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 (Some(s), None) => partlife::study::load(s)?,
                 (None, None) => anyhow::bail!("give a study file or --data <crush.csv>"),
             };
-            if study.is_some() && !matches!(loaded.study, partlife::study::Study::Discrepancy(_)) {
-                return Err(partlife::Error::config(loaded.path.display().to_string(), "kind", "`partlife discrepancy` runs studies of kind \"discrepancy\"").into());
+            if study.is_some() && !matches!(loaded.study, partlife::study::Study::Discrepancy(_) | partlife::study::Study::DiscrepancyCurves(_)) {
+                return Err(partlife::Error::config(loaded.path.display().to_string(), "kind", "`partlife discrepancy` runs studies of kind \"discrepancy\" or \"discrepancy_curves\"").into());
             }
             let reports_root = match &out {
                 Some(dir) => {
@@ -306,6 +307,21 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 d.loop_s,
                 d.report_s
             );
+            // The curve level needs the calibration's report (its emulator runs).
+            let study = std::path::Path::new("studies/discrepancy_curves.toml");
+            if PathBuf::from("reports/calibrate_gen3_rt/runs.csv").is_file() {
+                let loaded = partlife::study::load(study)?;
+                let opts = partlife::runner::RunOptions { reports_root: PathBuf::from("reports"), progress: false };
+                let summary = partlife::runner::run(&loaded, &opts)?;
+                out!(
+                    "curve-level discrepancy loop ({}): {} — {:.1} s including the 5 FE runs of the curvature table (goal < 15 min)",
+                    study.display(),
+                    summary.headlines.join("; "),
+                    summary.wall_time_s
+                );
+            } else {
+                out!("curve-level discrepancy loop: not timed — run `partlife run studies/calibrate_gen3_rt.toml` first (its report holds the emulator's runs)");
+            }
         }
         Command::Bench { uq: true, .. } => {
             out!("machine: {} threads available to rayon", rayon::current_num_threads());

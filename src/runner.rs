@@ -60,6 +60,7 @@ pub fn run(study: &LoadedStudy, opts: &RunOptions) -> Result<RunSummary> {
         Study::Calibrate(s) => crate::calibrate::run::run_calibrate(study, s, opts),
         Study::Uq(s) => crate::uq::run::run_uq(study, s, opts),
         Study::Discrepancy(s) => crate::discrepancy::run::run_discrepancy(study, s, opts),
+        Study::DiscrepancyCurves(s) => crate::discrepancy::curves::run_curves(study, s, opts),
     }
 }
 

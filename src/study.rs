@@ -165,7 +165,7 @@ pub struct MaterialSpec {
 }
 
 /// The kinds of study this version can run.
-pub const KINDS: [&str; 6] = ["lifetime", "dem", "crush", "calibrate", "uq", "discrepancy"];
+pub const KINDS: [&str; 7] = ["lifetime", "dem", "crush", "calibrate", "uq", "discrepancy", "discrepancy_curves"];
 
 /// A lifetime study (kind = "lifetime"): the deliverable's §6 chain for several materials.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -207,6 +207,9 @@ pub enum Study {
     Uq(Box<crate::uq::run::UqStudy>),
     /// kind = "discrepancy": find, name and add what the strength model misses.
     Discrepancy(Box<crate::discrepancy::run::DiscrepancyStudy>),
+    /// kind = "discrepancy_curves": the same at the force–displacement level, against a crush
+    /// calibration.
+    DiscrepancyCurves(Box<crate::discrepancy::curves::CurveStudy>),
 }
 
 /// A study file loaded from disk.
@@ -294,6 +297,11 @@ pub fn load(path: &Path) -> Result<LoadedStudy> {
             let s: crate::discrepancy::run::DiscrepancyStudy = parse_toml(path, &text)?;
             s.validate(&file)?;
             Study::Discrepancy(Box::new(s))
+        }
+        "discrepancy_curves" => {
+            let s: crate::discrepancy::curves::CurveStudy = parse_toml(path, &text)?;
+            s.validate(&file)?;
+            Study::DiscrepancyCurves(Box::new(s))
         }
         other => {
             return Err(Error::config(&file, "kind", format!("unknown kind \"{other}\"; known: {}", KINDS.join(", "))));

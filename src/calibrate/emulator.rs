@@ -71,6 +71,12 @@ impl Emulator {
             .collect()
     }
 
+    /// Predictive means of the first `count` outputs at θ (the others are not evaluated).
+    pub fn means(&self, theta: &[f64], count: usize) -> Vec<f64> {
+        let u = self.space.to_unit(theta);
+        self.gps.iter().take(count).map(|g| g.mean(&u)).collect()
+    }
+
     /// Latent (emulator-only) standard deviation of every output at θ.
     pub fn latent_sd(&self, theta: &[f64]) -> Vec<f64> {
         let u = self.space.to_unit(theta);

@@ -140,6 +140,12 @@ impl Gp {
         (self.y_mean + self.y_sd * mean, self.y_sd * self.y_sd * var)
     }
 
+    /// Predictive mean only (no variance solve).
+    pub fn mean(&self, p: &[f64]) -> f64 {
+        let m: f64 = self.x.iter().zip(self.alpha.iter()).map(|(xi, a)| a * matern52(xi, p, &self.inv_l, self.signal_variance)).sum();
+        self.y_mean + self.y_sd * m
+    }
+
     /// Nugget variance in output units (the emulator's estimate of simulator noise).
     pub fn noise_variance(&self) -> f64 {
         self.y_sd * self.y_sd * self.nugget

@@ -10,6 +10,9 @@
 //! * **particle-to-particle scatter**: each particle has its own diameter (truncated normal) and
 //!   its own tip roundness (uniform in `roundness`, an [`Shape::Asperity`] of that pole
 //!   curvature), which the calibration model does not know (it crushes a sphere);
+//! * optionally a **platen compliance** c (`compliance`, m/N): the recorded displacement is
+//!   δ + c·F, the load train's deflection included (a hidden effect for the discrepancy
+//!   workflow; 0 in the shipped files);
 //! * **measurement noise** on the force: Gaussian with sd `force_sd_n + force_rel_sd·F`,
 //!   sampled every `spacing` of total displacement, as a testing machine records.
 //!
@@ -76,6 +79,10 @@ pub struct CurveCase {
     pub roundness: [f64; 2],
     /// The true material (the generator's truth).
     pub truth: MaterialParams,
+    /// Hidden platen (machine) compliance c (m/N, default 0): the recorded displacement is
+    /// the particle's δ + c·F, as a testing machine whose load train yields records it.
+    #[serde(default)]
+    pub compliance: f64,
 }
 
 /// Columns of a curve file.
@@ -125,6 +132,9 @@ impl CurveSynthSettings {
             let d = c.diameter;
             if !(d.min > 0.0 && d.min < d.max && d.sd > 0.0 && d.mean.is_finite()) {
                 return bad(k("diameter"), format!("needs 0 < min < max and sd > 0 (got {d:?})"));
+            }
+            if !(c.compliance >= 0.0 && c.compliance < 1e-5) {
+                return bad(k("compliance"), format!("must lie in [0, 1e-5) m/N, got {}", c.compliance));
             }
             let [lo, hi] = c.roundness;
             if !(lo > 0.0 && lo <= hi && hi <= 1.0) {
@@ -185,7 +195,16 @@ pub fn generate(settings: &CurveSynthSettings, index: usize, progress: &(dyn Fn(
         .collect();
     let mut out = Vec::with_capacity(c.particles);
     for (k, ((d, rho), run)) in draws.into_iter().zip(runs).enumerate() {
-        let r = run?;
+        let mut r = run?;
+        // Machine compliance: the recorded displacement is δ + c·F, kept non-decreasing (after
+        // fracture the load train springs back while the crosshead goes on).
+        if c.compliance > 0.0 {
+            let mut reach = 0.0_f64;
+            for s in &mut r.curve {
+                reach = reach.max(s.displacement + c.compliance * s.force);
+                s.displacement = reach;
+            }
+        }
         let end = r.curve.last().map(|s| s.displacement).unwrap_or(0.0);
         let n = (end / settings.spacing).floor() as usize;
         let samples = (0..=n)

@@ -2,7 +2,7 @@
 //! name → add → shrink comparison of candidate model terms (issue 7, item 4).
 //!
 //! ```text
-//! y_i = η(x_i, θ) + δ(x_i) + ε_i,   δ ~ GP(0, σ_δ² k_ℓ),   ε_i ~ N(0, σ_ε²) (σ_ε known)
+//! y_i = η(x_i, θ) + δ(x_i) + ε_i,   δ ~ GP(0, σ_δ² k_ℓ),   ε_i ~ N(0, σ_ε,i²) (σ_ε,i known)
 //! ```
 //!
 //! k_ℓ is the squared-exponential kernel with one length per input dimension. With
@@ -39,8 +39,8 @@ use crate::model::{OutputSpec, Simulator};
 use crate::params::{Param, ParamSpace};
 use crate::stats::interpolated_quantiles;
 
-/// The simulator as a function of (θ, data index).
-pub type ModelFn<'a> = dyn Fn(&[f64], usize) -> f64 + Sync + 'a;
+/// The simulator at every data point as a function of θ.
+pub type ModelFn<'a> = dyn Fn(&[f64]) -> Vec<f64> + Sync + 'a;
 
 /// A calibration problem with discrepancy.
 pub struct Problem<'a> {
@@ -50,8 +50,8 @@ pub struct Problem<'a> {
     pub x: Vec<Vec<f64>>,
     /// Observations.
     pub y: Vec<f64>,
-    /// Known noise sd σ_ε.
-    pub noise_sd: f64,
+    /// Known noise sd σ_ε,i, one per observation.
+    pub noise_sd: Vec<f64>,
     /// The simulator η(θ, i).
     pub model: &'a ModelFn<'a>,
     /// Names of θ.
@@ -60,6 +60,9 @@ pub struct Problem<'a> {
     pub bounds: Vec<(f64, f64)>,
     /// Condition δ on δ(0) = 0 and δ′(0) = 0 (one input only).
     pub constrain_origin: bool,
+    /// Log prior density of θ (up to a constant) beyond the uniform bounds, for example the
+    /// posterior of an earlier calibration; it then counts as data in the BIC.
+    pub prior: Option<&'a (dyn Fn(&[f64]) -> f64 + Sync)>,
 }
 
 /// Sampler settings.
@@ -100,12 +103,15 @@ pub struct KohFit {
     pub sigma_delta: f64,
     /// Posterior median of the lengths.
     pub lengths: Vec<f64>,
-    /// Largest log-likelihood found (GP integrated out).
+    /// Largest log-likelihood found (GP integrated out; plus the log prior of θ when the
+    /// problem has one).
     pub max_loglik: f64,
     /// BIC = −2 max ℓ + (dim θ + 1 + d) ln n.
     pub bic: f64,
     /// Posterior mean of δ at the data points.
     pub delta: Vec<f64>,
+    /// Posterior sd of δ at the data points (over θ, σ_δ, ℓ and the GP).
+    pub delta_sd: Vec<f64>,
     /// RMS of that mean.
     pub delta_rms: f64,
 }
@@ -138,8 +144,8 @@ impl Problem<'_> {
         if self.constrain_origin && self.dim_x() != 1 {
             return Err(Error::numerical("discrepancy GP", "the δ(0) = 0, δ′(0) = 0 constraint needs one input"));
         }
-        if self.bounds.len() != self.names.len() || self.bounds.iter().any(|(a, b)| a.partial_cmp(b) != Some(std::cmp::Ordering::Less)) || self.noise_sd.is_nan() || self.noise_sd <= 0.0 {
-            return Err(Error::numerical("discrepancy GP", "θ bounds must be ordered and the noise sd > 0"));
+        if self.bounds.len() != self.names.len() || self.bounds.iter().any(|(a, b)| a.partial_cmp(b) != Some(std::cmp::Ordering::Less)) || self.noise_sd.len() != n || self.noise_sd.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+            return Err(Error::numerical("discrepancy GP", "θ bounds must be ordered and every observation needs a noise sd > 0"));
         }
         Ok(())
     }
@@ -147,7 +153,8 @@ impl Problem<'_> {
     fn hyper_bounds(&self) -> Vec<(f64, f64)> {
         let n = self.y.len() as f64;
         let mean = self.y.iter().sum::<f64>() / n;
-        let sy = (self.y.iter().map(|v| sq(v - mean)).sum::<f64>() / n).sqrt().max(self.noise_sd);
+        let noise = self.noise_sd.iter().fold(0.0_f64, |a, &b| a.max(b));
+        let sy = (self.y.iter().map(|v| sq(v - mean)).sum::<f64>() / n).sqrt().max(noise);
         let mut b = vec![((1e-4 * sy).ln(), (10.0 * sy).ln())];
         for k in 0..self.dim_x() {
             let (lo, hi) = self.x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v[k]), b.max(v[k])));
@@ -164,7 +171,8 @@ impl Problem<'_> {
         let s2 = (2.0 * p[nt]).exp();
         let ell: Vec<f64> = p[nt + 1..].iter().map(|v| v.exp()).collect();
         let k = DMatrix::from_fn(n, n, |i, j| kernel(&self.x[i], &self.x[j], s2, &ell, self.constrain_origin));
-        let r = DVector::from_fn(n, |i, _| self.y[i] - (self.model)(&p[..nt], i));
+        let eta = (self.model)(&p[..nt]);
+        let r = DVector::from_fn(n, |i, _| self.y[i] - eta.get(i).copied().unwrap_or(f64::NAN));
         (k, r)
     }
 
@@ -177,7 +185,7 @@ impl Problem<'_> {
         }
         let mut s = k;
         for i in 0..n {
-            s[(i, i)] += sq(self.noise_sd) * (1.0 + 1e-10);
+            s[(i, i)] += sq(self.noise_sd[i]) * (1.0 + 1e-10);
         }
         let Some(ch) = s.cholesky() else { return f64::NEG_INFINITY };
         let alpha = ch.solve(&r);
@@ -185,14 +193,18 @@ impl Problem<'_> {
         -0.5 * (r.dot(&alpha) + logdet + n as f64 * (2.0 * std::f64::consts::PI).ln())
     }
 
-    fn delta_mean(&self, p: &[f64]) -> Option<DVector<f64>> {
+    /// Conditional mean and variance of δ at the data given (θ, σ_δ, ℓ).
+    fn delta_moments(&self, p: &[f64]) -> Option<(DVector<f64>, DVector<f64>)> {
         let (k, r) = self.parts(p);
         let mut s = k.clone();
         for i in 0..self.y.len() {
-            s[(i, i)] += sq(self.noise_sd) * (1.0 + 1e-10);
+            s[(i, i)] += sq(self.noise_sd[i]) * (1.0 + 1e-10);
         }
         let ch = s.cholesky()?;
-        Some(&k * ch.solve(&r))
+        let mean = &k * ch.solve(&r);
+        let reduced = &k * ch.solve(&k);
+        let var = DVector::from_fn(self.y.len(), |i, _| (k[(i, i)] - reduced[(i, i)]).max(0.0));
+        Some((mean, var))
     }
 }
 
@@ -211,7 +223,7 @@ impl Simulator for AtData<'_, '_> {
         &self.outputs
     }
     fn simulate(&self, theta: &[f64]) -> Result<Vec<f64>> {
-        Ok((0..self.problem.y.len()).map(|i| (self.problem.model)(theta, i)).collect())
+        Ok((self.problem.model)(theta))
     }
 }
 
@@ -230,7 +242,7 @@ pub fn least_squares(problem: &Problem) -> Result<Vec<f64>> {
         space: ParamSpace::new(params)?,
         outputs: (0..problem.y.len()).map(|i| OutputSpec::new(format!("y{i}"), "-")).collect(),
     };
-    let noise = Noise::Known { sigma: vec![problem.noise_sd; problem.y.len()] };
+    let noise = Noise::Known { sigma: problem.noise_sd.clone() };
     Ok(lsq::fit(&sim, &problem.y, &noise, &LsqOptions::default())?.theta)
 }
 
@@ -245,7 +257,7 @@ pub fn fit(problem: &Problem, opts: &KohOptions) -> Result<KohFit> {
         if p.iter().zip(&bounds).any(|(v, (a, b))| !(v >= a && v <= b)) {
             return f64::NEG_INFINITY;
         }
-        problem.loglik(p)
+        problem.loglik(p) + problem.prior.map_or(0.0, |f| f(&p[..nt]))
     };
     // Walkers start near the least-squares θ with mid-range hyperparameters.
     let theta0 = least_squares(problem)?;
@@ -291,11 +303,12 @@ pub fn fit(problem: &Problem, opts: &KohOptions) -> Result<KohFit> {
     let all: Vec<&Vec<f64>> = chains.draws.iter().flat_map(|s| s.iter()).collect();
     let stride = (all.len() / opts.delta_draws.max(1)).max(1);
     let n = problem.y.len();
-    let mut delta = DVector::<f64>::zeros(n);
+    let (mut delta, mut second) = (DVector::<f64>::zeros(n), DVector::<f64>::zeros(n));
     let mut used = 0;
     for p in all.iter().step_by(stride) {
-        if let Some(d) = problem.delta_mean(p) {
-            delta += d;
+        if let Some((m, v)) = problem.delta_moments(p) {
+            second += v + m.component_mul(&m);
+            delta += m;
             used += 1;
         }
     }
@@ -303,9 +316,11 @@ pub fn fit(problem: &Problem, opts: &KohOptions) -> Result<KohFit> {
         return Err(Error::numerical("discrepancy GP", "no posterior draw gave a positive-definite covariance"));
     }
     delta /= used as f64;
+    second /= used as f64;
+    let delta_sd: Vec<f64> = (0..n).map(|i| (second[i] - sq(delta[i])).max(0.0).sqrt()).collect();
     let delta: Vec<f64> = delta.iter().copied().collect();
     let delta_rms = (delta.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
-    let max_loglik = problem.loglik(&best);
+    let max_loglik = best_lp;
     let bic = -2.0 * max_loglik + dim as f64 * (n as f64).ln();
     Ok(KohFit {
         name: problem.name.clone(),
@@ -318,6 +333,7 @@ pub fn fit(problem: &Problem, opts: &KohOptions) -> Result<KohFit> {
         max_loglik,
         bic,
         delta,
+        delta_sd,
         delta_rms,
     })
 }

@@ -11,9 +11,11 @@
 //!   after, detection power vs number of particles, tables, figures and `verdict.json`.
 //! * [`koh`]: Kennedy–O'Hagan calibration with a GP discrepancy δ(x) and the name → add →
 //!   shrink comparison of candidate model terms, verified on the simple machine and the ball drop.
-//!
-//! Still to come: the loop on crush force–displacement curves (FE emulator).
+//! * [`curves`]: the same loop at the force–displacement level (`kind = "discrepancy_curves"`):
+//!   the calibrated crush FE (its emulator) against measured curves, δ(displacement) and the
+//!   FE-level terms platen compliance, temperature softening and contact-tip curvature.
 
+pub mod curves;
 pub mod effects;
 pub mod gof;
 pub mod koh;

@@ -8,6 +8,7 @@
 //! | `discrepancy_evidence` | likelihood ratio of every candidate per round against the round's critical value | `evidence.csv` |
 //! | `discrepancy_lifetime` | breaking probability of the population, base vs final model, 90 % bands | `lifetime.csv` |
 //! | `discrepancy_power` | detection power and false-positive rate vs number of crush tests | `power.csv` |
+//! | `discrepancy_curves` (kind `discrepancy_curves`) | measured mean crush curves with the calibrated FE before/after the named terms; δ(x) with 90 % bands before/after | `curve_points.csv`, `curve_evidence.csv` |
 
 use std::path::Path;
 
@@ -289,4 +290,72 @@ fn power(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Resul
         legend: Some(SeriesLabelPosition::MiddleRight),
     };
     figure("discrepancy_power", width_cm, 0.85, &[(p, 1.0)])
+}
+
+/// Draws the figure of a curve-level discrepancy report (`kind = "discrepancy_curves"`):
+/// `discrepancy_curves` — top, the measured mean curves (markers, ±σ) with the calibrated model
+/// before (grey, dashed) and after the named terms (colour); bottom, the posterior mean of δ
+/// with its 90 % band, before (grey) and after (colour). From `curve_points.csv` only.
+pub fn render_curves(dir: &Path, width_cm: f64) -> Result<Rendered> {
+    let t = Table::load(dir, "curve_points")?;
+    let (file, x, y, sig) = (t.s("file")?, t.f("displacement_m")?, t.f("force_mean_n")?, t.f("sigma_n")?);
+    let (mb, ma) = (t.f("model_before_n")?, t.f("model_after_n")?);
+    let (db, dbs, da, das) = (t.f("delta_before_n")?, t.f("delta_sd_before_n")?, t.f("delta_after_n")?, t.f("delta_sd_after_n")?);
+    let ev = Table::load(dir, "curve_evidence")?;
+    let named: Vec<String> = {
+        let (c, n) = (ev.s("candidate")?, ev.s("named")?);
+        (0..c.len()).filter(|&i| n[i] == "yes").map(|i| c[i].clone()).collect()
+    };
+    let after = if named.is_empty() { "no term named".to_string() } else { format!("+ {}", named.join(" + ")) };
+    let files = distinct(&file);
+    let um = |v: f64| v * 1e6;
+    let (mut top, mut bottom) = (Vec::new(), Vec::new());
+    for (g, name) in files.iter().enumerate() {
+        let rows: Vec<usize> = (0..file.len()).filter(|&i| &file[i] == name).collect();
+        let c = colour(g);
+        let first = g == 0;
+        for &i in &rows {
+            top.push(Series::line(None, vec![(um(x[i]), y[i] - sig[i]), (um(x[i]), y[i] + sig[i])], c, 0.8));
+        }
+        top.push(Series { label: Some(format!("{name}: measured")), points: rows.iter().map(|&i| (um(x[i]), y[i])).collect(), colour: c, kind: Kind::Markers([Marker::Circle, Marker::Triangle, Marker::Cross][g % 3], 2.0) });
+        top.push(Series { label: first.then(|| "calibrated FE (no term)".to_string()), points: rows.iter().map(|&i| (um(x[i]), mb[i])).collect(), colour: GREY, kind: Kind::Dashed(1.0, 3.0, 2.0) });
+        top.push(Series::line(Some(format!("{name}: FE {after}")), rows.iter().map(|&i| (um(x[i]), ma[i])).collect(), c, 1.2));
+        bottom.push(Series { label: None, points: rows.iter().map(|&i| (um(x[i]), db[i] - 1.645 * dbs[i])).collect(), colour: GREY, kind: Kind::Band(rows.iter().map(|&i| db[i] + 1.645 * dbs[i]).collect(), 0.25) });
+        bottom.push(Series { label: first.then(|| "δ, calibrated FE (90 %)".to_string()), points: rows.iter().map(|&i| (um(x[i]), db[i])).collect(), colour: GREY, kind: Kind::Dashed(1.0, 3.0, 2.0) });
+        bottom.push(Series { label: None, points: rows.iter().map(|&i| (um(x[i]), da[i] - 1.645 * das[i])).collect(), colour: c, kind: Kind::Band(rows.iter().map(|&i| da[i] + 1.645 * das[i]).collect(), 0.25) });
+        bottom.push(Series::line(Some(format!("δ, {name} {after}")), rows.iter().map(|&i| (um(x[i]), da[i])).collect(), c, 1.2));
+    }
+    let xr = (0.0, x.iter().copied().fold(0.0, f64::max) * 1e6 * 1.05);
+    let ytop = y.iter().zip(&sig).map(|(a, s)| a + s).chain(mb.iter().copied()).chain(ma.iter().copied()).fold(0.0, f64::max);
+    let dvals: Vec<f64> = (0..x.len()).flat_map(|i| [db[i] - 1.645 * dbs[i], db[i] + 1.645 * dbs[i], da[i] - 1.645 * das[i], da[i] + 1.645 * das[i], 0.0]).collect();
+    let panels = vec![
+        (
+            Panel {
+                x_categories: vec![],
+                x_desc: String::new(),
+                y_desc: "Force at D₀ (N)".into(),
+                x_range: xr,
+                y_range: (0.0, ytop * 1.1),
+                y_log: false,
+                series: top,
+                legend: Some(SeriesLabelPosition::UpperLeft),
+            },
+            0.55,
+        ),
+        (
+            Panel {
+                x_categories: vec![],
+                x_desc: "Total displacement at D₀ (µm)".into(),
+                y_desc: "Discrepancy δ (N)".into(),
+                x_range: xr,
+                y_range: padded(dvals, 0.08, 0.8),
+                y_log: false,
+                series: bottom,
+                legend: Some(SeriesLabelPosition::UpperLeft),
+            },
+            0.45,
+        ),
+    ];
+    let drawn = figure("discrepancy_curves", width_cm, 1.25, &panels)?;
+    super::write_figures(dir, vec![("discrepancy_curves", drawn)])
 }

@@ -182,6 +182,7 @@ pub fn redraw(report_dir: &Path) -> Result<Rendered> {
         Some("calibrate") => return calibrate::render(report_dir, width),
         Some("uq") => return uq::render(report_dir, width),
         Some("discrepancy") => return discrepancy::render(report_dir, width),
+        Some("discrepancy_curves") => return discrepancy::render_curves(report_dir, width),
         _ => {}
     }
     render(report_dir, width)

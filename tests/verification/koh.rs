@@ -32,16 +32,17 @@ fn simple_machine_least_squares_is_biased_as_published() {
     // Noise-free, 11 points: θ̂ = 0.5624 (B&O'H 2014); max |δ| at the true θ = 0.433.
     let x = machine_x();
     let y: Vec<f64> = x.iter().map(|&v| reality(v)).collect();
-    let model = |t: &[f64], i: usize| t[0] * x[i];
+    let model = |t: &[f64]| (0..x.len()).map(|i| t[0] * x[i]).collect::<Vec<f64>>();
     let p = Problem {
         name: "η = θx".into(),
         x: x.iter().map(|v| vec![*v]).collect(),
         y: y.clone(),
-        noise_sd: 0.01,
+        noise_sd: vec![0.01; y.len()],
         model: &model,
         names: vec!["theta".into()],
         bounds: vec![(0.0, 2.0)],
         constrain_origin: true,
+        prior: None,
     };
     let t = least_squares(&p).unwrap()[0];
     assert!((t - 0.5624).abs() < 5e-5, "θ̂ = {t}");
@@ -54,13 +55,13 @@ fn simple_machine_constrained_discrepancy_and_the_missing_saturation_term() {
     let x = machine_x();
     let y = noisy(x.iter().map(|&v| reality(v)).collect(), 0.01, 3);
     let xs: Vec<Vec<f64>> = x.iter().map(|v| vec![*v]).collect();
-    let linear = |t: &[f64], i: usize| t[0] * x[i];
-    let saturating = |t: &[f64], i: usize| t[0] * x[i] / (1.0 + x[i] / t[1]);
-    let quadratic = |t: &[f64], i: usize| t[0] * x[i] + t[1] * x[i] * x[i];
-    let base = Problem { name: "θx".into(), x: xs.clone(), y: y.clone(), noise_sd: 0.01, model: &linear, names: vec!["theta".into()], bounds: vec![(0.0, 2.0)], constrain_origin: true };
+    let linear = |t: &[f64]| (0..x.len()).map(|i| t[0] * x[i]).collect::<Vec<f64>>();
+    let saturating = |t: &[f64]| (0..x.len()).map(|i| t[0] * x[i] / (1.0 + x[i] / t[1])).collect::<Vec<f64>>();
+    let quadratic = |t: &[f64]| (0..x.len()).map(|i| t[0] * x[i] + t[1] * x[i] * x[i]).collect::<Vec<f64>>();
+    let base = Problem { name: "θx".into(), x: xs.clone(), y: y.clone(), noise_sd: vec![0.01; y.len()], model: &linear, names: vec!["theta".into()], bounds: vec![(0.0, 2.0)], constrain_origin: true, prior: None };
     let cands = vec![
-        Problem { name: "saturation θx/(1 + x/a)".into(), x: xs.clone(), y: y.clone(), noise_sd: 0.01, model: &saturating, names: vec!["theta".into(), "a".into()], bounds: vec![(0.0, 2.0), (1.0, 200.0)], constrain_origin: true },
-        Problem { name: "quadratic θx + c x²".into(), x: xs.clone(), y: y.clone(), noise_sd: 0.01, model: &quadratic, names: vec!["theta".into(), "c".into()], bounds: vec![(0.0, 2.0), (-1.0, 1.0)], constrain_origin: true },
+        Problem { name: "saturation θx/(1 + x/a)".into(), x: xs.clone(), y: y.clone(), noise_sd: vec![0.01; y.len()], model: &saturating, names: vec!["theta".into(), "a".into()], bounds: vec![(0.0, 2.0), (1.0, 200.0)], constrain_origin: true, prior: None },
+        Problem { name: "quadratic θx + c x²".into(), x: xs.clone(), y: y.clone(), noise_sd: vec![0.01; y.len()], model: &quadratic, names: vec!["theta".into(), "c".into()], bounds: vec![(0.0, 2.0), (-1.0, 1.0)], constrain_origin: true, prior: None },
     ];
     let (fits, named) = compare(&base, &cands, &opts()).unwrap();
     for f in &fits {
@@ -148,16 +149,16 @@ fn ball_drop_names_quadratic_drag_and_recovers_c() {
     let sd = 0.01;
     let y = noisy(pts.iter().map(|&(h, r)| time_to_fall(h, 0.0, C_TRUE / r)).collect(), sd, 11);
     let xs: Vec<Vec<f64>> = pts.iter().map(|&(h, r)| vec![h, r]).collect();
-    let linear = |t: &[f64], i: usize| time_to_fall(pts[i].0, t[0] / pts[i].1, 0.0);
-    let quadratic = |t: &[f64], i: usize| time_to_fall(pts[i].0, 0.0, t[0] / pts[i].1);
-    let mixed = |t: &[f64], i: usize| time_to_fall(pts[i].0, t[0] / pts[i].1, t[1] / pts[i].1);
-    let delayed = |t: &[f64], i: usize| time_to_fall(pts[i].0, t[0] / pts[i].1, 0.0) + t[1];
-    let base = Problem { name: "linear drag".into(), x: xs.clone(), y: y.clone(), noise_sd: sd, model: &linear, names: vec!["c_linear".into()], bounds: vec![(1e-4, 2.0)], constrain_origin: false };
+    let linear = |t: &[f64]| (0..pts.len()).map(|i| time_to_fall(pts[i].0, t[0] / pts[i].1, 0.0)).collect::<Vec<f64>>();
+    let quadratic = |t: &[f64]| (0..pts.len()).map(|i| time_to_fall(pts[i].0, 0.0, t[0] / pts[i].1)).collect::<Vec<f64>>();
+    let mixed = |t: &[f64]| (0..pts.len()).map(|i| time_to_fall(pts[i].0, t[0] / pts[i].1, t[1] / pts[i].1)).collect::<Vec<f64>>();
+    let delayed = |t: &[f64]| (0..pts.len()).map(|i| time_to_fall(pts[i].0, t[0] / pts[i].1, 0.0) + t[1]).collect::<Vec<f64>>();
+    let base = Problem { name: "linear drag".into(), x: xs.clone(), y: y.clone(), noise_sd: vec![sd; y.len()], model: &linear, names: vec!["c_linear".into()], bounds: vec![(1e-4, 2.0)], constrain_origin: false, prior: None };
     // The drag-law alternatives: quadratic instead of linear, both, or linear with a release delay.
     let cands = vec![
-        Problem { name: "quadratic drag".into(), x: xs.clone(), y: y.clone(), noise_sd: sd, model: &quadratic, names: vec!["c_quadratic".into()], bounds: vec![(1e-4, 1.0)], constrain_origin: false },
-        Problem { name: "linear + quadratic drag".into(), x: xs.clone(), y: y.clone(), noise_sd: sd, model: &mixed, names: vec!["c_linear".into(), "c_quadratic".into()], bounds: vec![(0.0, 2.0), (0.0, 1.0)], constrain_origin: false },
-        Problem { name: "linear drag + release delay".into(), x: xs.clone(), y: y.clone(), noise_sd: sd, model: &delayed, names: vec!["c_linear".into(), "t0".into()], bounds: vec![(1e-4, 2.0), (-0.5, 0.5)], constrain_origin: false },
+        Problem { name: "quadratic drag".into(), x: xs.clone(), y: y.clone(), noise_sd: vec![sd; y.len()], model: &quadratic, names: vec!["c_quadratic".into()], bounds: vec![(1e-4, 1.0)], constrain_origin: false, prior: None },
+        Problem { name: "linear + quadratic drag".into(), x: xs.clone(), y: y.clone(), noise_sd: vec![sd; y.len()], model: &mixed, names: vec!["c_linear".into(), "c_quadratic".into()], bounds: vec![(0.0, 2.0), (0.0, 1.0)], constrain_origin: false, prior: None },
+        Problem { name: "linear drag + release delay".into(), x: xs.clone(), y: y.clone(), noise_sd: vec![sd; y.len()], model: &delayed, names: vec!["c_linear".into(), "t0".into()], bounds: vec![(1e-4, 2.0), (-0.5, 0.5)], constrain_origin: false, prior: None },
     ];
     let (fits, named) = compare(&base, &cands, &opts()).unwrap();
     for f in &fits {

@@ -89,6 +89,8 @@ fn curve_loop_names_temperature_and_compliance_and_nothing_on_clean_curves() {
     // Where: the 800 °C curve disagrees, by more than 20 % somewhere.
     let w = v["disagreement_before"].as_array().unwrap();
     assert!(w[1]["largest_relative_delta"].as_f64().unwrap() > 0.2, "{w:?}");
+    // The trend along the curve is diagnosed for every file.
+    assert_eq!(v["trend_along_curve"].as_array().unwrap().len(), 2, "{v}");
 
     // Nothing hidden: the calibration's own curves.
     let v = run_verdict(&s, "clean", &curve_study(&[("crush_curves_gen3_rt.csv", 20.0)]));
@@ -138,4 +140,12 @@ fn curve_study_without_its_calibration_report_is_refused() {
     assert!(s.report_files().is_empty(), "{:?}", s.report_files());
     // A bad key is refused at load, naming it.
     s.expect_bad_study("studies/curves.toml", "temperature_c = 20", "temperature_c = -400", &["data[0].temperature_c"]);
+    // A missing curve file names its key (checked before the calibration is read).
+    s.write("studies/curves.toml", &curve_study(&[("crush_curves_gen3_rt.csv", 20.0), ("no_such.csv", 800.0)]));
+    let out = s.run(&["run", "studies/curves.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    for e in ["curves.toml", "data[1].file", "no_such.csv"] {
+        assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
+    }
+    assert!(s.report_files().is_empty(), "{:?}", s.report_files());
 }

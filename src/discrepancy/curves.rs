@@ -549,7 +549,7 @@ impl CurveInputs<'_> {
         let mut evidence = Vec::new();
         let mut named = Vec::new();
         for round in 0..self.max_effects {
-            let current = stages.last().map(|s| s.clone()).ok_or_else(|| Error::numerical("curve discrepancy", "no stage"))?;
+            let current = stages.last().cloned().ok_or_else(|| Error::numerical("curve discrepancy", "no stage"))?;
             let remaining: Vec<CurveCandidate> = self.candidates.iter().copied().filter(|c| !named.contains(c)).collect();
             if remaining.is_empty() {
                 break;
@@ -606,6 +606,22 @@ pub fn disagreement(fit: &KohFit, points: &[Point], groups: usize) -> Vec<Option
             let (lo, hi) = hits.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| (a.min(points[i].x), b.max(points[i].x)));
             let rel = hits.iter().map(|&i| fit.delta[i].abs() / points[i].mean.abs().max(1e-12)).fold(0.0, f64::max);
             (!hits.is_empty()).then_some((lo, hi, rel))
+        })
+        .collect()
+}
+
+/// Trend of each file's mean curve residual (y − η(θ̂_LS))/σ along the curve: Spearman ρ against
+/// displacement with its permutation p-value (999 permutations); NaN with fewer than 4 points.
+pub fn trend_along_curve(points: &[Point], least_squares: &[f64], groups: usize, seed: u64) -> Result<Vec<(f64, f64)>> {
+    (0..groups)
+        .map(|g| {
+            let idx: Vec<usize> = (0..points.len()).filter(|&i| points[i].group == g).collect();
+            if idx.len() < 4 {
+                return Ok((f64::NAN, f64::NAN));
+            }
+            let r: Vec<f64> = idx.iter().map(|&i| (points[i].mean - least_squares[i]) / points[i].sigma).collect();
+            let x: Vec<f64> = idx.iter().map(|&i| points[i].x).collect();
+            super::gof::covariate_trend(&r, &x, 999, seed.wrapping_add(g as u64))
         })
         .collect()
 }
@@ -731,19 +747,29 @@ pub fn curvature_table(cal: &Calibrated, spec: &CurvatureTable, progress: &(dyn 
 pub fn run_curves(loaded: &LoadedStudy, s: &CurveStudy, opts: &RunOptions) -> Result<RunSummary> {
     let clock = RunClock::start();
     let file = loaded.path.display().to_string();
-    let cal = load_calibration(&file, "calibration", &loaded.resolve(Path::new(&s.calibration)), &opts.reports_root)?;
+    // The curve files first (cheap), then the calibration and its emulator.
     let mut paths = Vec::new();
-    let mut groups = Vec::new();
-    for d in &s.data {
+    let mut raw = Vec::new();
+    for (i, d) in s.data.iter().enumerate() {
         let path = loaded.resolve(Path::new(&d.file));
         if !path.is_file() {
-            return Err(Error::config(&file, "data.file", format!("{} does not exist", path.display())));
+            return Err(Error::config(&file, format!("data[{i}].file"), format!("{} does not exist", path.display())));
         }
-        let curves = load_curves(&path)?;
-        let label = d.label.clone().unwrap_or_else(|| path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
-        groups.push(Group { label, temperature: d.temperature_c, curves: curves.iter().map(|c| c.normalised(cal.reference_diameter)).collect() });
+        raw.push(load_curves(&path)?);
         paths.push(path);
     }
+    let cal = load_calibration(&file, "calibration", &loaded.resolve(Path::new(&s.calibration)), &opts.reports_root)?;
+    let groups: Vec<Group> = s
+        .data
+        .iter()
+        .zip(&paths)
+        .zip(&raw)
+        .map(|((d, path), curves)| Group {
+            label: d.label.clone().unwrap_or_else(|| path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()),
+            temperature: d.temperature_c,
+            curves: curves.iter().map(|c| c.normalised(cal.reference_diameter)).collect(),
+        })
+        .collect();
     let mut points = reduce(&|g| paths[g].clone(), &groups, &cal.grid, cal.fracture, s.sigma_floor)?;
     // The emulator's own uncertainty at the calibrated θ joins the measurement's.
     let emu_var: Vec<f64> = cal.emulator.predict(&cal.theta).iter().map(|p| p.1).collect();
@@ -778,13 +804,14 @@ pub fn run_curves(loaded: &LoadedStudy, s: &CurveStudy, opts: &RunOptions) -> Re
         pb.inc(1);
     })?;
     let base_ls = inputs_loop.model.eval(&[], &outcome.theta_ls);
+    let trend = trend_along_curve(&points, &base_ls, groups.len(), s.seed)?;
 
     let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
     write_curve_tables(&mut dir, &groups, &points, &cal, &outcome, &base_ls, &inputs_loop.names, table.as_ref())?;
-    let verdict = curve_verdict(loaded, s, &groups, &points, &outcome);
+    let verdict = curve_verdict(loaded, s, &groups, &points, &outcome, &trend);
     let json = serde_json::to_string_pretty(&verdict).map_err(|e| Error::numerical("verdict.json", e.to_string()))?;
     dir.write_bytes("verdict.json", json.as_bytes())?;
-    dir.write_bytes("summary.md", curve_summary(s, &groups, &points, &outcome).as_bytes())?;
+    dir.write_bytes("summary.md", curve_summary(s, &groups, &points, &outcome, &trend).as_bytes())?;
     pb.set_message("figures");
     let mut failures = Vec::new();
     let rendered = crate::report::discrepancy::render_curves(dir.path(), s.figures.width_cm)?;
@@ -818,7 +845,7 @@ fn term_parameter(fit: &KohFit, base_dim: usize, j: usize) -> (f64, f64, f64) {
     (fit.theta_median[i], fit.theta_90[i].0, fit.theta_90[i].1)
 }
 
-fn curve_verdict(loaded: &LoadedStudy, s: &CurveStudy, groups: &[Group], points: &[Point], o: &CurveOutcome) -> serde_json::Value {
+fn curve_verdict(loaded: &LoadedStudy, s: &CurveStudy, groups: &[Group], points: &[Point], o: &CurveOutcome, trend: &[(f64, f64)]) -> serde_json::Value {
     use serde_json::json;
     let base_dim = o.theta_ls.len();
     let (b, a) = (&o.stages[0], o.stages.last().unwrap_or(&o.stages[0]));
@@ -863,6 +890,11 @@ fn curve_verdict(loaded: &LoadedStudy, s: &CurveStudy, groups: &[Group], points:
             "from_um": w.map(|w| w.0 * 1e6),
             "to_um": w.map(|w| w.1 * 1e6),
             "largest_relative_delta": w.map(|w| w.2),
+        })).collect::<Vec<_>>(),
+        "trend_along_curve": groups.iter().zip(trend).map(|(g, t)| json!({
+            "file": g.label,
+            "spearman_rho": if t.0.is_finite() { json!(t.0) } else { json!(null) },
+            "p_permutation": if t.1.is_finite() { json!(t.1) } else { json!(null) },
         })).collect::<Vec<_>>(),
         "parameters_after": a.fit.names.iter().zip(&a.fit.theta_median).zip(&a.fit.theta_90).map(|((n, m), q)| json!({ "name": n, "median": m, "q05": q.0, "q95": q.1 })).collect::<Vec<_>>(),
     })
@@ -977,18 +1009,19 @@ fn write_curve_tables(dir: &mut ReportDir, groups: &[Group], points: &[Point], c
     Ok(())
 }
 
-fn curve_summary(s: &CurveStudy, groups: &[Group], points: &[Point], o: &CurveOutcome) -> String {
+fn curve_summary(s: &CurveStudy, groups: &[Group], points: &[Point], o: &CurveOutcome, trend: &[(f64, f64)]) -> String {
     let (b, a) = (&o.stages[0], o.stages.last().unwrap_or(&o.stages[0]));
     let mut md = String::from("# Discrepancy of the calibrated crush FE against measured curves\n\n");
     md.push_str(&format!("Calibration: `{}` (its emulator and posterior). Data: ", s.calibration));
     md.push_str(&groups.iter().map(|g| format!("{} ({} curves, {} °C)", g.label, g.curves.len(), g.temperature)).collect::<Vec<_>>().join(", "));
     md.push_str(&format!(".\n\n**Terms named: {}.** Gap RMS(δ̂/σ) {:.2} → {:.2}; RMS δ̂ {:.3} N → {:.3} N; BIC {:.1} → {:.1}.\n\n", term_names(&o.named), b.gap, a.gap, b.fit.delta_rms, a.fit.delta_rms, b.fit.bic, a.fit.bic));
     md.push_str("## Where the calibrated model disagrees (base model, |δ̂| > 2σ of the mean curve)\n\n");
-    for (g, w) in groups.iter().zip(disagreement(&b.fit, points, groups.len())) {
+    for ((g, w), t) in groups.iter().zip(disagreement(&b.fit, points, groups.len())).zip(trend) {
         match w {
-            Some((lo, hi, rel)) => md.push_str(&format!("* {}: from {:.1} to {:.1} µm (normalised), largest |δ̂|/F {:.1} %\n", g.label, lo * 1e6, hi * 1e6, 100.0 * rel)),
-            None => md.push_str(&format!("* {}: nowhere\n", g.label)),
+            Some((lo, hi, rel)) => md.push_str(&format!("* {}: from {:.1} to {:.1} µm (normalised), largest |δ̂|/F {:.1} %", g.label, lo * 1e6, hi * 1e6, 100.0 * rel)),
+            None => md.push_str(&format!("* {}: nowhere", g.label)),
         }
+        md.push_str(&format!("; least-squares residual trend along the curve: Spearman ρ {:.2} (permutation p {:.3})\n", t.0, t.1));
     }
     md.push_str("\n## Evidence (ΔBIC against the round's current model; named below −6)\n\n| round | candidate | ΔBIC | gap | parameter | median [90 %] | verdict |\n|---|---|---|---|---|---|---|\n");
     let base_dim = o.theta_ls.len();

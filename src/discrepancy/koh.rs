@@ -42,6 +42,9 @@ use crate::stats::interpolated_quantiles;
 /// The simulator at every data point as a function of θ.
 pub type ModelFn<'a> = dyn Fn(&[f64]) -> Vec<f64> + Sync + 'a;
 
+/// A log prior density of θ.
+pub type PriorFn<'a> = dyn Fn(&[f64]) -> f64 + Sync + 'a;
+
 /// A calibration problem with discrepancy.
 pub struct Problem<'a> {
     /// Name of the model (for reports).
@@ -62,7 +65,7 @@ pub struct Problem<'a> {
     pub constrain_origin: bool,
     /// Log prior density of θ (up to a constant) beyond the uniform bounds, for example the
     /// posterior of an earlier calibration; it then counts as data in the BIC.
-    pub prior: Option<&'a (dyn Fn(&[f64]) -> f64 + Sync)>,
+    pub prior: Option<&'a PriorFn<'a>>,
 }
 
 /// Sampler settings.

@@ -55,7 +55,7 @@ pub struct Problem<'a> {
     pub y: Vec<f64>,
     /// Known noise sd σ_ε,i, one per observation.
     pub noise_sd: Vec<f64>,
-    /// The simulator η(θ, i).
+    /// The simulator η(θ) at every data point.
     pub model: &'a ModelFn<'a>,
     /// Names of θ.
     pub names: Vec<String>,

@@ -154,24 +154,6 @@ pub struct CurveFile {
     pub label: Option<String>,
 }
 
-/// Sampler settings of the Kennedy–O'Hagan fits.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct KohSettings {
-    /// Walkers (≥ 2 × dimension + 2 is enforced).
-    pub walkers: usize,
-    /// Steps after burn-in.
-    pub steps: usize,
-    /// Burn-in steps.
-    pub burn_in: usize,
-}
-
-impl Default for KohSettings {
-    fn default() -> Self {
-        KohSettings { walkers: 32, steps: 2000, burn_in: 1500 }
-    }
-}
-
 /// The FE table of the curvature candidate.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -214,9 +196,9 @@ pub struct CurveStudy {
     /// Floor of the particle scatter, relative to the mean force.
     #[serde(default = "floor")]
     pub sigma_floor: f64,
-    /// Sampler.
+    /// Sampler of the Kennedy–O'Hagan fits (its seed is the study's).
     #[serde(default)]
-    pub koh: KohSettings,
+    pub koh: KohOptions,
     /// Curvature table.
     #[serde(default)]
     pub curvature: CurvatureTable,
@@ -243,7 +225,7 @@ impl CurveStudy {
         check(file, "candidates", !self.candidates.is_empty(), "at least one candidate is required".into())?;
         check(file, "max_effects", (1..=3).contains(&self.max_effects), format!("must lie in [1, 3], got {}", self.max_effects))?;
         check(file, "sigma_floor", self.sigma_floor >= 0.0 && self.sigma_floor < 0.5, format!("must lie in [0, 0.5), got {}", self.sigma_floor))?;
-        check(file, "koh.steps", self.koh.steps >= 200 && self.koh.burn_in >= 100 && self.koh.walkers >= 8, "needs steps ≥ 200, burn_in ≥ 100, walkers ≥ 8".into())?;
+        check(file, "koh.steps", self.koh.steps >= 200 && self.koh.burn_in >= 100 && self.koh.walkers >= 8 && self.koh.delta_draws >= 1, "needs steps ≥ 200, burn_in ≥ 100, walkers ≥ 8, delta_draws ≥ 1".into())?;
         check(file, "curvature.roundness", !self.curvature.roundness.is_empty() && self.curvature.roundness.iter().all(|r| *r > 0.05 && *r < 1.0), "needs values in (0.05, 1)".into())?;
         check(file, "curvature.width", self.curvature.width > 0.05 && self.curvature.width < 1.0, format!("must lie in (0.05, 1) rad, got {}", self.curvature.width))?;
         check(file, "figures.width_cm", self.figures.width_cm >= 4.0 && self.figures.width_cm <= 40.0, format!("must lie in [4, 40], got {}", self.figures.width_cm))
@@ -283,7 +265,7 @@ pub struct Group {
 }
 
 /// Averages each group at the grid points below every particle's fracture (or curve end).
-pub fn reduce(path_of: &dyn Fn(usize) -> PathBuf, groups: &[Group], grid: &[f64], fracture: FractureParams, sigma_floor: f64) -> Result<Vec<Point>> {
+pub fn reduce(paths: &[PathBuf], groups: &[Group], grid: &[f64], fracture: FractureParams, sigma_floor: f64) -> Result<Vec<Point>> {
     let mut out = Vec::new();
     for (g, grp) in groups.iter().enumerate() {
         let limit = grp
@@ -306,7 +288,7 @@ pub fn reduce(path_of: &dyn Fn(usize) -> PathBuf, groups: &[Group], grid: &[f64]
         }
         if used < 3 {
             return Err(Error::data_file(
-                &path_of(g),
+                &paths[g],
                 "file",
                 format!("only {used} of the calibration's grid displacements lie before every particle's fracture (at {:.2} µm when normalised): at least 3 are needed", limit * 1e6),
             ));
@@ -363,7 +345,8 @@ pub struct CurveModel<'a> {
     emulator: &'a Emulator,
     grid: &'a [f64],
     points: &'a [Point],
-    groups: usize,
+    /// Temperature of each group (°C).
+    temperatures: Vec<f64>,
     t_ref: f64,
     table: Option<&'a RatioTable>,
     base_dim: usize,
@@ -373,15 +356,14 @@ impl CurveModel<'_> {
     /// Forces at every point for θ = (base constants, one parameter per term in `terms` order).
     pub fn eval(&self, terms: &[CurveCandidate], theta: &[f64]) -> Vec<f64> {
         let base = self.emulator.means(&theta[..self.base_dim], self.grid.len());
-        let mut factor = vec![vec![1.0; self.grid.len()]; self.groups];
+        let mut factor = vec![vec![1.0; self.grid.len()]; self.temperatures.len()];
         let mut compliance = None;
         for (j, t) in terms.iter().enumerate() {
             let v = theta[self.base_dim + j];
             match t {
                 CurveCandidate::Compliance => compliance = Some(v * 1e-6),
                 CurveCandidate::Temperature => {
-                    for (g, row) in factor.iter_mut().enumerate() {
-                        let temp = self.points.iter().find(|p| p.group == g).map_or(self.t_ref, |p| p.temperature);
+                    for (row, temp) in factor.iter_mut().zip(&self.temperatures) {
                         let s = v.powf((temp - self.t_ref) / 100.0);
                         row.iter_mut().for_each(|f| *f *= s);
                     }
@@ -421,6 +403,8 @@ pub struct CurveEvidence {
     pub fit: Option<KohFit>,
     /// BIC(candidate) − BIC(current).
     pub delta_bic: f64,
+    /// Gap RMS(δ̂/σ) with the term (NaN when skipped).
+    pub gap: f64,
     /// Named in this round.
     pub named: bool,
 }
@@ -578,7 +562,7 @@ impl CurveInputs<'_> {
             let mut next = None;
             for (i, (c, why, s)) in tried.into_iter().enumerate() {
                 let delta_bic = s.as_ref().map_or(f64::NAN, |s| s.fit.bic - current.fit.bic);
-                evidence.push(CurveEvidence { round, candidate: c, skipped: why, fit: s.as_ref().map(|s| s.fit.clone()), delta_bic, named: Some(i) == best });
+                evidence.push(CurveEvidence { round, candidate: c, skipped: why, fit: s.as_ref().map(|s| s.fit.clone()), delta_bic, gap: s.as_ref().map_or(f64::NAN, |s| s.gap), named: Some(i) == best });
                 if Some(i) == best {
                     named.push(c);
                     next = s;
@@ -597,9 +581,12 @@ fn gap_of(fit: &KohFit, points: &[Point]) -> f64 {
     (fit.delta.iter().zip(points).map(|(d, p)| (d / p.sigma).powi(2)).sum::<f64>() / points.len() as f64).sqrt()
 }
 
+/// (from, to) displacement (m) and the largest |δ̂|/F of one file; None: nowhere.
+pub type Disagreement = Option<(f64, f64, f64)>;
+
 /// Where the discrepancy exceeds twice the uncertainty of the mean curve (|δ̂| > 2σ): per
 /// group, (from, to) displacement (m) and the largest |δ̂|/F there.
-pub fn disagreement(fit: &KohFit, points: &[Point], groups: usize) -> Vec<Option<(f64, f64, f64)>> {
+pub fn disagreement(fit: &KohFit, points: &[Point], groups: usize) -> Vec<Disagreement> {
     (0..groups)
         .map(|g| {
             let hits: Vec<usize> = (0..points.len()).filter(|&i| points[i].group == g && fit.delta[i].abs() > 2.0 * points[i].sigma).collect();
@@ -770,7 +757,7 @@ pub fn run_curves(loaded: &LoadedStudy, s: &CurveStudy, opts: &RunOptions) -> Re
             curves: curves.iter().map(|c| c.normalised(cal.reference_diameter)).collect(),
         })
         .collect();
-    let mut points = reduce(&|g| paths[g].clone(), &groups, &cal.grid, cal.fracture, s.sigma_floor)?;
+    let mut points = reduce(&paths, &groups, &cal.grid, cal.fracture, s.sigma_floor)?;
     // The emulator's own uncertainty at the calibrated θ joins the measurement's.
     let emu_var: Vec<f64> = cal.emulator.predict(&cal.theta).iter().map(|p| p.1).collect();
     for p in &mut points {
@@ -788,12 +775,12 @@ pub fn run_curves(loaded: &LoadedStudy, s: &CurveStudy, opts: &RunOptions) -> Re
     let names: Vec<String> = cal.model.space().params().iter().map(|p| p.name.clone()).collect();
     let bounds: Vec<(f64, f64)> = cal.model.space().params().iter().map(|p| (p.lower, p.upper)).collect();
     let inputs_loop = CurveInputs {
-        model: CurveModel { emulator: &cal.emulator, grid: &cal.grid, points: &points, groups: groups.len(), t_ref: s.data[0].temperature_c, table: table.as_ref(), base_dim: names.len() },
+        model: CurveModel { emulator: &cal.emulator, grid: &cal.grid, points: &points, temperatures: groups.iter().map(|g| g.temperature).collect(), t_ref: s.data[0].temperature_c, table: table.as_ref(), base_dim: names.len() },
         names,
         bounds,
         candidates: s.candidates.clone(),
         max_effects: s.max_effects,
-        koh: KohOptions { walkers: s.koh.walkers, steps: s.koh.steps, burn_in: s.koh.burn_in, delta_draws: 400, seed: s.seed },
+        koh: KohOptions { seed: s.seed, ..s.koh.clone() },
         prior: match s.theta {
             ThetaPrior::Calibration => Some(cal.posterior.clone()),
             ThetaPrior::Bounds => None,
@@ -807,11 +794,12 @@ pub fn run_curves(loaded: &LoadedStudy, s: &CurveStudy, opts: &RunOptions) -> Re
     let trend = trend_along_curve(&points, &base_ls, groups.len(), s.seed)?;
 
     let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
-    write_curve_tables(&mut dir, &groups, &points, &cal, &outcome, &base_ls, &inputs_loop.names, table.as_ref())?;
-    let verdict = curve_verdict(loaded, s, &groups, &points, &outcome, &trend);
+    write_curve_tables(&mut dir, &groups, &points, &cal, &outcome, &base_ls, table.as_ref())?;
+    let where_ = disagreement(&outcome.stages[0].fit, &points, groups.len());
+    let verdict = curve_verdict(loaded, s, &groups, &outcome, &where_, &trend);
     let json = serde_json::to_string_pretty(&verdict).map_err(|e| Error::numerical("verdict.json", e.to_string()))?;
     dir.write_bytes("verdict.json", json.as_bytes())?;
-    dir.write_bytes("summary.md", curve_summary(s, &groups, &points, &outcome, &trend).as_bytes())?;
+    dir.write_bytes("summary.md", curve_summary(s, &groups, &outcome, &where_, &trend).as_bytes())?;
     pb.set_message("figures");
     let mut failures = Vec::new();
     let rendered = crate::report::discrepancy::render_curves(dir.path(), s.figures.width_cm)?;
@@ -839,22 +827,21 @@ fn curve_headline(o: &CurveOutcome) -> String {
     format!("crush curves: terms named: {}; gap RMS(δ/σ) {:.2} → {:.2}; RMS δ {:.3} N → {:.3} N", term_names(&o.named), b.gap, a.gap, b.fit.delta_rms, a.fit.delta_rms)
 }
 
-/// The named term's parameter: (median, 5 %, 95 %).
-fn term_parameter(fit: &KohFit, base_dim: usize, j: usize) -> (f64, f64, f64) {
-    let i = base_dim + j;
+/// The parameter of the term a candidate fit added (its last θ): (median, 5 %, 95 %).
+fn added_parameter(fit: &KohFit) -> (f64, f64, f64) {
+    let i = fit.theta_median.len() - 1;
     (fit.theta_median[i], fit.theta_90[i].0, fit.theta_90[i].1)
 }
 
-fn curve_verdict(loaded: &LoadedStudy, s: &CurveStudy, groups: &[Group], points: &[Point], o: &CurveOutcome, trend: &[(f64, f64)]) -> serde_json::Value {
+fn curve_verdict(loaded: &LoadedStudy, s: &CurveStudy, groups: &[Group], o: &CurveOutcome, where_: &[Disagreement], trend: &[(f64, f64)]) -> serde_json::Value {
     use serde_json::json;
-    let base_dim = o.theta_ls.len();
     let (b, a) = (&o.stages[0], o.stages.last().unwrap_or(&o.stages[0]));
     let evidence: Vec<serde_json::Value> = o
         .evidence
         .iter()
         .map(|e| {
             let par = e.fit.as_ref().map(|f| {
-                let (m, lo, hi) = term_parameter(f, base_dim, f.names.len() - base_dim - 1);
+                let (m, lo, hi) = added_parameter(f);
                 json!({ "name": e.candidate.parameter(), "median": m, "q05": lo, "q95": hi })
             });
             json!({
@@ -863,14 +850,13 @@ fn curve_verdict(loaded: &LoadedStudy, s: &CurveStudy, groups: &[Group], points:
                 "skipped": e.skipped,
                 "bic": e.fit.as_ref().map(|f| f.bic),
                 "delta_bic": if e.delta_bic.is_finite() { json!(e.delta_bic) } else { json!(null) },
-                "gap": e.fit.as_ref().map(|f| gap_of(f, points)),
+                "gap": e.fit.as_ref().map(|_| e.gap),
                 "delta_rms_n": e.fit.as_ref().map(|f| f.delta_rms),
                 "parameter": par,
                 "named": e.named,
             })
         })
         .collect();
-    let where_ = disagreement(&b.fit, points, groups.len());
     json!({
         "study": loaded.name,
         "calibration": s.calibration,
@@ -884,7 +870,7 @@ fn curve_verdict(loaded: &LoadedStudy, s: &CurveStudy, groups: &[Group], points:
         "bic_after": a.fit.bic,
         "guard": format!("a term is named when it lowers BIC by more than {} against the current model", -BIC_STRONG),
         "evidence": evidence,
-        "disagreement_before": groups.iter().zip(&where_).map(|(g, w)| json!({
+        "disagreement_before": groups.iter().zip(where_).map(|(g, w)| json!({
             "file": g.label,
             "temperature_c": g.temperature,
             "from_um": w.map(|w| w.0 * 1e6),
@@ -901,7 +887,7 @@ fn curve_verdict(loaded: &LoadedStudy, s: &CurveStudy, groups: &[Group], points:
 }
 
 #[allow(clippy::too_many_arguments)]
-fn write_curve_tables(dir: &mut ReportDir, groups: &[Group], points: &[Point], cal: &Calibrated, o: &CurveOutcome, base_ls: &[f64], names: &[String], ratios: Option<&RatioTable>) -> Result<()> {
+fn write_curve_tables(dir: &mut ReportDir, groups: &[Group], points: &[Point], cal: &Calibrated, o: &CurveOutcome, base_ls: &[f64], ratios: Option<&RatioTable>) -> Result<()> {
     // points.csv: data, model and δ before and after.
     let (b, a) = (&o.stages[0], o.stages.last().unwrap_or(&o.stages[0]));
     let mut t = table(vec![
@@ -937,13 +923,12 @@ fn write_curve_tables(dir: &mut ReportDir, groups: &[Group], points: &[Point], c
     dir.write_table("curve_residuals", &mut t)?;
 
     // curve_evidence.csv
-    let base_dim = names.len();
     let ev = &o.evidence;
     let par = |k: usize| {
         ev.iter()
             .map(|e| {
                 e.fit.as_ref().map_or(f64::NAN, |f| {
-                    let p = term_parameter(f, base_dim, f.names.len() - base_dim - 1);
+                    let p = added_parameter(f);
                     [p.0, p.1, p.2][k]
                 })
             })
@@ -956,7 +941,7 @@ fn write_curve_tables(dir: &mut ReportDir, groups: &[Group], points: &[Point], c
         scol("skipped", ev.iter().map(|e| e.skipped.clone().unwrap_or_default()).collect()),
         fcol("bic", ev.iter().map(|e| e.fit.as_ref().map_or(f64::NAN, |f| f.bic)).collect()),
         fcol("delta_bic", ev.iter().map(|e| e.delta_bic).collect()),
-        fcol("gap", ev.iter().map(|e| e.fit.as_ref().map_or(f64::NAN, |f| gap_of(f, points))).collect()),
+        fcol("gap", ev.iter().map(|e| e.gap).collect()),
         scol("parameter", ev.iter().map(|e| e.candidate.parameter().to_string()).collect()),
         fcol("median", par(0)),
         fcol("q05", par(1)),
@@ -1009,14 +994,14 @@ fn write_curve_tables(dir: &mut ReportDir, groups: &[Group], points: &[Point], c
     Ok(())
 }
 
-fn curve_summary(s: &CurveStudy, groups: &[Group], points: &[Point], o: &CurveOutcome, trend: &[(f64, f64)]) -> String {
+fn curve_summary(s: &CurveStudy, groups: &[Group], o: &CurveOutcome, where_: &[Disagreement], trend: &[(f64, f64)]) -> String {
     let (b, a) = (&o.stages[0], o.stages.last().unwrap_or(&o.stages[0]));
     let mut md = String::from("# Discrepancy of the calibrated crush FE against measured curves\n\n");
     md.push_str(&format!("Calibration: `{}` (its emulator and posterior). Data: ", s.calibration));
     md.push_str(&groups.iter().map(|g| format!("{} ({} curves, {} °C)", g.label, g.curves.len(), g.temperature)).collect::<Vec<_>>().join(", "));
     md.push_str(&format!(".\n\n**Terms named: {}.** Gap RMS(δ̂/σ) {:.2} → {:.2}; RMS δ̂ {:.3} N → {:.3} N; BIC {:.1} → {:.1}.\n\n", term_names(&o.named), b.gap, a.gap, b.fit.delta_rms, a.fit.delta_rms, b.fit.bic, a.fit.bic));
     md.push_str("## Where the calibrated model disagrees (base model, |δ̂| > 2σ of the mean curve)\n\n");
-    for ((g, w), t) in groups.iter().zip(disagreement(&b.fit, points, groups.len())).zip(trend) {
+    for ((g, w), t) in groups.iter().zip(where_).zip(trend) {
         match w {
             Some((lo, hi, rel)) => md.push_str(&format!("* {}: from {:.1} to {:.1} µm (normalised), largest |δ̂|/F {:.1} %", g.label, lo * 1e6, hi * 1e6, 100.0 * rel)),
             None => md.push_str(&format!("* {}: nowhere", g.label)),
@@ -1024,17 +1009,16 @@ fn curve_summary(s: &CurveStudy, groups: &[Group], points: &[Point], o: &CurveOu
         md.push_str(&format!("; least-squares residual trend along the curve: Spearman ρ {:.2} (permutation p {:.3})\n", t.0, t.1));
     }
     md.push_str("\n## Evidence (ΔBIC against the round's current model; named below −6)\n\n| round | candidate | ΔBIC | gap | parameter | median [90 %] | verdict |\n|---|---|---|---|---|---|---|\n");
-    let base_dim = o.theta_ls.len();
     for e in &o.evidence {
         match &e.fit {
             Some(f) => {
-                let (m, lo, hi) = term_parameter(f, base_dim, f.names.len() - base_dim - 1);
+                let (m, lo, hi) = added_parameter(f);
                 md.push_str(&format!(
                     "| {} | {} | {:.1} | {:.2} | {} | {:.4} [{:.4}, {:.4}] | {} |\n",
                     e.round + 1,
                     e.candidate.name(),
                     e.delta_bic,
-                    gap_of(f, points),
+                    e.gap,
                     e.candidate.parameter(),
                     m,
                     lo,

@@ -68,8 +68,9 @@ pub struct Problem<'a> {
     pub prior: Option<&'a PriorFn<'a>>,
 }
 
-/// Sampler settings.
-#[derive(Debug, Clone, PartialEq)]
+/// Sampler settings (also a study's `[koh]` section; the seed comes from the study).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct KohOptions {
     /// Walkers.
     pub walkers: usize,
@@ -80,6 +81,7 @@ pub struct KohOptions {
     /// Draws used for the posterior mean of δ.
     pub delta_draws: usize,
     /// Seed.
+    #[serde(skip)]
     pub seed: u64,
 }
 

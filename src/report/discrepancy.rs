@@ -335,7 +335,8 @@ pub fn render_curves(dir: &Path, width_cm: f64) -> Result<Rendered> {
                 x_desc: String::new(),
                 y_desc: "Force at D₀ (N)".into(),
                 x_range: xr,
-                y_range: (0.0, ytop * 1.1),
+                // Headroom for the legend: the curves rise to the upper right, under it.
+                y_range: (0.0, ytop * 1.75),
                 y_log: false,
                 series: top,
                 legend: Some(SeriesLabelPosition::UpperLeft),

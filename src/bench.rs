@@ -13,7 +13,9 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::contact::{AveragingDomain, Elastic, Sphere};
 use crate::error::Result;
-use crate::lifetime::{BreakageCurve, ImpactLoad, Lifetime};
+use crate::lifetime::damage::{DamageModel, Law};
+use crate::model::Simulator;
+use crate::strength::{LifetimeChain, LifetimeModel, Population, Sample, StrengthFit};
 use crate::weibull::{Weibull, fit_mle, simulate_pivotal};
 
 /// One measured figure.
@@ -29,28 +31,46 @@ pub struct Figure {
     pub goal: String,
 }
 
-/// σ̄(V) + P_N evaluations per second on the calling thread, through the precomputed
-/// [`BreakageCurve`] (`fast = true`) or the general [`Lifetime`] path.
-pub fn lifetime_evaluations_per_second(min_time: Duration, fast: bool) -> Result<f64> {
+/// The deliverable's lifetime chain of a 0.9 mm particle (50 synthetic σ̄ at break, m ≈ 7),
+/// with P_N for N = 7300.
+fn bench_chain() -> Result<LifetimeChain> {
     let e = Elastic::new(112e9, 0.25)?;
     let sphere = Sphere { diameter: 0.9e-3, density: 3600.0, elastic: e };
-    let load = ImpactLoad::on_wall(&sphere, &Elastic::new(210e9, 0.3)?, 0.1, AveragingDomain::default());
-    let life = Lifetime { load, strength: Weibull::new(7.0, 800e6)? };
-    let curve = BreakageCurve::new(&life);
+    let w = Weibull::new(7.0, 800e6)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let sample = Sample { source: "bench".into(), strength: (0..50).map(|_| w.sample(&mut rng)).collect(), covariates: vec![] };
+    let fit = StrengthFit::new(&sample, &[], 5.0, "bench")?;
+    let population = Population { source: "declared".into(), particles: vec![crate::strength::Particle { diameter_m: 0.9e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false };
+    let model = LifetimeModel::new("bench", "bench", sphere, Elastic::new(210e9, 0.3)?, AveragingDomain::default(), fit, population)?;
+    let p = model.fit.estimate();
+    LifetimeChain::new(model, &[7300.0], (p, 0.1, 5.0))
+}
+
+/// σ̄(V) + P_N evaluations per second on the calling thread, through the lifetime model's fast
+/// methods (`fast = true`: impact stress and one precomputed damage law, as the Monte Carlo
+/// uses them) or the Simulator (`simulate`, with its bounds checks and allocations).
+pub fn lifetime_evaluations_per_second(min_time: Duration, fast: bool) -> Result<f64> {
+    let chain = bench_chain()?;
+    let model = chain.model();
+    let p = model.fit.estimate();
+    let law = [Law::new(DamageModel::Independent, p.shape, 7300.0, 0.0)];
     let mut rng = ChaCha8Rng::seed_from_u64(1);
     let velocities: Vec<f64> = (0..4096).map(|_| rng.random_range(0.5..20.0)).collect();
+    let thetas: Vec<Vec<f64>> = velocities.iter().map(|&v| chain.theta(&p, 0.1, v)).collect();
     let mut evals = 0u64;
     let mut acc = 0.0;
     let start = Instant::now();
     while start.elapsed() < min_time {
         if fast {
             for &v in &velocities {
-                let (sigma, p) = curve.evaluate(black_box(v), black_box(7300.0));
-                acc += sigma + p;
+                let ln_sigma = model.ln_impact_stress(black_box(0.1), black_box(v))?;
+                let mut out = [0.0];
+                model.breakage_into(&p, None, ln_sigma, &law, &mut out);
+                acc += ln_sigma + out[0];
             }
         } else {
-            for &v in &velocities {
-                acc += life.load.at_velocity(black_box(v))?.mean_tensile + life.p_after(black_box(v), black_box(7300.0))?;
+            for t in &thetas {
+                acc += chain.simulate(black_box(t))?[2];
             }
         }
         evals += velocities.len() as u64;
@@ -87,13 +107,13 @@ pub fn run_all(study: Option<&Path>) -> Result<Vec<Figure>> {
     let (slow_best, slow_median) = trials(false)?;
     let mut out = vec![
         Figure {
-            what: "σ̄(V) + P_N evaluations, one core, precomputed BreakageCurve, best of 7".into(),
+            what: "σ̄(V) + P_N evaluations, one core, the lifetime model's fast methods, best of 7".into(),
             value: fast_best,
             unit: format!("evaluations/s (median {fast_median:.3e})"),
             goal: "≥ 2e7/s".into(),
         },
         Figure {
-            what: "σ̄(V) + P_N evaluations, one core, general path (as in the Simulator), best of 7".into(),
+            what: "σ̄(V) + P_N evaluations, one core, through Simulator::simulate, best of 7".into(),
             value: slow_best,
             unit: format!("evaluations/s (median {slow_median:.3e})"),
             goal: "(reference)".into(),
@@ -344,7 +364,12 @@ pub fn external_chain_ess(path: &Path) -> Result<f64> {
 /// UQ speed figures.
 #[derive(Debug, Clone)]
 pub struct UqSpeed {
-    /// Wall time of 10⁶ Monte Carlo samples of the full chain, both materials, every horizon and
+    /// The primary strength model of the study and the particles each material's population
+    /// averages over (1 without effects).
+    pub strength_model: String,
+    /// Population rows evaluated per sample, per material.
+    pub particles: [usize; 2],
+    /// Wall time of 2²⁰ Monte Carlo samples of the full chain, both materials, every horizon and
     /// damage model of the main study (s).
     pub propagation_s: f64,
     /// Samples propagated.
@@ -356,23 +381,25 @@ pub struct UqSpeed {
     pub ishigami_error: f64,
 }
 
-/// Times the propagation of the main study (`study`, normally `studies/gen4_vs_bl.toml`) with
-/// 10⁶ samples, and the Ishigami indices at N = 2¹⁴.
+/// Times the propagation of the main study's primary strength model (`study`, normally
+/// `studies/gen4_vs_bl.toml`) with 2²⁰ samples (the fitting and draws before it are not timed),
+/// and the Ishigami indices at N = 2¹⁴.
 pub fn uq_speed(study: &Path) -> Result<UqSpeed> {
     let loaded = crate::study::load(study)?;
     let crate::study::Study::Uq(s) = &loaded.study else {
         return Err(crate::Error::config(study.display().to_string(), "kind", "the UQ benchmark needs a kind = \"uq\" study"));
     };
-    let chain = s.prepare(&loaded.path)?;
+    let shared = crate::uq::setup::Shared::new(s, &loaded.path)?;
+    let setup = crate::uq::setup::Setup::new(s, &loaded.path, &s.strength.effects, &s.contact.averaging, &shared)?;
     let samples = 1 << 20;
-    let prop = crate::uq::run::Propagation { method: crate::uq::run::Method::Sobol, samples, replicates: 8 };
+    let prop = crate::uq::study::Propagation { method: crate::uq::study::Method::Sobol, samples, replicates: 8 };
     let start = Instant::now();
-    let out = crate::uq::run::propagate(&chain, &prop, s.seed, &|| {})?;
+    let out = crate::uq::propagate::propagate(&setup, &prop, s.seed, &|| {})?;
     let propagation_s = start.elapsed().as_secs_f64();
     std::hint::black_box(&out.blocks);
+    let particles = [0, 1].map(|j| if setup.materials[j].model.uniform() { 1 } else { setup.materials[j].model.population.len() });
     let ishigami = crate::testfns::Ishigami::standard();
     let f = |u: &[f64]| -> Result<Vec<f64>> {
-        use crate::model::Simulator;
         let x: Vec<f64> = u.iter().map(|v| std::f64::consts::PI * (2.0 * v - 1.0)).collect();
         ishigami.simulate(&x)
     };
@@ -381,7 +408,7 @@ pub fn uq_speed(study: &Path) -> Result<UqSpeed> {
     let ishigami_s = start.elapsed().as_secs_f64();
     let (s1, st) = ([0.313905, 0.442411, 0.0], [0.557589, 0.442411, 0.243684]);
     let ishigami_error = (0..3).map(|i| (ind[0].first[i] - s1[i]).abs().max((ind[0].total[i] - st[i]).abs())).fold(0.0, f64::max);
-    Ok(UqSpeed { propagation_s, samples, ishigami_s, ishigami_error })
+    Ok(UqSpeed { strength_model: setup.spec.name(), particles, propagation_s, samples, ishigami_s, ishigami_error })
 }
 
 /// Speed of the discrepancy workflow on 100 particles.
@@ -413,8 +440,8 @@ pub fn discrepancy_speed(settings: &Path) -> Result<DiscrepancySpeed> {
     let loaded = crate::discrepancy::run::quick_study(&data)?;
     let crate::study::Study::Discrepancy(s) = &loaded.study else { unreachable!("quick_study builds a discrepancy study") };
     let crush = crate::data::read_crush(&data)?;
-    let sample = crate::discrepancy::run::sample_of(&crush, &s.material[0], &s.contact)?;
-    let settings = crate::discrepancy::workflow::Settings { seed: s.seed, ..Default::default() };
+    let sample = crate::strength::sample_of(&crush, &s.material[0].elastic, &s.contact)?;
+    let settings = crate::strength::NamingSettings { seed: s.seed, ..Default::default() };
     let start = Instant::now();
     let outcome = crate::discrepancy::workflow::analyse(&sample, &settings, true)?;
     let loop_s = start.elapsed().as_secs_f64();

@@ -399,6 +399,24 @@ impl AveragingDomain {
     }
 }
 
+/// Contact options of the crush test: the platen and the averaging domain of σ̄ (the `[contact]`
+/// section of a study).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ContactOptions {
+    /// Platen material (default: steel, E = 210 GPa, ν = 0.3).
+    pub platen: Elastic,
+    /// Averaging domain of the radial tensile stress (default: line, L = 2a; see the module
+    /// docs for why).
+    pub averaging: AveragingDomain,
+}
+
+impl Default for ContactOptions {
+    fn default() -> Self {
+        ContactOptions { platen: Elastic { youngs_modulus_pa: 210e9, poisson_ratio: 0.3 }, averaging: AveragingDomain::default() }
+    }
+}
+
 /// Contact state at one force: what the lifetime chain needs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactState {

@@ -160,6 +160,16 @@ impl Sobol {
     }
 }
 
+/// `n` Sobol' points in `dim` dimensions shifted modulo 1 by one uniform random vector drawn
+/// from stream `stream` of ChaCha8(`seed`) (a randomised quasi-Monte Carlo set: unbiased, and
+/// independent between streams).
+pub fn shifted_sobol(dim: usize, n: usize, seed: u64, stream: u64) -> Result<Vec<Vec<f64>>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(stream);
+    let shift: Vec<f64> = (0..dim).map(|_| rng.random::<f64>()).collect();
+    Ok(Sobol::points(dim, n, 1)?.into_iter().map(|p| p.iter().zip(&shift).map(|(x, s)| (x + s).fract()).collect()).collect())
+}
+
 /// A Latin hypercube of `n` points in `dim` dimensions, seeded.
 pub fn latin_hypercube(n: usize, dim: usize, seed: u64) -> Vec<Vec<f64>> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);

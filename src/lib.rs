@@ -13,7 +13,12 @@
 //!                                                     │
 //!          contact (Hertz) ─► σ̄ at break ─► weibull (ASTM C1239 MLE, pivotal bounds)
 //!                                                     │
-//!          lifetime::LifetimeChain: θ = (m, σ_θ, η, V) ↦ (F_max, σ̄, P_N…)  [Simulator]
+//!   strength::LifetimeModel — one chain for every study: contact curvature R_c, Weibull law of
+//!   σ̄ with effects (size, roundness, …), joint draws, population, impact, damage laws → P_N
+//!   (strength::LifetimeChain is its Simulator: θ = (m, σ_θ, β…, η, V) ↦ (F_max, σ̄, P_N…))
+//!                                                     │
+//!   lifetime study (runner) · main study (uq: per strength model + stacking average)
+//!   · discrepancy (names the effects; before/after are instances of the model)
 //!                                                     │
 //!     io::ReportDir ─► reports/<name>/{manifest.json, *.csv} ─► report::render ─► *.svg *.png *.pdf
 //! ```
@@ -22,7 +27,7 @@
 //!
 //! Physical models implement [`model::Simulator`] over a [`params::ParamSpace`]; methods
 //! (Monte Carlo, least squares, MCMC, experiment design, discrepancy) only see that trait.
-//! Implementers today: [`lifetime::LifetimeChain`], [`dem::model::TubeBankModel`],
+//! Implementers today: [`strength::LifetimeChain`], [`dem::model::TubeBankModel`],
 //! [`fem::model::CrushModel`], [`testfns::Ishigami`].
 //!
 //! ## Module map
@@ -35,18 +40,20 @@
 //! | [`testfns`] | analytic simulators (Ishigami) |
 //! | [`contact`] | Hertz: contact size, surface stresses, average tensile stress (explicit domain), crush, impact with η |
 //! | [`weibull`] | ASTM C1239 MLE, unbiasing, pivotal and Fisher bounds, probability plot, size scaling |
-//! | [`lifetime`] | p(V), P_N without underflow, impacts per year, the chain as a Simulator |
+//! | [`lifetime`] | P_N without underflow, impacts per year, the impact load; [`lifetime::damage`]: independent trials, Vogel–Peukert, Tavares–King as per-sample laws |
+//! | [`strength`] | the one strength/lifetime model: effects, Weibull regression, pivotal/Bayesian joint draws, populations, `LifetimeModel` and its Simulator, stacking weights |
+//! | [`dist`] | distributions declared in study files and the DEM velocity spectrum, as inverse-CDF marginals |
 //! | [`dem`] | native DEM of the tube bank: Hertz–Mindlin, cell lists, impacts, profiles, VTK; `TubeBankModel` |
 //! | [`fem`] | native crush FE: axisymmetric/plane-strain explicit quads, JH-2, platens, fields, VTU; `CrushModel` |
 //! | [`design`] | Sobol' sequences (Joe–Kuo, 64 dimensions), Latin hypercubes |
 //! | [`calibrate`] | noise models; multi-start Levenberg–Marquardt (or argmin Nelder–Mead / L-BFGS) with covariance and identifiability; ensemble and adaptive-Metropolis MCMC with R̂/ESS; GP emulator; evaluation cache; the `calibrate` study (crush FE and tube-bank DEM); synthetic curve and rig generators |
-//! | [`discrepancy`] | the discrepancy workflow: diagnosis (quantile residuals, bootstrap AD/KS, residual trends), candidate effects as Weibull regression terms, the name → add → diagnose loop with a max-T bootstrap guard, lifetime before/after, detection power; `partlife discrepancy`; Kennedy–O'Hagan GP discrepancy with BIC comparison of model terms (not yet run on crush curves) |
-//! | [`uq`] | the main study (`kind = "uq"`): Monte Carlo propagation of the lifetime chain, damage models (independent, Vogel–Peukert, Tavares–King), Sobol' indices with bootstrap intervals |
+//! | [`discrepancy`] | the discrepancy workflow: diagnosis (quantile residuals, bootstrap AD/KS, residual trends), the name → add → diagnose loop over the strength model's effects with a max-T bootstrap guard (also behind `effects = "diagnosed"` and its cross-validated scores), lifetime before/after, detection power; `partlife discrepancy`; Kennedy–O'Hagan GP discrepancy with BIC comparison of model terms, on crush curves too |
+//! | [`uq`] | the main study (`kind = "uq"`): strength models as a model-form choice with stacking weights, Monte Carlo propagation through each material's `LifetimeModel`, damage models and averaging domains side by side, Sobol' indices with bootstrap intervals |
 //! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation |
 //! | [`synth`] | the documented generator of the synthetic crush datasets |
-//! | [`stats`] | median, Pearson correlation with p-value |
+//! | [`stats`] | median, Pearson correlation with p-value, quantiles (interpolated, nearest-rank, weighted) |
 //! | [`study`] | TOML study schema (unknown keys rejected), validation, dispatch |
-//! | [`runner`] | runs a study into its report (lifetime here; DEM and crush in their modules) |
+//! | [`runner`] | runs a study into its report (the lifetime study here, through `strength`; the others in their modules) |
 //! | [`io`] | atomic report directories, CSV tables, manifest |
 //! | [`report`] | figures from tables only: SVG (plotters) → PNG (resvg) and vector PDF (svg2pdf) |
 //! | [`bench`](mod@bench) | the speed figures the issues ask for |
@@ -63,8 +70,9 @@ pub mod calibrate;
 pub mod contact;
 pub mod data;
 pub mod design;
-pub mod discrepancy;
 pub mod dem;
+pub mod discrepancy;
+pub mod dist;
 pub mod fem;
 pub mod error;
 pub mod io;
@@ -74,6 +82,7 @@ pub mod params;
 pub mod report;
 pub mod runner;
 pub mod stats;
+pub mod strength;
 pub mod study;
 pub mod synth;
 pub mod testfns;

@@ -202,6 +202,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let dir = reports_dir.join(&name);
             let rendered = partlife::report::redraw(&dir)?;
             out!("redrew {} files in {}", rendered.files.len(), dir.display());
+            for (fig, n) in rendered.legend_hidden.iter().filter(|(_, n)| *n > 0) {
+                eprintln!("warning: figure {fig}: its legend hides {n} data samples (no free corner)");
+            }
         }
         Command::Datasets { command: DatasetsCommand::Synth { settings, out_dir } } => {
             let s = partlife::synth::SynthSettings::load(&settings)?;
@@ -327,7 +330,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             out!("machine: {} threads available to rayon", rayon::current_num_threads());
             let u = partlife::bench::uq_speed(std::path::Path::new("studies/gen4_vs_bl.toml"))?;
             out!(
-                "main-study chain, {} Sobol' samples × 2 materials × 2 horizons × 3 damage models: {:.3} s ({:.2e} samples/s; goal 10⁶ in < 2 s)",
+                "main-study chain (strength model `{}`, populations of {} and {} particles), {} Sobol' samples × 2 materials × 2 horizons × 3 damage models: {:.3} s ({:.2e} samples/s; goal 2²⁰ in < 2 s)",
+                u.strength_model,
+                u.particles[0],
+                u.particles[1],
                 u.samples,
                 u.propagation_s,
                 u.samples as f64 / u.propagation_s

@@ -10,7 +10,7 @@
 //! * a simulator `Err` → recorded with θ in the run's failures list;
 //! * a non-finite output is a bug → [`Error::Numerical`] (see [`check_outputs`]).
 //!
-//! Implementers: [`crate::lifetime::LifetimeChain`] and the analytic
+//! Implementers: [`crate::strength::LifetimeChain`] and the analytic
 //! [`crate::testfns::Ishigami`], the tube-bank DEM [`crate::dem::model::TubeBankModel`] and the
 //! crush FE [`crate::fem::model::CrushModel`].
 

@@ -8,11 +8,14 @@
 //!    (`weibull_fits.csv`), probability-plot points and the CDF with its pivotal band;
 //! 4. power-law trend of σ̄ with diameter (`size_trend.csv`);
 //! 5. the radial stress profile of the median particle (`stress_profile*.csv`);
-//! 6. the [`LifetimeChain`] over the velocity grid through `Simulator::simulate_batch`
-//!    (`impact_curves.csv`, `breakage_curves.csv`) and the force–time history at the reference
-//!    velocity (`force_time.csv`);
-//! 7. breaking probability after each horizon at the reference velocity, with the pivotal band
-//!    propagated from the joint (m, σ_θ) draws (`lifetime_summary.csv`).
+//! 6. the strength model of the `[strength]` section (the deliverable's by default, or explicit
+//!    effects, or `"diagnosed"`) fitted to the crush data, with its parameters' estimates and
+//!    90 % ranges (`strength_fits.csv`);
+//! 7. its [`LifetimeChain`] over the velocity grid through `Simulator::simulate_batch`
+//!    (`impact_curves.csv`, `breakage_curves.csv`; population averages) and the force–time
+//!    history at the reference velocity (`force_time.csv`);
+//! 8. the population's breaking probability after each horizon at the reference velocity,
+//!    with the band of the model's joint draws (`lifetime_summary.csv`).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -21,14 +24,15 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::contact::{ContactState, ContactStress, Elastic, Hertz, Sphere, TensileZone};
-use crate::data::{CrushData, CrushRecord, read_crush};
+use crate::contact::{ContactState, ContactStress, Hertz};
+use crate::data::{CrushData, read_crush};
 use crate::error::{Error, Result};
 use crate::io::{InputFile, Manifest, ReportDir, fcol, git_state, scol, table, ucol};
-use crate::lifetime::{LifetimeChain, breakage_from_hazard, impacts_in, theta};
+use crate::lifetime::impacts_in;
 use crate::model::Simulator;
-use crate::study::{ContactOptions, LifetimeStudy, LoadedStudy, ShapeEstimate, Study};
-use crate::stats::{fit_line, median};
+use crate::stats::fit_line;
+use crate::strength::{LifetimeChain, LifetimeModel, ParameterSummary, Params, StrengthFit, contact_at_break, sample_of, summarise};
+use crate::study::{LifetimeStudy, LoadedStudy, ShapeEstimate, Study};
 use crate::weibull::{FisherBounds, PivotalBounds, Weibull, WeibullFit, fisher_bounds, fit_mle, probability_plot, simulate_pivotal, sorted_quantile};
 
 /// What a run produced, for the CLI to print.
@@ -77,8 +81,15 @@ struct MaterialRun {
     fit: WeibullFit,
     pivotal: PivotalBounds,
     fisher: FisherBounds,
+    /// The Weibull law of σ̄ of the C1239 analysis (no effects; `shape_estimate` applied).
     strength: Weibull,
+    /// Its pivotal draws (the CDF band).
     draws: Vec<Weibull>,
+    /// The strength model's parameters used for predictions (`shape_estimate` applied).
+    params: Params,
+    /// The strength model's parameters: estimates and 90 % ranges of the draws.
+    summary: Vec<ParameterSummary>,
+    /// The strength model as a Simulator.
     chain: LifetimeChain,
 }
 
@@ -100,20 +111,6 @@ fn pivotal_seed(seed: u64, n: usize) -> u64 {
     seed ^ (n as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
 }
 
-/// Hertz contact state of each crushed particle at its force at break: sphere of radius d/2 on
-/// the platen, σ̄ over the contact options' averaging domain (the deliverable's reduction).
-pub fn contact_at_break(records: &[CrushRecord], elastic: &Elastic, contact: &ContactOptions) -> Result<Vec<ContactState>> {
-    let zone = TensileZone::new(elastic.poisson_ratio);
-    records
-        .iter()
-        .map(|r| {
-            let radius = 0.5 * r.diameter_m;
-            let hertz = Hertz::sphere_on_flat(elastic, &contact.platen, radius);
-            ContactStress { hertz, zone, domain: contact.averaging, particle_radius: radius }.at_force(r.crush_force_n)
-        })
-        .collect()
-}
-
 /// Runs a lifetime study.
 pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) -> Result<RunSummary> {
     let clock = RunClock::start();
@@ -130,10 +127,10 @@ pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) 
         datasets.push(data);
     }
 
-    // 2–3. Contact at break, Weibull fits, pivotal bounds.
+    // 2–3. Contact at break, Weibull fits, pivotal bounds; the strength model.
     let mut evaluations: BTreeMap<String, u64> = BTreeMap::new();
     let mut runs = Vec::new();
-    for (m, data) in s.material.iter().zip(datasets) {
+    for (index, (m, data)) in s.material.iter().zip(datasets).enumerate() {
         pb.set_message(format!("{}: contact stresses and Weibull fit", m.label));
         let at_break = contact_at_break(&data.records, &m.elastic, &s.contact)?;
         let sigma_bar: Vec<f64> = at_break.iter().map(|c| c.mean_tensile).collect();
@@ -151,16 +148,28 @@ pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) 
         };
         let strength = Weibull::new(shape, fit.mle.scale)?;
         let draws = piv.draws(&fit);
+        // The strength model: the deliverable's unless the study names effects.
+        let sample = sample_of(&data, &m.elastic, &s.contact)?;
+        let naming = crate::strength::NamingSettings { seed: s.seed.wrapping_add(7919 * index as u64), ..s.strength.naming.clone() };
+        let effects = crate::discrepancy::workflow::resolve(&s.strength.effects, &sample, &naming)?;
+        let sfit = StrengthFit::new(&sample, &effects, s.strength.naming.gamma, &m.key)?;
+        let population = m.population(index, &data, &loaded.path, s.seed)?;
+        let model = LifetimeModel::new(&m.key, &m.label, m.sphere(&data), s.impact.target, s.contact.averaging, sfit, population)?;
+        let seed = pivotal_seed(s.seed, fit.n) ^ 0x5713;
+        let (params_draws, _) = model.draws(s.strength.uncertainty, s.strength.draws, seed)?;
+        *evaluations.entry("strength_draws".into()).or_default() += s.strength.draws as u64;
+        let mut params = model.fit.estimate();
+        if s.weibull.shape_estimate == ShapeEstimate::Unbiased {
+            // C1239's unbiased modulus: without effects its own simulation (the same pivots as
+            // the bounds), with effects 1/mean(m̂/m) over the model's pivotal draws.
+            params.shape = if effects.is_empty() { shape } else { params.shape * params_draws.len() as f64 / params_draws.iter().map(|d| params.shape / d.shape).sum::<f64>() };
+        }
+        let summary = summarise(&model.fit, &params_draws);
         pb.inc(1);
-        let diameter = m.impact_diameter_m.unwrap_or_else(|| median(&data.diameters()));
-        let sphere = Sphere { diameter, density: m.density_kg_m3, elastic: m.elastic };
-        let chain = LifetimeChain::new(
-            sphere,
-            s.impact.target,
-            s.contact.averaging,
-            &s.impact.impact_counts,
-            (strength, s.impact.energy_fraction, s.impact.reference_velocity_m_s),
-        )?;
+        // The curves' counts, with N = 1 for the single-impact probability.
+        let mut counts = vec![1.0];
+        counts.extend(s.impact.impact_counts.iter().copied().filter(|n| *n != 1.0));
+        let chain = LifetimeChain::new(model, &counts, (params, s.impact.energy_fraction, s.impact.reference_velocity_m_s))?;
         runs.push(MaterialRun {
             key: m.key.clone(),
             label: m.label.clone(),
@@ -172,6 +181,8 @@ pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) 
             fisher,
             strength,
             draws,
+            params,
+            summary,
             chain,
         });
     }
@@ -182,6 +193,7 @@ pub fn run_lifetime(loaded: &LoadedStudy, s: &LifetimeStudy, opts: &RunOptions) 
     write_weibull(&mut dir, &runs, s)?;
     write_size_trend(&mut dir, &runs)?;
     write_stress_profile(&mut dir, &runs, s)?;
+    write_strength_fits(&mut dir, &runs)?;
     let mut failures = Vec::new();
     pb.set_message("impact and breakage curves");
     for n in write_curves(&mut dir, &runs, s, &mut failures)? {
@@ -418,7 +430,7 @@ fn write_stress_profile(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeS
         let i = idx[(idx.len() - 1) / 2];
         let rec = &r.data.records[i];
         let radius = 0.5 * rec.diameter_m;
-        let hertz = Hertz::sphere_on_flat(&r.chain.sphere().elastic, &s.contact.platen, radius);
+        let hertz = Hertz::sphere_on_flat(&r.chain.model().sphere.elastic, &s.contact.platen, radius);
         let cs = ContactStress::new(hertz, s.contact.averaging, radius);
         let state = cs.at_force(rec.crush_force_n)?;
         let a = state.radius;
@@ -466,7 +478,8 @@ fn write_stress_profile(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeS
 }
 
 /// Impact and breakage curves of every material over the velocity grid, through the
-/// Simulator interface; returns the number of evaluations per material.
+/// Simulator interface (σ̄ and F_max of the reference sphere; P of the population); returns the
+/// number of evaluations per material.
 fn write_curves(
     dir: &mut ReportDir,
     runs: &[MaterialRun],
@@ -479,22 +492,14 @@ fn write_curves(
     let (mut bk, mut bl, mut bv, mut bn, mut bp) = (vec![], vec![], vec![], vec![], vec![]);
     let mut evaluations = Vec::new();
     for run in runs {
-        let nominal = run.chain.space().nominal();
-        let thetas: Vec<Vec<f64>> = velocities
-            .iter()
-            .map(|&v| {
-                let mut t = nominal.clone();
-                t[theta::VELOCITY] = v;
-                t
-            })
-            .collect();
+        let thetas: Vec<Vec<f64>> = velocities.iter().map(|&v| run.chain.theta(&run.params, s.impact.energy_fraction, v)).collect();
         let results = run.chain.simulate_batch(&thetas);
         evaluations.push(thetas.len() as u64);
-        let impact = run.chain.impact(s.impact.energy_fraction);
+        let impact = run.chain.model().impact(s.impact.energy_fraction);
         let mut ok = Vec::new();
-        for (t, r) in thetas.iter().zip(results) {
+        for ((t, r), &v) in thetas.iter().zip(results).zip(&velocities) {
             match r {
-                Ok(y) => ok.push((t[theta::VELOCITY], y)),
+                Ok(y) => ok.push((v, y)),
                 Err(e) => failures.push(format!("{}: θ = {t:?}: {e}", run.key)),
             }
         }
@@ -508,9 +513,9 @@ fn write_curves(
             ifm.push(y[0]);
             isb.push(y[1]);
             itc.push(if *v > 0.0 { impact.contact_time(*v) } else { f64::NAN });
-            ip.push(-(-run.strength.cumulative_hazard(y[1])).exp_m1());
+            ip.push(y[2]); // counts()[0] is N = 1
         }
-        for (ci, &c) in run.chain.counts().iter().enumerate() {
+        for (ci, &c) in run.chain.counts().iter().enumerate().filter(|(_, c)| s.impact.impact_counts.contains(c)) {
             for (v, y) in &ok {
                 bk.push(run.key.clone());
                 bl.push(run.label.clone());
@@ -545,7 +550,7 @@ fn write_force_time(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy
     let v = s.impact.reference_velocity_m_s;
     let (mut k, mut l, mut vv, mut t, mut f, mut j) = (vec![], vec![], vec![], vec![], vec![], vec![]);
     for r in runs {
-        let impact = r.chain.impact(s.impact.energy_fraction);
+        let impact = r.chain.model().impact(s.impact.energy_fraction);
         for smp in impact.force_history(v, 301)? {
             k.push(r.key.clone());
             l.push(r.label.clone());
@@ -570,31 +575,26 @@ fn write_force_time(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy
 
 fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -> Result<Vec<String>> {
     let v = s.impact.reference_velocity_m_s;
-    let a = 0.5 * (1.0 - s.weibull.confidence);
     let (mut k, mut l, mut vv, mut yy, mut nn, mut p, mut pl, mut pu) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     let mut headlines = Vec::new();
     for r in runs {
-        let mut th = r.chain.space().nominal();
-        th[theta::VELOCITY] = v;
-        let life = r.chain.lifetime_at(&th)?;
-        let sigma = life.load.at_velocity(v)?.mean_tensile;
+        let model = r.chain.model();
+        let counts: Vec<f64> = s.impact.years.iter().map(|&y| impacts_in(y, s.impact.impacts_per_year)).collect();
+        let seed = pivotal_seed(s.seed, r.fit.n) ^ 0x5713;
+        let bands = model.bands(&r.params, s.impact.energy_fraction, v, &counts, s.strength.uncertainty, s.strength.draws, seed, s.weibull.confidence)?;
+        let effects = crate::strength::fit::names(model.fit.effects());
         let mut line = format!(
-            "{}: N = {}, m = {:.2} (MLE {:.2}, {:.0} % bounds {:.2}–{:.2}), σ_θ = {:.0} MPa; at {v} m/s:",
+            "{}: N = {}, m = {:.2} (MLE {:.2}, {:.0} % bounds {:.2}–{:.2}), σ_θ = {:.0} MPa; effects: {effects}; at {v} m/s:",
             r.label,
             r.fit.n,
-            r.strength.shape,
-            r.fit.mle.shape,
+            r.params.shape,
+            model.fit.model.shape(),
             100.0 * s.weibull.confidence,
             r.pivotal.shape.0,
             r.pivotal.shape.1,
-            r.fit.mle.scale / 1e6
+            r.params.mu.exp() / 1e6
         );
-        for &years in &s.impact.years {
-            let n = impacts_in(years, s.impact.impacts_per_year);
-            let point = breakage_from_hazard(r.strength.cumulative_hazard(sigma), n);
-            let mut band: Vec<f64> = r.draws.iter().map(|w| breakage_from_hazard(w.cumulative_hazard(sigma), n)).collect();
-            band.sort_by(f64::total_cmp);
-            let (lo, hi) = (sorted_quantile(&band, a), sorted_quantile(&band, 1.0 - a));
+        for ((&years, &n), (point, lo, hi)) in s.impact.years.iter().zip(&counts).zip(bands) {
             k.push(r.key.clone());
             l.push(r.label.clone());
             vv.push(v);
@@ -621,6 +621,31 @@ fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -
     ])?;
     dir.write_table("lifetime_summary", &mut df)?;
     Ok(headlines)
+}
+
+/// The strength model of every material: its effects, population, and each parameter's
+/// estimate (the modulus as used for predictions) with the 90 % range of its draws.
+fn write_strength_fits(dir: &mut ReportDir, runs: &[MaterialRun]) -> Result<()> {
+    let mut rows: Vec<(&MaterialRun, &ParameterSummary)> = Vec::new();
+    for r in runs {
+        rows.extend(r.summary.iter().map(|p| (r, p)));
+    }
+    let text = |f: &dyn Fn(&(&MaterialRun, &ParameterSummary)) -> String| rows.iter().map(f).collect::<Vec<_>>();
+    let num = |f: &dyn Fn(&(&MaterialRun, &ParameterSummary)) -> f64| rows.iter().map(f).collect::<Vec<_>>();
+    let mut df = table(vec![
+        scol("material_key", text(&|r| r.0.key.clone())),
+        scol("material", text(&|r| r.0.label.clone())),
+        scol("effects", text(&|r| crate::strength::fit::names(r.0.chain.model().fit.effects()))),
+        scol("population", text(&|r| r.0.chain.model().population.source.clone())),
+        ucol("particles", rows.iter().map(|r| r.0.chain.model().population.len() as u64).collect()),
+        scol("parameter", text(&|r| r.1.name.clone())),
+        scol("unit", text(&|r| r.1.unit.clone())),
+        fcol("mle", num(&|r| r.1.estimate)),
+        fcol("used", num(&|r| if r.1.name == "weibull_modulus" { r.0.params.shape } else { r.1.estimate })),
+        fcol("q05", num(&|r| r.1.q05)),
+        fcol("q95", num(&|r| r.1.q95)),
+    ])?;
+    dir.write_table("strength_fits", &mut df)
 }
 
 /// Convenience for callers that only have a path.

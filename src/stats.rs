@@ -142,3 +142,31 @@ pub fn quantiles(v: &mut [f64], qs: &[f64]) -> Vec<f64> {
     v.sort_by(f64::total_cmp);
     qs.iter().map(|q| v[((v.len() - 1) as f64 * q).round() as usize]).collect()
 }
+
+/// Quantiles `ps` of a weighted sample (value, weight > 0): the inverse of its weighted
+/// empirical CDF, i.e. the smallest value whose cumulative weight reaches p·(total weight).
+/// With equal weights this is the type-1 (inverse empirical CDF) quantile. Empty: NaN.
+pub fn weighted_quantiles(mut v: Vec<(f64, f64)>, ps: &[f64]) -> Vec<f64> {
+    if v.is_empty() {
+        return vec![f64::NAN; ps.len()];
+    }
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = v.iter().map(|x| x.1).sum();
+    let mut cum = Vec::with_capacity(v.len());
+    let mut c = 0.0;
+    for x in &v {
+        c += x.1;
+        cum.push(c);
+    }
+    ps.iter().map(|&p| v[cum.partition_point(|&c| c < p.clamp(0.0, 1.0) * total * (1.0 - 1e-12)).min(v.len() - 1)].0).collect()
+}
+
+#[cfg(test)]
+mod weighted_tests {
+    #[test]
+    fn weighted_quantiles_invert_the_weighted_cdf() {
+        // Values 1, 2, 3 with weights 0.2, 0.3, 0.5: CDF 0.2, 0.5, 1.0.
+        let v = vec![(3.0, 0.5), (1.0, 0.2), (2.0, 0.3)];
+        assert_eq!(super::weighted_quantiles(v, &[0.1, 0.2, 0.25, 0.5, 0.51, 1.0]), vec![1.0, 1.0, 2.0, 2.0, 3.0, 3.0]);
+    }
+}

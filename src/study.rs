@@ -22,7 +22,8 @@ use std::path::{Path, PathBuf};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
-use crate::contact::{AveragingDomain, Elastic};
+pub use crate::contact::ContactOptions;
+use crate::contact::Elastic;
 use crate::error::{Error, Result};
 
 /// Parses TOML into `T`; a syntax error, a wrong type or an unknown key becomes one
@@ -44,25 +45,8 @@ pub fn parse_toml<T: DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
     })
 }
 
-/// Contact options of the crush test.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ContactOptions {
-    /// Platen material (default: steel, E = 210 GPa, ν = 0.3).
-    pub platen: Elastic,
-    /// Averaging domain of the radial tensile stress (default: line, L = 2a; see
-    /// [`crate::contact`] for why).
-    pub averaging: AveragingDomain,
-}
-
 fn steel() -> Elastic {
     Elastic { youngs_modulus_pa: 210e9, poisson_ratio: 0.3 }
-}
-
-impl Default for ContactOptions {
-    fn default() -> Self {
-        ContactOptions { platen: steel(), averaging: AveragingDomain::default() }
-    }
 }
 
 /// Impact options.
@@ -159,9 +143,34 @@ pub struct MaterialSpec {
     pub elastic: Elastic,
     /// Particle (apparent) density (kg/m³).
     pub density_kg_m3: f64,
-    /// Diameter of the particle in impacts (m); default: median diameter of the crush data.
+    /// Diameter of the reference particle of the impact outputs (F_max, force history; m);
+    /// default: median diameter of the crush data. The breakage does not depend on it.
     #[serde(default)]
     pub impact_diameter_m: Option<f64>,
+    /// The particles predicted for (default: the crush data's particles, fresh).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub population: Option<crate::strength::PopulationSpec>,
+}
+
+impl MaterialSpec {
+    /// The population of material `index` of the study `file` (declared, or the particles of
+    /// `data`); declared samples are seeded by `seed` and the index.
+    pub fn population(&self, index: usize, data: &crate::data::CrushData, file: &Path, seed: u64) -> Result<crate::strength::Population> {
+        match &self.population {
+            None => Ok(crate::strength::Population::of_data(data)),
+            Some(p) => {
+                let resolve = |q: &str| resolve_relative(file, Path::new(q));
+                crate::strength::Population::declared(p, &file.display().to_string(), &format!("material[{index}].population"), &resolve, seed ^ (0x909 + index as u64))
+            }
+        }
+    }
+
+    /// The reference particle of the impact outputs: `impact_diameter_m` or the median
+    /// diameter of `data`.
+    pub fn sphere(&self, data: &crate::data::CrushData) -> crate::contact::Sphere {
+        let diameter = self.impact_diameter_m.unwrap_or_else(|| crate::stats::median(&data.diameters()));
+        crate::contact::Sphere { diameter, density: self.density_kg_m3, elastic: self.elastic }
+    }
 }
 
 /// The kinds of study this version can run.
@@ -181,9 +190,12 @@ pub struct LifetimeStudy {
     /// Impacts.
     #[serde(default)]
     pub impact: ImpactOptions,
-    /// Weibull statistics.
+    /// Weibull statistics (ASTM C1239 analysis of σ̄ at break).
     #[serde(default)]
     pub weibull: WeibullOptions,
+    /// The strength model of the predictions (default: the deliverable's, no effects).
+    #[serde(default)]
+    pub strength: crate::strength::StrengthOptions,
     /// Figures.
     #[serde(default)]
     pub figures: FigureOptions,
@@ -204,7 +216,7 @@ pub enum Study {
     /// kind = "calibrate": fit a simulator's parameters to data.
     Calibrate(Box<crate::calibrate::run::CalibrateStudy>),
     /// kind = "uq": Monte Carlo propagation and Sobol' indices of the lifetime chain.
-    Uq(Box<crate::uq::run::UqStudy>),
+    Uq(Box<crate::uq::study::UqStudy>),
     /// kind = "discrepancy": find, name and add what the strength model misses.
     Discrepancy(Box<crate::discrepancy::run::DiscrepancyStudy>),
     /// kind = "discrepancy_curves": the same at the force–displacement level, against a crush
@@ -289,8 +301,8 @@ pub fn load(path: &Path) -> Result<LoadedStudy> {
             Study::Calibrate(Box::new(s))
         }
         "uq" => {
-            let s: crate::uq::run::UqStudy = parse_toml(path, &text)?;
-            s.prepare(path)?;
+            let s: crate::uq::study::UqStudy = parse_toml(path, &text)?;
+            s.validate(&file)?;
             Study::Uq(Box::new(s))
         }
         "discrepancy" => {
@@ -331,6 +343,7 @@ fn elastic(file: &str, key: &str, e: &Elastic) -> Result<()> {
 pub fn validate_lifetime(s: &LifetimeStudy, file: &str) -> Result<()> {
     elastic(file, "contact.platen", &s.contact.platen)?;
     s.contact.averaging.validate(file, "contact.averaging")?;
+    s.strength.validate(file, &s.contact.averaging)?;
     let i = &s.impact;
     elastic(file, "impact.target", &i.target)?;
     check(

@@ -204,7 +204,7 @@ pub struct PriorImpacts {
 impl PriorImpacts {
     /// Strength factor (E_m,k/E_m,0)^(1/5) after k impacts; None if the particle breaks.
     pub fn strength_factor(&self, k: u32) -> Option<f64> {
-        let path = crate::uq::damage::tk_ratio_path(self.ratio, self.gamma, u64::from(k))?;
+        let path = crate::lifetime::damage::tk_ratio_path(self.ratio, self.gamma, u64::from(k))?;
         Some(((path[0] - path[k as usize]) / 5.0).exp())
     }
 }
@@ -339,6 +339,24 @@ fn decimals(step: f64) -> usize {
         return 9;
     }
     (0..12).find(|&k| ((step * 10f64.powi(k as i32)).round() - step * 10f64.powi(k as i32)).abs() < 1e-9).unwrap_or(12)
+}
+
+impl SynthMaterial {
+    /// The generator's own single-impact hazard of a fresh particle (its truth; for tests that
+    /// compare a fitted model with it, never for fitting). A particle of true diameter `d` and
+    /// roundness `roundness`, of density `density`, hits `wall` at `v` (m/s) with elastic energy
+    /// fraction `eta`; the Hertz impact ([`crate::contact::Impact`]) with its true contact
+    /// curvature R_c = roundness^q d/2 gives the peak pressure p0, and the hazard is
+    /// ((1 − 2ν) p0/3 / σ_0 (d/d_ref)^(−α))^m — the same law as the crush test's (temperature
+    /// below the softening reference).
+    pub fn impact_hazard(&self, d: f64, roundness: f64, density: f64, wall: &Elastic, eta: f64, v: f64) -> f64 {
+        let n = &self.nature;
+        let sphere = crate::contact::Sphere { diameter: d, density, elastic: self.elastic };
+        let impact = crate::contact::Impact::sphere_on_wall(&sphere, wall, roundness.powf(n.curvature_exponent) * 0.5 * d, eta);
+        let p0 = impact.hertz.peak_pressure(impact.max_force(v));
+        let scale = n.strength_scale_pa * (d / n.reference_diameter_m).powf(-n.size_exponent);
+        ((1.0 - 2.0 * self.elastic.poisson_ratio) * p0 / 3.0 / scale).powf(n.strength_shape)
+    }
 }
 
 /// Generates the particles of material `index` of the settings.

@@ -258,7 +258,8 @@ fn uq_study_bad_input() {
     reset(&s);
     s.expect_bad_study(study, "median = 0.1, sd_log = 0.5", "median = 0.1, sd_log = -0.5", &["impact.energy_fraction", "sd_log"]);
     reset(&s);
-    s.expect_bad_study(study, "mean = 0.72, sd = 0.05, min = 0.5, max = 1.0", "mean = 0.72, sd = 0.05, min = 0.5, max = 1.5", &["material[0].roundness", "[0.001, 1]"]);
+    let population = "density_kg_m3 = 3060\npopulation = { particles = 64, diameter_m = { distribution = \"uniform\", min = 0.0006, max = 0.0012 }, roundness = { distribution = \"normal\", mean = 0.72, sd = 0.05, min = 0.5, max = 1.5 } }\n";
+    s.expect_bad_study(study, "density_kg_m3 = 3060\n", population, &["material[0].population.roundness", "[0.001, 1]"]);
     reset(&s);
     s.expect_bad_study(study, "years = [1, 10]", "years = [0, 10]", &["impact.years", "> 0"]);
     reset(&s);
@@ -303,7 +304,62 @@ fn uq_study_rejects_unknown_material_keys() {
     let s = Scratch::new();
     let study = "studies/gen4_vs_bl.toml";
     s.write(study, &std::fs::read_to_string(common::root().join(study)).unwrap());
-    s.expect_bad_study(study, "density_kg_m3 = 3600\n", "density_kg_m3 = 3600\ncolour = \"red\"\n", &["material[1].colour", "unknown key"]);
+    s.expect_bad_study(study, "density_kg_m3 = 3600\n", "density_kg_m3 = 3600\ncolour = \"red\"\n", &["line", "colour", "unknown field"]);
+}
+
+/// The main study's strength models (issue: one strength model for every study): an effect
+/// whose covariate the data lack, an unknown effect, a model listed twice, and too few crush
+/// tests to weigh the models are each refused with the reason, exit 2, nothing written.
+#[test]
+fn uq_strength_model_bad_input() {
+    let s = Scratch::new();
+    let study = "studies/gen4_vs_bl.toml";
+    let text = std::fs::read_to_string(common::root().join(study)).unwrap();
+    let gen4 = std::fs::read_to_string(common::root().join("datasets/crush_gen4.csv")).unwrap();
+    let reset = |s: &Scratch| {
+        s.write(study, &text);
+        s.write("datasets/crush_gen4.csv", &gen4);
+    };
+    // The roundness column emptied: the explicit roundness + sphericity model needs it.
+    reset(&s);
+    let emptied: String = gen4
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            let mut f: Vec<&str> = l.split(',').collect();
+            if i > 0 {
+                f[4] = "";
+            }
+            f.join(",") + "\n"
+        })
+        .collect();
+    s.write("datasets/crush_gen4.csv", &emptied);
+    bad_data(&s, study, &["crush_gen4.csv", "column roundness", "`gen4`", "`roundness` effect"]);
+    // An unknown effect.
+    reset(&s);
+    s.expect_bad_study(study, "[\"roundness\", \"sphericity\"]", "[\"rondness\", \"sphericity\"]", &["rondness", "roundness"]);
+    // A strength model listed twice.
+    reset(&s);
+    s.expect_bad_study(study, "strength = [[], [\"roundness\", \"sphericity\"], \"diagnosed\"]", "strength = [[], [], \"diagnosed\"]", &["model_form.strength[1]", "listed twice"]);
+    // Nine crush tests: the weights cannot be computed.
+    reset(&s);
+    s.write("datasets/crush_gen4.csv", &gen4.lines().take(10).map(|l| format!("{l}\n")).collect::<String>());
+    let two = text.replace("effects = \"diagnosed\"", "effects = []").replace("strength = [[], [\"roundness\", \"sphericity\"], \"diagnosed\"]", "strength = [[], [\"size\"]]");
+    s.write(study, &two);
+    bad_data(&s, study, &["crush_gen4.csv", "too few to weigh strength models", "at least 10"]);
+}
+
+/// Runs `study` and checks the contract for a data error: exit 2, one message naming what
+/// `expect` lists (the data file rather than the study), nothing written.
+fn bad_data(s: &Scratch, study: &str, expect: &[&str]) {
+    let out = s.run(&["run", study, "--quiet"]);
+    assert_eq!(out.code, 2, "exit code; stderr: {}", out.stderr);
+    assert!(!out.stderr.contains("panicked"), "{}", out.stderr);
+    assert_eq!(out.stderr.trim().lines().count(), 1, "one message: {}", out.stderr);
+    for e in expect {
+        assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
+    }
+    assert!(s.report_files().is_empty(), "a failed run wrote {:?}", s.report_files());
 }
 
 #[test]

@@ -5,46 +5,11 @@
 
 mod common;
 
-use common::{Scratch, root};
-use partlife::discrepancy::run::sample_of;
-use partlife::discrepancy::workflow::{Settings, analyse};
-use partlife::study::{ContactOptions, MaterialSpec};
+use common::{Scratch, bl_generator as settings, root};
+use partlife::contact::{ContactOptions, Elastic};
+use partlife::discrepancy::workflow::analyse;
+use partlife::strength::{Effect, NamingSettings, sample_of};
 use partlife::synth::{SynthSettings, generate};
-
-/// Generator settings of one BL-16/30-like material with the chosen hidden physics
-/// (`q` roundness curvature exponent, `alpha` size exponent, `temperatures`/`softening` TOML
-/// fragments), `count` particles, `seed`.
-fn settings(q: f64, alpha: f64, count: usize, seed: u64, temperature: &str, softening: &str) -> String {
-    format!(
-        r#"seed = {seed}
-platen = {{ youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }}
-[[material]]
-file = "hidden.csv"
-label = "BL 16/30"
-id_prefix = "BL"
-count = {count}
-temperature_c = {temperature}
-elastic = {{ youngs_modulus_pa = 112e9, poisson_ratio = 0.25 }}
-diameter = {{ mean = 0.00089, sd = 0.00014, min = 0.00059, max = 0.00119 }}
-roundness = {{ mean = 0.72, sd = 0.05 }}
-sphericity = {{ mean = 0.87, sd = 0.04 }}
-[material.nature]
-strength_shape = 22.0
-strength_scale_pa = 1.99e9
-reference_diameter_m = 0.0009
-size_exponent = {alpha}
-curvature_exponent = {q}
-{softening}
-[material.measurement]
-force_rel_sd = 0.01
-force_resolution_n = 0.1
-diameter_sd_m = 5e-6
-diameter_resolution_m = 1e-6
-shape_sd = 0.01
-shape_resolution = 0.001
-"#
-    )
-}
 
 /// Generates with the CLI, runs `partlife discrepancy --data`, returns the verdict.
 fn verdict_of(s: &Scratch, generator: &str) -> serde_json::Value {
@@ -128,22 +93,15 @@ fn temperatures_mixed_in_one_file_are_named() {
 fn false_positives(seeds: std::ops::Range<u64>, count: usize, q: f64) -> usize {
     let text = settings(q, 0.0, count, 0, "20.0", "");
     let mut generator: SynthSettings = toml::from_str(&text).unwrap();
-    let spec = MaterialSpec {
-        key: "bl".into(),
-        label: "BL 16/30".into(),
-        data: "hidden.csv".into(),
-        elastic: partlife::contact::Elastic { youngs_modulus_pa: 112e9, poisson_ratio: 0.25 },
-        density_kg_m3: 3060.0,
-        impact_diameter_m: None,
-    };
+    let elastic = Elastic { youngs_modulus_pa: 112e9, poisson_ratio: 0.25 };
     let mut hits = 0;
     for seed in seeds {
         generator.seed = 5000 + seed;
         let records = generate(&generator, 0).unwrap().into_iter().map(|p| p.record).collect();
         let data = partlife::data::CrushData { path: "hidden.csv".into(), records };
-        let sample = sample_of(&data, &spec, &ContactOptions::default()).unwrap();
-        let o = analyse(&sample, &Settings { bootstrap: 199, seed, ..Settings::default() }, false).unwrap();
-        hits += usize::from(o.named.iter().any(|c| *c != partlife::discrepancy::effects::Candidate::Roundness));
+        let sample = sample_of(&data, &elastic, &ContactOptions::default()).unwrap();
+        let o = analyse(&sample, &NamingSettings { bootstrap: 199, seed, ..NamingSettings::default() }, false).unwrap();
+        hits += usize::from(o.named.iter().any(|c| *c != Effect::Roundness));
     }
     hits
 }

@@ -6,7 +6,7 @@ mod common;
 use common::{Scratch, root};
 use partlife::io::{col_f64, col_str, read_table};
 
-const TABLES: [&str; 11] = [
+const TABLES: [&str; 12] = [
     "particles",
     "weibull_fits",
     "weibull_points",
@@ -18,6 +18,7 @@ const TABLES: [&str; 11] = [
     "breakage_curves",
     "force_time",
     "lifetime_summary",
+    "strength_fits",
 ];
 const FIGURES: [&str; 6] =
     ["fig05_force_time", "fig13_stress_profile", "fig14_sigma_vs_diameter", "fig14_weibull_cdf", "fig15_impact", "fig16_breakage"];
@@ -194,8 +195,10 @@ fn closed_stdout_pipe_is_not_a_panic() {
     assert!(s.path("reports/lifetime/manifest.json").is_file());
 }
 
-/// The main study (README's first command) writes every table and figure with the headline and
-/// its Monte Carlo error, and is deterministic and independent of the thread count.
+/// The main study (README's first command) writes every table and figure with the headline per
+/// strength model and model-averaged with the weights, is deterministic and independent of the
+/// thread count, reproduces the committed golden values within their Monte Carlo tolerance, and
+/// the README shows its headline as it is.
 #[test]
 fn main_uq_study_writes_the_headline_deterministically() {
     let run = |threads: &str| {
@@ -203,32 +206,70 @@ fn main_uq_study_writes_the_headline_deterministically() {
         s.write("studies/gen4_vs_bl.toml", &std::fs::read_to_string(root().join("studies/gen4_vs_bl.toml")).unwrap());
         let out = s.run(&["run", "studies/gen4_vs_bl.toml", "--quiet", "--threads", threads]);
         assert_eq!(out.code, 0, "{}", out.stderr);
-        assert!(out.stdout.contains("P(Gen 4 breaks more than BL 16/30 in 10 yr) = ") && out.stdout.contains("(Monte Carlo se)"), "{}", out.stdout);
-        s
+        assert!(out.stdout.contains("P(Gen 4 breaks more than BL 16/30 in 10 yr) = ") && out.stdout.contains("(Monte Carlo se; averaged over the strength models with stacking weights"), "{}", out.stdout);
+        (s, out.stdout)
     };
-    let (a, b) = (run("2"), run("1"));
+    let ((a, stdout), (b, _)) = (run("2"), run("1"));
     let dir = "reports/gen4_vs_bl";
-    for t in ["materials", "comparison", "breakage", "convergence", "distributions", "breakage_vs_velocity", "sobol", "inputs", "averaging"] {
+    for t in ["materials", "comparison", "breakage", "strength_models", "weights", "convergence", "distributions", "breakage_vs_velocity", "sobol", "inputs", "averaging"] {
         assert_eq!(a.read(&format!("{dir}/{t}.csv")), b.read(&format!("{dir}/{t}.csv")), "{t}.csv differs between 2 threads and 1");
     }
-    for f in ["uq_breakage_vs_velocity", "uq_distributions", "uq_convergence", "uq_sobol", "uq_sobol_convergence", "uq_model_form"] {
+    assert_eq!(a.read(&format!("{dir}/summary.md")), b.read(&format!("{dir}/summary.md")));
+    for f in ["uq_breakage_vs_velocity", "uq_distributions", "uq_convergence", "uq_sobol", "uq_sobol_convergence", "uq_model_form", "uq_strength_models"] {
         for ext in ["svg", "png", "pdf"] {
             assert!(a.path(&format!("{dir}/{f}.{ext}")).is_file(), "{f}.{ext}");
         }
     }
     let manifest: serde_json::Value = serde_json::from_str(&a.read(&format!("{dir}/manifest.json"))).unwrap();
     assert_eq!(manifest["failures"].as_array().map(|v| v.len()), Some(0), "{}", manifest["failures"]);
-    // The headline's Monte Carlo error is small, and the Sobol' first-order indices of each output
-    // sum to at most 1 (+ their error); the dummy γ has no effect on the independent-trials model.
+
+    // Golden values (tests/reference/gen4_vs_bl_headline.csv; the rule for regenerating them is
+    // written in that file): P(candidate worse) within four Monte Carlo standard errors (floor
+    // 1e-4), the weights to 1e-6.
     let cmp_path = a.path(&format!("{dir}/comparison.csv"));
-    let se = col_f64(&read_table(&cmp_path).unwrap(), &cmp_path, "mc_se").unwrap();
-    assert!(se[0] < 0.005 && se[1] < 0.005, "{se:?}");
+    let cmp = read_table(&cmp_path).unwrap();
+    let (cs, cm, cy, cp, cse) = (col_str(&cmp, &cmp_path, "strength_model").unwrap(), col_str(&cmp, &cmp_path, "model").unwrap(), col_f64(&cmp, &cmp_path, "years").unwrap(), col_f64(&cmp, &cmp_path, "p_candidate_worse").unwrap(), col_f64(&cmp, &cmp_path, "mc_se").unwrap());
+    let w_path = a.path(&format!("{dir}/weights.csv"));
+    let wt = read_table(&w_path).unwrap();
+    let (wm, ws) = (col_str(&wt, &w_path, "strength_model").unwrap(), col_f64(&wt, &w_path, "weight_stacking").unwrap());
+    let golden = std::fs::read_to_string(root().join("tests/reference/gen4_vs_bl_headline.csv")).unwrap();
+    let mut checked = 0;
+    for line in golden.lines().filter(|l| !l.starts_with('#') && !l.starts_with("strength_model,")) {
+        let f: Vec<&str> = line.split(',').collect();
+        let (model, years, p, se, w): (&str, f64, f64, f64, f64) = (f[0], f[1].parse().unwrap(), f[2].parse().unwrap(), f[3].parse().unwrap(), f[4].parse().unwrap());
+        let i = (0..cs.len()).find(|&i| cs[i] == model && cm[i] == "independent" && cy[i] == years).unwrap_or_else(|| panic!("no row {model}, {years} yr"));
+        let tol = 4.0 * se.max(cse[i]) + 1e-4;
+        assert!((cp[i] - p).abs() <= tol, "{model}, {years} yr: P(Gen 4 worse) = {} against the golden {p} (tolerance {tol})", cp[i]);
+        if let Some(k) = wm.iter().position(|m| m == model) {
+            assert!((ws[k] - w).abs() < 1e-6, "{model}: stacking weight {} against the golden {w}", ws[k]);
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 8, "four strength rows (three models and the average) for each of two horizons");
+
+    // The README shows this run's headline lines and the summary's strength-model table.
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    for line in stdout.lines().filter(|l| l.contains("P(Gen 4") || l.contains("per strength model")) {
+        assert!(readme.contains(line), "README lacks the run's headline line (regenerate it from the run):\n{line}");
+    }
+    let summary = a.read(&format!("{dir}/summary.md"));
+    let table: Vec<&str> = summary.lines().skip_while(|l| !l.starts_with("| strength model | effects | weight")).take_while(|l| l.starts_with('|')).collect();
+    assert!(table.len() >= 5);
+    for line in table {
+        assert!(readme.contains(line), "README lacks the summary's strength-model table row (regenerate it from reports/gen4_vs_bl/summary.md):\n{line}");
+    }
+
+    // The Sobol' first-order indices of each output sum to at most 1 (+ their error); the dummy γ
+    // has no effect on the independent-trials model; every effect parameter is an input.
     let sob_path = a.path(&format!("{dir}/sobol.csv"));
     let sob = read_table(&sob_path).unwrap();
     let f = |c: &str| col_f64(&sob, &sob_path, c).unwrap();
     let t = |c: &str| col_str(&sob, &sob_path, c).unwrap();
     let (n, out, input, s1, st) = (f("n"), t("output"), t("input"), f("s1"), f("st"));
     let nmax = n.iter().cloned().fold(0.0, f64::max);
+    for name in ["strength_gen4", "size_alpha_gen4", "strength_bl1630", "size_alpha_bl1630", "roundness_q_bl1630"] {
+        assert!(input.iter().any(|i| i == name), "no Sobol' input {name}");
+    }
     for o in ["log10_p_gen4", "log10_p_bl1630", "p_gen4_minus_p_bl1630"] {
         let rows: Vec<usize> = (0..n.len()).filter(|&i| n[i] == nmax && out[i] == o).collect();
         let sum: f64 = rows.iter().map(|&i| s1[i]).sum();

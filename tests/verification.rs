@@ -14,6 +14,7 @@ mod verification {
     mod mcmc;
     mod lifetime;
     mod sobol;
+    mod strength;
     mod uq;
     mod weibull;
 }

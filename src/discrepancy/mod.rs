@@ -3,8 +3,9 @@
 //!
 //! * [`gof`]: diagnosis tools — quantile residuals, AD/KS with parametric-bootstrap p-values,
 //!   residual trends against covariates with permutation p-values.
-//! * [`regress`]: the Weibull strength model with covariates (log-location-scale regression).
-//! * [`effects`]: the library of candidate effects, their equations and covariate signatures.
+//! * the candidate effects, their equations and covariate signatures, and the Weibull
+//!   regression that fits them are the strength model's ([`crate::strength::effects`],
+//!   [`crate::strength::regress`]): the fits before and after naming are instances of it.
 //! * [`workflow`]: the name → add → diagnose-again loop with the bootstrap-calibrated
 //!   false-discovery guard and the gap measure.
 //! * [`run`]: the study (`kind = "discrepancy"`, `partlife discrepancy`): lifetime before and
@@ -16,9 +17,7 @@
 //!   FE-level terms platen compliance, temperature softening and contact-tip curvature.
 
 pub mod curves;
-pub mod effects;
 pub mod gof;
 pub mod koh;
-pub mod regress;
 pub mod run;
 pub mod workflow;

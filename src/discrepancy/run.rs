@@ -9,7 +9,7 @@
 //! [impact]         # lifetime change: target, energy_fraction, reference_velocity_m_s,
 //!                  # impacts_per_year, years
 //! [discrepancy]    # candidates, bootstrap, permutations, alpha, cv_folds, max_effects,
-//!                  # tavares_king_gamma (the loop's Settings)
+//!                  # tavares_king_gamma (the loop's NamingSettings)
 //! [lifetime]       # bootstrap: replicates of the lifetime bands
 //! [power]          # particles = [20, 40, 80, 160], replicates, bootstrap (replicates = 0: off)
 //! [figures]        # width_cm
@@ -18,12 +18,12 @@
 //!
 //! # Lifetime change
 //!
-//! For the base and the final model, the breaking probability of the measured population after
-//! N = years × impacts per year at the reference velocity: P = mean_i [1 − exp(−N H_i)] with
-//! H_i = (σ̄_impact,i e^(−s_i) / σ_i)^m — particle i's own diameter in the Hertz impact, its own
-//! fitted scale σ_i, and s_i the contact-geometry part of its effects
-//! ([`super::effects::Candidate::impact_exponent`]). The 90 % band comes from a parametric
-//! bootstrap of the model (simulate at the observed covariates, refit, recompute).
+//! The base and the final model are instances of the one strength model
+//! ([`crate::strength::LifetimeModel`]), evaluated for the measured particles as the population:
+//! the breaking probability after N = years × impacts per year at the reference velocity,
+//! P = mean_i [1 − exp(−N H_i)] with each particle's own scale and contact curvature. The 90 %
+//! band comes from the model's joint draws (the parametric bootstrap in pivotal form, with the
+//! population's Bayesian bootstrap), as in the lifetime and main studies.
 //!
 //! # Detection power
 //!
@@ -42,14 +42,13 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::effects::{Candidate, ModelFit, Term};
-use super::workflow::{GAP_MEASURE, MIN_PARTICLES, Outcome, Sample, Settings, analyse, validate};
-use crate::contact::Sphere;
+use super::workflow::{GAP_MEASURE, MIN_PARTICLES, Outcome, analyse, validate};
 use crate::data::{CrushData, read_crush};
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
-use crate::lifetime::{ImpactLoad, breakage_from_hazard, impacts_in};
-use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, contact_at_break, progress_bar, record_figures};
+use crate::lifetime::impacts_in;
+use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
+use crate::strength::{Effect, LifetimeModel, ModelFit, NamingSettings, Sample, StrengthFit, Term, Uncertainty, sample_of};
 use crate::study::{ContactOptions, FigureOptions, ImpactOptions, LoadedStudy, MaterialSpec, check, elastic_checked};
 
 /// Options of the lifetime bands.
@@ -100,7 +99,7 @@ pub struct DiscrepancyStudy {
     pub impact: ImpactOptions,
     /// The naming loop.
     #[serde(default)]
-    pub discrepancy: Settings,
+    pub discrepancy: NamingSettings,
     /// The lifetime bands.
     #[serde(default)]
     pub lifetime: LifetimeOptions,
@@ -125,18 +124,7 @@ impl DiscrepancyStudy {
         check(file, "impact.reference_velocity_m_s", i.reference_velocity_m_s > 0.0 && i.reference_velocity_m_s <= crate::lifetime::MAX_VELOCITY, format!("must lie in (0, {}] m/s (got {})", crate::lifetime::MAX_VELOCITY, i.reference_velocity_m_s))?;
         check(file, "impact.impacts_per_year", i.impacts_per_year > 0.0 && i.impacts_per_year.is_finite(), format!("must be > 0 (got {})", i.impacts_per_year))?;
         check(file, "impact.years", !i.years.is_empty() && i.years.iter().all(|y| *y > 0.0 && y.is_finite()), format!("needs at least one horizon, each > 0 (got {:?})", i.years))?;
-        let d = &self.discrepancy;
-        check(file, "discrepancy.candidates", !d.candidates.is_empty(), "needs at least one candidate".into())?;
-        let mut seen = d.candidates.clone();
-        seen.sort();
-        seen.dedup();
-        check(file, "discrepancy.candidates", seen.len() == d.candidates.len(), "lists a candidate twice".into())?;
-        check(file, "discrepancy.bootstrap", d.bootstrap >= 99, format!("must be ≥ 99 for a 5 % guard (got {})", d.bootstrap))?;
-        check(file, "discrepancy.permutations", d.permutations >= 99, format!("must be ≥ 99 (got {})", d.permutations))?;
-        check(file, "discrepancy.alpha", d.alpha > 0.0 && d.alpha <= 0.5, format!("must lie in (0, 0.5] (got {})", d.alpha))?;
-        check(file, "discrepancy.cv_folds", d.cv_folds >= 2, format!("must be ≥ 2 (got {})", d.cv_folds))?;
-        check(file, "discrepancy.max_effects", d.max_effects >= 1, format!("must be ≥ 1 (got {})", d.max_effects))?;
-        check(file, "discrepancy.tavares_king_gamma", d.gamma > 0.0 && d.gamma.is_finite(), format!("must be > 0 (got {})", d.gamma))?;
+        self.discrepancy.validate(file, "discrepancy")?;
         check(file, "lifetime.bootstrap", self.lifetime.bootstrap >= 20, format!("must be ≥ 20 (got {})", self.lifetime.bootstrap))?;
         let p = &self.power;
         if p.replicates > 0 {
@@ -157,8 +145,8 @@ impl DiscrepancyStudy {
         Ok(())
     }
 
-    fn settings(&self) -> Settings {
-        Settings { seed: self.seed, ..self.discrepancy.clone() }
+    fn settings(&self) -> NamingSettings {
+        NamingSettings { seed: self.seed, ..self.discrepancy.clone() }
     }
 }
 
@@ -178,13 +166,14 @@ pub fn quick_study(data: &Path) -> Result<LoadedStudy> {
         elastic: crate::contact::Elastic { youngs_modulus_pa: 112e9, poisson_ratio: 0.25 },
         density_kg_m3: 3600.0,
         impact_diameter_m: None,
+        population: None,
     };
     let study = DiscrepancyStudy {
         kind: "discrepancy".into(),
         seed: 20261122,
         contact: ContactOptions::default(),
         impact: ImpactOptions::default(),
-        discrepancy: Settings::default(),
+        discrepancy: NamingSettings::default(),
         lifetime: LifetimeOptions::default(),
         power: PowerOptions::default(),
         figures: FigureOptions::default(),
@@ -201,38 +190,9 @@ pub fn quick_study(data: &Path) -> Result<LoadedStudy> {
     })
 }
 
-/// Strengths (σ̄ at break) and covariates of a crush dataset.
-pub fn sample_of(data: &CrushData, m: &MaterialSpec, contact: &ContactOptions) -> Result<Sample> {
-    let at = contact_at_break(&data.records, &m.elastic, contact)?;
-    let r = &data.records;
-    Ok(Sample {
-        source: data.path.display().to_string(),
-        strength: at.iter().map(|c| c.mean_tensile).collect(),
-        covariates: vec![
-            ("diameter_m".into(), r.iter().map(|x| Some(x.diameter_m)).collect()),
-            ("roundness".into(), r.iter().map(|x| x.roundness).collect()),
-            ("sphericity".into(), r.iter().map(|x| x.sphericity).collect()),
-            ("temperature_c".into(), r.iter().map(|x| x.temperature_c).collect()),
-            ("impacts".into(), r.iter().map(|x| x.impacts.map(|k| k as f64)).collect()),
-        ],
-    })
-}
-
 /// The terms of a model's effects for a sample (the effects were fitted, so each has a term).
-fn terms_of(effects: &[Candidate], sample: &Sample, gamma: f64) -> Vec<(Candidate, Term)> {
+fn terms_of(effects: &[Effect], sample: &Sample, gamma: f64) -> Vec<(Effect, Term)> {
     effects.iter().filter_map(|c| c.term(&sample.covariates, gamma).ok().map(|t| (*c, t))).collect()
-}
-
-/// Breaking probability of the population after each impact count of `counts` (years, N)
-/// under a fitted model, given each particle's σ̄ at the reference impact; each particle's
-/// hazard is computed once for all horizons.
-fn population_breakage(model: &ModelFit, impact_stress: &[f64], counts: &[(f64, f64)]) -> Vec<f64> {
-    let m = model.shape();
-    let hazards: Vec<f64> = impact_stress.iter().enumerate().map(|(i, s)| (m * (s.ln() - model.impact_shift(i) - model.reg.mu)).exp()).collect();
-    counts
-        .iter()
-        .map(|(_, n)| hazards.iter().map(|h| breakage_from_hazard(*h, *n)).sum::<f64>() / hazards.len() as f64)
-        .collect()
 }
 
 /// Lifetime prediction of one model: per horizon (median-free point estimate, 5 %, 95 %).
@@ -248,24 +208,22 @@ pub struct LifetimeBand {
     pub q95: f64,
 }
 
-fn lifetime_bands(model: &ModelFit, sample: &Sample, gamma: f64, impact_stress: &[f64], counts: &[(f64, f64)], b: usize, seed: u64) -> Vec<LifetimeBand> {
-    let terms = terms_of(&model.effects, sample, gamma);
-    let draws: Vec<Vec<f64>> = (0..b)
-        .into_par_iter()
-        .filter_map(|r| {
-            let (_, refit) = model.bootstrap_refit(&terms, seed, r)?;
-            Some(population_breakage(&refit, impact_stress, counts))
-        })
-        .collect();
-    let estimate = population_breakage(model, impact_stress, counts);
-    counts
-        .iter()
-        .enumerate()
-        .map(|(k, (years, _))| {
-            let q = crate::stats::interpolated_quantiles(draws.iter().map(|d| d[k]).collect(), &[0.05, 0.95]);
-            LifetimeBand { years: *years, estimate: estimate[k], q05: q[0], q95: q[1] }
-        })
-        .collect()
+/// The lifetime band of a fitted stage model, as an instance of the strength model.
+fn lifetime_bands(model: &ModelFit, sample: &Sample, m: &Prepared, s: &DiscrepancyStudy, seed: u64) -> Result<Vec<LifetimeBand>> {
+    let terms = terms_of(&model.effects, sample, s.discrepancy.gamma);
+    let fit = StrengthFit::from_model(model.clone(), terms, sample);
+    let lm = LifetimeModel::new(&m.spec.key, &m.spec.label, m.spec.sphere(&m.data), s.impact.target, s.contact.averaging, fit, m.population.clone())?;
+    let counts: Vec<f64> = s.impact.years.iter().map(|y| impacts_in(*y, s.impact.impacts_per_year)).collect();
+    let bands = lm.bands(&lm.fit.estimate(), s.impact.energy_fraction, s.impact.reference_velocity_m_s, &counts, Uncertainty::Bootstrap, s.lifetime.bootstrap, seed, 0.9)?;
+    Ok(s.impact.years.iter().zip(bands).map(|(&years, (estimate, q05, q95))| LifetimeBand { years, estimate, q05, q95 }).collect())
+}
+
+/// One material's inputs: its study entry, crush data, sample and population.
+struct Prepared {
+    spec: MaterialSpec,
+    data: CrushData,
+    sample: Sample,
+    population: crate::strength::Population,
 }
 
 /// Detection power at one sample size.
@@ -284,7 +242,7 @@ pub struct PowerRow {
     pub all: usize,
 }
 
-fn power_study(sample: &Sample, outcome: &Outcome, settings: &Settings, p: &PowerOptions, tick: &(dyn Fn() + Sync)) -> Vec<PowerRow> {
+fn power_study(sample: &Sample, outcome: &Outcome, settings: &NamingSettings, p: &PowerOptions, tick: &(dyn Fn() + Sync)) -> Vec<PowerRow> {
     let n0 = sample.strength.len();
     let scenarios: Vec<(&str, &ModelFit)> = if outcome.named.is_empty() {
         vec![("none", &outcome.before().model)]
@@ -310,7 +268,7 @@ fn power_study(sample: &Sample, outcome: &Outcome, settings: &Settings, p: &Powe
                         .collect();
                     let covariates = sample.covariates.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i]).collect())).collect();
                     let synthetic = Sample { source: format!("power replicate {r}"), strength, covariates };
-                    let s = Settings { bootstrap: p.bootstrap, seed: settings.seed ^ (r as u64 + 1), ..settings.clone() };
+                    let s = NamingSettings { bootstrap: p.bootstrap, seed: settings.seed ^ (r as u64 + 1), ..settings.clone() };
                     let named = analyse(&synthetic, &s, false).map(|o| o.named).unwrap_or_default();
                     tick();
                     if *name == "none" {
@@ -369,44 +327,33 @@ pub fn run_discrepancy(loaded: &LoadedStudy, s: &DiscrepancyStudy, opts: &RunOpt
         let path = loaded.resolve(&m.data);
         let data = read_crush(&path)?;
         inputs.push(InputFile::hash(&path)?);
-        let sample = sample_of(&data, m, &s.contact)?;
+        let sample = sample_of(&data, &m.elastic, &s.contact)?;
         validate(&sample)?;
-        prepared.push((m.clone(), data, sample));
+        let population = m.population(prepared.len(), &data, &loaded.path, s.seed)?;
+        prepared.push(Prepared { spec: m.clone(), data, sample, population });
     }
     let settings = s.settings();
     let power_runs = if s.power.replicates > 0 { s.power.particles.len() * s.power.replicates * 2 } else { 0 };
     let pb = progress_bar((prepared.len() * (2 + power_runs)) as u64, opts.progress, crate::runner::PROGRESS_COUNT);
-    let counts: Vec<(f64, f64)> = s.impact.years.iter().map(|y| (*y, impacts_in(*y, s.impact.impacts_per_year))).collect();
     let mut results = Vec::new();
-    for (k, (spec, data, sample)) in prepared.into_iter().enumerate() {
-        pb.set_message(format!("{}: naming loop", spec.label));
-        let material_settings = Settings { seed: s.seed.wrapping_add(7919 * k as u64), ..settings.clone() };
-        let outcome = analyse(&sample, &material_settings, true)?;
+    for (k, m) in prepared.into_iter().enumerate() {
+        pb.set_message(format!("{}: naming loop", m.spec.label));
+        let material_settings = NamingSettings { seed: s.seed.wrapping_add(7919 * k as u64), ..settings.clone() };
+        let outcome = analyse(&m.sample, &material_settings, true)?;
         pb.inc(1);
-        pb.set_message(format!("{}: lifetime before/after", spec.label));
-        let impact_stress = data
-            .records
-            .iter()
-            .map(|r| {
-                let sphere = Sphere { diameter: r.diameter_m, density: spec.density_kg_m3, elastic: spec.elastic };
-                ImpactLoad::on_wall(&sphere, &s.impact.target, s.impact.energy_fraction, s.contact.averaging)
-                    .at_velocity(s.impact.reference_velocity_m_s)
-                    .map(|c| c.mean_tensile)
-            })
-            .collect::<Result<Vec<f64>>>()?;
-        let gamma = s.discrepancy.gamma;
+        pb.set_message(format!("{}: lifetime before/after", m.spec.label));
         let lifetime = vec![
-            ("before".to_string(), lifetime_bands(&outcome.before().model, &sample, gamma, &impact_stress, &counts, s.lifetime.bootstrap, material_settings.seed ^ 0x11FE)),
-            ("after".to_string(), lifetime_bands(&outcome.after().model, &sample, gamma, &impact_stress, &counts, s.lifetime.bootstrap, material_settings.seed ^ 0x11FF)),
+            ("before".to_string(), lifetime_bands(&outcome.before().model, &m.sample, &m, s, material_settings.seed ^ 0x11FE)?),
+            ("after".to_string(), lifetime_bands(&outcome.after().model, &m.sample, &m, s, material_settings.seed ^ 0x11FF)?),
         ];
         pb.inc(1);
         let power = if s.power.replicates > 0 {
-            pb.set_message(format!("{}: detection power", spec.label));
-            power_study(&sample, &outcome, &material_settings, &s.power, &|| pb.inc(1))
+            pb.set_message(format!("{}: detection power", m.spec.label));
+            power_study(&m.sample, &outcome, &material_settings, &s.power, &|| pb.inc(1))
         } else {
             Vec::new()
         };
-        results.push(MaterialResult { spec, data, sample, outcome, lifetime, power });
+        results.push(MaterialResult { spec: m.spec, data: m.data, sample: m.sample, outcome, lifetime, power });
     }
 
     let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
@@ -429,7 +376,7 @@ pub fn run_discrepancy(loaded: &LoadedStudy, s: &DiscrepancyStudy, opts: &RunOpt
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })
 }
 
-fn names(c: &[Candidate]) -> String {
+fn names(c: &[Effect]) -> String {
     if c.is_empty() { "none".into() } else { c.iter().map(|c| c.name()).collect::<Vec<_>>().join(" then ") }
 }
 
@@ -718,7 +665,7 @@ fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> String {
             md.push_str(&format!("After: largest trend `{}` (ρ = {:.2}, p = {:.3}).\n", f.covariate, f.rho, f.p));
         }
         md.push_str(&format!(
-            "\n**Lifetime at {} m/s, η = {}, {} impacts a year** (population of the measured particles; 90 % parametric-bootstrap band):\n\n| horizon | base model | final model |\n|---|---|---|\n",
+            "\n**Lifetime at {} m/s, η = {}, {} impacts a year** (population of the measured particles; 90 % band of the strength model's joint draws — pivotal bootstrap of its parameters and Bayesian bootstrap of the population):\n\n| horizon | base model | final model |\n|---|---|---|\n",
             s.impact.reference_velocity_m_s, s.impact.energy_fraction, s.impact.impacts_per_year
         ));
         let (lb, la) = (&r.lifetime[0].1, &r.lifetime[1].1);

@@ -5,7 +5,7 @@
 //!    every covariate with a permutation p-value, the tertile of largest departure, and AD/KS
 //!    statistics whose p-values come from the round's parametric bootstrap (each replicate
 //!    refits the current model);
-//! 2. **fits every remaining candidate** ([`super::effects`]) on top of it and scores it by
+//! 2. **fits every remaining candidate** ([`crate::strength::effects`]) on top of it and scores it by
 //!    * the likelihood ratio Λ = 2(ℓ_cand − ℓ_current), calibrated by the same bootstrap:
 //!      B samples drawn from the fitted current model at the observed covariates, each
 //!      refitted with and without every candidate. The marginal p-value counts Λ*_c ≥ Λ_c; the
@@ -25,14 +25,13 @@
 //!
 //! Deterministic for a seed and any thread count: every replicate has its own ChaCha8 stream.
 
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
-use super::effects::{Candidate, ModelFit, Term, fit_model, fit_model_near};
 use super::gof::{CovariateFinding, ad_ks_of_u, covariate_findings, normal_scores};
 use crate::error::{Error, Result};
+use crate::strength::fit::{cv_pointwise, folds};
+use crate::strength::{Effect, ModelFit, NamingSettings, Sample, Term, fit_model, fit_model_near};
 
 /// Fewest particles the workflow accepts.
 pub const MIN_PARTICLES: usize = 10;
@@ -40,63 +39,13 @@ pub const MIN_PARTICLES: usize = 10;
 /// Covariate columns the diagnosis looks at, in order.
 pub const DIAGNOSED: [&str; 5] = ["diameter_m", "roundness", "sphericity", "temperature_c", "impacts"];
 
-/// Settings of the loop: the `[discrepancy]` section of a study (the seed is the study's).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Settings {
-    /// Candidates to consider (default: all).
-    pub candidates: Vec<Candidate>,
-    /// Bootstrap replicates per round: LR calibration and AD/KS p-values (default 499).
-    pub bootstrap: usize,
-    /// Permutations of each residual-trend test (default 999).
-    pub permutations: usize,
-    /// Family-wise error rate of the guard (default 0.05).
-    pub alpha: f64,
-    /// Folds of the cross-validated log score (default 10).
-    pub cv_folds: usize,
-    /// Most effects to name (default 3).
-    pub max_effects: usize,
-    /// Tavares–King γ of the damage candidate (default 5).
-    #[serde(rename = "tavares_king_gamma")]
-    pub gamma: f64,
-    /// Seed (set from the study's seed, not read from the section).
-    #[serde(skip)]
-    pub seed: u64,
-}
-
-impl Default for Settings {
-    fn default() -> Self {
-        Settings {
-            candidates: super::effects::ALL.to_vec(),
-            bootstrap: 499,
-            permutations: 999,
-            alpha: 0.05,
-            cv_folds: 10,
-            max_effects: 3,
-            gamma: 5.0,
-            seed: 20261122,
-        }
-    }
-}
-
-/// Strengths and covariates of one crush sample.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Sample {
-    /// Where it came from (for messages).
-    pub source: String,
-    /// σ̄ at break (Pa), per particle.
-    pub strength: Vec<f64>,
-    /// Covariate columns by name (`None`: empty cell).
-    pub covariates: Vec<(String, Vec<Option<f64>>)>,
-}
-
 /// Evidence for one candidate in one round.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Evidence {
     /// Round (0: against the base model).
     pub round: usize,
     /// The candidate.
-    pub candidate: Candidate,
+    pub candidate: Effect,
     /// Why it was not fitted (then every number is NaN).
     pub skipped: Option<String>,
     /// Log-likelihood with the candidate added.
@@ -150,7 +99,7 @@ pub struct Stage {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Outcome {
     /// Effects named, in order.
-    pub named: Vec<Candidate>,
+    pub named: Vec<Effect>,
     /// Evidence of every candidate in every round.
     pub evidence: Vec<Evidence>,
     /// One stage per round: `stages[0]` the base model, the last the final model.
@@ -221,65 +170,9 @@ fn diagnosable(sample: &Sample) -> (Vec<(&'static str, Vec<f64>)>, Vec<String>) 
     (out, skipped)
 }
 
-/// ln σ_i of particle `i` under a model fitted on other rows: its linear terms' columns at row
-/// i and the damage offset at the fitted ratio.
-fn predict_ln_scale(fit: &ModelFit, terms: &[(Candidate, Term)], i: usize) -> f64 {
-    let mut s = fit.reg.mu;
-    let mut j = 0;
-    for (_, t) in terms {
-        match t {
-            Term::Linear(z) => {
-                s += fit.reg.beta[j] * z[i];
-                j += 1;
-            }
-            Term::Damage { impacts, gamma } => {
-                let x0 = fit.damage_ratio.unwrap_or(0.0);
-                s += super::effects::damage_offset(x0, *gamma, impacts[i]).unwrap_or(f64::NEG_INFINITY);
-            }
-        }
-    }
-    s
-}
-
-fn subset(terms: &[(Candidate, Term)], rows: &[usize]) -> Vec<(Candidate, Term)> {
-    terms
-        .iter()
-        .map(|(c, t)| {
-            let t = match t {
-                Term::Linear(z) => Term::Linear(rows.iter().map(|&i| z[i]).collect()),
-                Term::Damage { impacts, gamma } => Term::Damage { impacts: rows.iter().map(|&i| impacts[i]).collect(), gamma: *gamma },
-            };
-            (*c, t)
-        })
-        .collect()
-}
-
 /// K-fold cross-validated log score of a model (None if a training fit fails).
-fn cv_log_score(x: &[f64], terms: &[(Candidate, Term)], folds: &[usize], k: usize) -> Option<f64> {
-    let mut total = 0.0;
-    for f in 0..k {
-        let train: Vec<usize> = (0..x.len()).filter(|&i| folds[i] != f).collect();
-        let xt: Vec<f64> = train.iter().map(|&i| x[i]).collect();
-        let fit = fit_model(&xt, &subset(terms, &train)).ok()?;
-        for i in (0..x.len()).filter(|&i| folds[i] == f) {
-            total += fit.reg.ln_density_at(predict_ln_scale(&fit, terms, i), x[i]);
-        }
-    }
-    total.is_finite().then_some(total)
-}
-
-/// A seeded fold assignment (balanced, shuffled).
-fn folds(n: usize, k: usize, seed: u64) -> Vec<usize> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut idx: Vec<usize> = (0..n).collect();
-    for i in (1..n).rev() {
-        idx.swap(i, rand::Rng::random_range(&mut rng, 0..=i));
-    }
-    let mut f = vec![0; n];
-    for (pos, &i) in idx.iter().enumerate() {
-        f[i] = pos % k;
-    }
-    f
+fn cv_log_score(x: &[f64], terms: &[(Effect, Term)], folds: &[usize], k: usize) -> Option<f64> {
+    cv_pointwise(x, terms, folds, k).map(|v| v.iter().sum())
 }
 
 /// Quantile residuals and probability-integral transforms of `x` under a fitted model.
@@ -294,7 +187,7 @@ type Replicate = (f64, f64, Vec<f64>);
 
 /// Runs the loop on a sample. `diagnose = false` skips the residual-trend permutation tests
 /// (used by the power study, which needs only the names).
-pub fn analyse(sample: &Sample, settings: &Settings, diagnose: bool) -> Result<Outcome> {
+pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Result<Outcome> {
     validate(sample)?;
     let x = &sample.strength;
     let n = x.len();
@@ -304,8 +197,8 @@ pub fn analyse(sample: &Sample, settings: &Settings, diagnose: bool) -> Result<O
     let fold = folds(n, folds_k, settings.seed ^ 0xF01D);
 
     // Every candidate's term, or why it is skipped.
-    let mut available: Vec<(Candidate, Term)> = Vec::new();
-    let mut skipped: Vec<(Candidate, String)> = Vec::new();
+    let mut available: Vec<(Effect, Term)> = Vec::new();
+    let mut skipped: Vec<(Effect, String)> = Vec::new();
     for &c in &settings.candidates {
         match c.term(&sample.covariates, settings.gamma) {
             Ok(t) => available.push((c, t)),
@@ -313,13 +206,13 @@ pub fn analyse(sample: &Sample, settings: &Settings, diagnose: bool) -> Result<O
         }
     }
 
-    let mut current: Vec<(Candidate, Term)> = Vec::new();
+    let mut current: Vec<(Effect, Term)> = Vec::new();
     let mut named = Vec::new();
     let mut evidence = Vec::new();
     let mut stages = Vec::new();
     for round in 0.. {
         let model = fit_model(x, &current)?;
-        let remaining: Vec<&(Candidate, Term)> = if named.len() < settings.max_effects {
+        let remaining: Vec<&(Effect, Term)> = if named.len() < settings.max_effects {
             available.iter().filter(|(c, _)| !named.contains(c)).collect()
         } else {
             Vec::new()
@@ -401,7 +294,7 @@ pub fn analyse(sample: &Sample, settings: &Settings, diagnose: bool) -> Result<O
             let (beta, se) = m.coefficient(*c).unwrap_or((f64::NAN, f64::NAN));
             let (sym, val, meaning) = c.parameter(beta, m.shape());
             // Delta method by a central difference of the reported parameter in β.
-            let val_se = if *c == Candidate::Damage { f64::NAN } else { 0.5 * (c.parameter(beta + se, m.shape()).1 - c.parameter(beta - se, m.shape()).1).abs() };
+            let val_se = if *c == Effect::Damage { f64::NAN } else { 0.5 * (c.parameter(beta + se, m.shape()).1 - c.parameter(beta - se, m.shape()).1).abs() };
             round_ev.push(Evidence {
                 round,
                 candidate: *c,
@@ -448,7 +341,64 @@ pub fn analyse(sample: &Sample, settings: &Settings, diagnose: bool) -> Result<O
     Ok(Outcome { named, evidence, stages, skipped_covariates })
 }
 
-fn skipped_evidence(round: usize, candidate: Candidate, reason: String) -> Evidence {
+/// The effects of a strength specification for one material: an explicit list as it is, or
+/// the effects the loop names on the material's own sample (`"diagnosed"`, the guard included;
+/// candidates whose covariate the data lack are skipped, as in the discrepancy study).
+pub fn resolve(spec: &crate::strength::StrengthSpec, sample: &Sample, settings: &NamingSettings) -> Result<Vec<Effect>> {
+    match spec {
+        crate::strength::StrengthSpec::Effects(v) => Ok(v.clone()),
+        crate::strength::StrengthSpec::Diagnosed => Ok(analyse(sample, settings, false)?.named),
+    }
+}
+
+/// Cross-validated log density of every crush test of `sample` under strength specification
+/// `spec` (the model's predictive evidence, for stacking weights): K-fold with the naming
+/// settings' folds and seed; for `"diagnosed"` the naming loop runs on each training fold, so
+/// the selection is part of what is validated. An explicit effect whose covariate is missing is
+/// an error naming `material`, the file and the column.
+pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings: &NamingSettings, material: &str) -> Result<Vec<f64>> {
+    let x = &sample.strength;
+    let n = x.len();
+    if n < MIN_PARTICLES {
+        return Err(data_err(sample, "all rows".into(), format!("material `{material}`: {n} crush tests are too few to weigh strength models by cross-validation (at least {MIN_PARTICLES})")));
+    }
+    let k = settings.cv_folds.clamp(2, n);
+    let fold = folds(n, k, settings.seed ^ 0xF01D);
+    let terms_for = |effects: &[Effect]| -> Result<Vec<(Effect, Term)>> {
+        effects
+            .iter()
+            .map(|&e| {
+                e.term(&sample.covariates, settings.gamma)
+                    .map(|t| (e, t))
+                    .map_err(|reason| data_err(sample, format!("column {}", e.covariate()), format!("material `{material}`: the strength model's `{}` effect needs this column: {reason}", e.name())))
+            })
+            .collect()
+    };
+    let failed = || Error::numerical("cross-validated log score", format!("material `{material}`: a training fit of the `{}` strength model failed", spec.name()));
+    match spec {
+        crate::strength::StrengthSpec::Effects(v) => cv_pointwise(x, &terms_for(v)?, &fold, k).ok_or_else(failed),
+        crate::strength::StrengthSpec::Diagnosed => {
+            let mut out = vec![f64::NAN; n];
+            for f in 0..k {
+                let train: Vec<usize> = (0..n).filter(|&i| fold[i] != f).collect();
+                let sub = Sample {
+                    source: sample.source.clone(),
+                    strength: train.iter().map(|&i| x[i]).collect(),
+                    covariates: sample.covariates.iter().map(|(c, v)| (c.clone(), train.iter().map(|&i| v[i]).collect())).collect(),
+                };
+                let named = analyse(&sub, settings, false)?.named;
+                let terms = terms_for(&named)?;
+                let fit = fit_model(&sub.strength, &crate::strength::fit::subset(&terms, &train)).map_err(|_| failed())?;
+                for i in (0..n).filter(|&i| fold[i] == f) {
+                    out[i] = fit.reg.ln_density_at(crate::strength::fit::predict_ln_scale(&fit, &terms, i), x[i]);
+                }
+            }
+            if out.iter().all(|v| v.is_finite()) { Ok(out) } else { Err(failed()) }
+        }
+    }
+}
+
+fn skipped_evidence(round: usize, candidate: Effect, reason: String) -> Evidence {
     Evidence {
         round,
         candidate,

@@ -53,6 +53,13 @@ impl Table {
     pub(crate) fn s(&self, col: &str) -> Result<Vec<String>> {
         col_str(&self.df, &self.path, col)
     }
+    /// The rows whose text column `col` equals `value`.
+    pub(crate) fn filter(self, col: &str, value: &str) -> Result<Self> {
+        let keys = self.s(col)?;
+        let mask: polars::prelude::BooleanChunked = keys.iter().map(|k| Some(k == value)).collect();
+        let df = self.df.filter(&mask).map_err(|e| Error::data_file(&self.path, col, e.to_string()))?;
+        Ok(Table { df, path: self.path })
+    }
     /// Whether the table has a column.
     pub(crate) fn has(&self, col: &str) -> bool {
         self.df.get_column_names().iter().any(|c| c.as_str() == col)

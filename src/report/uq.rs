@@ -9,7 +9,11 @@
 //! | `uq_convergence` | P(candidate breaks more) vs sample count with ±2 MC standard errors | `convergence.csv` |
 //! | `uq_sobol` | first-order and total Sobol' indices with intervals, one panel per output | `sobol.csv` |
 //! | `uq_sobol_convergence` | total indices vs base sample size, candidate's log₁₀ P | `sobol.csv` |
-//! | `uq_model_form` | the damage models side by side: median and 90 % band per material and horizon | `breakage.csv` |
+//! | `uq_model_form` | the damage models side by side (primary strength model): median and 90 % band per material and horizon | `breakage.csv` |
+//! | `uq_strength_models` | the strength models side by side and model-averaged (stacking weights in the labels): P(candidate breaks more) with ±2 MC standard errors per horizon, and P_break at the last horizon, median and 90 % band per material | `comparison.csv`, `breakage.csv`, `weights.csv` |
+//!
+//! Tables and figures other than `uq_strength_models` describe the primary strength model
+//! (`primary_strength_model` of `materials.csv`).
 
 use std::path::Path;
 
@@ -31,13 +35,15 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
     }
     let (keys, labels) = ([k[0].clone(), k[1].clone()], [l[0].clone(), l[1].clone()]);
     let (keys, labels) = (&keys, &labels);
+    let primary = m.s("primary_strength_model")?[0].clone();
     let figures = vec![
         ("uq_breakage_vs_velocity", breakage_vs_velocity(dir, width_cm, labels, keys)?),
         ("uq_distributions", distributions(dir, width_cm, labels, keys)?),
         ("uq_convergence", convergence(dir, width_cm, labels)?),
         ("uq_sobol", sobol(dir, 2.0 * width_cm)?),
         ("uq_sobol_convergence", sobol_convergence(dir, width_cm)?),
-        ("uq_model_form", model_form(dir, width_cm, labels, keys)?),
+        ("uq_model_form", model_form(dir, width_cm, labels, keys, &primary)?),
+        ("uq_strength_models", strength_models(dir, 2.0 * width_cm, labels, keys)?),
     ];
     super::write_figures(dir, figures)
 }
@@ -53,14 +59,18 @@ fn breakage_vs_velocity(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &
     let mut panels = Vec::new();
     for (hi, &h) in horizons.iter().enumerate() {
         let mut series = Vec::new();
-        let mut ys = Vec::new();
+        let rows_of = |key: &String| (0..mat.len()).filter(|&i| &mat[i] == key && yrs[i] == h).collect::<Vec<usize>>();
+        // The data reach down to the figures' floor; four more decades below it leave the lower
+        // right corner free for the legend (the bands rise with velocity), and anything under
+        // the axis is drawn on it.
+        let data_lo = keys.iter().flat_map(|k| rows_of(k)).map(|i| lg(q05[i])).fold(0.0, f64::min).floor();
+        let lo = data_lo - 4.0;
+        let at = |p: f64| p.max(1e-300).log10().max(lo);
         for (j, key) in keys.iter().enumerate() {
-            let rows: Vec<usize> = (0..mat.len()).filter(|&i| &mat[i] == key && yrs[i] == h).collect();
-            series.push(Series { label: Some(format!("{} 90 % band", labels[j])), points: rows.iter().map(|&i| (v[i], lg(q05[i]))).collect(), colour: colour(j), kind: Kind::Band(rows.iter().map(|&i| lg(q95[i])).collect(), 0.25) });
-            series.push(Series::line(Some(format!("{} median", labels[j])), rows.iter().map(|&i| (v[i], lg(q50[i]))).collect(), colour(j), 1.2));
-            ys.extend(rows.iter().flat_map(|&i| [lg(q05[i]), lg(q95[i])]));
+            let rows = rows_of(key);
+            series.push(Series { label: Some(format!("{} 90 % band", labels[j])), points: rows.iter().map(|&i| (v[i], at(q05[i]))).collect(), colour: colour(j), kind: Kind::Band(rows.iter().map(|&i| at(q95[i])).collect(), 0.25) });
+            series.push(Series::line(Some(format!("{} median", labels[j])), rows.iter().map(|&i| (v[i], at(q50[i]))).collect(), colour(j), 1.2));
         }
-        let lo = ys.iter().cloned().fold(0.0, f64::min).floor();
         panels.push((
             Panel {
                 x_categories: vec![],
@@ -136,7 +146,15 @@ fn convergence(dir: &Path, width_cm: f64, labels: &[String; 2]) -> Result<Drawn>
 
 /// Short input names for a category axis.
 fn short(name: &str) -> String {
-    name.replace("weibull_", "Weib. ").replace("roundness_", "rnd ").replace("sphericity_", "sph ").replace("energy_fraction", "η").replace("velocity", "V").replace("impacts_per_year", "N/yr").replace("tk_gamma", "γ (TK)")
+    name.replace("strength_", "Weib. ")
+        .replace("size_alpha_", "α ")
+        .replace("roundness_q_", "q ")
+        .replace("sphericity_p_", "p ")
+        .replace("temperature_strength_ratio_per_100c_", "T ratio ")
+        .replace("energy_fraction", "η")
+        .replace("velocity", "V")
+        .replace("impacts_per_year", "N/yr")
+        .replace("tk_gamma", "γ (TK)")
 }
 
 fn sobol(dir: &Path, width_cm: f64) -> Result<Drawn> {
@@ -205,8 +223,8 @@ fn sobol_convergence(dir: &Path, width_cm: f64) -> Result<Drawn> {
     figure("uq_sobol_convergence", width_cm, 0.7, &[(panel, 1.0)])
 }
 
-fn model_form(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[String; 2]) -> Result<Drawn> {
-    let t = Table::load(dir, "breakage")?;
+fn model_form(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[String; 2], primary: &str) -> Result<Drawn> {
+    let t = Table::load(dir, "breakage")?.filter("strength_model", primary)?;
     let (model, mat, yrs, q05, q50, q95) = (t.s("model")?, t.s("material")?, t.f("years")?, t.f("q05")?, t.f("median")?, t.f("q95")?);
     let models = distinct(&model);
     let horizons = distinct(&yrs);
@@ -253,4 +271,87 @@ fn model_form(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[String; 2
         ));
     }
     figure("uq_model_form", width_cm, 0.6 * horizons.len() as f64, &panels)
+}
+
+/// Short name of a strength model on a category axis.
+fn short_model(name: &str) -> String {
+    match name {
+        "deliverable" => "deliverable".into(),
+        "model-averaged" => "averaged".into(),
+        o => o.replace("roundness", "rnd").replace("sphericity", "sph").replace("temperature", "T").replace("damage", "dmg"),
+    }
+}
+
+fn strength_models(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[String; 2]) -> Result<Drawn> {
+    let w = Table::load(dir, "weights")?;
+    let (wm, ws) = (w.s("strength_model")?, w.f("weight_stacking")?);
+    let c = Table::load(dir, "comparison")?;
+    let (cs, cm, cy, cp, cse) = (c.s("strength_model")?, c.s("model")?, c.f("years")?, c.f("p_candidate_worse")?, c.f("mc_se")?);
+    let damage = cm.first().cloned().unwrap_or_default();
+    let models = distinct(&cs);
+    let horizons = distinct(&cy);
+    let categories: Vec<String> = models
+        .iter()
+        .map(|m| match wm.iter().position(|x| x == m) {
+            Some(i) if wm.len() > 1 => format!("{} (w = {:.2})", short_model(m), ws[i]),
+            _ => short_model(m),
+        })
+        .collect();
+    // Top: P(candidate breaks more) per model and horizon, ±2 se.
+    let mut top = Vec::new();
+    for (hi, &h) in horizons.iter().enumerate() {
+        let off = (hi as f64 - 0.5 * (horizons.len() as f64 - 1.0)) * 0.15;
+        let mut pts = Vec::new();
+        for (k, m) in models.iter().enumerate() {
+            let Some(i) = (0..cs.len()).find(|&i| &cs[i] == m && cm[i] == damage && cy[i] == h) else { continue };
+            let x = (k + 1) as f64 + off;
+            pts.push((x, cp[i]));
+            top.push(Series::line(None, vec![(x, (cp[i] - 2.0 * cse[i]).max(0.0)), (x, (cp[i] + 2.0 * cse[i]).min(1.0))], colour(hi), 1.0));
+        }
+        let marker = if hi == 0 { Marker::Circle } else { Marker::Triangle };
+        top.push(Series { label: Some(years_label(h)), points: pts, colour: colour(hi), kind: Kind::Markers(marker, 2.2) });
+    }
+    // A probability axis ends at 1; its lower end follows the data (the legend sits in the
+    // free column on the right).
+    let lows: Vec<f64> = (0..cs.len()).filter(|&i| cm[i] == damage).map(|i| (cp[i] - 2.0 * cse[i]).max(0.0)).collect();
+    let (lo, _) = padded(lows.iter().copied().chain([1.0]), 0.15, 0.0);
+    let top_panel = Panel {
+        x_categories: categories.clone(),
+        x_desc: String::new(),
+        y_desc: format!("P({} breaks more)", labels[0]),
+        x_range: (0.5, models.len() as f64 + 1.5),
+        y_range: (lo.max(0.0), 1.0),
+        y_log: false,
+        series: top,
+        legend: Some(SeriesLabelPosition::LowerRight),
+    };
+    // Bottom: P break at the last horizon, median and 90 % band per material.
+    let t = Table::load(dir, "breakage")?.filter("model", &damage)?;
+    let (ts, mat, yrs, q05, q50, q95) = (t.s("strength_model")?, t.s("material")?, t.f("years")?, t.f("q05")?, t.f("median")?, t.f("q95")?);
+    let last = horizons.last().copied().unwrap_or(1.0);
+    let mut series = Vec::new();
+    let mut ys = Vec::new();
+    for (j, key) in keys.iter().enumerate() {
+        let off = if j == 0 { -0.15 } else { 0.15 };
+        for (k, m) in models.iter().enumerate() {
+            let Some(i) = (0..ts.len()).find(|&i| &ts[i] == m && &mat[i] == key && yrs[i] == last) else { continue };
+            let x = (k + 1) as f64 + off;
+            let lab = if k == 0 { Some(labels[j].clone()) } else { None };
+            series.push(Series { label: lab, points: vec![(x - 0.1, lg(q05[i])), (x + 0.1, lg(q05[i]))], colour: colour(j), kind: Kind::Band(vec![lg(q95[i]); 2], 0.35) });
+            series.push(Series { label: None, points: vec![(x, lg(q50[i]))], colour: colour(j), kind: Kind::Markers(Marker::Circle, 2.0) });
+            ys.extend([lg(q05[i]), lg(q95[i])]);
+        }
+    }
+    let lo = (ys.iter().cloned().fold(0.0, f64::min) - 0.5).floor().max(LG_FLOOR);
+    let bottom = Panel {
+        x_categories: categories,
+        x_desc: "Strength model (stacking weight w; rnd: roundness, sph: sphericity); dot: median, bar: 90 % band".into(),
+        y_desc: format!("P break, {}", years_label(last)),
+        x_range: (0.5, models.len() as f64 + 1.5),
+        y_range: (lo, 0.8),
+        y_log: true,
+        series,
+        legend: Some(SeriesLabelPosition::LowerRight),
+    };
+    figure("uq_strength_models", width_cm, 0.6, &[(top_panel, 0.4), (bottom, 0.6)])
 }

@@ -1,14 +1,18 @@
-//! Uncertainty quantification: Monte Carlo propagation through the lifetime chain and
-//! variance-based sensitivity.
+//! The main study (`kind = "uq"`): Monte Carlo propagation of every uncertain input of the
+//! lifetime chain, per strength model and averaged over them, and variance-based sensitivity.
 //!
-//! * [`inputs`]: distributions of the study file, the DEM velocity spectrum, Weibull draws
-//!   (parametric bootstrap or Bayesian posterior).
-//! * [`damage`]: independent trials, Vogel–Peukert, Tavares–King.
-//! * [`run`]: the `kind = "uq"` study.
+//! * [`study`]: the study file's schema and its validation.
+//! * [`setup`]: one strength model's comparison of the two particle types — every uncertain
+//!   input as a marginal, one sample evaluated through each material's
+//!   [`crate::strength::LifetimeModel`].
+//! * [`propagate`]: blocks of Monte Carlo, LHS or shifted Sobol' samples, collected in order.
+//! * [`run`]: the run — strength models with stacking weights, the model-averaged headline,
+//!   damage models and averaging domains side by side, Sobol' indices, tables and summary.
 //! * [`sobol`]: Saltelli design, first-order (Saltelli 2010) and total (Jansen) Sobol' indices
 //!   with bootstrap intervals.
 
-pub mod damage;
-pub mod inputs;
+pub mod propagate;
 pub mod run;
+pub mod setup;
 pub mod sobol;
+pub mod study;

@@ -1,619 +1,70 @@
 //! The `kind = "uq"` study: Monte Carlo propagation of every uncertain input of the lifetime
-//! chain to the breaking probabilities of two particle types, the probability that one breaks
-//! more than the other, Sobol' indices, and the three damage models side by side.
+//! chain to the breaking probabilities of two particle types and the probability that one
+//! breaks more than the other — per strength model and averaged over them — with Sobol'
+//! indices, and the damage models and averaging domains side by side.
 //!
-//! ```toml
-//! kind = "uq"
-//! seed = 1
-//! compare = { candidate = "gen4", reference = "bl1630" }
-//! [contact]        # crush contact (platen, averaging domain), as in a lifetime study
-//! [impact]         # target, years, impacts_per_year, energy_fraction, velocity (distributions)
-//! [weibull]        # uncertainty = "bootstrap" | "bayesian", draws
-//! [damage]         # models, primary, gamma (Tavares–King coefficient distribution)
-//! [propagation]    # method = "plain" | "lhs" | "sobol", samples, replicates
-//! [sensitivity]    # n (Saltelli base size), bootstrap, level
-//! [[material]]     # key, label, data, elastic, density_kg_m3, roundness, sphericity
-//! ```
+//! # Strength models as a model-form choice
+//!
+//! Each strength model of `[model_form] strength` (the primary `[strength] effects` first) is
+//! fitted to both materials' crush data ([`super::setup::Setup`]; `"diagnosed"` runs the
+//! naming loop on each material) and propagated with the same number of samples. Its weight
+//! comes from predictive evidence: the 10-fold cross-validated log density of every crush test
+//! of both materials, combined by **stacking** ([`crate::strength::weights`], which says why
+//! stacking rather than pseudo-BMA; both are reported). The model-averaged headline is
+//! P̄ = Σ_M w_M P_M with standard error (Σ_M w_M² se_M²)^(1/2) (the runs are independent); the
+//! averaged breakage bands are the quantiles of the weighted mixture of the models' samples.
 //!
 //! # One sample
 //!
-//! Per material j: (m, σ_θ) from the Weibull uncertainty of its crush data (σ̄ at break reduced
-//! as in the lifetime study: Hertz, sphere of the particle's radius, the study's averaging
-//! domain); the contact curvature factor c = roundness × sphericity (Wadell roundness: corner
-//! radius over inscribed radius; sphericity: inscribed over equivalent radius), so the impact
-//! contact has radius of curvature c·R; shared by both materials: η, V, impacts per year, γ.
-//! The impact (Hertz, sphere of mass m on the steel tube with curvature c·R, energy fraction η)
-//! gives the peak pressure; σ̄ = r·p0 (r = σ̄/p0 of the averaging domain, which must be a
-//! multiple of the contact radius); the single-impact hazard H = (σ̄/σ_θ)^m; P_N of each damage
-//! model ([`super::damage`]) for N = years × impacts per year. Since σ̄ ∝ V^(2/5), the hazard at
-//! any other velocity is H(V) = H(1 m/s)·V^(2m/5): the breakage-vs-velocity bands reuse the
-//! samples.
-//!
-//! # Estimates and their Monte Carlo error
-//!
-//! The samples come in `replicates` independent blocks (plain: own streams; LHS: own
-//! hypercubes; Sobol': own random shifts). Every headline is the mean of the block estimates,
-//! its standard error the sd of the block estimates over √blocks — valid for all three methods.
-//! The convergence table repeats this on the first k points of every block.
+//! Per material: one joint draw of its strength model (m, μ, the effects' β, the population
+//! weights); shared: η, V, impacts per year, γ. Each material's [`crate::strength::LifetimeModel`]
+//! gives the population's P_N under every damage model ([`crate::lifetime::damage`]) for
+//! N = years × impacts per year. Since σ̄ ∝ V^(2/5), the breakage-vs-velocity bands reuse the
+//! samples' inputs with V replaced.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
-use super::damage::{CriticalRatioTable, DamageModel, VogelPeukert, breakage};
-use super::inputs::{Dist, Marginal, WeibullUncertainty, bayesian_weibull_draws};
+use super::propagate::{Propagated, mean_se, propagate};
+use super::setup::{Mode, Setup, Shared};
 use super::sobol::{SobolIndices, sobol_indices};
-use crate::contact::{AveragingDomain, ContactStress, Elastic, Hertz, Impact, Sphere, TensileZone};
-use crate::data::read_crush;
+use super::study::{Propagation, UqStudy};
+use crate::contact::AveragingDomain;
+use crate::dist::Marginal;
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
+use crate::lifetime::damage::DamageModel;
 use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
-use crate::study::{ContactOptions, FigureOptions, LoadedStudy, MaterialSpec};
-use crate::weibull::{Weibull, fit_mle, simulate_pivotal};
+use crate::stats::{interpolated_quantiles, weighted_quantiles};
+use crate::strength::{NamingSettings, StrengthSpec, summarise};
+use crate::study::LoadedStudy;
 
-/// Impacts and the shared uncertain inputs.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct UqImpact {
-    /// Tube material (default steel).
-    #[serde(default = "steel")]
-    pub target: Elastic,
-    /// Horizons (years), each > 0.
-    pub years: Vec<f64>,
-    /// High-velocity impacts per particle and year.
-    pub impacts_per_year: Dist,
-    /// Elastic energy fraction η ∈ (0, 1].
-    pub energy_fraction: Dist,
-    /// Impact velocity (m/s): a distribution or a DEM spectrum.
-    pub velocity: Dist,
-    /// Velocity range of the breakage-vs-velocity figure (m/s).
-    #[serde(default = "velocity_range")]
-    pub velocity_range: [f64; 2],
+/// One strength model's run: its setup, samples and predictive evidence.
+pub struct Form {
+    /// The prepared comparison.
+    pub setup: Setup,
+    /// Its samples.
+    pub prop: Propagated,
+    /// Cross-validated log density of each crush test, per material (empty with one model).
+    pub lpd: [Vec<f64>; 2],
+    /// Stacking weight.
+    pub weight: f64,
+    /// Pseudo-BMA weight.
+    pub weight_pbma: f64,
 }
 
-fn steel() -> Elastic {
-    Elastic { youngs_modulus_pa: 210e9, poisson_ratio: 0.3 }
-}
-
-fn velocity_range() -> [f64; 2] {
-    [0.5, 20.0]
-}
-
-/// Weibull parameter uncertainty.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct UqWeibull {
-    /// Bootstrap of the MLE or Bayesian posterior.
-    pub uncertainty: WeibullUncertainty,
-    /// Joint draws per material.
-    pub draws: usize,
-}
-
-impl Default for UqWeibull {
-    fn default() -> Self {
-        UqWeibull { uncertainty: WeibullUncertainty::Bootstrap, draws: 4000 }
+/// P ± its Monte Carlo standard error, the error written so that it never reads as zero: to four
+/// decimals, in scientific notation below 5·10⁻⁵, and as "in all n samples" when every sample
+/// agreed (se = 0, p = 0 or 1).
+pub fn pm(p: f64, se: f64, n: usize) -> String {
+    if se == 0.0 && (p == 0.0 || p == 1.0) {
+        format!("{p:.4} (in all {n} samples)")
+    } else if se < 5e-5 {
+        format!("{p:.4} ± {se:.1e}")
+    } else {
+        format!("{p:.4} ± {se:.4}")
     }
-}
-
-/// Damage models.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct UqDamage {
-    /// Models compared (all three by default).
-    pub models: Vec<DamageModel>,
-    /// The model of the headline and the Sobol' indices.
-    pub primary: DamageModel,
-    /// Tavares–King damage coefficient γ.
-    pub gamma: Dist,
-}
-
-impl Default for UqDamage {
-    fn default() -> Self {
-        UqDamage { models: DamageModel::ALL.to_vec(), primary: DamageModel::Independent, gamma: Dist::Uniform { min: 2.0, max: 7.0 } }
-    }
-}
-
-/// Sampling method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Method {
-    /// Independent uniform draws.
-    Plain,
-    /// Latin hypercube.
-    Lhs,
-    /// Randomly shifted Sobol' points.
-    #[default]
-    Sobol,
-}
-
-/// Propagation settings.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Propagation {
-    /// Sampling method.
-    pub method: Method,
-    /// Samples in all.
-    pub samples: usize,
-    /// Independent blocks (for the standard errors).
-    pub replicates: usize,
-}
-
-impl Default for Propagation {
-    fn default() -> Self {
-        Propagation { method: Method::Sobol, samples: 1 << 17, replicates: 8 }
-    }
-}
-
-/// Sobol' index settings.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Sensitivity {
-    /// Saltelli base sample size (a power of two is best).
-    pub n: usize,
-    /// Bootstrap resamples of the intervals.
-    pub bootstrap: usize,
-    /// Interval level.
-    pub level: f64,
-}
-
-impl Default for Sensitivity {
-    fn default() -> Self {
-        Sensitivity { n: 1 << 13, bootstrap: 500, level: 0.95 }
-    }
-}
-
-/// One particle type: a lifetime study's material plus its shape distributions.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct UqMaterial {
-    /// Key, label, crush data, elastic constants, density, impact diameter.
-    #[serde(flatten)]
-    pub spec: MaterialSpec,
-    /// Wadell roundness distribution (0, 1].
-    pub roundness: Dist,
-    /// Sphericity distribution (0, 1].
-    pub sphericity: Dist,
-    /// Keys nobody took (serde cannot deny unknown fields through `flatten`): rejected at load.
-    #[serde(flatten, skip_serializing)]
-    pub unknown: BTreeMap<String, toml::Value>,
-}
-
-/// Model-form alternatives (the damage models are compared in every run).
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ModelForm {
-    /// Other averaging domains of σ̄: each reruns the whole chain (Weibull refit of the crush
-    /// data included) with a quarter of the samples; `averaging.csv` compares them.
-    pub averaging: Vec<AveragingDomain>,
-}
-
-/// Which material is compared with which.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Compare {
-    /// The candidate ("is it worse?").
-    pub candidate: String,
-    /// The reference.
-    pub reference: String,
-}
-
-/// A `kind = "uq"` study.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct UqStudy {
-    /// `uq`.
-    pub kind: String,
-    /// Seed of every random draw.
-    pub seed: u64,
-    /// Candidate and reference.
-    pub compare: Compare,
-    /// Crush contact.
-    #[serde(default)]
-    pub contact: ContactOptions,
-    /// Impacts and shared inputs.
-    pub impact: UqImpact,
-    /// Weibull uncertainty.
-    #[serde(default)]
-    pub weibull: UqWeibull,
-    /// Damage models.
-    #[serde(default)]
-    pub damage: UqDamage,
-    /// Propagation.
-    #[serde(default)]
-    pub propagation: Propagation,
-    /// Sobol' indices.
-    #[serde(default)]
-    pub sensitivity: Sensitivity,
-    /// Model-form alternatives run besides the main chain.
-    #[serde(default)]
-    pub model_form: ModelForm,
-    /// Figures.
-    #[serde(default)]
-    pub figures: FigureOptions,
-    /// Exactly two particle types.
-    pub material: Vec<UqMaterial>,
-}
-
-/// One uncertain input.
-#[derive(Debug, Clone)]
-pub struct Input {
-    /// Name in tables.
-    pub name: String,
-    /// Unit.
-    pub unit: String,
-    /// Its marginal.
-    pub marginal: Marginal,
-}
-
-/// Per material, what the samples need.
-#[derive(Debug, Clone)]
-pub struct PreparedMaterial {
-    /// Key.
-    pub key: String,
-    /// Label.
-    pub label: String,
-    /// The impacting sphere.
-    pub sphere: Sphere,
-    /// Crush particles and the MLE of σ̄ at break (n, m̂, σ̂_θ).
-    pub fit: (usize, f64, f64),
-    /// Crush data file.
-    pub path: PathBuf,
-}
-
-/// Everything a run needs, checked at load.
-#[derive(Debug, Clone)]
-pub struct Chain {
-    /// Inputs in order: `weibull_<a>`, `weibull_<b>`, `roundness_<a>`, `sphericity_<a>`,
-    /// `roundness_<b>`, `sphericity_<b>`, `energy_fraction`, `velocity`, `impacts_per_year`,
-    /// `tk_gamma` (a = candidate, b = reference).
-    pub inputs: Vec<Input>,
-    /// The two materials: candidate first, reference second.
-    pub materials: [PreparedMaterial; 2],
-    /// The averaging domain of σ̄ (crush and impact alike).
-    pub domain: AveragingDomain,
-    /// σ̄/p0 of the domain when constant (outer limit a multiple of a): the fast path.
-    pub ratio: Option<f64>,
-    /// Tensile zones of the two materials (their ν).
-    pub zones: [TensileZone; 2],
-    /// Tube.
-    pub wall: Elastic,
-    /// Horizons (years).
-    pub years: Vec<f64>,
-    /// Damage models (primary first).
-    pub models: Vec<DamageModel>,
-    /// Tavares–King x* tables per horizon (fixed impacts per year only).
-    pub tk: Vec<Option<CriticalRatioTable>>,
-}
-
-/// Input indices.
-mod idx {
-    pub const WEIBULL: usize = 0; // + material
-    pub const ROUNDNESS: usize = 2; // + 2 × material
-    pub const SPHERICITY: usize = 3; // + 2 × material
-    pub const ETA: usize = 6;
-    pub const VELOCITY: usize = 7;
-    pub const PER_YEAR: usize = 8;
-    pub const GAMMA: usize = 9;
-}
-
-/// What the single-impact hazard of one sample needs: H(V) = (σ̄(p0, a)/σ_θ)^m with
-/// p0 = c_p V^(2/5) and a = c_a V^(2/5) (Hertz impact).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Hazard {
-    /// Weibull modulus m.
-    pub m: f64,
-    /// ln σ_θ.
-    pub ln_scale: f64,
-    /// Peak pressure at 1 m/s (Pa).
-    pub c_p: f64,
-    /// Contact radius at 1 m/s (m).
-    pub c_a: f64,
-    /// Particle radius (m).
-    pub radius: f64,
-}
-
-/// One evaluated sample: per material its hazard parameters and P per material, horizon and
-/// model (index [`Chain::slot`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Evaluated {
-    /// Hazard parameters per material.
-    pub hazard: [Hazard; 2],
-    /// ln V.
-    pub ln_v: f64,
-    /// Impacts per year.
-    pub per_year: f64,
-    /// γ.
-    pub gamma: f64,
-    /// P_N per material, horizon, model (flattened: (j·Y + h)·D + d).
-    pub p: Vec<f64>,
-}
-
-impl Chain {
-    /// Index into [`Evaluated::p`] of material j (0 candidate, 1 reference), horizon h, model k.
-    pub fn slot(&self, j: usize, h: usize, k: usize) -> usize {
-        (j * self.years.len() + h) * self.models.len() + k
-    }
-
-    /// The varying inputs' indices (the dimensions of the unit points).
-    pub fn varying(&self) -> Vec<usize> {
-        (0..self.inputs.len()).filter(|&i| self.inputs[i].marginal.varies()).collect()
-    }
-
-    /// Full input vector from a unit point over the varying inputs.
-    /// (The hot path of the propagation: one inverse CDF per varying input, no allocation but
-    /// the result.)
-    pub fn values(&self, u: &[f64]) -> Vec<f64> {
-        let mut k = 0;
-        self.inputs
-            .iter()
-            .map(|i| match &i.marginal {
-                Marginal::Fixed(v) => *v,
-                m => {
-                    k += 1;
-                    m.quantile(u[k - 1])
-                }
-            })
-            .collect()
-    }
-
-    /// Single-impact hazard parameters of material j at inputs x.
-    pub fn hazard(&self, j: usize, x: &[f64]) -> Hazard {
-        let mat = &self.materials[j];
-        let w: Weibull = match &self.inputs[idx::WEIBULL + j].marginal {
-            Marginal::Weibull(d) => d[x[idx::WEIBULL + j] as usize],
-            _ => unreachable!("input 0/1 are Weibull draws"),
-        };
-        let c = x[idx::ROUNDNESS + 2 * j] * x[idx::SPHERICITY + 2 * j];
-        let impact = Impact::sphere_on_wall(&mat.sphere, &self.wall, c * mat.sphere.radius(), x[idx::ETA]);
-        let f1 = impact.max_force(1.0);
-        Hazard { m: w.shape, ln_scale: w.scale.ln(), c_p: impact.hertz.peak_pressure(f1), c_a: impact.hertz.contact_radius(f1), radius: mat.sphere.radius() }
-    }
-
-    /// ln H at ln V for material j: σ̄ = r·p0 on the fast path, else the domain's formula at
-    /// (p0, a, R); a contact larger than the domain (a > R, far beyond 100 m/s) counts as a
-    /// certain break.
-    pub fn ln_hazard(&self, j: usize, hz: &Hazard, ln_v: f64) -> f64 {
-        if ln_v == f64::NEG_INFINITY {
-            return f64::NEG_INFINITY; // V = 0: no contact, no hazard
-        }
-        let ln_sigma = match self.ratio {
-            Some(r) => (r * hz.c_p).ln() + 0.4 * ln_v,
-            None => {
-                let t = (0.4 * ln_v).exp();
-                self.domain.mean_tensile_stress(&self.zones[j], hz.c_p * t, hz.c_a * t, hz.radius).map(f64::ln).unwrap_or(f64::INFINITY)
-            }
-        };
-        hz.m * (ln_sigma - hz.ln_scale)
-    }
-
-    /// P_N of model `d` for modulus m and ln H, N impacts and γ (horizon h).
-    pub fn p(&self, model: DamageModel, m: f64, ln_h: f64, n: f64, gamma: f64, h: usize) -> f64 {
-        let hz = ln_h.exp();
-        let vp = if model == DamageModel::VogelPeukert { VogelPeukert::matched(m / 5.0) } else { VogelPeukert { rate: 0.0, threshold: 0.0 } };
-        let x_star = match (model, &self.tk[h]) {
-            (DamageModel::TavaresKing, Some(t)) => t.ratio(gamma),
-            _ => 1.0,
-        };
-        breakage(model, hz, m, n, &vp, x_star)
-    }
-
-    /// Evaluates one unit point.
-    pub fn evaluate(&self, u: &[f64]) -> Evaluated {
-        let x = self.values(u);
-        let hazard = [self.hazard(0, &x), self.hazard(1, &x)];
-        let v = x[idx::VELOCITY];
-        let ln_v = if v > 0.0 { v.ln() } else { f64::NEG_INFINITY };
-        let ln_h = [self.ln_hazard(0, &hazard[0], ln_v), self.ln_hazard(1, &hazard[1], ln_v)];
-        let (y, d) = (self.years.len(), self.models.len());
-        let mut p = vec![0.0; 2 * y * d];
-        for j in 0..2 {
-            for h in 0..y {
-                let n = self.years[h] * x[idx::PER_YEAR];
-                for (k, &model) in self.models.iter().enumerate() {
-                    p[self.slot(j, h, k)] = self.p(model, hazard[j].m, ln_h[j], n, x[idx::GAMMA], h);
-                }
-            }
-        }
-        Evaluated { hazard, ln_v, per_year: x[idx::PER_YEAR], gamma: x[idx::GAMMA], p }
-    }
-}
-
-impl UqStudy {
-    /// Checks the study and builds the chain (reads and fits the crush data).
-    pub fn prepare(&self, path: &std::path::Path) -> Result<Chain> {
-        let file = path.display().to_string();
-        let resolve = |p: &str| crate::study::resolve_relative(path, std::path::Path::new(p));
-        let bad = |k: &str, rule: String| Err(Error::config(&file, k, rule));
-        if self.material.len() != 2 {
-            return bad("material", format!("a UQ study compares exactly two [[material]]s, got {}", self.material.len()));
-        }
-        let pos = |k: &str, key: &str| -> Result<usize> {
-            self.material.iter().position(|m| m.spec.key == k).ok_or_else(|| Error::config(&file, key, format!("`{k}` is not a material key ({}, {})", self.material[0].spec.key, self.material[1].spec.key)))
-        };
-        let (ic, ir) = (pos(&self.compare.candidate, "compare.candidate")?, pos(&self.compare.reference, "compare.reference")?);
-        if ic == ir {
-            return bad("compare", "candidate and reference must differ".into());
-        }
-        if self.impact.years.is_empty() || self.impact.years.iter().any(|y| !(y.is_finite() && *y > 0.0)) {
-            return bad("impact.years", format!("every horizon must be a finite number of years > 0, got {:?}", self.impact.years));
-        }
-        let [vlo, vhi] = self.impact.velocity_range;
-        if !(vlo > 0.0 && vlo < vhi && vhi <= crate::lifetime::MAX_VELOCITY) {
-            return bad("impact.velocity_range", format!("needs 0 < low < high ≤ {} m/s, got [{vlo}, {vhi}]", crate::lifetime::MAX_VELOCITY));
-        }
-        crate::study::elastic_checked(&file, "impact.target", &self.impact.target)?;
-        crate::study::elastic_checked(&file, "contact.platen", &self.contact.platen)?;
-        self.contact.averaging.validate(&file, "contact.averaging")?;
-        let zone_ratio = |nu: f64| self.contact.averaging.ratio_to_peak_pressure(&TensileZone::new(nu));
-        if !(2..=1_000_000).contains(&self.weibull.draws) {
-            return bad("weibull.draws", format!("must lie in [2, 10⁶], got {}", self.weibull.draws));
-        }
-        let p = &self.propagation;
-        if p.replicates < 2 || p.samples < 64 * p.replicates || p.samples > 50_000_000 {
-            return bad("propagation", format!("needs replicates ≥ 2 and 64·replicates ≤ samples ≤ 5·10⁷, got {} samples in {} replicates", p.samples, p.replicates));
-        }
-        let s = &self.sensitivity;
-        if s.n < 64 || s.n > 1 << 20 || !(s.level > 0.0 && s.level < 1.0) || s.bootstrap > 100_000 {
-            return bad("sensitivity", format!("needs 64 ≤ n ≤ 2²⁰ and level in (0, 1), got n = {}, level {}", s.n, s.level));
-        }
-        if self.damage.models.is_empty() || !self.damage.models.contains(&self.damage.primary) {
-            return bad("damage.primary", format!("{:?} must be one of damage.models {:?}", self.damage.primary, self.damage.models));
-        }
-        let mut models = vec![self.damage.primary];
-        models.extend(self.damage.models.iter().copied().filter(|m| *m != self.damage.primary));
-        models.dedup();
-
-        // Inputs.
-        let m = |d: &Dist, key: &str, unit: &str| d.marginal(&file, key, unit, &resolve);
-        let in_range = |mg: &Marginal, key: &str, lo: f64, hi: f64| -> Result<()> {
-            let (a, b) = (mg.quantile(0.0), mg.quantile(1.0));
-            if a >= lo && b <= hi && a.is_finite() && b.is_finite() { Ok(()) } else { Err(Error::config(&file, key, format!("values must lie in [{lo}, {hi}], the distribution spans [{a}, {b}]"))) }
-        };
-        let mut mats = Vec::new();
-        let mut inputs = Vec::new();
-        let order = [ic, ir];
-        let mut shape_inputs = Vec::new();
-        for (slot, &i) in order.iter().enumerate() {
-            let (mm, shape) = (&self.material[i].spec, &self.material[i]);
-            let key = |k: &str| format!("material[{i}].{k}");
-            if let Some(k) = shape.unknown.keys().next() {
-                return bad(&key(k), "unknown key (known: key, label, data, elastic, density_kg_m3, impact_diameter_m, roundness, sphericity)".into());
-            }
-            crate::study::elastic_checked(&file, &key("elastic"), &mm.elastic)?;
-            if !(mm.density_kg_m3 > 0.0 && mm.density_kg_m3.is_finite()) {
-                return bad(&key("density_kg_m3"), format!("must be > 0, got {}", mm.density_kg_m3));
-            }
-            let dpath = resolve(&mm.data.display().to_string());
-            if !dpath.is_file() {
-                return bad(&key("data"), format!("{} does not exist", dpath.display()));
-            }
-            let data = read_crush(&dpath)?;
-            let zone = TensileZone::new(mm.elastic.poisson_ratio);
-            let sigma: Vec<f64> = data
-                .records
-                .iter()
-                .map(|r| {
-                    let radius = 0.5 * r.diameter_m;
-                    let hertz = Hertz::sphere_on_flat(&mm.elastic, &self.contact.platen, radius);
-                    ContactStress { hertz, zone, domain: self.contact.averaging, particle_radius: radius }.at_force(r.crush_force_n).map(|c| c.mean_tensile)
-                })
-                .collect::<Result<_>>()?;
-            let fit = fit_mle(&sigma).map_err(|e| Error::data_file(&dpath, "all rows", format!("Weibull fit of the average tensile stress failed: {e}")))?;
-            let seed = self.seed ^ (0xA5A5 + slot as u64);
-            let draws = match self.weibull.uncertainty {
-                WeibullUncertainty::Bootstrap => simulate_pivotal(fit.n, self.weibull.draws, seed)?.draws(&fit),
-                WeibullUncertainty::Bayesian => bayesian_weibull_draws(&sigma, &fit, self.weibull.draws, seed)?,
-            };
-            let diameter = match mm.impact_diameter_m {
-                Some(d) if d > 0.0 && d.is_finite() => d,
-                Some(d) => return bad(&key("impact_diameter_m"), format!("must be > 0, got {d}")),
-                None => crate::stats::quantiles(&mut data.diameters(), &[0.5])[0],
-            };
-            inputs.push(Input { name: format!("weibull_{}", mm.key), unit: "m (-)".into(), marginal: Marginal::Weibull(draws) });
-            let r = m(&shape.roundness, &key("roundness"), "-")?;
-            in_range(&r, &key("roundness"), 1e-3, 1.0)?;
-            let sp = m(&shape.sphericity, &key("sphericity"), "-")?;
-            in_range(&sp, &key("sphericity"), 1e-3, 1.0)?;
-            shape_inputs.push(Input { name: format!("roundness_{}", mm.key), unit: "-".into(), marginal: r });
-            shape_inputs.push(Input { name: format!("sphericity_{}", mm.key), unit: "-".into(), marginal: sp });
-            mats.push(PreparedMaterial { key: mm.key.clone(), label: mm.label.clone(), sphere: Sphere { diameter, density: mm.density_kg_m3, elastic: mm.elastic }, fit: (fit.n, fit.mle.shape, fit.mle.scale), path: dpath });
-        }
-        // One ratio: both materials' ν enter the tensile zone; they must agree for one r.
-        let nus = [self.material[ic].spec.elastic.poisson_ratio, self.material[ir].spec.elastic.poisson_ratio];
-        let zones = nus.map(TensileZone::new);
-        // The fast path needs one constant σ̄/p0 for both materials.
-        let ratio = match (zone_ratio(nus[0]), zone_ratio(nus[1])) {
-            (Some(a), Some(b)) if (a / b - 1.0).abs() < 1e-12 => Some(a),
-            _ => None,
-        };
-        for (i, d) in self.model_form.averaging.iter().enumerate() {
-            d.validate(&file, &format!("model_form.averaging[{i}]"))?;
-        }
-        inputs.extend(shape_inputs);
-        let eta = m(&self.impact.energy_fraction, "impact.energy_fraction", "-")?;
-        in_range(&eta, "impact.energy_fraction", 1e-6, 1.0)?;
-        let v = m(&self.impact.velocity, "impact.velocity", "m/s")?;
-        in_range(&v, "impact.velocity", 0.0, crate::lifetime::MAX_VELOCITY)?;
-        let per_year = m(&self.impact.impacts_per_year, "impact.impacts_per_year", "1/yr")?;
-        in_range(&per_year, "impact.impacts_per_year", 1e-9, 1e9)?;
-        let gamma = m(&self.damage.gamma, "damage.gamma", "-")?;
-        in_range(&gamma, "damage.gamma", 0.1, 100.0)?;
-        for (d, key) in [(&self.impact.energy_fraction, "impact.energy_fraction"), (&self.impact.impacts_per_year, "impact.impacts_per_year"), (&self.damage.gamma, "damage.gamma")] {
-            if matches!(d, Dist::Spectrum { .. }) {
-                return bad(key, "a spectrum is a velocity distribution only".into());
-            }
-        }
-        for mm in &self.material {
-            if matches!(mm.roundness, Dist::Spectrum { .. }) || matches!(mm.sphericity, Dist::Spectrum { .. }) {
-                return bad("material", "a spectrum is a velocity distribution only".into());
-            }
-        }
-        let tk = if models.contains(&DamageModel::TavaresKing) {
-            let Marginal::Fixed(n_year) = per_year else {
-                return bad("impact.impacts_per_year", "the Tavares–King model needs a fixed number of impacts per year (its damage table is per N)".into());
-            };
-            let (glo, ghi) = (gamma.quantile(0.0), gamma.quantile(1.0));
-            self.impact.years.iter().map(|y| Some(CriticalRatioTable::new((y * n_year).round().max(1.0) as u64, glo, ghi.max(glo + 1e-9), 41))).collect()
-        } else {
-            vec![None; self.impact.years.len()]
-        };
-        inputs.push(Input { name: "energy_fraction".into(), unit: "-".into(), marginal: eta });
-        inputs.push(Input { name: "velocity".into(), unit: "m/s".into(), marginal: v });
-        inputs.push(Input { name: "impacts_per_year".into(), unit: "1/yr".into(), marginal: per_year });
-        inputs.push(Input { name: "tk_gamma".into(), unit: "-".into(), marginal: gamma });
-        if !(4.0..=40.0).contains(&self.figures.width_cm) {
-            return bad("figures.width_cm", format!("must lie in [4, 40], got {}", self.figures.width_cm));
-        }
-        let [a, b]: [PreparedMaterial; 2] = mats.try_into().map_err(|_| Error::config(&file, "material", "two materials"))?;
-        Ok(Chain { inputs, materials: [a, b], domain: self.contact.averaging, ratio, zones, wall: self.impact.target, years: self.impact.years.clone(), models, tk })
-    }
-}
-
-/// The unit points of block r (n points in d dimensions).
-pub fn block_points(method: Method, d: usize, n: usize, seed: u64, r: usize) -> Result<Vec<Vec<f64>>> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(r as u64 + 1);
-    Ok(match method {
-        Method::Plain => (0..n).map(|_| (0..d).map(|_| rng.random::<f64>()).collect()).collect(),
-        Method::Lhs => crate::design::latin_hypercube(n, d, seed.wrapping_add(1 + r as u64)),
-        Method::Sobol => {
-            let shift: Vec<f64> = (0..d).map(|_| rng.random::<f64>()).collect();
-            crate::design::Sobol::points(d, n, 1)?
-                .into_iter()
-                .map(|p| p.iter().zip(&shift).map(|(x, s)| (x + s).fract()).collect())
-                .collect()
-        }
-    })
-}
-
-/// Mean and standard error over blocks.
-fn mean_se(v: &[f64]) -> (f64, f64) {
-    let n = v.len() as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
-    (m, (var / n).sqrt())
-}
-
-/// The propagation result.
-pub struct Propagated {
-    /// Blocks of evaluated samples.
-    pub blocks: Vec<Vec<Evaluated>>,
-}
-
-/// Runs the propagation (rayon-parallel; the result does not depend on the thread count).
-pub fn propagate(chain: &Chain, p: &Propagation, seed: u64, tick: &(dyn Fn() + Sync)) -> Result<Propagated> {
-    let d = chain.varying().len().max(1);
-    let n = p.samples / p.replicates;
-    let mut blocks = Vec::with_capacity(p.replicates);
-    for r in 0..p.replicates {
-        let pts = block_points(p.method, d, n, seed, r)?;
-        blocks.push(pts.par_iter().map(|u| chain.evaluate(u)).collect());
-        tick();
-    }
-    Ok(Propagated { blocks })
 }
 
 /// log10 of a probability, floored at 1e-300.
@@ -621,42 +72,71 @@ fn lg(p: f64) -> f64 {
     p.max(1e-300).log10()
 }
 
+/// The naming settings of material index i (the seed the setup's `"diagnosed"` used).
+fn naming(s: &UqStudy, i: usize) -> NamingSettings {
+    NamingSettings { seed: s.seed.wrapping_add(7919 * i as u64), ..s.strength.naming.clone() }
+}
+
+/// Fits, weighs and propagates every strength model of the study.
+pub fn forms(s: &UqStudy, path: &std::path::Path, shared: &Shared, tick: &(dyn Fn() + Sync)) -> Result<Vec<Form>> {
+    let specs = s.specs();
+    let setups: Vec<Setup> = specs.iter().map(|spec| Setup::new(s, path, spec, &s.contact.averaging, shared)).collect::<Result<_>>()?;
+    let order = s.order();
+    let lpd: Vec<[Vec<f64>; 2]> = if setups.len() > 1 {
+        setups
+            .iter()
+            .map(|st| -> Result<[Vec<f64>; 2]> {
+                let f = |j: usize| crate::discrepancy::workflow::cv_scores(&st.spec, &st.materials[j].sample, &naming(s, order[j]), &st.materials[j].model.key);
+                Ok([f(0)?, f(1)?])
+            })
+            .collect::<Result<_>>()?
+    } else {
+        vec![[Vec::new(), Vec::new()]]
+    };
+    let pooled: Vec<Vec<f64>> = lpd.iter().map(|l| l[0].iter().chain(&l[1]).copied().collect()).collect();
+    let (w, wp) = if setups.len() > 1 { (crate::strength::weights::stacking(&pooled)?, crate::strength::weights::pseudo_bma(&pooled)?) } else { (vec![1.0], vec![1.0]) };
+    let mut out = Vec::new();
+    for (((setup, lpd), weight), weight_pbma) in setups.into_iter().zip(lpd).zip(w).zip(wp) {
+        let prop = propagate(&setup, &s.propagation, s.seed, tick)?;
+        out.push(Form { setup, prop, lpd, weight, weight_pbma });
+    }
+    Ok(out)
+}
+
 /// Runs the study.
 pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<RunSummary> {
     let clock = RunClock::start();
-    let chain = s.prepare(&loaded.path)?;
+    s.validate(&loaded.path.display().to_string())?;
+    let shared = Shared::new(s, &loaded.path)?;
+    let specs = s.specs();
+    let sens_sizes: Vec<usize> = (0..5).rev().map(|k| (s.sensitivity.n >> k).max(64)).collect();
+    let pb = progress_bar((specs.len() * s.propagation.replicates + sens_sizes.len() + 3) as u64, opts.progress, crate::runner::PROGRESS_COUNT);
+    pb.set_message("strength models and Monte Carlo propagation");
+    let forms = forms(s, &loaded.path, &shared, &|| pb.inc(1))?;
     let mut inputs = vec![InputFile::hash(&loaded.path)?];
-    for m in &chain.materials {
+    for m in &forms[0].setup.materials {
         inputs.push(InputFile::hash(&m.path)?);
     }
-    if let Dist::Spectrum { file, .. } = &s.impact.velocity {
+    if let crate::dist::Dist::Spectrum { file, .. } = &s.impact.velocity {
         inputs.push(InputFile::hash(&loaded.resolve(std::path::Path::new(file)))?);
     }
-    let sens_sizes: Vec<usize> = (0..5).rev().map(|k| (s.sensitivity.n >> k).max(64)).collect();
-    let pb = progress_bar((s.propagation.replicates + sens_sizes.len() + 2) as u64, opts.progress, crate::runner::PROGRESS_COUNT);
-    pb.set_message("Monte Carlo propagation");
-    let prop = propagate(&chain, &s.propagation, s.seed, &|| pb.inc(1))?;
 
     let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
-    let headline = write_headline(&mut dir, &chain, &prop)?;
-    write_convergence(&mut dir, &chain, &prop)?;
-    write_distributions(&mut dir, &chain, &prop)?;
-    write_breakage_vs_velocity(&mut dir, &chain, &prop, s.impact.velocity_range)?;
+    let headline = write_headline(&mut dir, &forms)?;
+    write_strength_models(&mut dir, &forms)?;
+    let primary = &forms[0];
+    write_convergence(&mut dir, &primary.setup, &primary.prop)?;
+    write_distributions(&mut dir, &primary.setup, &primary.prop)?;
+    write_breakage_vs_velocity(&mut dir, &primary.setup, &primary.prop, s.impact.velocity_range)?;
     pb.inc(1);
     pb.set_message("Sobol' indices");
-    let (final_indices, outputs) = write_sobol(&mut dir, &chain, s, &sens_sizes, &|| pb.inc(1))?;
-    write_inputs(&mut dir, &chain)?;
+    let (final_indices, outputs) = write_sobol(&mut dir, &primary.setup, s, &sens_sizes, &|| pb.inc(1))?;
+    write_inputs(&mut dir, &primary.setup)?;
     pb.set_message("averaging-domain alternatives");
-    let averaging = write_averaging(&mut dir, s, &loaded.path, &chain, &prop)?;
-    let varying = chain.varying();
-    let mut md = summary(s, &chain, &prop, &final_indices, &varying, &outputs, &headline);
-    if averaging.len() > chain.years.len() {
-        md.push_str("\n## Averaging domain of σ̄ (independent trials)\n\n| domain | horizon | P(candidate worse) | median P candidate | median P reference |\n|---|---|---|---|---|\n");
-        for (d, years, worse, se, a, b) in &averaging {
-            md.push_str(&format!("| {d} | {years} yr | {worse:.4} ± {se:.4} | {a:.2e} | {b:.2e} |\n"));
-        }
-        md.push_str("\nEvery domain whose outer limit is a multiple of the contact radius gives σ̄ = r·p0 in the crush test and in the impact alike, so r cancels between the Weibull scale and the impact stress: those domains give identical answers. Only a domain reaching the particle radius (σ̄ depends on a/R, which differs between the crush at break and a 5 m/s impact) changes them.\n");
-    }
+    let averaging = write_averaging(&mut dir, s, &loaded.path, &shared, &forms)?;
+    pb.inc(1);
+    let varying = primary.setup.varying(Mode::Split);
+    let md = summary(s, &forms, &final_indices, &varying, &outputs, &headline, &averaging);
     dir.write_bytes("summary.md", md.as_bytes())?;
     pb.set_message("figures");
     let mut failures = Vec::new();
@@ -664,154 +144,256 @@ pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<Ru
     record_figures(&mut dir, rendered, &mut failures);
     pb.inc(1);
     let mut evaluations = BTreeMap::new();
-    evaluations.insert("propagation_samples".to_string(), prop.count() as u64);
+    evaluations.insert("propagation_samples".to_string(), forms.iter().map(|f| f.prop.count() as u64).sum());
     evaluations.insert("sobol_model_runs".to_string(), sens_sizes.iter().map(|n| (n * (varying.len() + 2)) as u64).sum());
+    evaluations.insert("strength_draws".to_string(), forms.iter().map(|f| 2 * f.setup.materials[0].draws.len() as u64).sum());
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: headline.lines })
 }
 
-/// The study's domain and every `[model_form] averaging` alternative (each a rerun of the
-/// chain with its own Weibull fit, a quarter of the samples): P(candidate worse) and the
-/// medians, primary model, per horizon.
-#[allow(clippy::type_complexity)]
-fn write_averaging(dir: &mut ReportDir, s: &UqStudy, path: &std::path::Path, chain: &Chain, prop: &Propagated) -> Result<Vec<(String, f64, f64, f64, f64, f64)>> {
-    let mut rows = Vec::new();
-    let mut add = |c: &Chain, p: &Propagated, d: &AveragingDomain| {
-        for (h, &years) in c.years.iter().enumerate() {
-            let (a, b) = (c.slot(0, h, 0), c.slot(1, h, 0));
-            let (worse, se) = mean_se(&p.fraction_worse(a, b, p.blocks[0].len()));
-            rows.push((d.describe(), years, worse, se, crate::stats::interpolated_quantiles(p.values(a), &[0.5])[0], crate::stats::interpolated_quantiles(p.values(b), &[0.5])[0]));
-        }
-    };
-    add(chain, prop, &chain.domain);
-    for d in &s.model_form.averaging {
-        let mut alt = s.clone();
-        alt.contact.averaging = *d;
-        let c = alt.prepare(path)?;
-        let opts = Propagation { samples: (s.propagation.samples / 4).max(64 * s.propagation.replicates), ..s.propagation.clone() };
-        let p = propagate(&c, &opts, s.seed, &|| {})?;
-        add(&c, &p, d);
-    }
-    dir.write_table(
-        "averaging",
-        &mut table(vec![
-            scol("domain", rows.iter().map(|r| r.0.clone()).collect()),
-            fcol("years", rows.iter().map(|r| r.1).collect()),
-            fcol("p_candidate_worse", rows.iter().map(|r| r.2).collect()),
-            fcol("mc_se", rows.iter().map(|r| r.3).collect()),
-            fcol("median_p_candidate", rows.iter().map(|r| r.4).collect()),
-            fcol("median_p_reference", rows.iter().map(|r| r.5).collect()),
-        ])?,
-    )?;
-    Ok(rows)
+/// One row of the comparison: P(candidate worse) of a strength model (or the average) under a
+/// damage model at a horizon, with the medians of both materials.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    /// Strength model name, or `model-averaged`.
+    pub strength: String,
+    /// Damage model.
+    pub damage: DamageModel,
+    /// Horizon (years).
+    pub years: f64,
+    /// P(candidate breaks more).
+    pub worse: f64,
+    /// Its Monte Carlo standard error.
+    pub se: f64,
+    /// Fraction of samples with equal P.
+    pub ties: f64,
+    /// Median P of candidate and reference.
+    pub median: [f64; 2],
+    /// 5 % and 95 % quantiles of P, candidate and reference.
+    pub band: [(f64, f64); 2],
 }
 
-impl Propagated {
-    /// Every sample.
-    pub fn all(&self) -> impl Iterator<Item = &Evaluated> {
-        self.blocks.iter().flatten()
-    }
-
-    /// Number of samples.
-    pub fn count(&self) -> usize {
-        self.blocks.iter().map(|b| b.len()).sum()
-    }
-
-    /// P at `slot` over every sample.
-    pub fn values(&self, slot: usize) -> Vec<f64> {
-        self.all().map(|e| e.p[slot]).collect()
-    }
-
-    /// Per block, the fraction of its first `first` samples in which the candidate's P (slot
-    /// `a`) exceeds the reference's (slot `b`).
-    pub fn fraction_worse(&self, a: usize, b: usize, first: usize) -> Vec<f64> {
-        self.blocks.iter().map(|bl| bl[..first.min(bl.len())].iter().filter(|e| e.p[a] > e.p[b]).count() as f64 / first.min(bl.len()) as f64).collect()
-    }
-}
-
-/// The headline lines and, per model and horizon, (model, years, P(candidate worse), its se,
-/// fraction of ties, median P of candidate and reference).
+/// The headline lines and every comparison row.
 pub struct Headline {
-    /// Printed lines (primary model).
+    /// Printed lines.
     pub lines: Vec<String>,
-    /// Per model and horizon.
-    pub rows: Vec<(DamageModel, f64, f64, f64, f64, f64, f64)>,
+    /// Per strength model (then `model-averaged`), damage model and horizon.
+    pub rows: Vec<Row>,
 }
 
-fn write_headline(dir: &mut ReportDir, chain: &Chain, prop: &Propagated) -> Result<Headline> {
-    let names = [&chain.materials[0].label, &chain.materials[1].label];
-    let nb = prop.blocks[0].len();
-    let mut out = Headline { lines: Vec::new(), rows: Vec::new() };
-    let mut q_rows: (Vec<String>, Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
-    for (k, model) in chain.models.iter().enumerate() {
-        for (h, &years) in chain.years.iter().enumerate() {
-            let (a, b) = (chain.slot(0, h, k), chain.slot(1, h, k));
-            let (mean, se) = mean_se(&prop.fraction_worse(a, b, nb));
-            let ties = prop.all().filter(|e| e.p[a] == e.p[b]).count() as f64 / prop.count() as f64;
-            if k == 0 {
-                out.lines.push(format!("P({} breaks more than {} in {} yr) = {:.4} ± {:.4} (Monte Carlo se)", names[0], names[1], years, mean, se));
+/// The name of the averaged rows.
+pub const AVERAGED: &str = "model-averaged";
+
+fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
+    let st = &forms[0].setup;
+    let names = [&st.materials[0].model.label, &st.materials[1].model.label];
+    let mut rows = Vec::new();
+    let mut q_rows: (Vec<String>, Vec<String>, Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
+    let mut push_q = |strength: &str, damage: DamageModel, key: &str, years: f64, q: [f64; 3], se: f64, mean: f64| {
+        q_rows.0.push(strength.into());
+        q_rows.1.push(damage.name().into());
+        q_rows.2.push(key.into());
+        q_rows.3.push(years);
+        q_rows.4.push(q[0]);
+        q_rows.5.push(q[1]);
+        q_rows.6.push(se);
+        q_rows.7.push(q[2]);
+        q_rows.8.push(mean);
+    };
+    for (k, &damage) in st.models.iter().enumerate() {
+        for (h, &years) in st.years.iter().enumerate() {
+            let (a, b) = (st.slot(0, h, k), st.slot(1, h, k));
+            for f in forms {
+                let nb = f.prop.blocks[0].n;
+                let (worse, se) = mean_se(&f.prop.fraction_worse(a, b, nb));
+                let mut median = [0.0; 2];
+                let mut band = [(0.0, 0.0); 2];
+                for (j, slot) in [a, b].into_iter().enumerate() {
+                    let all = f.prop.values(slot);
+                    let mean = all.iter().sum::<f64>() / all.len() as f64;
+                    let q = interpolated_quantiles(all, &[0.05, 0.5, 0.95]);
+                    let block_medians: Vec<f64> = (0..f.prop.blocks.len()).map(|bi| interpolated_quantiles(f.prop.block_values(bi, slot), &[0.5])[0]).collect();
+                    median[j] = q[1];
+                    band[j] = (q[0], q[2]);
+                    push_q(&f.setup.spec.name(), damage, &st.materials[j].model.key, years, [q[0], q[1], q[2]], mean_se(&block_medians).1, mean);
+                }
+                rows.push(Row { strength: f.setup.spec.name(), damage, years, worse, se, ties: f.prop.ties(a, b), median, band });
             }
-            let mut medians = [0.0; 2];
-            for j in 0..2 {
-                let slot = chain.slot(j, h, k);
-                let all = prop.values(slot);
-                let block_medians: Vec<f64> = prop.blocks.iter().map(|bl| crate::stats::interpolated_quantiles(bl.iter().map(|e| e.p[slot]).collect(), &[0.5])[0]).collect();
-                let mean_p = all.iter().sum::<f64>() / all.len() as f64;
-                let q = crate::stats::interpolated_quantiles(all, &[0.05, 0.5, 0.95]);
-                medians[j] = q[1];
-                q_rows.0.push(model.name().into());
-                q_rows.1.push(chain.materials[j].key.clone());
-                q_rows.2.push(years);
-                q_rows.3.push(q[0]);
-                q_rows.4.push(q[1]);
-                q_rows.5.push(mean_se(&block_medians).1);
-                q_rows.6.push(q[2]);
-                q_rows.7.push(mean_p);
+            if forms.len() > 1 {
+                // The weighted mixture of the models' samples.
+                let worse: f64 = forms.iter().zip(&rows[rows.len() - forms.len()..]).map(|(f, r)| f.weight * r.worse).sum();
+                let se = forms.iter().zip(&rows[rows.len() - forms.len()..]).map(|(f, r)| (f.weight * r.se).powi(2)).sum::<f64>().sqrt();
+                let ties = forms.iter().zip(&rows[rows.len() - forms.len()..]).map(|(f, r)| f.weight * r.ties).sum();
+                let mut median = [0.0; 2];
+                let mut band = [(0.0, 0.0); 2];
+                for (j, slot) in [a, b].into_iter().enumerate() {
+                    let pooled = |block: Option<usize>| -> Vec<(f64, f64)> {
+                        forms
+                            .iter()
+                            .flat_map(|f| {
+                                let v = match block {
+                                    Some(bi) => f.prop.block_values(bi, slot),
+                                    None => f.prop.values(slot),
+                                };
+                                let w = f.weight / v.len() as f64;
+                                v.into_iter().map(move |x| (x, w))
+                            })
+                            .filter(|x| x.1 > 0.0)
+                            .collect()
+                    };
+                    let all = pooled(None);
+                    let mean = all.iter().map(|(x, w)| x * w).sum::<f64>();
+                    let q = weighted_quantiles(all, &[0.05, 0.5, 0.95]);
+                    let block_medians: Vec<f64> = (0..forms[0].prop.blocks.len()).map(|bi| weighted_quantiles(pooled(Some(bi)), &[0.5])[0]).collect();
+                    median[j] = q[1];
+                    band[j] = (q[0], q[2]);
+                    push_q(AVERAGED, damage, &st.materials[j].model.key, years, [q[0], q[1], q[2]], mean_se(&block_medians).1, mean);
+                }
+                rows.push(Row { strength: AVERAGED.into(), damage, years, worse, se, ties, median, band });
             }
-            out.rows.push((*model, years, mean, se, ties, medians[0], medians[1]));
+        }
+    }
+    // Printed lines: the primary damage model, every horizon.
+    let mut lines = Vec::new();
+    let primary = st.models[0];
+    for &years in &st.years {
+        let of = |name: &str| rows.iter().find(|r| r.strength == name && r.damage == primary && r.years == years);
+        let title = format!("P({} breaks more than {} in {} yr)", names[0], names[1], years);
+        let n = forms[0].prop.count();
+        if forms.len() == 1 {
+            if let Some(r) = of(&forms[0].setup.spec.name()) {
+                lines.push(format!("{title} = {} (Monte Carlo se; strength model: {})", pm(r.worse, r.se, n), r.strength));
+            }
+        } else {
+            if let Some(r) = of(AVERAGED) {
+                let w: Vec<String> = forms.iter().map(|f| format!("{} {:.3}", f.setup.spec.name(), f.weight)).collect();
+                lines.push(format!("{title} = {} (Monte Carlo se; averaged over the strength models with stacking weights {})", pm(r.worse, r.se, n), w.join(", ")));
+            }
+            let per: Vec<String> = forms.iter().filter_map(|f| of(&f.setup.spec.name()).map(|r| format!("{} {}", r.strength, pm(r.worse, r.se, n)))).collect();
+            lines.push(format!("    per strength model: {}", per.join("; ")));
         }
     }
     dir.write_table(
         "materials",
         &mut table(vec![
             scol("role", vec!["candidate".into(), "reference".into()]),
-            scol("key", chain.materials.iter().map(|m| m.key.clone()).collect()),
-            scol("label", chain.materials.iter().map(|m| m.label.clone()).collect()),
-            ucol("crush_particles", chain.materials.iter().map(|m| m.fit.0 as u64).collect()),
-            fcol("weibull_m_mle", chain.materials.iter().map(|m| m.fit.1).collect()),
-            fcol("weibull_scale_mle_pa", chain.materials.iter().map(|m| m.fit.2).collect()),
-            fcol("impact_diameter_m", chain.materials.iter().map(|m| m.sphere.diameter).collect()),
+            scol("key", st.materials.iter().map(|m| m.model.key.clone()).collect()),
+            scol("label", st.materials.iter().map(|m| m.model.label.clone()).collect()),
+            ucol("crush_particles", st.materials.iter().map(|m| m.sample.strength.len() as u64).collect()),
+            scol("population", st.materials.iter().map(|m| m.model.population.source.clone()).collect()),
+            ucol("population_particles", st.materials.iter().map(|m| m.model.population.len() as u64).collect()),
+            fcol("reference_diameter_m", st.materials.iter().map(|m| m.model.sphere.diameter).collect()),
+            scol("primary_strength_model", vec![st.spec.name(); 2]),
         ])?,
     )?;
-    let r = &out.rows;
     dir.write_table(
         "comparison",
         &mut table(vec![
-            scol("model", r.iter().map(|x| x.0.name().to_string()).collect()),
-            fcol("years", r.iter().map(|x| x.1).collect()),
-            fcol("p_candidate_worse", r.iter().map(|x| x.2).collect()),
-            fcol("mc_se", r.iter().map(|x| x.3).collect()),
-            fcol("ties", r.iter().map(|x| x.4).collect()),
+            scol("strength_model", rows.iter().map(|x| x.strength.clone()).collect()),
+            scol("model", rows.iter().map(|x| x.damage.name().to_string()).collect()),
+            fcol("years", rows.iter().map(|x| x.years).collect()),
+            fcol("p_candidate_worse", rows.iter().map(|x| x.worse).collect()),
+            fcol("mc_se", rows.iter().map(|x| x.se).collect()),
+            fcol("ties", rows.iter().map(|x| x.ties).collect()),
         ])?,
     )?;
     dir.write_table(
         "breakage",
-        &mut table(vec![scol("model", q_rows.0), scol("material", q_rows.1), fcol("years", q_rows.2), fcol("q05", q_rows.3), fcol("median", q_rows.4), fcol("median_mc_se", q_rows.5), fcol("q95", q_rows.6), fcol("mean", q_rows.7)])?,
+        &mut table(vec![
+            scol("strength_model", q_rows.0),
+            scol("model", q_rows.1),
+            scol("material", q_rows.2),
+            fcol("years", q_rows.3),
+            fcol("q05", q_rows.4),
+            fcol("median", q_rows.5),
+            fcol("median_mc_se", q_rows.6),
+            fcol("q95", q_rows.7),
+            fcol("mean", q_rows.8),
+        ])?,
     )?;
-    Ok(out)
+    Ok(Headline { lines, rows })
 }
 
-/// Convergence of P(candidate worse), primary model, every horizon, on the first k samples of
+/// `strength_models.csv` (every model's effects and parameters per material, with the largest
+/// correlation between the effect draws and the base draws) and `weights.csv`.
+fn write_strength_models(dir: &mut ReportDir, forms: &[Form]) -> Result<()> {
+    let mut t: (Vec<String>, Vec<String>, Vec<String>, Vec<String>, Vec<u64>, Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
+    for f in forms {
+        for m in &f.setup.materials {
+            let model = &m.model;
+            let corr = split_correlation(m);
+            for p in summarise(&model.fit, &m.draws) {
+                t.0.push(f.setup.spec.name());
+                t.1.push(model.key.clone());
+                t.2.push(crate::strength::fit::names(model.fit.effects()));
+                t.3.push(model.population.source.clone());
+                t.4.push(model.population.len() as u64);
+                t.5.push(p.name);
+                t.6.push(p.estimate);
+                t.7.push(p.q05);
+                t.8.push(p.q95);
+                t.9.push(corr);
+            }
+        }
+    }
+    dir.write_table(
+        "strength_models",
+        &mut table(vec![
+            scol("strength_model", t.0),
+            scol("material", t.1),
+            scol("effects", t.2),
+            scol("population", t.3),
+            ucol("population_particles", t.4),
+            scol("parameter", t.5),
+            fcol("mle", t.6),
+            fcol("q05", t.7),
+            fcol("q95", t.8),
+            fcol("max_abs_correlation_effects_vs_base", t.9),
+        ])?,
+    )?;
+    let elpd = |f: &Form, j: usize| if f.lpd[j].is_empty() { f64::NAN } else { f.lpd[j].iter().sum::<f64>() };
+    dir.write_table(
+        "weights",
+        &mut table(vec![
+            scol("strength_model", forms.iter().map(|f| f.setup.spec.name()).collect()),
+            scol("effects_candidate", forms.iter().map(|f| crate::strength::fit::names(f.setup.materials[0].model.fit.effects())).collect()),
+            scol("effects_reference", forms.iter().map(|f| crate::strength::fit::names(f.setup.materials[1].model.fit.effects())).collect()),
+            fcol("elpd_candidate", forms.iter().map(|f| elpd(f, 0)).collect()),
+            fcol("elpd_reference", forms.iter().map(|f| elpd(f, 1)).collect()),
+            fcol("elpd", forms.iter().map(|f| elpd(f, 0) + elpd(f, 1)).collect()),
+            fcol("weight_stacking", forms.iter().map(|f| f.weight).collect()),
+            fcol("weight_pseudo_bma", forms.iter().map(|f| f.weight_pbma).collect()),
+        ])?,
+    )
+}
+
+/// The largest |correlation| between an effect's β draws and the base (μ_c, ln m) draws — how
+/// far the split sampling of the Sobol' indices is from the joint draws (0 without effects).
+fn split_correlation(m: &super::setup::Material) -> f64 {
+    let k = m.model.linear().len();
+    let centre = &m.model.fit.centre;
+    let base: [Vec<f64>; 2] = [
+        m.draws.iter().map(|d| d.mu + (0..k).map(|l| d.beta[l] * centre[l]).sum::<f64>()).collect(),
+        m.draws.iter().map(|d| d.shape.ln()).collect(),
+    ];
+    (0..k).flat_map(|l| {
+        let b: Vec<f64> = m.draws.iter().map(|d| d.beta[l]).collect();
+        base.iter().map(move |x| crate::stats::pearson(x, &b).0.abs()).collect::<Vec<_>>()
+    })
+    .fold(0.0, f64::max)
+}
+
+/// Convergence of P(candidate worse), primary models, every horizon, on the first k samples of
 /// every block (k doubling from 16).
-fn write_convergence(dir: &mut ReportDir, chain: &Chain, prop: &Propagated) -> Result<()> {
-    let nb = prop.blocks[0].len();
+fn write_convergence(dir: &mut ReportDir, st: &Setup, prop: &Propagated) -> Result<()> {
+    let nb = prop.blocks[0].n;
     let mut conv: (Vec<f64>, Vec<u64>, Vec<f64>, Vec<f64>) = Default::default();
     let mut k = 16usize.min(nb);
     loop {
-        for (h, &years) in chain.years.iter().enumerate() {
-            let (m, se) = mean_se(&prop.fraction_worse(chain.slot(0, h, 0), chain.slot(1, h, 0), k));
+        for (h, &years) in st.years.iter().enumerate() {
+            let (m, se) = mean_se(&prop.fraction_worse(st.slot(0, h, 0), st.slot(1, h, 0), k));
             conv.0.push(years);
             conv.1.push((k * prop.blocks.len()) as u64);
             conv.2.push(m);
@@ -825,11 +407,11 @@ fn write_convergence(dir: &mut ReportDir, chain: &Chain, prop: &Propagated) -> R
     dir.write_table("convergence", &mut table(vec![fcol("years", conv.0), ucol("samples", conv.1), fcol("p_candidate_worse", conv.2), fcol("mc_se", conv.3)])?)
 }
 
-/// Densities of log₁₀ P per material and horizon (primary model), 60 bins over the pooled range.
-fn write_distributions(dir: &mut ReportDir, chain: &Chain, prop: &Propagated) -> Result<()> {
+/// Densities of log₁₀ P per material and horizon (primary models), 60 bins over the pooled range.
+fn write_distributions(dir: &mut ReportDir, st: &Setup, prop: &Propagated) -> Result<()> {
     let mut hist: (Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
-    for (h, &years) in chain.years.iter().enumerate() {
-        let vals: Vec<Vec<f64>> = (0..2).map(|j| prop.values(chain.slot(j, h, 0)).into_iter().map(lg).collect()).collect();
+    for (h, &years) in st.years.iter().enumerate() {
+        let vals: Vec<Vec<f64>> = (0..2).map(|j| prop.values(st.slot(j, h, 0)).into_iter().map(lg).collect()).collect();
         let lo = vals.iter().flatten().cloned().fold(f64::INFINITY, f64::min).max(-30.0);
         let hi = vals.iter().flatten().cloned().fold(f64::NEG_INFINITY, f64::max).max(lo + 1e-6);
         let bins = 60;
@@ -840,7 +422,7 @@ fn write_distributions(dir: &mut ReportDir, chain: &Chain, prop: &Propagated) ->
                 c[((x - lo) / width).floor().clamp(0.0, bins as f64 - 1.0) as usize] += 1;
             }
             for (b, n) in c.iter().enumerate() {
-                hist.0.push(chain.materials[j].key.clone());
+                hist.0.push(st.materials[j].model.key.clone());
                 hist.1.push(years);
                 hist.2.push(lo + (b as f64 + 0.5) * width);
                 hist.3.push(*n as f64 / v.len() as f64 / width);
@@ -850,18 +432,33 @@ fn write_distributions(dir: &mut ReportDir, chain: &Chain, prop: &Propagated) ->
     dir.write_table("distributions", &mut table(vec![scol("material", hist.0), fcol("years", hist.1), fcol("log10_p", hist.2), fcol("density", hist.3)])?)
 }
 
-/// P_break vs velocity with its 90 % band (primary model) from up to 4000 samples' hazards:
-/// H(V) = H(1 m/s)·V^(2m/5).
-fn write_breakage_vs_velocity(dir: &mut ReportDir, chain: &Chain, prop: &Propagated, [vlo, vhi]: [f64; 2]) -> Result<()> {
-    let sub: Vec<&Evaluated> = prop.blocks.iter().flat_map(|b| b.iter().take(4000 / prop.blocks.len())).collect();
+/// P_break vs velocity with its 90 % band (primary models) from up to 4000 samples' inputs with
+/// the velocity replaced.
+fn write_breakage_vs_velocity(dir: &mut ReportDir, st: &Setup, prop: &Propagated, [vlo, vhi]: [f64; 2]) -> Result<()> {
+    let per_block = (4000 / prop.blocks.len()).max(1);
+    let xs: Vec<&[f64]> = (0..prop.blocks.len()).flat_map(|b| (0..per_block.min(prop.blocks[b].n)).map(move |i| prop.x(b, i))).collect();
+    let vi = st.velocity_input();
+    let grid: Vec<f64> = (0..48).map(|i| vlo * (vhi / vlo).powf(i as f64 / 47.0)).collect();
+    // Per velocity, every sample's P (all slots).
+    let per_v: Vec<Vec<Vec<f64>>> = grid
+        .par_iter()
+        .map(|&v| {
+            xs.iter()
+                .map(|x| {
+                    let mut x = x.to_vec();
+                    x[vi] = v;
+                    let mut p = vec![0.0; st.outputs()];
+                    st.evaluate_into(&x, Mode::Joint, &mut p).map(|_| p)
+                })
+                .collect::<Result<Vec<_>>>()
+        })
+        .collect::<Result<_>>()?;
     let mut vv: (Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
     for j in 0..2 {
-        for (h, &years) in chain.years.iter().enumerate() {
-            for i in 0..48 {
-                let v = vlo * (vhi / vlo).powf(i as f64 / 47.0);
-                let ps: Vec<f64> = sub.iter().map(|e| chain.p(chain.models[0], e.hazard[j].m, chain.ln_hazard(j, &e.hazard[j], v.ln()), years * e.per_year, e.gamma, h)).collect();
-                let q = crate::stats::interpolated_quantiles(ps, &[0.05, 0.5, 0.95]);
-                vv.0.push(chain.materials[j].key.clone());
+        for (h, &years) in st.years.iter().enumerate() {
+            for (i, &v) in grid.iter().enumerate() {
+                let q = interpolated_quantiles(per_v[i].iter().map(|p| p[st.slot(j, h, 0)]).collect(), &[0.05, 0.5, 0.95]);
+                vv.0.push(st.materials[j].model.key.clone());
                 vv.1.push(years);
                 vv.2.push(v);
                 vv.3.push(q[0]);
@@ -873,21 +470,19 @@ fn write_breakage_vs_velocity(dir: &mut ReportDir, chain: &Chain, prop: &Propaga
     dir.write_table("breakage_vs_velocity", &mut table(vec![scol("material", vv.0), fcol("years", vv.1), fcol("velocity_m_s", vv.2), fcol("q05", vv.3), fcol("median", vv.4), fcol("q95", vv.5)])?)
 }
 
-/// Sobol' indices of the primary model at the last horizon for every base size in `sizes`
-/// (the last is the study's n); returns the final indices and the output names.
-fn write_sobol(dir: &mut ReportDir, chain: &Chain, s: &UqStudy, sizes: &[usize], tick: &dyn Fn()) -> Result<(Vec<SobolIndices>, Vec<String>)> {
-    let h = chain.years.len() - 1;
-    let at = |j: usize, h: usize, k: usize| chain.slot(j, h, k);
-    let varying = chain.varying();
+/// Sobol' indices of the primary models at the last horizon for every base size in `sizes`
+/// (the last is the study's n; split sampling, so every effect parameter is an input); returns
+/// the final indices and the output names.
+fn write_sobol(dir: &mut ReportDir, st: &Setup, s: &UqStudy, sizes: &[usize], tick: &dyn Fn()) -> Result<(Vec<SobolIndices>, Vec<String>)> {
+    let h = st.years.len() - 1;
+    let (a, b) = (st.slot(0, h, 0), st.slot(1, h, 0));
+    let varying = st.varying(Mode::Split);
     let f = |u: &[f64]| -> Result<Vec<f64>> {
-        let e = chain.evaluate(u);
-        Ok(vec![lg(e.p[at(0, h, 0)]), lg(e.p[at(1, h, 0)]), e.p[at(0, h, 0)] - e.p[at(1, h, 0)]])
+        let (_, p) = st.evaluate(u, Mode::Split)?;
+        Ok(vec![lg(p[a]), lg(p[b]), p[a] - p[b]])
     };
-    let outputs = vec![
-        format!("log10_p_{}", chain.materials[0].key),
-        format!("log10_p_{}", chain.materials[1].key),
-        format!("p_{}_minus_p_{}", chain.materials[0].key, chain.materials[1].key),
-    ];
+    let keys = [&st.materials[0].model.key, &st.materials[1].model.key];
+    let outputs = vec![format!("log10_p_{}", keys[0]), format!("log10_p_{}", keys[1]), format!("p_{}_minus_p_{}", keys[0], keys[1])];
     let mut sob: (Vec<String>, Vec<u64>, Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<String>) = Default::default();
     let mut final_indices: Vec<SobolIndices> = Vec::new();
     for &n in sizes {
@@ -896,7 +491,7 @@ fn write_sobol(dir: &mut ReportDir, chain: &Chain, s: &UqStudy, sizes: &[usize],
             for (k, &i) in varying.iter().enumerate() {
                 sob.0.push(outputs[o].clone());
                 sob.1.push(n as u64);
-                sob.2.push(chain.inputs[i].name.clone());
+                sob.2.push(st.inputs[i].name.clone());
                 sob.3.push(si.first[k]);
                 sob.4.push(si.first_ci[k].0);
                 sob.5.push(si.first_ci[k].1);
@@ -929,19 +524,22 @@ fn write_sobol(dir: &mut ReportDir, chain: &Chain, s: &UqStudy, sizes: &[usize],
     Ok((final_indices, outputs))
 }
 
-/// The inputs' 5/50/95 % quantiles (Weibull draws: of the modulus m).
-fn write_inputs(dir: &mut ReportDir, chain: &Chain) -> Result<()> {
+/// The primary model's inputs with their 5/50/95 % quantiles (joint strength draws: of the
+/// modulus m).
+fn write_inputs(dir: &mut ReportDir, st: &Setup) -> Result<()> {
     let mut it: (Vec<String>, Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
-    for i in &chain.inputs {
+    for i in &st.inputs {
         it.0.push(i.name.clone());
-        it.1.push(i.unit.clone());
-        // Weibull draws: the quantiles of the modulus m over the draws.
-        let qs = match &i.marginal {
-            Marginal::Weibull(d) => {
-                let q = crate::stats::interpolated_quantiles(d.iter().map(|w| w.shape).collect(), &[0.05, 0.5, 0.95]);
+        let qs = match (&i.marginal, st.materials.iter().find(|m| i.name == format!("strength_{}", m.model.key))) {
+            (Marginal::Index(_), Some(m)) => {
+                let q = interpolated_quantiles(m.draws.iter().map(|d| d.shape).collect(), &[0.05, 0.5, 0.95]);
+                it.1.push("Weibull m of the joint draws".into());
                 [q[0], q[1], q[2]]
             }
-            m => [0.05, 0.5, 0.95].map(|u| m.quantile(u)),
+            (mg, _) => {
+                it.1.push(i.unit.clone());
+                [0.05, 0.5, 0.95].map(|u| mg.quantile(u))
+            }
         };
         it.2.push(qs[0]);
         it.3.push(qs[1]);
@@ -950,48 +548,241 @@ fn write_inputs(dir: &mut ReportDir, chain: &Chain) -> Result<()> {
     dir.write_table("inputs", &mut table(vec![scol("input", it.0), scol("unit", it.1), fcol("q05", it.2), fcol("median", it.3), fcol("q95", it.4)])?)
 }
 
-/// The plain-language summary.
-fn summary(s: &UqStudy, chain: &Chain, prop: &Propagated, ind: &[SobolIndices], varying: &[usize], outputs: &[String], headline: &Headline) -> String {
-    let [a, b] = [&chain.materials[0], &chain.materials[1]];
-    let mut md = format!("# {} against {}: breakage over {} years, with its uncertainty\n\n", a.label, b.label, chain.years.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" and "));
+/// One row of `averaging.csv`: domain, horizon, P(candidate worse), se, medians.
+type AveragingRow = (String, f64, f64, f64, f64, f64);
+
+/// The study's domain and every `[model_form] averaging` alternative, each a rerun of the
+/// chain with the deliverable's strength model (its own Weibull fit) and a quarter of the
+/// samples: P(candidate worse) and the medians, primary damage model, per horizon.
+fn write_averaging(dir: &mut ReportDir, s: &UqStudy, path: &std::path::Path, shared: &Shared, forms: &[Form]) -> Result<Vec<AveragingRow>> {
+    let mut rows = Vec::new();
+    let mut add = |c: &Setup, p: &Propagated, d: &AveragingDomain| {
+        for (h, &years) in c.years.iter().enumerate() {
+            let (a, b) = (c.slot(0, h, 0), c.slot(1, h, 0));
+            let (worse, se) = mean_se(&p.fraction_worse(a, b, p.blocks[0].n));
+            rows.push((d.describe(), years, worse, se, interpolated_quantiles(p.values(a), &[0.5])[0], interpolated_quantiles(p.values(b), &[0.5])[0]));
+        }
+    };
+    let deliverable = StrengthSpec::default();
+    let opts = Propagation { samples: (s.propagation.samples / 4).max(64 * s.propagation.replicates), ..s.propagation.clone() };
+    let own;
+    let (bc, bp) = match forms.iter().find(|f| f.setup.spec == deliverable) {
+        Some(f) => (&f.setup, &f.prop),
+        None => {
+            let c = Setup::new(s, path, &deliverable, &s.contact.averaging, shared)?;
+            let p = propagate(&c, &opts, s.seed, &|| {})?;
+            own = (c, p);
+            (&own.0, &own.1)
+        }
+    };
+    add(bc, bp, &s.contact.averaging);
+    for d in &s.model_form.averaging {
+        let c = Setup::new(s, path, &deliverable, d, shared)?;
+        let p = propagate(&c, &opts, s.seed, &|| {})?;
+        add(&c, &p, d);
+    }
+    dir.write_table(
+        "averaging",
+        &mut table(vec![
+            scol("domain", rows.iter().map(|r| r.0.clone()).collect()),
+            scol("strength_model", vec![deliverable.name(); rows.len()]),
+            fcol("years", rows.iter().map(|r| r.1).collect()),
+            fcol("p_candidate_worse", rows.iter().map(|r| r.2).collect()),
+            fcol("mc_se", rows.iter().map(|r| r.3).collect()),
+            fcol("median_p_candidate", rows.iter().map(|r| r.4).collect()),
+            fcol("median_p_reference", rows.iter().map(|r| r.5).collect()),
+        ])?,
+    )?;
+    Ok(rows)
+}
+
+/// "the deliverable's model" or "the `x` model".
+fn model_phrase(name: &str) -> String {
+    if name == "deliverable" { "the deliverable's model (no effects)".into() } else { format!("the `{name}` model") }
+}
+
+/// The better particle for P(candidate worse) = p, and how sure.
+fn verdict(p: f64, names: [&str; 2]) -> String {
+    let (better, q) = if p > 0.5 { (names[1], p) } else { (names[0], 1.0 - p) };
+    if p == 0.5 {
+        return "neither particle is better".into();
+    }
+    let sure = if q >= 0.99 {
+        "with near certainty"
+    } else if q >= 0.9 {
+        "with high probability"
+    } else if q >= 0.7 {
+        "more likely than not"
+    } else {
+        "but the answer is close to a coin toss"
+    };
+    format!("{better} is the better particle, {sure} ({q:.3})")
+}
+
+/// The effects each material carries under a model, in words.
+fn effects_phrase(f: &Form) -> String {
+    f.setup.materials.iter().map(|m| format!("{}: {}", m.model.label, crate::strength::fit::names(m.model.fit.effects()).replace('+', ", "))).collect::<Vec<_>>().join("; ")
+}
+
+/// The plain-language summary; every sentence with a number is built from the numbers it
+/// states.
+fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying: &[usize], outputs: &[String], headline: &Headline, averaging: &[AveragingRow]) -> String {
+    let st = &forms[0].setup;
+    let [a, b] = [&st.materials[0].model.label, &st.materials[1].model.label];
+    let names = [a.as_str(), b.as_str()];
+    let primary_damage = st.models[0];
+    let first_h = st.years[0];
+    let row = |strength: &str, damage: DamageModel, years: f64| headline.rows.iter().find(|r| r.strength == strength && r.damage == damage && r.years == years);
+    let mut md = format!("# {a} against {b}: breakage over {} years, with its uncertainty\n\n", st.years.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" and "));
     md.push_str(&format!(
-        "{} Monte Carlo samples ({:?}, {} independent blocks for the standard errors) of every uncertain input; damage model of the headline: {}.\n\n",
-        prop.count(),
+        "{} Monte Carlo samples per strength model ({:?}, {} independent blocks for the standard errors) of every uncertain input; {} strength model{} compared; damage model of the headline: {}. **The crush data are synthetic stand-ins** (datasets/README.md).\n\n",
+        forms[0].prop.count(),
         s.propagation.method,
-        prop.blocks.len(),
-        chain.models[0].label()
+        forms[0].prop.blocks.len(),
+        forms.len(),
+        if forms.len() == 1 { "" } else { "s" },
+        primary_damage.label()
     ));
     md.push_str("## Headline\n\n");
     for l in &headline.lines {
-        md.push_str(&format!("* {l}\n"));
+        md.push_str(&format!("* {}\n", l.trim()));
     }
-    md.push_str("\n| material | horizon | median P | 90 % band |\n|---|---|---|---|\n");
-    for j in 0..2 {
-        for (h, years) in chain.years.iter().enumerate() {
-            let q = crate::stats::interpolated_quantiles(prop.values(chain.slot(j, h, 0)), &[0.05, 0.5, 0.95]);
-            md.push_str(&format!("| {} | {} yr | {:.2e} | {:.1e} – {:.1e} |\n", chain.materials[j].label, years, q[1], q[0], q[2]));
+    md.push_str(&format!("\n| strength model | effects | weight (stacking) | {} |\n|---|---|---|{}\n", st.years.iter().map(|y| format!("P({a} worse), {y} yr")).collect::<Vec<_>>().join(" | "), "---|".repeat(st.years.len())));
+    let n = forms[0].prop.count();
+    for f in forms {
+        let cells: Vec<String> = st.years.iter().map(|&y| row(&f.setup.spec.name(), primary_damage, y).map_or("–".into(), |r| pm(r.worse, r.se, n))).collect();
+        md.push_str(&format!("| {} | {} | {:.3} | {} |\n", f.setup.spec.name(), effects_phrase(f), f.weight, cells.join(" | ")));
+    }
+    if forms.len() > 1 {
+        let cells: Vec<String> = st.years.iter().map(|&y| row(AVERAGED, primary_damage, y).map_or("–".into(), |r| pm(r.worse, r.se, n))).collect();
+        md.push_str(&format!("| {AVERAGED} | | 1 | {} |\n", cells.join(" | ")));
+    }
+
+    // The question in plain words.
+    if forms.len() > 1 {
+        md.push_str(&format!("\n## Does accounting for the effects change which particle is better? ({first_h} yr, {})\n\n", primary_damage.label()));
+        let base = forms.iter().find(|f| f.setup.spec == StrengthSpec::default());
+        if let Some(r0) = base.and_then(|f| row(&f.setup.spec.name(), primary_damage, first_h)) {
+            md.push_str(&format!("Under {} {a} breaks more than {b} with probability {}: {}.\n", model_phrase("deliverable"), pm(r0.worse, r0.se, n), verdict(r0.worse, names)));
+            for f in forms.iter().filter(|f| f.setup.spec != StrengthSpec::default()) {
+                let Some(r) = row(&f.setup.spec.name(), primary_damage, first_h) else { continue };
+                let same = (r.worse > 0.5) == (r0.worse > 0.5);
+                md.push_str(&format!(
+                    "Under {} ({}), with probability {}: {}; accounting for these effects {} which particle is better.\n",
+                    model_phrase(&f.setup.spec.name()),
+                    effects_phrase(f),
+                    pm(r.worse, r.se, n),
+                    verdict(r.worse, names),
+                    if same { "does not change" } else { "changes" }
+                ));
+            }
+            if let Some(r) = row(AVERAGED, primary_damage, first_h) {
+                let best = forms.iter().max_by(|x, y| x.weight.total_cmp(&y.weight)).map(|f| (f.setup.spec.name(), f.weight)).unwrap_or_default();
+                md.push_str(&format!(
+                    "\nThe stacking weights (from the cross-validated log density of the {} crush tests) put {:.3} on {}. Averaged over the strength models, P({a} breaks more) = {}: {}.\n",
+                    forms[0].lpd[0].len() + forms[0].lpd[1].len(),
+                    best.1,
+                    model_phrase(&best.0),
+                    pm(r.worse, r.se, n),
+                    verdict(r.worse, names)
+                ));
+            }
+            // The deliverable's hypothesis: shape effects would favour the candidate.
+            let shape: Vec<&Form> = forms.iter().filter(|f| f.setup.materials.iter().any(|m| m.model.fit.effects().iter().any(|e| e.is_contact_geometry()))).collect();
+            if !shape.is_empty() {
+                md.push_str(&format!("\nThe deliverable expected that accounting for the particles' shape (roundness, non-sphericity) would make the lifetime model favour {a}. "));
+                let parts: Vec<String> = shape
+                    .iter()
+                    .filter_map(|f| row(&f.setup.spec.name(), primary_damage, first_h).map(|r| (f, r)))
+                    .map(|(f, r)| format!("under {} P({a} breaks less than {b}) = {:.3}", model_phrase(&f.setup.spec.name()), 1.0 - r.worse))
+                    .collect();
+                let favoured = shape.iter().filter_map(|f| row(&f.setup.spec.name(), primary_damage, first_h)).any(|r| r.worse < 0.5);
+                md.push_str(&format!(
+                    "With shape effects fitted to these data, {}, against {:.3} under the deliverable's model: the hypothesis is {}.\n",
+                    parts.join(", "),
+                    1.0 - r0.worse,
+                    if favoured { format!("supported ({a} is favoured)") } else if shape.iter().filter_map(|f| row(&f.setup.spec.name(), primary_damage, first_h)).all(|r| r.worse > r0.worse) { format!("not supported: the shape effects make {b} look even better") } else { format!("not supported: {b} stays the better particle") }
+                ));
+            }
         }
     }
-    md.push_str("\n## What drives it (Sobol' total indices, last horizon)\n\n");
+
+    md.push_str("\n## Breaking probability per strength model (median and 90 % band)\n\n| strength model | material | horizon | median P | 90 % band |\n|---|---|---|---|---|\n");
+    let strengths: Vec<String> = forms.iter().map(|f| f.setup.spec.name()).chain((forms.len() > 1).then(|| AVERAGED.to_string())).collect();
+    for name in &strengths {
+        for &y in &st.years {
+            if let Some(r) = row(name, primary_damage, y) {
+                for j in 0..2 {
+                    md.push_str(&format!("| {name} | {} | {y} yr | {:.2e} | {:.1e} – {:.1e} |\n", names[j], r.median[j], r.band[j].0, r.band[j].1));
+                }
+            }
+        }
+    }
+
+    md.push_str("\n## The strength models (per material: effects, modulus and 90 % range of the draws)\n\n| strength model | material | effects | m | other parameters |\n|---|---|---|---|---|\n");
+    for f in forms {
+        for m in &f.setup.materials {
+            let sums = summarise(&m.model.fit, &m.draws);
+            let other: Vec<String> = sums.iter().skip(2).map(|p| format!("{} = {:.3} [{:.3}, {:.3}]", p.name, p.estimate, p.q05, p.q95)).collect();
+            md.push_str(&format!("| {} | {} | {} | {:.2} [{:.2}, {:.2}] | {} |\n", f.setup.spec.name(), m.model.label, crate::strength::fit::names(m.model.fit.effects()), sums[0].estimate, sums[0].q05, sums[0].q95, other.join("; ")));
+        }
+    }
+
+    md.push_str(&format!("\n## What drives it (Sobol' total indices, last horizon, strength model `{}`)\n\n", st.spec.name()));
     for (o, si) in ind.iter().enumerate() {
         let mut order: Vec<usize> = (0..varying.len()).collect();
         order.sort_by(|&p, &q| si.total[q].total_cmp(&si.total[p]));
-        let top: Vec<String> = order.iter().take(3).map(|&k| format!("{} (S_T = {:.2}, S = {:.2})", chain.inputs[varying[k]].name, si.total[k], si.first[k])).collect();
+        let top: Vec<String> = order.iter().take(3).map(|&k| format!("{} (S_T = {:.2}, S = {:.2})", st.inputs[varying[k]].name, si.total[k], si.first[k])).collect();
         md.push_str(&format!("* `{}`: {}\n", outputs[o], top.join("; ")));
-        let neg: Vec<String> = si.negative().iter().map(|&k| chain.inputs[varying[k]].name.clone()).collect();
+        let neg: Vec<String> = si.negative().iter().map(|&k| st.inputs[varying[k]].name.clone()).collect();
         if !neg.is_empty() {
             md.push_str(&format!("  (negative estimates, i.e. zero within Monte Carlo error: {})\n", neg.join(", ")));
         }
     }
-    md.push_str("\n## Damage models side by side\n\n| model | horizon | P(candidate worse) | both equal | ");
-    md.push_str(&format!("median P {} | median P {} |\n|---|---|---|---|---|---|\n", a.label, b.label));
-    for &(model, years, worse, _, ties, med_a, med_b) in &headline.rows {
-        md.push_str(&format!("| {} | {} yr | {:.3} | {:.3} | {:.2e} | {:.2e} |\n", model.label(), years, worse, ties, med_a, med_b));
+
+    md.push_str(&format!("\n## Damage models side by side (strength model `{}`)\n\n| model | horizon | P({a} worse) | both equal | median P {a} | median P {b} |\n|---|---|---|---|---|---|\n", st.spec.name()));
+    let primary_rows: Vec<&Row> = headline.rows.iter().filter(|r| r.strength == st.spec.name()).collect();
+    for r in &primary_rows {
+        md.push_str(&format!("| {} | {} yr | {:.3} | {:.3} | {:.2e} | {:.2e} |\n", r.damage.label(), r.years, r.worse, r.ties, r.median[0], r.median[1]));
     }
-    md.push_str(&format!(
-        "\nCrush data: {} N = {} (m̂ = {:.2}, σ̂_θ = {:.0} MPa), {} N = {} (m̂ = {:.2}, σ̂_θ = {:.0} MPa); Weibull uncertainty by {:?}.\n",
-        a.label, a.fit.0, a.fit.1, a.fit.2 / 1e6, b.label, b.fit.0, b.fit.1, b.fit.2 / 1e6, s.weibull.uncertainty
-    ));
-    md.push_str("\nIndependent trials treat every impact as a new chance to break; Tavares–King treats a particle as a fixed flaw population that only breaks earlier when damage accumulates, so it gives far smaller probabilities; Vogel–Peukert has an energy threshold below which nothing breaks. The spread between the models is model-form uncertainty that more crush data cannot remove: it needs repeated-impact tests.\n");
+    md.push('\n');
+    md.push_str(&damage_sentences(st, &primary_rows, names));
+    md.push_str("The spread between the damage models is model-form uncertainty that more crush data cannot remove: it needs repeated-impact tests.\n");
+
+    if averaging.len() > st.years.len() {
+        md.push_str("\n## Averaging domain of σ̄ (deliverable's strength model, independent trials)\n\n| domain | horizon | P(candidate worse) | median P candidate | median P reference |\n|---|---|---|---|---|\n");
+        for (d, years, worse, se, pa, pb) in averaging {
+            md.push_str(&format!("| {d} | {years} yr | {worse:.4} ± {se:.4} | {pa:.2e} | {pb:.2e} |\n"));
+        }
+        md.push_str("\nEvery domain whose outer limit is a multiple of the contact radius gives σ̄ = r·p0 in the crush test and in the impact alike, so r cancels between the Weibull scale and the impact stress: those domains give identical answers up to Monte Carlo error. Only a domain reaching the particle radius (σ̄ depends on a/R, which differs between the crush at break and a 5 m/s impact) changes them.\n");
+    }
     md
+}
+
+/// How each damage model's medians compare with independent trials', generated from the rows
+/// (last horizon).
+fn damage_sentences(st: &Setup, rows: &[&Row], names: [&str; 2]) -> String {
+    let last = *st.years.last().unwrap_or(&1.0);
+    let Some(indep) = rows.iter().find(|r| r.damage == DamageModel::Independent && r.years == last) else { return String::new() };
+    let mut out = String::new();
+    for r in rows.iter().filter(|r| r.damage != DamageModel::Independent && r.years == last) {
+        let parts: Vec<String> = (0..2)
+            .map(|j| {
+                let (x, y) = (r.median[j], indep.median[j]);
+                let times = |r: f64| if r >= 1000.0 { format!("{r:.1e}") } else if r >= 10.0 { format!("{r:.0}") } else { format!("{r:.2}") };
+                let cmp = if x == 0.0 && y > 0.0 {
+                    "no breakage in most samples (below its energy threshold)".to_string()
+                } else if x > y {
+                    format!("larger median probabilities ({x:.2e} against {y:.2e}, × {})", times(x / y))
+                } else if x < y {
+                    format!("smaller median probabilities ({x:.2e} against {y:.2e}, × {})", times(x / y))
+                } else {
+                    format!("the same median probability ({x:.2e})")
+                };
+                format!("for {} {cmp}", names[j])
+            })
+            .collect();
+        out.push_str(&format!("Over {last} years {} gives, compared with independent trials, {}; under it P({} breaks more) = {:.3}.\n", r.damage.label(), parts.join(", and "), names[0], r.worse));
+    }
+    out
 }

@@ -96,3 +96,38 @@ pub fn run_in(dir: &Path, args: &[&str]) -> Out {
         stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
     }
 }
+
+/// Generator settings of one BL-16/30-like material with the chosen hidden physics
+/// (`q` roundness curvature exponent, `alpha` size exponent, `temperatures`/`softening` TOML
+/// fragments), `count` particles, `seed`.
+pub fn bl_generator(q: f64, alpha: f64, count: usize, seed: u64, temperature: &str, softening: &str) -> String {
+    format!(
+        r#"seed = {seed}
+platen = {{ youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }}
+[[material]]
+file = "hidden.csv"
+label = "BL 16/30"
+id_prefix = "BL"
+count = {count}
+temperature_c = {temperature}
+elastic = {{ youngs_modulus_pa = 112e9, poisson_ratio = 0.25 }}
+diameter = {{ mean = 0.00089, sd = 0.00014, min = 0.00059, max = 0.00119 }}
+roundness = {{ mean = 0.72, sd = 0.05 }}
+sphericity = {{ mean = 0.87, sd = 0.04 }}
+[material.nature]
+strength_shape = 22.0
+strength_scale_pa = 1.99e9
+reference_diameter_m = 0.0009
+size_exponent = {alpha}
+curvature_exponent = {q}
+{softening}
+[material.measurement]
+force_rel_sd = 0.01
+force_resolution_n = 0.1
+diameter_sd_m = 5e-6
+diameter_resolution_m = 1e-6
+shape_sd = 0.01
+shape_resolution = 0.001
+"#
+    )
+}

@@ -1,28 +1,17 @@
-//! Uncertain inputs of the UQ study: distributions declared in the study file, the DEM
-//! impact-velocity spectrum, and the joint sampling uncertainty of the Weibull parameters.
+//! Distributions declared in study files (`{ distribution = "…", … }`) and the DEM
+//! impact-velocity spectrum, as marginals sampled by their inverse CDF.
 //!
-//! Every marginal is sampled by its inverse CDF from a uniform u ∈ [0, 1], so plain Monte Carlo,
-//! Latin hypercube and Sobol' points, and the Saltelli designs of the sensitivity analysis all
-//! use the same code.
-//!
-//! Weibull parameters (m, σ_θ) of a material are one input: u picks one of K joint draws,
-//! either a **parametric bootstrap** of the MLE (the C1239 pivotal simulation: K samples of the
-//! same size from the fitted law, refitted; [`crate::weibull::Pivotal::draws`]) or the
-//! **posterior of a Bayesian fit** (prior ∝ 1/(m σ_θ), i.e. flat in ln m and ln σ_θ, evaluated on
-//! a 240 × 240 grid over ±7 asymptotic standard errors and sampled cell by cell with uniform
-//! jitter; [`bayesian_weibull_draws`]). Both describe the same sampling uncertainty and agree
-//! on large samples (`tests/verification/uq.rs`).
+//! Every marginal is sampled from a uniform u ∈ [0, 1], so plain Monte Carlo, Latin hypercube
+//! and Sobol' points, the Saltelli designs of the sensitivity analysis and the stratified
+//! particle populations of the strength model all use the same code.
 
 use std::path::Path;
 
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::io::{col_f64, col_str, read_table};
 use crate::params::{Param, Prior};
-use crate::weibull::{Weibull, WeibullFit};
 
 /// A distribution declared in a study file (`{ distribution = "…", … }`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -98,8 +87,8 @@ pub enum Marginal {
     Param(Param),
     /// A piecewise-linear quantile function (p ascending from 0, v ascending).
     Quantiles(Vec<(f64, f64)>),
-    /// One of K joint Weibull draws.
-    Weibull(Vec<Weibull>),
+    /// One of K joint draws (of a strength model's parameters): the value is the draw's index.
+    Index(usize),
 }
 
 impl Marginal {
@@ -108,7 +97,7 @@ impl Marginal {
         !matches!(self, Marginal::Fixed(_))
     }
 
-    /// The value at u ∈ [0, 1] (for Weibull draws: the draw's index).
+    /// The value at u ∈ [0, 1] (for joint draws: the draw's index ⌊u·K⌋).
     pub fn quantile(&self, u: f64) -> f64 {
         match self {
             Marginal::Fixed(v) => *v,
@@ -121,15 +110,7 @@ impl Marginal {
                 }
                 v0 + (v1 - v0) * (u - p0) / (p1 - p0)
             }
-            Marginal::Weibull(d) => ((u * d.len() as f64) as usize).min(d.len() - 1) as f64,
-        }
-    }
-
-    /// A Weibull draw at u.
-    pub fn weibull(&self, u: f64) -> Option<Weibull> {
-        match self {
-            Marginal::Weibull(d) => Some(d[self.quantile(u) as usize]),
-            _ => None,
+            Marginal::Index(k) => ((u * *k as f64) as usize).min(k - 1) as f64,
         }
     }
 }
@@ -232,56 +213,4 @@ pub fn read_spectrum(path: &Path, target: &str, row: u32) -> Result<Vec<(f64, f6
         q.push((*p, v));
     }
     Ok(q)
-}
-
-/// Source of the joint Weibull uncertainty.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum WeibullUncertainty {
-    /// Parametric bootstrap of the MLE (the C1239 pivotal simulation).
-    #[default]
-    Bootstrap,
-    /// Posterior of a Bayesian fit with prior ∝ 1/(m σ_θ).
-    Bayesian,
-}
-
-/// `k` posterior draws of (m, σ_θ) for `data` (prior ∝ 1/(m σ_θ)), seeded.
-pub fn bayesian_weibull_draws(data: &[f64], fit: &WeibullFit, k: usize, seed: u64) -> Result<Vec<Weibull>> {
-    const G: usize = 240;
-    let n = data.len() as f64;
-    let (m0, s0) = (fit.mle.shape, fit.mle.scale);
-    // Asymptotic sds: sd(ln m̂) ≈ 0.78/√n, sd(ln σ̂) ≈ 1.05/(m √n).
-    let (hw_m, hw_s) = (7.0 * 0.78 / n.sqrt(), 7.0 * 1.053 / (m0 * n.sqrt()));
-    let (lm0, ls0) = (m0.ln() - hw_m, s0.ln() - hw_s);
-    let (dm, ds) = (2.0 * hw_m / G as f64, 2.0 * hw_s / G as f64);
-    let mut logp = Vec::with_capacity(G * G);
-    for i in 0..G {
-        let m = (lm0 + (i as f64 + 0.5) * dm).exp();
-        for j in 0..G {
-            let s = (ls0 + (j as f64 + 0.5) * ds).exp();
-            // Flat in (ln m, ln σ): the Jacobian cancels the 1/(m σ) prior.
-            logp.push(Weibull { shape: m, scale: s }.log_likelihood(data));
-        }
-    }
-    let max = logp.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-    if !max.is_finite() {
-        return Err(Error::numerical("Bayesian Weibull fit", "the likelihood is not finite on the grid"));
-    }
-    let mut cum = Vec::with_capacity(logp.len());
-    let mut total = 0.0;
-    for l in &logp {
-        total += (l - max).exp();
-        cum.push(total);
-    }
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    Ok((0..k)
-        .map(|_| {
-            let u = rng.random::<f64>() * total;
-            let c = cum.partition_point(|&x| x < u).min(cum.len() - 1);
-            let (i, j) = (c / G, c % G);
-            let m = (lm0 + (i as f64 + rng.random::<f64>()) * dm).exp();
-            let s = (ls0 + (j as f64 + rng.random::<f64>()) * ds).exp();
-            Weibull { shape: m, scale: s }
-        })
-        .collect())
 }

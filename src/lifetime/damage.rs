@@ -1,5 +1,5 @@
 //! Damage models: from the single-impact breakage law of the lifetime chain to the breaking
-//! probability after N impacts (`../shared/reference/mechanics.md` §4).
+//! probability after N impacts.
 //!
 //! All three start from the same calibrated single-impact law. With the Hertz impact,
 //! σ̄ ∝ V^(2/5), so the Weibull law of σ̄ at break is a Weibull law of the specific impact
@@ -21,13 +21,17 @@
 //!   impacts iff its initial ratio exceeds x*(N, γ) ([`critical_ratio`]); hence
 //!   `P_N = 1 − exp(−H · x*^(−m/5))`. With γ → ∞ (no damage) x* → 1 and P_N → p: unlike
 //!   independent trials, a particle that survived the first impact survives identical later
-//!   ones (mechanics.md §4.1, caveat 2).
+//!   ones (the second caveat of independent trials: impacts at one velocity are not independent
+//!   chances for a particle whose flaws do not change).
+//!
+//! [`Law`] is one model at a fixed modulus m and impact count N with its constants
+//! precomputed: the hot path of a population's breakage, one evaluation per particle.
 //!
 //! Verified against hand-computed cases in the unit tests below.
 
 use serde::{Deserialize, Serialize};
 
-use crate::lifetime::breakage_from_hazard;
+use super::breakage_from_hazard;
 
 /// Which damage model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -77,8 +81,9 @@ impl VogelPeukert {
     /// The master curve through the Weibull-in-energy law of modulus `k = m/5` at 10 % and
     /// 63.2 % breakage (the threshold is kept ≥ 0).
     pub fn matched(k: f64) -> VogelPeukert {
+        // l1 = −ln 0.9 = 0.10536…; w1 = l1^(1/k) by exp/ln (one exp per call).
         let (l1, l2) = (-(0.9f64).ln(), 1.0);
-        let (w1, w2) = (l1.powf(1.0 / k), 1.0);
+        let (w1, w2) = ((l1.ln() / k).exp(), 1.0);
         let rate = (l2 - l1) / (w2 - w1);
         let threshold = (w1 - l1 / rate).max(0.0);
         // With the threshold clamped, pass through the 63.2 % point.
@@ -195,25 +200,76 @@ impl CriticalRatioTable {
 
     /// x*(N, γ) (γ clamped to the table).
     pub fn ratio(&self, gamma: f64) -> f64 {
+        self.ln_ratio(gamma).exp()
+    }
+
+    /// ln x*(N, γ), linear in γ between the table's points (γ clamped to the table).
+    pub fn ln_ratio(&self, gamma: f64) -> f64 {
         let g = &self.gamma;
         let k = g.partition_point(|&v| v <= gamma).clamp(1, g.len() - 1);
         let t = ((gamma - g[k - 1]) / (g[k] - g[k - 1])).clamp(0.0, 1.0);
-        (self.ln_x[k - 1] + t * (self.ln_x[k] - self.ln_x[k - 1])).exp()
+        self.ln_x[k - 1] + t * (self.ln_x[k] - self.ln_x[k - 1])
     }
 }
 
-/// P_N of a damage model from the single-impact hazard H = (W/W_θ)^(m/5) at modulus m;
-/// `vp` and `x_star` are the model's constants (ignored by the others).
-pub fn breakage(model: DamageModel, hazard: f64, m: f64, n: f64, vp: &VogelPeukert, x_star: f64) -> f64 {
-    match model {
-        DamageModel::Independent => breakage_from_hazard(hazard, n),
-        DamageModel::VogelPeukert => {
-            // w = W/W_θ = H^(5/m).
-            let w = hazard.powf(5.0 / m);
-            breakage_from_hazard(vp.hazard(w), n)
+/// One damage model at modulus m and N impacts, its constants precomputed. Independent trials
+/// and Tavares–King are both P_N = 1 − exp(−c H) (c = N, and c = x*^(−m/5)); Vogel–Peukert is
+/// linear in the energy above its threshold.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Law {
+    /// 1 − exp(−c H).
+    Scaled {
+        /// c = N (independent trials) or x*(N, γ)^(−m/5) (Tavares–King).
+        c: f64,
+    },
+    /// 1 − exp(−N f x W_θ (w − w_min)⁺) with w = H^(5/m).
+    VogelPeukert {
+        /// Impacts N.
+        n: f64,
+        /// The master curve in units of W_θ.
+        curve: VogelPeukert,
+        /// 5/m.
+        exponent: f64,
+        /// ln H below which w ≤ w_min (nothing breaks): (m/5) ln w_min.
+        ln_h_min: f64,
+    },
+}
+
+impl Law {
+    /// Model `model` at modulus `m` after `n` impacts; `ln_x_star` = ln x*(N, γ) (read by
+    /// Tavares–King only).
+    pub fn new(model: DamageModel, m: f64, n: f64, ln_x_star: f64) -> Law {
+        match model {
+            DamageModel::Independent => Law::Scaled { c: n },
+            DamageModel::VogelPeukert => {
+                let curve = VogelPeukert::matched(m / 5.0);
+                let ln_h_min = if curve.threshold > 0.0 { m / 5.0 * curve.threshold.ln() } else { f64::NEG_INFINITY };
+                Law::VogelPeukert { n, curve, exponent: 5.0 / m, ln_h_min }
+            }
+            DamageModel::TavaresKing => Law::Scaled { c: (-m / 5.0 * ln_x_star).exp() },
         }
-        DamageModel::TavaresKing => -(-hazard * x_star.powf(-m / 5.0)).exp_m1(),
     }
+
+    /// P_N for the single-impact hazard H = e^ln_h (both given: the caller has both).
+    #[inline(always)]
+    pub fn p(&self, h: f64, ln_h: f64) -> f64 {
+        match *self {
+            Law::Scaled { c } => breakage_from_hazard(h, c),
+            Law::VogelPeukert { n, curve, exponent, ln_h_min } => {
+                if ln_h <= ln_h_min {
+                    0.0
+                } else {
+                    breakage_from_hazard(curve.hazard((exponent * ln_h).exp()), n)
+                }
+            }
+        }
+    }
+}
+
+/// P_N of a damage model from the single-impact hazard H = (W/W_θ)^(m/5) at modulus m after
+/// `n` impacts; `x_star` = x*(N, γ) is read by Tavares–King only.
+pub fn breakage(model: DamageModel, hazard: f64, m: f64, n: f64, x_star: f64) -> f64 {
+    Law::new(model, m, n, x_star.ln()).p(hazard, hazard.ln())
 }
 
 #[cfg(test)]
@@ -239,8 +295,7 @@ mod tests {
         let vp = VogelPeukert::matched(1.0);
         assert!((vp.rate - 1.0).abs() < 1e-12 && vp.threshold.abs() < 1e-12);
         // Below the threshold nothing breaks, however many impacts.
-        let vp = VogelPeukert::matched(2.0);
-        assert_eq!(breakage(DamageModel::VogelPeukert, 0.2f64.powi(2), 10.0, 1e6, &vp, 1.0), 0.0);
+        assert_eq!(breakage(DamageModel::VogelPeukert, 0.2f64.powi(2), 10.0, 1e6, 1.0), 0.0);
     }
 
     #[test]
@@ -272,12 +327,11 @@ mod tests {
         // P(survive n) = (1 − p)^n.
         let p: f64 = 1e-3;
         let h = -(1.0 - p).ln();
-        let vp = VogelPeukert::matched(2.0);
         for n in [1.0, 730.0, 7300.0] {
-            let got = breakage(DamageModel::Independent, h, 10.0, n, &vp, 1.0);
+            let got = breakage(DamageModel::Independent, h, 10.0, n, 1.0);
             assert!((1.0 - got - (1.0 - p).powf(n)).abs() < 1e-12);
         }
         // Tavares–King without damage (x* = 1) is the single-impact probability.
-        assert!((breakage(DamageModel::TavaresKing, h, 10.0, 7300.0, &vp, 1.0) - p).abs() < 1e-15);
+        assert!((breakage(DamageModel::TavaresKing, h, 10.0, 7300.0, 1.0) - p).abs() < 1e-15);
     }
 }

@@ -1,0 +1,256 @@
+//! The joint uncertainty of a fitted strength model: draws of (m, μ, β).
+//!
+//! The Weibull regression is a log-location-scale model, y = ln σ̄ = μ + β·z + b·w with w
+//! standard minimum-Gumbel and b = 1/m ([`super::regress`]). For such a model the maximum-
+//! likelihood estimates give pivotal quantities whose distribution does not depend on the
+//! unknown parameters (Lawless 2003, §6.3):
+//!
+//! ```text
+//! b̂/b,   (μ̂ − μ)/b̂,   (β̂ − β)/b̂
+//! ```
+//!
+//! so simulating unit samples (μ = 0, β = 0, b = 1) at the observed covariates and refitting
+//! gives exact draws (μ*, β*, b*) of those pivots, and the draws
+//!
+//! ```text
+//! b = b̂/b*,   μ = μ̂ − b̂ μ*/b*,   β = β̂ − b̂ β*/b*
+//! ```
+//!
+//! are the parametric bootstrap in pivotal form ([`Uncertainty::Bootstrap`]). Without effects
+//! this is exactly ASTM C1239's pivotal simulation (m_j = m̂/q_j with q = m̂* of a unit sample,
+//! ln σ_j = ln σ̂ − t_j/m̂ with t = m̂* ln σ̂*; [`crate::weibull::Pivotal::draws`]). A model that
+//! profiles a Tavares–King damage ratio is not location-scale in it; its draws are a plain
+//! parametric bootstrap (refits of samples drawn from the fitted model).
+//!
+//! [`Uncertainty::Bayesian`] samples the posterior with the prior flat in (μ, β, ln b) — the
+//! right-invariant prior of a location-scale model, ∝ 1/(m σ_θ) without effects — by the
+//! ensemble sampler ([`crate::calibrate::mcmc`]); the damage ratio, if any, gets a prior flat in
+//! ln x on [10⁻⁴, 0.99]. For location-scale models this prior reproduces the conditional
+//! confidence intervals of the pivots, so the two agree on large samples
+//! (`tests/verification/strength.rs`).
+//!
+//! Every draw has its own ChaCha8 stream: the draws do not depend on the thread count.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::Distribution;
+use rayon::prelude::*;
+
+use super::fit::{ModelFit, StrengthFit};
+use super::options::Uncertainty;
+use super::regress::{Design, fit};
+use crate::error::{Error, Result};
+
+/// Most linear effects a model carries (roundness, size, temperature, sphericity).
+pub const MAX_LINEAR: usize = 4;
+
+/// One set of strength-model parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Params {
+    /// Weibull modulus m.
+    pub shape: f64,
+    /// μ = ln σ_θ at z = 0 (ln Pa): the scale of a perfectly round particle of the reference
+    /// diameter at the reference temperature.
+    pub mu: f64,
+    /// β of the linear effects (in the order of [`StrengthFit::linear`]), zero-padded.
+    pub beta: [f64; MAX_LINEAR],
+}
+
+impl Params {
+    /// The parameters of a fitted model.
+    pub fn of(model: &ModelFit) -> Params {
+        let mut beta = [0.0; MAX_LINEAR];
+        for (b, v) in beta.iter_mut().zip(&model.reg.beta) {
+            *b = *v;
+        }
+        Params { shape: model.shape(), mu: model.reg.mu, beta }
+    }
+}
+
+impl StrengthFit {
+    /// The maximum-likelihood estimate.
+    pub fn estimate(&self) -> Params {
+        Params::of(&self.model)
+    }
+
+    /// `k` joint draws of the parameters (seeded; independent of the thread count).
+    pub fn draws(&self, how: Uncertainty, k: usize, seed: u64) -> Result<Vec<Params>> {
+        if self.linear().len() > MAX_LINEAR {
+            return Err(Error::numerical("strength draws", format!("at most {MAX_LINEAR} linear effects")));
+        }
+        match how {
+            Uncertainty::Bootstrap if self.model.damage_ratio.is_none() => self.pivotal_draws(k, seed),
+            Uncertainty::Bootstrap => self.bootstrap_draws(k, seed),
+            Uncertainty::Bayesian => self.posterior_draws(k, seed),
+        }
+    }
+
+    /// Pivotal draws: unit samples at the observed covariates, refitted.
+    fn pivotal_draws(&self, k: usize, seed: u64) -> Result<Vec<Params>> {
+        let m = &self.model;
+        let (b_hat, mu_hat) = (m.reg.b, m.reg.mu);
+        let design = Design { columns: &m.columns, offset: None };
+        let out: Vec<Option<Params>> = (0..k)
+            .into_par_iter()
+            .map(|r| {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                rng.set_stream(r as u64 + 1);
+                // A unit sample is standard exponential (Weibull with m = 1, σ = 1); a refit
+                // that fails (vanishingly rare) is replaced by the next sample of its stream.
+                for _ in 0..20 {
+                    let x: Vec<f64> = (0..m.n).map(|_| rand_distr::Exp1.sample(&mut rng)).collect();
+                    if let Ok(u) = fit(&x, &design) {
+                        let mut beta = [0.0; MAX_LINEAR];
+                        for (j, b) in beta.iter_mut().enumerate().take(m.reg.beta.len()) {
+                            *b = m.reg.beta[j] - b_hat * u.beta[j] / u.b;
+                        }
+                        return Some(Params { shape: u.b / b_hat, mu: mu_hat - b_hat * u.mu / u.b, beta });
+                    }
+                }
+                None
+            })
+            .collect();
+        collect(out, "pivotal simulation")
+    }
+
+    /// Plain parametric bootstrap (models with a profiled damage ratio).
+    fn bootstrap_draws(&self, k: usize, seed: u64) -> Result<Vec<Params>> {
+        let out: Vec<Option<Params>> = (0..k)
+            .into_par_iter()
+            .map(|r| (0..20).find_map(|attempt| self.model.bootstrap_refit(&self.terms, seed ^ ((attempt as u64) << 40), r).map(|(_, f)| Params::of(&f))))
+            .collect();
+        collect(out, "parametric bootstrap")
+    }
+
+    /// Posterior draws by the ensemble sampler.
+    fn posterior_draws(&self, k: usize, seed: u64) -> Result<Vec<Params>> {
+        use crate::calibrate::mcmc::{EnsembleOptions, ensemble};
+        let m = &self.model;
+        let nl = m.columns.len();
+        let damage = m.damage_ratio.is_some();
+        let dim = 2 + nl + usize::from(damage);
+        let y: Vec<f64> = self.data.iter().map(|x| x.ln()).collect();
+        let damage_terms = self.terms.iter().find_map(|(_, t)| match t {
+            super::effects::Term::Damage { impacts, gamma } => Some((impacts.clone(), *gamma)),
+            _ => None,
+        });
+        let (lx_lo, lx_hi) = ((1e-4f64).ln(), (0.99f64).ln());
+        // θ = (μ, ln b, β…, [ln x]).
+        let log_post = |t: &[f64]| -> f64 {
+            let (mu, s) = (t[0], t[1]);
+            let b = s.exp();
+            let offset = if let Some((impacts, gamma)) = &damage_terms {
+                let lx = t[2 + nl];
+                if !(lx_lo..=lx_hi).contains(&lx) {
+                    return f64::NEG_INFINITY;
+                }
+                let n_max = impacts.iter().copied().max().unwrap_or(0);
+                let Some(path) = crate::lifetime::damage::tk_ratio_path(lx.exp(), *gamma, n_max) else { return f64::NEG_INFINITY };
+                Some(impacts.iter().map(|&n| (lx - path[n as usize]) / 5.0).collect::<Vec<f64>>())
+            } else {
+                None
+            };
+            let mut l = 0.0;
+            for (i, yi) in y.iter().enumerate() {
+                let mut ls = mu;
+                for j in 0..nl {
+                    ls += t[2 + j] * m.columns[j][i];
+                }
+                if let Some(o) = &offset {
+                    ls += o[i];
+                }
+                let w = (yi - ls) / b;
+                l += -s + w - w.exp();
+            }
+            if l.is_finite() { l } else { f64::NEG_INFINITY }
+        };
+        // Start the walkers in a small ball around the MLE (scaled by asymptotic sds).
+        let n = m.n as f64;
+        let mut centre = vec![m.reg.mu, m.reg.b.ln()];
+        let mut sd = vec![1.05 * m.reg.b / n.sqrt(), 0.78 / n.sqrt()];
+        for j in 0..nl {
+            centre.push(m.reg.beta[j]);
+            sd.push(if m.reg.beta_se[j].is_finite() && m.reg.beta_se[j] > 0.0 { m.reg.beta_se[j] } else { 0.1 });
+        }
+        if let Some(x) = m.damage_ratio {
+            centre.push(x.ln().clamp(lx_lo + 0.01, lx_hi - 0.01));
+            sd.push(0.05);
+        }
+        let walkers = (4 * dim).max(16);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xBA7E5);
+        let normal = rand_distr::StandardNormal;
+        let init: Vec<Vec<f64>> = (0..walkers)
+            .map(|_| {
+                centre.iter().zip(&sd).map(|(c, s)| {
+                    let z: f64 = normal.sample(&mut rng);
+                    c + 0.1 * s * z
+                }).collect()
+            })
+            .collect();
+        let thin = 10;
+        let steps = (k * thin).div_ceil(walkers);
+        let opts = EnsembleOptions { walkers, steps, burn_in: 1000, stretch: 2.0, seed };
+        let chains = ensemble(log_post, init, &opts)?;
+        for p in 0..dim {
+            let d = chains.diagnostics(p);
+            if !(d.r_hat < 1.1) {
+                return Err(Error::numerical("strength posterior", format!("the ensemble sampler did not converge (parameter {p}: R̂ = {:.3})", d.r_hat)));
+            }
+        }
+        let mut out = Vec::with_capacity(k);
+        'steps: for step in chains.draws.iter().skip(thin - 1).step_by(thin) {
+            for t in step {
+                let mut beta = [0.0; MAX_LINEAR];
+                beta[..nl].copy_from_slice(&t[2..2 + nl]);
+                out.push(Params { shape: (-t[1]).exp(), mu: t[0], beta });
+                if out.len() == k {
+                    break 'steps;
+                }
+            }
+        }
+        if out.len() < k {
+            return Err(Error::numerical("strength posterior", format!("{} of {k} draws", out.len())));
+        }
+        Ok(out)
+    }
+}
+
+fn collect(out: Vec<Option<Params>>, what: &str) -> Result<Vec<Params>> {
+    let k = out.len();
+    let got: Vec<Params> = out.into_iter().flatten().collect();
+    if got.len() < k {
+        return Err(Error::numerical("strength draws", format!("{what}: {} of {k} refits failed", k - got.len())));
+    }
+    Ok(got)
+}
+
+/// One parameter of a fitted strength model: its estimate and the 5/95 % quantiles of its draws.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParameterSummary {
+    /// `weibull_modulus`, `scale_pa` (e^μ), or an effect's reported symbol (`size_alpha`, `roundness_q`, …).
+    pub name: String,
+    /// Unit.
+    pub unit: String,
+    /// Maximum-likelihood estimate.
+    pub estimate: f64,
+    /// 5 % quantile of the draws.
+    pub q05: f64,
+    /// 95 % quantile of the draws.
+    pub q95: f64,
+}
+
+/// The modulus, the scale e^μ and every linear effect's reported parameter of `fit`, with
+/// the 90 % range of `draws`.
+pub fn summarise(fit: &StrengthFit, draws: &[Params]) -> Vec<ParameterSummary> {
+    let est = fit.estimate();
+    let row = |name: String, unit: &str, f: &dyn Fn(&Params) -> f64| {
+        let q = crate::stats::interpolated_quantiles(draws.iter().map(f).collect(), &[0.05, 0.95]);
+        ParameterSummary { name, unit: unit.into(), estimate: f(&est), q05: q[0], q95: q[1] }
+    };
+    let mut out = vec![row("weibull_modulus".into(), "-", &|p| p.shape), row("scale_pa".into(), "Pa", &|p| p.mu.exp())];
+    for (j, e) in fit.linear().into_iter().enumerate() {
+        let (sym, _, _) = e.parameter(0.0, 1.0);
+        out.push(row(format!("{}_{sym}", e.name()), "-", &|p| e.natural(p.beta[j])));
+    }
+    out
+}

@@ -1,0 +1,279 @@
+//! The effects a strength model can carry (the discrepancy workflow's candidate library).
+//!
+//! The deliverable's lifetime model reduces every crush test to the average Hertzian tensile
+//! stress at break σ̄ with the contact radius of curvature R = d/2 and one Weibull law for all
+//! particles. Each effect is a physical extension of that model with one extra parameter,
+//! acting on the Weibull scale of particle i in the σ̄ reduced with R = d/2 as
+//! `ln σ_i = μ + β z_i` (+ the other effects); the modulus is shared. Their equations and
+//! covariate signatures:
+//!
+//! | effect | covariate | equation | parameter reported |
+//! |---|---|---|---|
+//! | `roundness` (contact curvature) | `roundness` r | R_c = r^q R. Crush: F ∝ R_c² p0³, so the σ̄ reduced with R is σ̄_true (R_c/R)^(2/3): z = ln r, β = 2q/3 | q = 3β/2 (Wadell: q = 1) |
+//! | `size` (weakest link) | `diameter_m` d | σ_θ(d) = σ_θ (d/d̃)^(−α), d̃ the median diameter of the fitted data: z = ln(d/d̃), β = −α | α; volume flaws α = 3/m, surface flaws α = 2/m |
+//! | `temperature` (softening) | `temperature_c` T | ln σ_θ(T) = ln σ_θ + β (T − T̄)/1000 °C, T̄ the mean of the fitted data; strength and stiffness both shift the σ̄ reduced at break (σ̄ ∝ (F E*²/R²)^(1/3)), above ≈ 900 °C through the amorphous phase (deliverable §2) | strength ratio per 100 °C, e^(β/10) |
+//! | `sphericity` (effective radius) | `sphericity` s | R_c = s^p R, as roundness: z = ln s, β = 2p/3 | p = 3β/2 |
+//! | `damage` (Tavares–King) | `impacts` n (prior impacts) | each prior impact at the energy ratio x = E_k/E_m damages the particle, E_m,n = E_m,0 Π(1 − D_j) ([`crate::lifetime::damage::tk_damage`], γ fixed); since the Hertz fracture energy scales as σ̄⁵, ln σ_i gets the offset (1/5) ln(x/x_n) | x, fitted by profile likelihood |
+//!
+//! Contact-geometry effects (roundness, sphericity) also change the impact: with R_c the peak
+//! pressure of a Hertz impact scales as R_c^(−3/5) at a fixed particle mass, so the impact
+//! stress of particle i is multiplied by (R_c/R)^(−3/5) = e^(−0.9 β z_i); strength effects
+//! (size, temperature) change the scale only ([`Effect::impact_exponent`]). Damage describes
+//! impacts a crushed particle received before its test; the particles of a prediction are
+//! fresh, so it changes only the fit.
+//!
+//! A candidate whose covariate is missing (no column, empty cells, constant over the sample) is
+//! skipped with the reason by the naming loop ([`Effect::term`]); a strength model that lists
+//! it explicitly refuses the data.
+
+use serde::{Deserialize, Serialize};
+
+use super::population::Particle;
+use crate::lifetime::damage::tk_ratio_path;
+
+/// An effect of the strength model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Effect {
+    /// Roundness sets the contact radius of curvature.
+    Roundness,
+    /// Weakest-link size effect on strength.
+    Size,
+    /// Temperature softening of strength and stiffness.
+    Temperature,
+    /// Sphericity sets an effective contact radius.
+    Sphericity,
+    /// Tavares–King damage from prior impacts.
+    Damage,
+}
+
+/// Every effect, in the library's order.
+pub const ALL: [Effect; 5] = [Effect::Roundness, Effect::Size, Effect::Temperature, Effect::Sphericity, Effect::Damage];
+
+/// Covariate columns of a crush sample, by name; `None` for an empty cell.
+pub type Covariates = [(String, Vec<Option<f64>>)];
+
+/// How an effect enters the regression.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Term {
+    /// A linear column z.
+    Linear(Vec<f64>),
+    /// The Tavares–King offset: prior impact counts and γ.
+    Damage {
+        /// Prior impacts per particle.
+        impacts: Vec<u64>,
+        /// Tavares–King γ.
+        gamma: f64,
+    },
+}
+
+impl Effect {
+    /// Key used in studies, tables and verdict.json.
+    pub fn name(self) -> &'static str {
+        match self {
+            Effect::Roundness => "roundness",
+            Effect::Size => "size",
+            Effect::Temperature => "temperature",
+            Effect::Sphericity => "sphericity",
+            Effect::Damage => "damage",
+        }
+    }
+
+    /// Human label.
+    pub fn label(self) -> &'static str {
+        match self {
+            Effect::Roundness => "roundness / contact curvature",
+            Effect::Size => "size effect (weakest link)",
+            Effect::Temperature => "temperature softening",
+            Effect::Sphericity => "sphericity / effective radius",
+            Effect::Damage => "damage from prior impacts (Tavares–King)",
+        }
+    }
+
+    /// The dataset column the effect needs.
+    pub fn covariate(self) -> &'static str {
+        match self {
+            Effect::Roundness => "roundness",
+            Effect::Size => "diameter_m",
+            Effect::Temperature => "temperature_c",
+            Effect::Sphericity => "sphericity",
+            Effect::Damage => "impacts",
+        }
+    }
+
+    /// Its equation, as written in verdict.json.
+    pub fn equation(self) -> &'static str {
+        match self {
+            Effect::Roundness => "R_c = roundness^q R; ln σ_θ,i = μ + (2q/3) ln roundness_i",
+            Effect::Size => "σ_θ(d) = σ_θ (d/d_median)^(−α); ln σ_θ,i = μ − α ln(d_i/d_median)",
+            Effect::Temperature => "ln σ_θ(T) = μ + β (T − T_mean)/1000 °C",
+            Effect::Sphericity => "R_c = sphericity^p R; ln σ_θ,i = μ + (2p/3) ln sphericity_i",
+            Effect::Damage => "E_m,n = E_m,0 Π(1 − D_j), D_j Tavares–King at ratio x; ln σ_θ,i = μ + (1/5) ln(x/x_n,i)",
+        }
+    }
+
+    /// Whether the effect changes the contact radius of curvature (and so the impact stress).
+    pub fn is_contact_geometry(self) -> bool {
+        matches!(self, Effect::Roundness | Effect::Sphericity)
+    }
+
+    /// Exponent κ with which the effect also scales the impact stress: the single-impact
+    /// hazard of particle i is (σ̄_impact · e^(−κ β z_i) / e^μ)^m. κ = 0.9 for contact-geometry
+    /// effects (impact p0 ∝ R_c^(−3/5) against the crush reduction's R_c^(−2/3)), κ = 1 for
+    /// strength effects.
+    pub fn impact_exponent(self) -> f64 {
+        if self.is_contact_geometry() { 0.9 } else { 1.0 }
+    }
+
+    /// The reference value of the covariate over the fitted sample: the median diameter (size),
+    /// the mean temperature (temperature); 0 for the others (unused).
+    pub fn reference(self, values: &[f64]) -> f64 {
+        match self {
+            Effect::Size => crate::stats::median(values),
+            Effect::Temperature => values.iter().sum::<f64>() / values.len() as f64,
+            _ => 0.0,
+        }
+    }
+
+    /// The regression column z of a covariate value, given the reference.
+    pub fn z(self, value: f64, reference: f64) -> f64 {
+        match self {
+            Effect::Roundness | Effect::Sphericity => value.ln(),
+            Effect::Size => (value / reference).ln(),
+            Effect::Temperature => (value - reference) / 1000.0,
+            Effect::Damage => 0.0,
+        }
+    }
+
+    /// The covariate of a particle of a population (None if it was not measured or declared).
+    pub fn value_of(self, p: &Particle) -> Option<f64> {
+        match self {
+            Effect::Roundness => p.roundness,
+            Effect::Size => Some(p.diameter_m),
+            Effect::Temperature => p.temperature_c,
+            Effect::Sphericity => p.sphericity,
+            Effect::Damage => Some(0.0),
+        }
+    }
+
+    /// The effect's term for this sample, or the reason it cannot be fitted.
+    pub fn term(self, covariates: &Covariates, gamma: f64) -> std::result::Result<Term, String> {
+        let name = self.covariate();
+        let Some((_, col)) = covariates.iter().find(|(n, _)| n == name).filter(|(_, c)| c.iter().any(|v| v.is_some())) else {
+            return Err(format!("the dataset has no `{name}` values (no such column, or every cell empty)"));
+        };
+        let missing = col.iter().filter(|v| v.is_none()).count();
+        if missing > 0 {
+            return Err(format!("`{name}` is empty on {missing} of {} rows", col.len()));
+        }
+        let v: Vec<f64> = col.iter().map(|x| x.unwrap_or(f64::NAN)).collect();
+        if v.iter().all(|x| *x == v[0]) {
+            return Err(format!("`{name}` is the same on every row ({}): no contrast to fit", v[0]));
+        }
+        let positive = |what: &str| -> std::result::Result<(), String> {
+            match v.iter().find(|x| x.is_nan() || **x <= 0.0) {
+                Some(x) => Err(format!("`{name}` must be > 0 for {what} (got {x})")),
+                None => Ok(()),
+            }
+        };
+        match self {
+            Effect::Damage => {
+                if let Some(x) = v.iter().find(|x| !(**x >= 0.0 && x.fract() == 0.0 && **x <= 1e6)) {
+                    return Err(format!("`{name}` must be whole numbers in [0, 10⁶] (got {x})"));
+                }
+                Ok(Term::Damage { impacts: v.iter().map(|x| *x as u64).collect(), gamma })
+            }
+            _ => {
+                if self != Effect::Temperature {
+                    positive("a power law")?;
+                }
+                let r = self.reference(&v);
+                Ok(Term::Linear(v.iter().map(|&x| self.z(x, r)).collect()))
+            }
+        }
+    }
+
+    /// The reported parameter: (symbol, value from β (or x for damage), meaning).
+    pub fn parameter(self, beta: f64, shape: f64) -> (&'static str, f64, String) {
+        let value = self.natural(beta);
+        match self {
+            Effect::Roundness => ("q", value, format!("contact radius R_c = roundness^{value:.2} R (Wadell: 1)")),
+            Effect::Sphericity => ("p", value, format!("contact radius R_c = sphericity^{value:.2} R")),
+            Effect::Size => {
+                let a = value;
+                let (vol, surf) = (3.0 / shape, 2.0 / shape);
+                let kind = if a <= 0.0 {
+                    "strength rises with size: not a weakest-link effect".to_string()
+                } else if (a - vol).abs() <= (a - surf).abs() && a < 1.5 * vol {
+                    format!("close to volume flaws (3/m = {vol:.3})")
+                } else if a < 1.5 * vol {
+                    format!("close to surface flaws (2/m = {surf:.3})")
+                } else {
+                    format!("stronger than weakest-link scaling (volume 3/m = {vol:.3}, surface 2/m = {surf:.3})")
+                };
+                ("alpha", a, format!("σ_θ ∝ d^(−α), α = {a:.3}: {kind}"))
+            }
+            Effect::Temperature => ("strength_ratio_per_100c", value, format!("strength × {value:.3} per 100 °C")),
+            Effect::Damage => ("x", value, format!("prior impacts at {value:.3} of the fracture energy")),
+        }
+    }
+
+    /// The reported parameter's value for a regression coefficient β (α = −β, q = p = 3β/2,
+    /// strength ratio per 100 °C e^(β/10); damage: β is already the ratio x).
+    pub fn natural(self, beta: f64) -> f64 {
+        match self {
+            Effect::Roundness | Effect::Sphericity => 1.5 * beta,
+            Effect::Size => -beta,
+            Effect::Temperature => (beta / 10.0).exp(),
+            Effect::Damage => beta,
+        }
+    }
+
+    /// The inverse of [`Effect::natural`].
+    pub fn beta_of(self, natural: f64) -> f64 {
+        match self {
+            Effect::Roundness | Effect::Sphericity => natural / 1.5,
+            Effect::Size => -natural,
+            Effect::Temperature => 10.0 * natural.ln(),
+            Effect::Damage => natural,
+        }
+    }
+}
+
+/// ln(x0/x_n)/5 for a particle after n impacts at the initial ratio x0 (Tavares–King, γ): the
+/// ln-strength change, since the Hertz fracture energy scales as the strength⁵. None if it
+/// would have broken.
+pub(crate) fn damage_offset(x0: f64, gamma: f64, n: u64) -> Option<f64> {
+    let path = tk_ratio_path(x0, gamma, n)?;
+    Some((path[0] - path[n as usize]) / 5.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cov(name: &str, v: Vec<f64>) -> (String, Vec<Option<f64>>) {
+        (name.to_string(), v.into_iter().map(Some).collect())
+    }
+
+    #[test]
+    fn missing_or_constant_covariates_are_skipped_with_a_reason() {
+        let c = vec![cov("temperature_c", vec![20.0; 12]), ("roundness".into(), vec![Some(0.7), None, Some(0.8)])];
+        assert!(Effect::Temperature.term(&c, 5.0).unwrap_err().contains("same on every row"));
+        assert!(Effect::Roundness.term(&c, 5.0).unwrap_err().contains("empty on 1 of 3"));
+        assert!(Effect::Damage.term(&c, 5.0).unwrap_err().contains("no `impacts` values"));
+    }
+
+    #[test]
+    fn natural_parameters_invert() {
+        for e in ALL {
+            for b in [-0.4, 0.1, 0.7] {
+                assert!((e.beta_of(e.natural(b)) - b).abs() < 1e-12, "{e:?}");
+            }
+        }
+        // A particle's column uses the sample's reference: the median diameter.
+        let c = vec![cov("diameter_m", vec![0.8e-3, 1.0e-3, 0.9e-3])];
+        let Term::Linear(z) = Effect::Size.term(&c, 5.0).unwrap() else { panic!() };
+        assert!((z[2]).abs() < 1e-15 && (z[1] - (1.0f64 / 0.9).ln()).abs() < 1e-15);
+    }
+}

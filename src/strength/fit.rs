@@ -1,0 +1,379 @@
+//! Fitting the strength model to one material's crush data: the reduction of each test to σ̄
+//! at break, the maximum-likelihood fit of the Weibull regression with the model's effects
+//! ([`fit_model`]), and cross-validated pointwise log scores ([`cv_pointwise`]) for model
+//! comparison.
+//!
+//! The reduction is the deliverable's: a sphere of radius R = d/2 on the platen, the Hertz
+//! contact at the force at break, σ̄ averaged over the study's domain ([`contact_at_break`]).
+//! Contact-geometry effects are regression terms on this σ̄ (see [`super::effects`]), which
+//! for a domain with σ̄ ∝ p0 is the same as reducing each test with its own R_c.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use super::effects::{Effect, Term, damage_offset};
+use super::regress::{Design, RegFit, fit};
+use crate::contact::{ContactOptions, ContactState, ContactStress, Elastic, Hertz, TensileZone};
+use crate::data::{CrushData, CrushRecord};
+use crate::error::{Error, Result};
+use crate::lifetime::damage::tk_ratio_path;
+
+/// Strengths and covariates of one crush sample.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sample {
+    /// Where it came from (for messages).
+    pub source: String,
+    /// σ̄ at break (Pa), per particle.
+    pub strength: Vec<f64>,
+    /// Covariate columns by name (`None`: empty cell).
+    pub covariates: Vec<(String, Vec<Option<f64>>)>,
+}
+
+/// Hertz contact state of each crushed particle at its force at break: sphere of radius d/2 on
+/// the platen, σ̄ over the contact options' averaging domain (the deliverable's reduction).
+pub fn contact_at_break(records: &[CrushRecord], elastic: &Elastic, contact: &ContactOptions) -> Result<Vec<ContactState>> {
+    let zone = TensileZone::new(elastic.poisson_ratio);
+    records
+        .iter()
+        .map(|r| {
+            let radius = 0.5 * r.diameter_m;
+            let hertz = Hertz::sphere_on_flat(elastic, &contact.platen, radius);
+            ContactStress { hertz, zone, domain: contact.averaging, particle_radius: radius }.at_force(r.crush_force_n)
+        })
+        .collect()
+}
+
+/// Strengths (σ̄ at break) and covariates of a crush dataset.
+pub fn sample_of(data: &CrushData, elastic: &Elastic, contact: &ContactOptions) -> Result<Sample> {
+    let at = contact_at_break(&data.records, elastic, contact)?;
+    let r = &data.records;
+    Ok(Sample {
+        source: data.path.display().to_string(),
+        strength: at.iter().map(|c| c.mean_tensile).collect(),
+        covariates: vec![
+            ("diameter_m".into(), r.iter().map(|x| Some(x.diameter_m)).collect()),
+            ("roundness".into(), r.iter().map(|x| x.roundness).collect()),
+            ("sphericity".into(), r.iter().map(|x| x.sphericity).collect()),
+            ("temperature_c".into(), r.iter().map(|x| x.temperature_c).collect()),
+            ("impacts".into(), r.iter().map(|x| x.impacts.map(|k| k as f64)).collect()),
+        ],
+    })
+}
+
+/// A fitted model: the base Weibull plus zero or more effects.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelFit {
+    /// The effects, in the order they were added.
+    pub effects: Vec<Effect>,
+    /// The regression (β in the order of the linear effects).
+    pub reg: RegFit,
+    /// Linear columns, in the order of the linear effects.
+    pub columns: Vec<Vec<f64>>,
+    /// The damage offset at the fitted ratio, if damage is an effect.
+    pub offset: Option<Vec<f64>>,
+    /// Fitted Tavares–King ratio x, if damage is an effect.
+    pub damage_ratio: Option<f64>,
+    /// Number of particles fitted.
+    pub n: usize,
+}
+
+impl ModelFit {
+    /// The regression design of the fitted model.
+    pub fn design(&self) -> Design<'_> {
+        Design { columns: &self.columns, offset: self.offset.as_deref() }
+    }
+
+    /// Number of parameters: μ, b, one per effect.
+    pub fn parameters(&self) -> usize {
+        2 + self.effects.len()
+    }
+
+    /// Weibull modulus.
+    pub fn shape(&self) -> f64 {
+        self.reg.shape()
+    }
+
+    /// Maximised log-likelihood.
+    pub fn loglik(&self) -> f64 {
+        self.reg.loglik
+    }
+
+    /// The linear effects, in the order of β.
+    pub fn linear(&self) -> Vec<Effect> {
+        self.effects.iter().copied().filter(|e| *e != Effect::Damage).collect()
+    }
+
+    /// β of a linear effect (or the ratio x for damage), with its standard error (NaN for damage).
+    pub fn coefficient(&self, c: Effect) -> Option<(f64, f64)> {
+        if c == Effect::Damage {
+            return self.damage_ratio.map(|x| (x, f64::NAN));
+        }
+        let j = self.linear().iter().position(|e| *e == c)?;
+        Some((self.reg.beta[j], self.reg.beta_se[j]))
+    }
+
+    /// Parametric-bootstrap replicate `r` (its own ChaCha8 stream of `seed`): strengths drawn
+    /// from this model at the sample's covariates, refitted with `terms` (the model's own terms
+    /// or more). None if the refit fails.
+    pub fn bootstrap_refit(&self, terms: &[(Effect, Term)], seed: u64, r: usize) -> Option<(Vec<f64>, ModelFit)> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(r as u64 + 1);
+        let xs = self.reg.sample(&self.design(), self.n, &mut rng);
+        let refit = fit_model_near(&xs, terms, self.damage_ratio).ok()?;
+        Some((xs, refit))
+    }
+}
+
+/// Fits the base model plus `terms` to the strengths `x`.
+pub fn fit_model(x: &[f64], terms: &[(Effect, Term)]) -> Result<ModelFit> {
+    fit_model_near(x, terms, None)
+}
+
+/// [`fit_model`] with a hint for the damage ratio (that of a fit to similar data, as in a
+/// bootstrap refit): the profile search then starts near it, which is several times faster.
+pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>) -> Result<ModelFit> {
+    let mut columns = Vec::new();
+    let mut damage = None;
+    let mut effects = Vec::new();
+    for (c, t) in terms {
+        effects.push(*c);
+        match t {
+            Term::Linear(z) => columns.push(z.clone()),
+            Term::Damage { impacts, gamma } => damage = Some((impacts, *gamma)),
+        }
+    }
+    // Linear effects first in `effects`' β order; damage (if any) is profiled.
+    let Some((impacts, gamma)) = damage else {
+        let reg = fit(x, &Design { columns: &columns, offset: None })?;
+        return Ok(ModelFit { effects, reg, columns, offset: None, damage_ratio: None, n: x.len() });
+    };
+    let n_max = impacts.iter().copied().max().unwrap_or(0);
+    // One Tavares–King trajectory per trial ratio serves every particle.
+    let offsets = |lx: f64| -> Option<Vec<f64>> {
+        let path = tk_ratio_path(lx.exp(), gamma, n_max)?;
+        Some(impacts.iter().map(|&n| (lx - path[n as usize]) / 5.0).collect())
+    };
+    let profile = |lx: f64| -> f64 {
+        offsets(lx)
+            .and_then(|o| fit(x, &Design { columns: &columns, offset: Some(&o) }).ok())
+            .map_or(f64::NEG_INFINITY, |r| r.loglik)
+    };
+    let (lo, hi) = ((1e-4f64).ln(), (0.99f64).ln());
+    let golden = |mut a: f64, mut b: f64, tol: f64| -> f64 {
+        let phi = 0.5 * (5f64.sqrt() - 1.0);
+        let (mut c, mut d) = (b - phi * (b - a), a + phi * (b - a));
+        let (mut fc, mut fd) = (profile(c), profile(d));
+        while b - a > tol {
+            if fc >= fd {
+                (b, d, fd) = (d, c, fc);
+                c = b - phi * (b - a);
+                fc = profile(c);
+            } else {
+                (a, c, fc) = (c, d, fd);
+                d = a + phi * (b - a);
+                fd = profile(d);
+            }
+        }
+        0.5 * (a + b)
+    };
+    // Near a hint (a bootstrap refit of a fitted ratio): golden section on ln x ± 1, kept
+    // unless the optimum sits at the edge of that bracket.
+    let local = hint.filter(|h| h.is_finite() && *h > 0.0).map(|h| {
+        let (a, b) = ((h.ln() - 1.0).max(lo), (h.ln() + 1.0).min(hi));
+        let lx = golden(a, b, 1e-3);
+        let inside = (lx - a > 1e-2 || a == lo) && (b - lx > 1e-2 || b == hi);
+        (lx, inside && profile(lx).is_finite())
+    });
+    let lx = match local {
+        Some((lx, true)) => lx,
+        _ => {
+            // Coarse scan of ln x over [ln 10⁻⁴, ln 0.99] (ratios that break a particle score
+            // −∞), then golden section around the best point to 10⁻⁴ in ln x.
+            let grid: Vec<f64> = (0..=16).map(|k| lo + (hi - lo) * k as f64 / 16.0).collect();
+            let vals: Vec<f64> = grid.iter().map(|&g| profile(g)).collect();
+            let best = (0..grid.len()).max_by(|&a, &b| vals[a].total_cmp(&vals[b])).unwrap_or(0);
+            if !vals[best].is_finite() {
+                return Err(Error::numerical("damage effect", "every trial damage ratio breaks a particle or fails to fit"));
+            }
+            golden(grid[best.saturating_sub(1)], grid[(best + 1).min(grid.len() - 1)], 1e-4)
+        }
+    };
+    let off = offsets(lx).ok_or_else(|| Error::numerical("damage effect", "the fitted ratio breaks a particle"))?;
+    let reg = fit(x, &Design { columns: &columns, offset: Some(&off) })?;
+    // `effects` keeps damage wherever it was added; β follow the linear effects' order.
+    Ok(ModelFit { effects, reg, columns, offset: Some(off), damage_ratio: Some(lx.exp()), n: x.len() })
+}
+
+/// ln σ_i of particle `i` under a model fitted on other rows: its linear terms' columns at row
+/// i and the damage offset at the fitted ratio.
+pub fn predict_ln_scale(fit: &ModelFit, terms: &[(Effect, Term)], i: usize) -> f64 {
+    let mut s = fit.reg.mu;
+    let mut j = 0;
+    for (_, t) in terms {
+        match t {
+            Term::Linear(z) => {
+                s += fit.reg.beta[j] * z[i];
+                j += 1;
+            }
+            Term::Damage { impacts, gamma } => {
+                let x0 = fit.damage_ratio.unwrap_or(0.0);
+                s += damage_offset(x0, *gamma, impacts[i]).unwrap_or(f64::NEG_INFINITY);
+            }
+        }
+    }
+    s
+}
+
+/// The terms restricted to `rows`.
+pub fn subset(terms: &[(Effect, Term)], rows: &[usize]) -> Vec<(Effect, Term)> {
+    terms
+        .iter()
+        .map(|(c, t)| {
+            let t = match t {
+                Term::Linear(z) => Term::Linear(rows.iter().map(|&i| z[i]).collect()),
+                Term::Damage { impacts, gamma } => Term::Damage { impacts: rows.iter().map(|&i| impacts[i]).collect(), gamma: *gamma },
+            };
+            (*c, t)
+        })
+        .collect()
+}
+
+/// A seeded fold assignment of n rows to k folds (balanced, shuffled).
+pub fn folds(n: usize, k: usize, seed: u64) -> Vec<usize> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut idx: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
+        idx.swap(i, rand::Rng::random_range(&mut rng, 0..=i));
+    }
+    let mut f = vec![0; n];
+    for (pos, &i) in idx.iter().enumerate() {
+        f[i] = pos % k;
+    }
+    f
+}
+
+/// K-fold cross-validated log density of every particle: particle i scored under the model with
+/// `terms` fitted to the other folds (plug-in maximum likelihood). None if a training fit fails.
+pub fn cv_pointwise(x: &[f64], terms: &[(Effect, Term)], folds: &[usize], k: usize) -> Option<Vec<f64>> {
+    let mut out = vec![f64::NAN; x.len()];
+    for f in 0..k {
+        let train: Vec<usize> = (0..x.len()).filter(|&i| folds[i] != f).collect();
+        let xt: Vec<f64> = train.iter().map(|&i| x[i]).collect();
+        let fit = fit_model(&xt, &subset(terms, &train)).ok()?;
+        for i in (0..x.len()).filter(|&i| folds[i] == f) {
+            out[i] = fit.reg.ln_density_at(predict_ln_scale(&fit, terms, i), x[i]);
+        }
+    }
+    out.iter().all(|v| v.is_finite()).then_some(out)
+}
+
+/// The strength model fitted to one material's crush sample: the regression with the model's
+/// effects, the terms it was fitted with (for refits) and each linear effect's reference value
+/// (median diameter, mean temperature) and mean column (its centre over the sample).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StrengthFit {
+    /// The fitted regression.
+    pub model: ModelFit,
+    /// Its terms, in the order of `model.effects`.
+    pub terms: Vec<(Effect, Term)>,
+    /// Reference value of each linear effect's covariate (order of β).
+    pub references: Vec<f64>,
+    /// Mean of each linear column over the sample (order of β).
+    pub centre: Vec<f64>,
+    /// The sample's source (file), for messages.
+    pub source: String,
+    /// The fitted strengths σ̄ at break (Pa).
+    pub data: Vec<f64>,
+}
+
+impl StrengthFit {
+    /// Fits `effects` to `sample`. An effect whose covariate is missing, empty or constant in
+    /// the data is an error naming `material`, the file, the column and the rule (a study that
+    /// asks for an effect needs its covariate; the naming loop instead skips such candidates).
+    pub fn new(sample: &Sample, effects: &[Effect], gamma: f64, material: &str) -> Result<StrengthFit> {
+        let mut terms = Vec::new();
+        for &e in effects {
+            let t = e.term(&sample.covariates, gamma).map_err(|reason| Error::Data {
+                file: sample.source.clone(),
+                location: format!("column {}", e.covariate()),
+                rule: format!("material `{material}`: the strength model's `{}` effect needs this column: {reason}", e.name()),
+            })?;
+            terms.push((e, t));
+        }
+        let model = fit_model(&sample.strength, &terms).map_err(|err| Error::Data {
+            file: sample.source.clone(),
+            location: "all rows".into(),
+            rule: format!("material `{material}`: the strength model ({}) could not be fitted: {err}", names(effects)),
+        })?;
+        Ok(Self::from_model(model, terms, sample))
+    }
+
+    /// Wraps a model fitted with `terms` to `sample` (the naming loop's final model).
+    pub fn from_model(model: ModelFit, terms: Vec<(Effect, Term)>, sample: &Sample) -> StrengthFit {
+        let mut references = Vec::new();
+        let mut centre = Vec::new();
+        for (e, t) in &terms {
+            if let Term::Linear(z) = t {
+                let values: Vec<f64> = sample
+                    .covariates
+                    .iter()
+                    .find(|(n, _)| n == e.covariate())
+                    .map(|(_, c)| c.iter().map(|v| v.unwrap_or(f64::NAN)).collect())
+                    .unwrap_or_default();
+                references.push(e.reference(&values));
+                centre.push(z.iter().sum::<f64>() / z.len() as f64);
+            }
+        }
+        StrengthFit { model, terms, references, centre, source: sample.source.clone(), data: sample.strength.clone() }
+    }
+
+    /// The model's effects, in the order they were added.
+    pub fn effects(&self) -> &[Effect] {
+        &self.model.effects
+    }
+
+    /// The linear effects, in the order of β.
+    pub fn linear(&self) -> Vec<Effect> {
+        self.model.linear()
+    }
+}
+
+/// Effect names joined by `+` (`none` for the deliverable's model).
+pub fn names(effects: &[Effect]) -> String {
+    if effects.is_empty() { "none".into() } else { effects.iter().map(|e| e.name()).collect::<Vec<_>>().join("+") }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::weibull::Weibull;
+    use rand::Rng;
+
+    #[test]
+    fn damage_ratio_is_recovered() {
+        // Particles crushed after 0–200 prior impacts at x = 0.05 (γ = 5), m = 15.
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let n = 600;
+        let impacts: Vec<u64> = (0..n).map(|_| rng.random_range(0..=200)).collect();
+        let x: Vec<f64> = impacts
+            .iter()
+            .map(|&k| {
+                let f = damage_offset(0.05, 5.0, k).unwrap().exp();
+                Weibull::new(15.0, 2e9 * f).unwrap().sample(&mut rng)
+            })
+            .collect();
+        let c = vec![("impacts".to_string(), impacts.iter().map(|&k| Some(k as f64)).collect())];
+        let t = Effect::Damage.term(&c, 5.0).unwrap();
+        let m = fit_model(&x, &[(Effect::Damage, t)]).unwrap();
+        let r = m.damage_ratio.unwrap();
+        assert!((r / 0.05 - 1.0).abs() < 0.25, "x = {r}");
+        assert!((m.shape() - 15.0).abs() < 1.5);
+    }
+
+    #[test]
+    fn a_missing_covariate_names_material_file_and_column() {
+        let s = Sample { source: "d.csv".into(), strength: vec![1e9; 12], covariates: vec![("roundness".into(), vec![None; 12])] };
+        let e = StrengthFit::new(&s, &[Effect::Roundness], 5.0, "gen4").unwrap_err().to_string();
+        assert!(e.contains("d.csv") && e.contains("column roundness") && e.contains("gen4"), "{e}");
+    }
+}

@@ -1,0 +1,45 @@
+//! The strength model: one lifetime chain, fitted once per material and used by every study.
+//!
+//! The deliverable's §6 chain — crush force at break → Hertz average radial tension σ̄ → Weibull
+//! strength → Hertz impact with energy fraction η → breaking probability after N impacts — is
+//! one object here, [`LifetimeModel`]. Its strength law is the Weibull law of σ̄ at break with
+//! any of the effects the discrepancy workflow can name ([`effects`]): a weakest-link size
+//! effect σ_θ ∝ d^(−α), roundness and sphericity as contact curvature R_c = roundness^q ·
+//! sphericity^p · R (the same R_c in the crush reduction and in every impact), temperature
+//! softening, and damage from impacts before the crush test. The deliverable's model is the
+//! special case without effects (R_c = R, one law for all particles).
+//!
+//! * [`fit`]: the crush sample (σ̄ at break per particle and its covariates), the
+//!   maximum-likelihood fit of the Weibull regression ([`regress`]) with the model's effects,
+//!   cross-validated pointwise log scores.
+//! * [`draws`]: the joint uncertainty of all the model's parameters — the parametric bootstrap
+//!   in pivotal form (ASTM C1239's pivotal simulation, generalised) or the Bayesian posterior.
+//! * [`population`]: the particles a prediction is for (the crush data's, or declared
+//!   distributions); P_break is the population average, with the population's own sampling
+//!   uncertainty (Bayesian bootstrap) in the bands.
+//! * [`model`]: the chain itself, its fast evaluation (one exp per particle and one per law),
+//!   and the [`Simulator`](crate::model::Simulator) [`LifetimeChain`].
+//! * [`options`]: the `[strength]` section of studies (`effects = [] | [...] | "diagnosed"`,
+//!   uncertainty, draws, the naming loop's settings).
+//! * [`weights`]: stacking and pseudo-BMA weights of competing strength models from their
+//!   cross-validated log scores.
+//!
+//! The lifetime study (`crate::runner`), the main study (`crate::uq`) and the discrepancy
+//! workflow (`crate::discrepancy`) all evaluate a [`LifetimeModel`]; at fixed inputs they give
+//! the same breakage (`tests/verification/strength.rs`).
+
+pub mod draws;
+pub mod effects;
+pub mod fit;
+pub mod model;
+pub mod options;
+pub mod population;
+pub mod regress;
+pub mod weights;
+
+pub use draws::{MAX_LINEAR, ParameterSummary, Params, summarise};
+pub use effects::{ALL, Effect, Term};
+pub use fit::{ModelFit, Sample, StrengthFit, contact_at_break, fit_model, fit_model_near, sample_of};
+pub use model::{LifetimeChain, LifetimeModel};
+pub use options::{NamingSettings, StrengthOptions, StrengthSpec, Uncertainty};
+pub use population::{Particle, Population, PopulationSpec};

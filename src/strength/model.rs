@@ -1,0 +1,397 @@
+//! The lifetime model of one particle type: contact geometry → strength law → impact →
+//! population → breaking probability after N impacts. Every study evaluates this object.
+//!
+//! # Equations
+//!
+//! A particle of diameter d (R = d/2) touches a flat (platen or tube) with the radius of
+//! curvature
+//!
+//! ```text
+//! R_c = R · roundness^q · sphericity^p          (q = p = 0 unless the model carries the effect)
+//! ```
+//!
+//! in the crush test and in every impact alike. With an averaging domain ending at a multiple of
+//! the contact radius, σ̄ = r·p0 and the Hertz relations are power laws in R_c:
+//!
+//! ```text
+//! crush at force F:    p0 ∝ (F E*²/R_c²)^(1/3)              ⇒ σ̄(F, R_c) = σ̄(F, R)·(R_c/R)^(−2/3)
+//! impact at V, η:      p0 ∝ E*^(4/5) (ρ d³)^(1/5) (η V²)^(1/5) R_c^(−3/5)
+//!                                                          ⇒ σ̄_imp(R_c) = σ̄_imp,sphere·(R_c/R)^(−3/5)
+//! ```
+//!
+//! and σ̄_imp,sphere(η, V) does not depend on d (the mass ∝ d³ and R^(−3/5) cancel), nor does
+//! a/R of a sphere's impact, so one reference sphere serves every particle, whatever the
+//! domain. The strength law is the Weibull law of σ̄ at break with the particle's own scale,
+//! ln σ_θ,i = μ + Σ_strength β_k z_ik (size, temperature; [`super::effects`]); in the σ̄ reduced
+//! with R = d/2 the contact effects add β z_ik with β = 2q/3 (z = ln roundness). The
+//! single-impact hazard of particle i is then
+//!
+//! ```text
+//! ln H_i = m [ln σ̄_imp,sphere(η, V) − μ − Σ_k κ_k β_k z_ik],   κ = 1 (strength), 0.9 (contact)
+//! ```
+//!
+//! (κ = (3/5)/(2/3): the impact feels R_c^(−3/5) where the crush reduction felt R_c^(−2/3)),
+//! P_N,i follows from the damage model ([`crate::lifetime::damage::Law`]) and the population's
+//! breaking probability is P_N = Σ_i w_i P_N,i ([`super::population`]). The deliverable's model
+//! is the special case without effects: R_c = R, one strength law, every particle alike.
+//!
+//! For a domain with σ̄ ∝ p0 the impact stress is σ̄_imp,sphere(1, 1)·η^(1/5)·V^(2/5): one
+//! logarithm per call ([`LifetimeModel::ln_impact_stress`]; `tests::fast_path_is_the_contact_chain`
+//! checks it against the contact module to 1e-12). With L = R the domain formula is evaluated.
+//!
+//! [`LifetimeChain`] is the model as a [`Simulator`]: θ = (m, σ_θ = e^μ, β of each linear
+//! effect, η, V) ↦ (F_max and σ̄ of the reference sphere, P_N of the population for each
+//! configured N under independent trials).
+//!
+//! Verified by the unit tests below (power laws of R_c against direct Hertz computations,
+//! diameter independence, fast path) and by `tests/verification/strength.rs` (the three studies
+//! agree at fixed inputs; coverage of a generator's true population breakage).
+
+use super::draws::{MAX_LINEAR, Params};
+use super::effects::Effect;
+use super::fit::StrengthFit;
+use super::population::Population;
+use crate::contact::{AveragingDomain, Elastic, Impact, Sphere, TensileZone};
+use crate::error::{Error, Result};
+use crate::lifetime::damage::{DamageModel, Law};
+use crate::lifetime::{ImpactLoad, MAX_VELOCITY};
+use crate::model::{OutputSpec, Simulator, check_outputs};
+use crate::params::{Param, ParamSpace};
+
+/// The lifetime model of one particle type.
+#[derive(Debug, Clone)]
+pub struct LifetimeModel {
+    /// Material key (`bl1630`).
+    pub key: String,
+    /// Material label (`BL 16/30`).
+    pub label: String,
+    /// Reference particle of the impact outputs (F_max, contact time, force history); its
+    /// diameter does not change σ̄ or the breakage.
+    pub sphere: Sphere,
+    /// The wall (tube) hit in impacts.
+    pub wall: Elastic,
+    /// Averaging domain of σ̄ (crush and impact alike).
+    pub domain: AveragingDomain,
+    /// The fitted strength law.
+    pub fit: StrengthFit,
+    /// The particles predicted for.
+    pub population: Population,
+    /// Linear effects, in the order of β.
+    linear: Vec<Effect>,
+    /// κ_k z_ik per particle (row-major, stride `linear.len()`; one row of zeros without
+    /// linear effects).
+    kz: Vec<f64>,
+    /// Rows of `kz`.
+    rows: usize,
+    /// ln σ̄ of the reference sphere's impact at η = 1, V = 1 m/s when σ̄ ∝ p0.
+    ln_sigma_unit: Option<f64>,
+}
+
+impl LifetimeModel {
+    /// The model of a material: its fitted strength law, the particle that hits `wall`, the
+    /// averaging domain and the population predicted for. A population particle without a
+    /// covariate the model needs is an error naming the material and the source.
+    pub fn new(key: &str, label: &str, sphere: Sphere, wall: Elastic, domain: AveragingDomain, fit: StrengthFit, population: Population) -> Result<Self> {
+        let linear = fit.linear();
+        if linear.len() > MAX_LINEAR {
+            return Err(Error::numerical("lifetime model", format!("at most {MAX_LINEAR} linear effects")));
+        }
+        let zone = TensileZone::new(sphere.elastic.poisson_ratio);
+        let proportional = domain.ratio_to_peak_pressure(&zone).is_some();
+        if let Some(e) = linear.iter().find(|e| e.is_contact_geometry())
+            && !proportional
+        {
+            return Err(Error::Param {
+                name: "contact.averaging".into(),
+                rule: format!("material `{key}`: the `{}` effect changes the contact curvature, which needs σ̄ ∝ p0 (a domain ending at a multiple of the contact radius), not {}", e.name(), domain.describe()),
+            });
+        }
+        if population.is_empty() {
+            return Err(Error::numerical("lifetime model", format!("material `{key}`: the population has no particle")));
+        }
+        let (kz, rows) = if linear.is_empty() {
+            (vec![], 1)
+        } else {
+            let mut kz = Vec::with_capacity(population.len() * linear.len());
+            for (i, p) in population.particles.iter().enumerate() {
+                for (e, r) in linear.iter().zip(&fit.references) {
+                    let Some(v) = e.value_of(p).filter(|v| v.is_finite()) else {
+                        return Err(Error::Data {
+                            file: population.source.trim_start_matches("data: ").to_string(),
+                            location: format!("row {} (line {}), column {}", i + 1, i + 2, e.covariate()),
+                            rule: format!("material `{key}`: the strength model's `{}` effect needs this covariate for every particle of the population", e.name()),
+                        });
+                    };
+                    kz.push(e.impact_exponent() * e.z(v, *r));
+                }
+            }
+            (kz, population.len())
+        };
+        let ln_sigma_unit = if proportional { Some(ImpactLoad::on_wall(&sphere, &wall, 1.0, domain).at_velocity(1.0)?.mean_tensile.ln()) } else { None };
+        Ok(LifetimeModel { key: key.into(), label: label.into(), sphere, wall, domain, fit, population, linear, kz, rows, ln_sigma_unit })
+    }
+
+    /// Linear effects, in the order of β.
+    pub fn linear(&self) -> &[Effect] {
+        &self.linear
+    }
+
+    /// Whether every particle has the same breakage (no linear effect).
+    pub fn uniform(&self) -> bool {
+        self.linear.is_empty()
+    }
+
+    /// The impact of the reference sphere on the wall with energy fraction η.
+    pub fn impact(&self, eta: f64) -> Impact {
+        Impact::sphere_on_wall(&self.sphere, &self.wall, self.sphere.radius(), eta)
+    }
+
+    /// ln σ̄ (Pa) of a spherical particle's impact at energy fraction η and velocity V (m/s);
+    /// −∞ at V ≤ 0 (no contact).
+    #[inline]
+    pub fn ln_impact_stress(&self, eta: f64, v: f64) -> Result<f64> {
+        if v <= 0.0 {
+            return Ok(f64::NEG_INFINITY);
+        }
+        match self.ln_sigma_unit {
+            Some(c) => Ok(c + 0.2 * eta.ln() + 0.4 * v.ln()),
+            None => Ok(ImpactLoad::on_wall(&self.sphere, &self.wall, eta, self.domain).at_velocity(v)?.mean_tensile.ln()),
+        }
+    }
+
+    /// The population's breaking probability under each law of `laws` (built for `p.shape`),
+    /// added into `out` (which the caller zeroes), at the reference sphere's impact stress
+    /// ln σ̄ = `ln_sigma`. `weights` (one per particle, summing to 1) default to equal.
+    #[inline]
+    pub fn breakage_into(&self, p: &Params, weights: Option<&[f64]>, ln_sigma: f64, laws: &[Law], out: &mut [f64]) {
+        debug_assert_eq!(laws.len(), out.len());
+        let m = p.shape;
+        let base = m * (ln_sigma - p.mu);
+        if self.rows == 1 && self.linear.is_empty() {
+            let h = base.exp();
+            for (o, law) in out.iter_mut().zip(laws) {
+                *o += law.p(h, base);
+            }
+            return;
+        }
+        let k = self.linear.len();
+        let w0 = 1.0 / self.rows as f64;
+        for i in 0..self.rows {
+            let row = &self.kz[i * k..(i + 1) * k];
+            let mut s = 0.0;
+            for j in 0..k {
+                s += p.beta[j] * row[j];
+            }
+            let ln_h = base - m * s;
+            let h = ln_h.exp();
+            let w = weights.map_or(w0, |w| w[i]);
+            for (o, law) in out.iter_mut().zip(laws) {
+                *o += w * law.p(h, ln_h);
+            }
+        }
+    }
+
+    /// The population's breaking probability after each of `counts` impacts at (η, V) under
+    /// independent trials.
+    pub fn breakage(&self, p: &Params, weights: Option<&[f64]>, eta: f64, v: f64, counts: &[f64]) -> Result<Vec<f64>> {
+        let laws: Vec<Law> = counts.iter().map(|&n| Law::new(DamageModel::Independent, p.shape, n, 0.0)).collect();
+        let mut out = vec![0.0; counts.len()];
+        self.breakage_into(p, weights, self.ln_impact_stress(eta, v)?, &laws, &mut out);
+        Ok(out)
+    }
+
+    /// Each particle's single-impact ln H at ln σ̄ (for tables and tests).
+    pub fn ln_hazards(&self, p: &Params, ln_sigma: f64) -> Vec<f64> {
+        let base = p.shape * (ln_sigma - p.mu);
+        if self.linear.is_empty() {
+            return vec![base; self.population.len()];
+        }
+        let k = self.linear.len();
+        (0..self.rows).map(|i| base - p.shape * (0..k).map(|j| p.beta[j] * self.kz[i * k + j]).sum::<f64>()).collect()
+    }
+
+    /// The population's P_N after each of `counts` impacts at (η, V) under independent trials:
+    /// (estimate at `estimate`, lower, upper) where the two-sided `level` band comes from `k`
+    /// joint draws ([`LifetimeModel::draws`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn bands(&self, estimate: &Params, eta: f64, v: f64, counts: &[f64], how: super::options::Uncertainty, k: usize, seed: u64, level: f64) -> Result<Vec<(f64, f64, f64)>> {
+        use rayon::prelude::*;
+        let point = self.breakage(estimate, None, eta, v, counts)?;
+        let (draws, weights) = self.draws(how, k, seed)?;
+        let ln_sigma = self.ln_impact_stress(eta, v)?;
+        let per: Vec<Vec<f64>> = draws
+            .par_iter()
+            .enumerate()
+            .map(|(r, p)| {
+                let laws: Vec<Law> = counts.iter().map(|&n| Law::new(DamageModel::Independent, p.shape, n, 0.0)).collect();
+                let mut out = vec![0.0; counts.len()];
+                self.breakage_into(p, weights.as_ref().map(|w| &w[r][..]), ln_sigma, &laws, &mut out);
+                out
+            })
+            .collect();
+        let a = 0.5 * (1.0 - level);
+        Ok((0..counts.len())
+            .map(|c| {
+                let q = crate::stats::interpolated_quantiles(per.iter().map(|d| d[c]).collect(), &[a, 1.0 - a]);
+                (point[c], q[0], q[1])
+            })
+            .collect())
+    }
+
+    /// Joint draws of the parameters and, for a sampled population, of its weights (the same
+    /// draw index pairs them).
+    pub fn draws(&self, how: super::options::Uncertainty, k: usize, seed: u64) -> Result<(Vec<Params>, Option<Vec<Vec<f64>>>)> {
+        let params = self.fit.draws(how, k, seed)?;
+        let weights = if self.uniform() { None } else { self.population.weight_draws(k, seed ^ 0x9E0_1A7E) };
+        Ok((params, weights))
+    }
+}
+
+/// The lifetime model as a [`Simulator`].
+#[derive(Debug, Clone)]
+pub struct LifetimeChain {
+    model: LifetimeModel,
+    counts: Vec<f64>,
+    space: ParamSpace,
+    outputs: Vec<OutputSpec>,
+}
+
+/// Indices of θ in [`LifetimeChain`] (the β of the linear effects follow the scale).
+pub mod theta {
+    /// Weibull shape m (-).
+    pub const SHAPE: usize = 0;
+    /// Weibull scale σ_θ = e^μ (Pa).
+    pub const SCALE: usize = 1;
+    /// First β.
+    pub const BETA: usize = 2;
+}
+
+impl LifetimeChain {
+    /// The chain of `model`, with P_N outputs for each of `counts`; `nominal` = (parameters,
+    /// η, V in m/s).
+    pub fn new(model: LifetimeModel, counts: &[f64], nominal: (Params, f64, f64)) -> Result<Self> {
+        if counts.iter().any(|n| !(n.is_finite() && *n >= 1.0)) {
+            return Err(Error::Param { name: "impact_counts".into(), rule: format!("every count must be ≥ 1 (got {counts:?})") });
+        }
+        let (p, eta, v) = nominal;
+        // Wide physical bounds; a nominal outside them is an error, never clamped.
+        let mut params = vec![Param::uniform("weibull_shape", "-", 0.1, 500.0, p.shape), Param::uniform("weibull_scale_pa", "Pa", 1e3, 1e12, p.mu.exp())];
+        for (j, e) in model.linear().iter().enumerate() {
+            params.push(Param::uniform(&format!("beta_{}", e.name()), "-", -50.0, 50.0, p.beta[j]));
+        }
+        params.push(Param::uniform("energy_fraction", "-", 1e-9, 1.0, eta));
+        params.push(Param::uniform("velocity_m_s", "m/s", 0.0, MAX_VELOCITY, v));
+        let space = ParamSpace::new(params)?;
+        let mut outputs = vec![OutputSpec::new("f_max_n", "N"), OutputSpec::new("sigma_bar_pa", "Pa")];
+        outputs.extend(counts.iter().map(|n| OutputSpec::new(format!("p_break_{n}"), "-")));
+        Ok(LifetimeChain { model, counts: counts.to_vec(), space, outputs })
+    }
+
+    /// The model.
+    pub fn model(&self) -> &LifetimeModel {
+        &self.model
+    }
+
+    /// The impact counts N of the outputs.
+    pub fn counts(&self) -> &[f64] {
+        &self.counts
+    }
+
+    /// θ of (parameters, η, V).
+    pub fn theta(&self, p: &Params, eta: f64, v: f64) -> Vec<f64> {
+        let k = self.model.linear().len();
+        let mut t = vec![p.shape, p.mu.exp()];
+        t.extend_from_slice(&p.beta[..k]);
+        t.extend([eta, v]);
+        t
+    }
+
+    /// (parameters, η, V) of θ.
+    pub fn unpack(&self, theta: &[f64]) -> Result<(Params, f64, f64)> {
+        self.space.check(theta)?;
+        if !self.space.contains(theta) {
+            return Err(Error::Param { name: "θ".into(), rule: format!("{theta:?} lies outside the bounds") });
+        }
+        let k = self.model.linear().len();
+        let mut beta = [0.0; MAX_LINEAR];
+        beta[..k].copy_from_slice(&theta[theta::BETA..theta::BETA + k]);
+        Ok((Params { shape: theta[theta::SHAPE], mu: theta[theta::SCALE].ln(), beta }, theta[theta::BETA + k], theta[theta::BETA + k + 1]))
+    }
+}
+
+impl Simulator for LifetimeChain {
+    fn space(&self) -> &ParamSpace {
+        &self.space
+    }
+    fn outputs(&self) -> &[OutputSpec] {
+        &self.outputs
+    }
+    fn simulate(&self, theta: &[f64]) -> Result<Vec<f64>> {
+        let (p, eta, v) = self.unpack(theta)?;
+        let (force, sigma) = if v > 0.0 {
+            let state = ImpactLoad::on_wall(&self.model.sphere, &self.model.wall, eta, self.model.domain).at_velocity(v)?;
+            (state.force, self.model.ln_impact_stress(eta, v)?.exp())
+        } else {
+            (0.0, 0.0)
+        };
+        let mut y = vec![force, sigma];
+        y.extend(self.model.breakage(&p, None, eta, v, &self.counts)?);
+        check_outputs("lifetime chain", &self.outputs, theta, &y)?;
+        Ok(y)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::{ContactStress, Hertz, OuterLimit};
+
+    fn e() -> Elastic {
+        Elastic::new(112e9, 0.25).unwrap()
+    }
+    fn steel() -> Elastic {
+        Elastic::new(210e9, 0.3).unwrap()
+    }
+
+    #[test]
+    fn contact_curvature_power_laws_match_direct_hertz() {
+        // Crush: σ̄ at a force with R_c against R (line average to 2a): exponent −2/3.
+        let (r, c, f) = (0.45e-3, 0.7f64, 120.0);
+        let s = |rc: f64| ContactStress::new(Hertz::sphere_on_flat(&e(), &steel(), rc), AveragingDomain::default(), rc).at_force(f).unwrap().mean_tensile;
+        assert!((s(c * r) / s(r) - c.powf(-2.0 / 3.0)).abs() < 1e-12);
+        // Impact of the same mass with R_c against R: exponent −3/5 (κ = 0.9 of the crush's).
+        let sphere = Sphere { diameter: 2.0 * r, density: 3060.0, elastic: e() };
+        let imp = |rc: f64| {
+            let i = Impact::sphere_on_wall(&sphere, &steel(), rc, 0.1);
+            ContactStress::new(i.hertz, AveragingDomain::default(), r).at_force(i.max_force(5.0)).unwrap().mean_tensile
+        };
+        assert!((imp(c * r) / imp(r) - c.powf(-0.6)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn sphere_impact_stress_does_not_depend_on_diameter() {
+        for outer in [OuterLimit::ContactMultiple, OuterLimit::ParticleRadius] {
+            let domain = AveragingDomain { outer, ..AveragingDomain::default() };
+            let sig = |d: f64| ImpactLoad::on_wall(&Sphere { diameter: d, density: 3600.0, elastic: e() }, &steel(), 0.1, domain).at_velocity(5.0).unwrap().mean_tensile;
+            assert!((sig(0.6e-3) / sig(1.2e-3) - 1.0).abs() < 1e-12, "{outer:?}");
+        }
+    }
+
+    #[test]
+    fn fast_path_is_the_contact_chain() {
+        let sphere = Sphere { diameter: 0.9e-3, density: 3060.0, elastic: e() };
+        let fit = crate::strength::fit::StrengthFit::new(
+            &crate::strength::fit::Sample { source: "x".into(), strength: (1..=20).map(|i| 7e8 + 1e7 * i as f64).collect(), covariates: vec![] },
+            &[],
+            5.0,
+            "x",
+        )
+        .unwrap();
+        let pop = Population { source: "declared".into(), particles: vec![crate::strength::population::Particle { diameter_m: 0.9e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false };
+        let m = LifetimeModel::new("x", "X", sphere, steel(), AveragingDomain::default(), fit, pop).unwrap();
+        for (eta, v) in [(0.1, 5.0), (0.37, 0.3), (1.0, 45.0)] {
+            let direct = ImpactLoad::on_wall(&sphere, &steel(), eta, AveragingDomain::default()).at_velocity(v).unwrap().mean_tensile.ln();
+            assert!((m.ln_impact_stress(eta, v).unwrap() - direct).abs() < 1e-12);
+        }
+    }
+}

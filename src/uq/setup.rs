@@ -1,0 +1,297 @@
+//! One strength model's comparison of the two particle types, ready to sample: every uncertain
+//! input as a marginal, and the evaluation of one sample through each material's
+//! [`LifetimeModel`] (no second copy of the chain).
+//!
+//! # Inputs
+//!
+//! In order: `strength_<a>` (one of K joint draws of material a's strength model: m, μ, the
+//! effects' β and the population weights), one input per effect parameter of material a
+//! (`size_alpha_<a>`, `roundness_q_<a>`, …), the same for material b, then `energy_fraction`,
+//! `velocity`, `impacts_per_year` and `tk_gamma` (a = candidate, b = reference).
+//!
+//! # Joint and split sampling
+//!
+//! The propagation ([`Mode::Joint`]) takes every parameter of a material from one joint draw:
+//! the headline carries the exact joint uncertainty and the effect inputs are not sampled.
+//! Sobol' indices need independent inputs; [`Mode::Split`] takes the modulus, the scale at the
+//! sample's mean covariates μ_c = μ + Σ β_k z̄_k and the population weights from the joint draw
+//! and each effect parameter from its own marginal. With centred covariates the Fisher
+//! information of the Weibull regression is block-diagonal between (μ_c, b) and β, so their
+//! estimates are asymptotically independent; `strength_models.csv` reports the largest sample
+//! correlation of the draws so the approximation can be judged.
+
+use std::path::{Path, PathBuf};
+
+use super::study::UqStudy;
+use crate::contact::{AveragingDomain, ContactOptions};
+use crate::data::read_crush;
+use crate::dist::Marginal;
+use crate::error::{Error, Result};
+use crate::lifetime::damage::{CriticalRatioTable, DamageModel, Law};
+use crate::strength::{LifetimeModel, MAX_LINEAR, NamingSettings, Params, Sample, StrengthFit, StrengthSpec, sample_of};
+
+/// One uncertain input.
+#[derive(Debug, Clone)]
+pub struct Input {
+    /// Name in tables.
+    pub name: String,
+    /// Unit.
+    pub unit: String,
+    /// Its marginal.
+    pub marginal: Marginal,
+}
+
+/// How a sample's unit point maps to the inputs (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Every strength parameter from one joint draw (the propagation).
+    Joint,
+    /// Effect parameters from their own marginals (the Sobol' indices).
+    Split,
+}
+
+/// One particle type of the comparison.
+#[derive(Debug, Clone)]
+pub struct Material {
+    /// Its lifetime model (fitted strength law, population, impact).
+    pub model: LifetimeModel,
+    /// Joint draws of its strength parameters.
+    pub draws: Vec<Params>,
+    /// Population weights paired with the draws (a sampled population), or equal weights.
+    pub weights: Option<Vec<Vec<f64>>>,
+    /// Its crush sample (σ̄ at break and covariates).
+    pub sample: Sample,
+    /// The crush data file.
+    pub path: PathBuf,
+    /// Index of `strength_<key>` in the inputs.
+    strength_input: usize,
+    /// Indices of its effect parameters in the inputs (order of the linear effects).
+    effect_inputs: Vec<usize>,
+}
+
+/// The inputs shared by every strength model.
+#[derive(Debug, Clone)]
+pub struct Shared {
+    /// η, V, impacts per year, γ.
+    pub inputs: [Input; 4],
+    /// Tavares–King x* tables per horizon (fixed impacts per year only).
+    pub tk: Vec<Option<CriticalRatioTable>>,
+    /// Damage models (primary first).
+    pub models: Vec<DamageModel>,
+}
+
+impl Shared {
+    /// Builds the shared inputs of a study (`path` its file).
+    pub fn new(s: &UqStudy, path: &Path) -> Result<Shared> {
+        let file = path.display().to_string();
+        let resolve = |p: &str| crate::study::resolve_relative(path, Path::new(p));
+        let m = |d: &crate::dist::Dist, key: &str, unit: &str, lo: f64, hi: f64| -> Result<Marginal> {
+            let mg = d.marginal(&file, key, unit, &resolve)?;
+            let (a, b) = (mg.quantile(0.0), mg.quantile(1.0));
+            if a >= lo && b <= hi && a.is_finite() && b.is_finite() { Ok(mg) } else { Err(Error::config(&file, key, format!("values must lie in [{lo}, {hi}], the distribution spans [{a}, {b}]"))) }
+        };
+        let eta = m(&s.impact.energy_fraction, "impact.energy_fraction", "-", 1e-6, 1.0)?;
+        let v = m(&s.impact.velocity, "impact.velocity", "m/s", 0.0, crate::lifetime::MAX_VELOCITY)?;
+        let per_year = m(&s.impact.impacts_per_year, "impact.impacts_per_year", "1/yr", 1e-9, 1e9)?;
+        let gamma = m(&s.damage.gamma, "damage.gamma", "-", 0.1, 100.0)?;
+        let mut models = vec![s.damage.primary];
+        models.extend(s.damage.models.iter().copied().filter(|m| *m != s.damage.primary));
+        models.dedup();
+        let tk = if models.contains(&DamageModel::TavaresKing) {
+            let Marginal::Fixed(n_year) = per_year else {
+                return Err(Error::config(&file, "impact.impacts_per_year", "the Tavares–King model needs a fixed number of impacts per year (its damage table is per N)"));
+            };
+            let (glo, ghi) = (gamma.quantile(0.0), gamma.quantile(1.0));
+            s.impact.years.iter().map(|y| Some(CriticalRatioTable::new((y * n_year).round().max(1.0) as u64, glo, ghi.max(glo + 1e-9), 41))).collect()
+        } else {
+            vec![None; s.impact.years.len()]
+        };
+        let input = |name: &str, unit: &str, marginal: Marginal| Input { name: name.into(), unit: unit.into(), marginal };
+        Ok(Shared {
+            inputs: [input("energy_fraction", "-", eta), input("velocity", "m/s", v), input("impacts_per_year", "1/yr", per_year), input("tk_gamma", "-", gamma)],
+            tk,
+            models,
+        })
+    }
+}
+
+/// The comparison under one strength model.
+#[derive(Debug, Clone)]
+pub struct Setup {
+    /// The strength model (as specified; `diagnosed` resolves per material).
+    pub spec: StrengthSpec,
+    /// Inputs in order (module docs).
+    pub inputs: Vec<Input>,
+    /// Candidate first, reference second.
+    pub materials: [Material; 2],
+    /// Horizons (years).
+    pub years: Vec<f64>,
+    /// Damage models (primary first).
+    pub models: Vec<DamageModel>,
+    /// Averaging domain of σ̄.
+    pub domain: AveragingDomain,
+    tk: Vec<Option<CriticalRatioTable>>,
+    shared_at: usize,
+}
+
+impl Setup {
+    /// Fits strength model `spec` to both materials of study `s` (file `path`) with averaging
+    /// domain `domain`, and draws its uncertainty.
+    pub fn new(s: &UqStudy, path: &Path, spec: &StrengthSpec, domain: &AveragingDomain, shared: &Shared) -> Result<Setup> {
+        let file = path.display().to_string();
+        let contact = ContactOptions { platen: s.contact.platen, averaging: *domain };
+        let mut inputs = Vec::new();
+        let mut materials = Vec::new();
+        for (slot, &i) in s.order().iter().enumerate() {
+            let m = &s.material[i];
+            let dpath = crate::study::resolve_relative(path, &m.data);
+            if !dpath.is_file() {
+                return Err(Error::config(&file, format!("material[{i}].data"), format!("{} does not exist", dpath.display())));
+            }
+            let data = read_crush(&dpath)?;
+            let sample = sample_of(&data, &m.elastic, &contact)?;
+            let naming = NamingSettings { seed: s.seed.wrapping_add(7919 * i as u64), ..s.strength.naming.clone() };
+            let effects = crate::discrepancy::workflow::resolve(spec, &sample, &naming)?;
+            let fit = StrengthFit::new(&sample, &effects, naming.gamma, &m.key)?;
+            let population = m.population(i, &data, path, s.seed)?;
+            let model = LifetimeModel::new(&m.key, &m.label, m.sphere(&data), s.impact.target, *domain, fit, population)?;
+            let (draws, weights) = model.draws(s.strength.uncertainty, s.strength.draws, s.seed ^ (0xA5A5 + slot as u64))?;
+            let strength_input = inputs.len();
+            inputs.push(Input { name: format!("strength_{}", m.key), unit: "joint draw".into(), marginal: Marginal::Index(draws.len()) });
+            let mut effect_inputs = Vec::new();
+            for (l, e) in model.linear().iter().enumerate() {
+                let mut v: Vec<f64> = draws.iter().map(|d| e.natural(d.beta[l])).collect();
+                v.sort_by(f64::total_cmp);
+                let k = v.len();
+                let q: Vec<(f64, f64)> = v.into_iter().enumerate().map(|(r, x)| (r as f64 / (k - 1) as f64, x)).collect();
+                let (sym, _, _) = e.parameter(0.0, 1.0);
+                effect_inputs.push(inputs.len());
+                inputs.push(Input { name: format!("{}_{sym}_{}", e.name(), m.key), unit: "-".into(), marginal: Marginal::Quantiles(q) });
+            }
+            materials.push(Material { model, draws, weights, sample, path: dpath, strength_input, effect_inputs });
+        }
+        let shared_at = inputs.len();
+        inputs.extend(shared.inputs.iter().cloned());
+        let [a, b]: [Material; 2] = materials.try_into().map_err(|_| Error::config(&file, "material", "two materials"))?;
+        Ok(Setup { spec: spec.clone(), inputs, materials: [a, b], years: s.impact.years.clone(), models: shared.models.clone(), domain: *domain, tk: shared.tk.clone(), shared_at })
+    }
+
+    /// Index into a sample's P of material j (0 candidate, 1 reference), horizon h, model k.
+    pub fn slot(&self, j: usize, h: usize, k: usize) -> usize {
+        (j * self.years.len() + h) * self.models.len() + k
+    }
+
+    /// Number of P values per sample.
+    pub fn outputs(&self) -> usize {
+        2 * self.years.len() * self.models.len()
+    }
+
+    /// Index of input `eta`, `velocity`, `per_year` or `gamma` (0–3).
+    fn shared(&self, k: usize) -> usize {
+        self.shared_at + k
+    }
+
+    /// Index of the velocity input.
+    pub fn velocity_input(&self) -> usize {
+        self.shared(1)
+    }
+
+    /// Whether input i is an effect parameter (sampled in split mode only).
+    fn is_effect(&self, i: usize) -> bool {
+        self.materials.iter().any(|m| m.effect_inputs.contains(&i))
+    }
+
+    /// The inputs a unit point covers in `mode`.
+    pub fn varying(&self, mode: Mode) -> Vec<usize> {
+        (0..self.inputs.len()).filter(|&i| self.inputs[i].marginal.varies() && (mode == Mode::Split || !self.is_effect(i))).collect()
+    }
+
+    /// Full input vector from a unit point over the varying inputs of `mode` (in joint mode the
+    /// effect inputs hold the joint draw's values).
+    pub fn values(&self, u: &[f64], mode: Mode) -> Vec<f64> {
+        let mut x = vec![0.0; self.inputs.len()];
+        self.values_into(u, mode, &mut x);
+        x
+    }
+
+    /// [`Setup::values`] into `x` (length: the number of inputs).
+    pub fn values_into(&self, u: &[f64], mode: Mode, x: &mut [f64]) {
+        let mut k = 0;
+        for (i, xi) in x.iter_mut().enumerate() {
+            let m = &self.inputs[i].marginal;
+            *xi = if !m.varies() {
+                m.quantile(0.5)
+            } else if mode == Mode::Joint && self.is_effect(i) {
+                f64::NAN
+            } else {
+                k += 1;
+                m.quantile(u[k - 1])
+            };
+        }
+        if mode == Mode::Joint {
+            for mat in &self.materials {
+                let d = &mat.draws[x[mat.strength_input] as usize];
+                for (l, (&i, e)) in mat.effect_inputs.iter().zip(mat.model.linear()).enumerate() {
+                    x[i] = e.natural(d.beta[l]);
+                }
+            }
+        }
+    }
+
+    /// Material j's strength parameters and population weights at inputs x.
+    pub fn params(&self, j: usize, x: &[f64], mode: Mode) -> (Params, Option<&[f64]>) {
+        let mat = &self.materials[j];
+        let k = x[mat.strength_input] as usize;
+        let d = mat.draws[k];
+        let w = mat.weights.as_ref().map(|w| &w[k][..]);
+        if mode == Mode::Joint {
+            return (d, w);
+        }
+        // Split: keep the draw's μ_c = μ + Σ β z̄ and replace β by the effect inputs.
+        let mut p = d;
+        let mut beta = [0.0; MAX_LINEAR];
+        for (l, (&i, e)) in mat.effect_inputs.iter().zip(mat.model.linear()).enumerate() {
+            beta[l] = e.beta_of(x[i]);
+            p.mu += (d.beta[l] - beta[l]) * mat.model.fit.centre[l];
+        }
+        p.beta = beta;
+        (p, w)
+    }
+
+    /// P per material, horizon and damage model of the sample with inputs x, into `out`
+    /// (length [`Setup::outputs`]).
+    pub fn evaluate_into(&self, x: &[f64], mode: Mode, out: &mut [f64]) -> Result<()> {
+        let strength = [self.params(0, x, mode), self.params(1, x, mode)];
+        self.evaluate_at(strength, [x[self.shared(0)], x[self.shared(1)], x[self.shared(2)], x[self.shared(3)]], out)
+    }
+
+    /// P per material, horizon and damage model at explicit strength parameters and population
+    /// weights (candidate, reference) and shared inputs (η, V, impacts per year, γ), into `out`.
+    pub fn evaluate_at(&self, strength: [(Params, Option<&[f64]>); 2], [eta, v, per_year, gamma]: [f64; 4], out: &mut [f64]) -> Result<()> {
+        out.fill(0.0);
+        let per = self.years.len() * self.models.len();
+        let mut laws = [Law::Scaled { c: 0.0 }; 32];
+        for (j, (p, w)) in strength.into_iter().enumerate() {
+            let mut c = 0;
+            for (h, years) in self.years.iter().enumerate() {
+                let ln_x_star = self.tk[h].as_ref().map_or(0.0, |t| t.ln_ratio(gamma));
+                for &model in &self.models {
+                    laws[c] = Law::new(model, p.shape, years * per_year, ln_x_star);
+                    c += 1;
+                }
+            }
+            let model = &self.materials[j].model;
+            let ln_sigma = model.ln_impact_stress(eta, v)?;
+            model.breakage_into(&p, w, ln_sigma, &laws[..per], &mut out[j * per..(j + 1) * per]);
+        }
+        Ok(())
+    }
+
+    /// [`Setup::evaluate_into`] from a unit point.
+    pub fn evaluate(&self, u: &[f64], mode: Mode) -> Result<(Vec<f64>, Vec<f64>)> {
+        let x = self.values(u, mode);
+        let mut p = vec![0.0; self.outputs()];
+        self.evaluate_into(&x, mode, &mut p)?;
+        Ok((x, p))
+    }
+}

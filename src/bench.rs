@@ -142,12 +142,10 @@ pub fn run_all(study: Option<&Path>) -> Result<Vec<Figure>> {
             crate::study::Study::Calibrate(_) => "< 600 s (complete Bayesian calibration, empty cache)",
             _ => "< 5 s",
         };
-        let root = std::env::temp_dir().join(format!("partlife-bench-{}", std::process::id()));
+        let root = crate::io::TempDir::new("bench")?;
         let start = Instant::now();
-        let res = crate::runner::run_file(path, &crate::runner::RunOptions { reports_root: root.clone(), progress: false });
+        crate::runner::run_file(path, &crate::runner::RunOptions { reports_root: root.path().to_path_buf(), progress: false })?;
         let secs = start.elapsed().as_secs_f64();
-        let _ = std::fs::remove_dir_all(&root);
-        res?;
         out.push(Figure {
             what: format!("study {} end to end (in process)", path.display()),
             value: secs,
@@ -433,9 +431,9 @@ pub fn discrepancy_speed(settings: &Path) -> Result<DiscrepancySpeed> {
     gen_settings.material.truncate(1);
     gen_settings.material[0].count = 100;
     gen_settings.material[0].file = "bench_crush_100.csv".into();
-    let dir = std::env::temp_dir().join(format!("partlife-bench-discrepancy-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| crate::Error::write(&dir, e))?;
-    crate::synth::synthesize(&gen_settings, &dir)?;
+    let scratch = crate::io::TempDir::new("bench-discrepancy")?;
+    let dir = scratch.path();
+    crate::synth::synthesize(&gen_settings, dir)?;
     let data = dir.join("bench_crush_100.csv");
     let loaded = crate::discrepancy::run::quick_study(&data)?;
     let crate::study::Study::Discrepancy(s) = &loaded.study else { unreachable!("quick_study builds a discrepancy study") };
@@ -449,6 +447,5 @@ pub fn discrepancy_speed(settings: &Path) -> Result<DiscrepancySpeed> {
     let opts = crate::runner::RunOptions { reports_root: dir.join("reports"), progress: false };
     crate::runner::run(&loaded, &opts)?;
     let report_s = start.elapsed().as_secs_f64();
-    let _ = std::fs::remove_dir_all(&dir);
     Ok(DiscrepancySpeed { particles: sample.strength.len(), named: outcome.named.iter().map(|c| c.name()).collect(), loop_s, report_s })
 }

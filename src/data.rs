@@ -383,7 +383,7 @@ mod tests {
 
     #[test]
     fn reads_a_valid_file_with_optional_cells() {
-        let dir = tempfile::tempdir().unwrap();
+        let dir = crate::io::TempDir::new("test").unwrap();
         let p = write(
             dir.path(),
             "a.csv",
@@ -398,7 +398,7 @@ mod tests {
 
     #[test]
     fn errors_name_row_line_column_and_rule() {
-        let dir = tempfile::tempdir().unwrap();
+        let dir = crate::io::TempDir::new("test").unwrap();
         let p = write(
             dir.path(),
             "b.csv",

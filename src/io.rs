@@ -32,6 +32,42 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     })
 }
 
+/// A scratch directory under the system's temporary directory, removed with everything in it
+/// when dropped (benchmarks, tests). partlife keeps it in-house rather than depend on a crate:
+/// the test build must resolve exactly the release build's dependency features.
+#[derive(Debug)]
+pub struct TempDir {
+    path: PathBuf,
+}
+
+impl TempDir {
+    /// A new, empty directory `partlife-<label>-<pid>-<serial>`; never an existing one.
+    pub fn new(label: &str) -> Result<TempDir> {
+        static SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let base = std::env::temp_dir();
+        loop {
+            let serial = SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let path = base.join(format!("partlife-{label}-{}-{serial}", std::process::id()));
+            match std::fs::create_dir(&path) {
+                Ok(()) => return Ok(TempDir { path }),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+                Err(e) => return Err(Error::write(&path, e)),
+            }
+        }
+    }
+
+    /// Its path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.path);
+    }
+}
+
 /// SHA-256 of bytes, hex.
 pub fn sha256_hex(bytes: &[u8]) -> String {
     let digest = Sha256::digest(bytes);
@@ -268,7 +304,7 @@ mod tests {
 
     #[test]
     fn uncommitted_report_leaves_nothing_and_commit_replaces() {
-        let root = tempfile::tempdir().unwrap();
+        let root = crate::io::TempDir::new("test").unwrap();
         {
             let mut r = ReportDir::create(root.path(), "x").unwrap();
             r.write_bytes("a.txt", b"1").unwrap();
@@ -287,7 +323,7 @@ mod tests {
 
     #[test]
     fn tables_round_trip() {
-        let dir = tempfile::tempdir().unwrap();
+        let dir = crate::io::TempDir::new("test").unwrap();
         let mut df = table(vec![fcol("x", vec![1.0, 2.5]), scol("s", vec!["a".into(), "b,c".into()])]).unwrap();
         let p = dir.path().join("t.csv");
         write_atomic(&p, &table_to_csv(&mut df).unwrap()).unwrap();

@@ -11,7 +11,7 @@ use partlife::synth::{SynthSettings, synthesize};
 #[test]
 fn synth_reproduces_the_committed_files() {
     let settings = SynthSettings::load(&root().join("datasets/synth_crush.toml")).unwrap();
-    let dir = tempfile::tempdir().unwrap();
+    let dir = partlife::io::TempDir::new("test").unwrap();
     let summaries = synthesize(&settings, dir.path()).unwrap();
     assert_eq!(summaries.len(), 2);
     for m in &settings.material {
@@ -99,7 +99,7 @@ fn table1_is_transcribed_completely() {
 fn synth_dem_reproduces_the_committed_file() {
     use partlife::calibrate::synth_dem::{DemSynthSettings, synthesize};
     let (settings, model) = DemSynthSettings::load(&root().join("datasets/synth_dem.toml")).unwrap();
-    let dir = tempfile::tempdir().unwrap();
+    let dir = partlife::io::TempDir::new("test").unwrap();
     let (path, obs) = synthesize(&settings, &model, dir.path()).unwrap();
     assert_eq!(obs.len(), settings.heights.len() + 1);
     let old = std::fs::read(root().join("datasets").join(&settings.file)).unwrap();
@@ -113,7 +113,7 @@ fn synth_dem_reproduces_the_committed_file() {
 fn synth_curves_reproduce_the_committed_files() {
     use partlife::calibrate::synth::{CurveSynthSettings, synthesize};
     let settings = CurveSynthSettings::load(&root().join("datasets/synth_curves.toml")).unwrap();
-    let dir = tempfile::tempdir().unwrap();
+    let dir = partlife::io::TempDir::new("test").unwrap();
     let out = synthesize(&settings, dir.path(), &|| {}).unwrap();
     assert_eq!(out.len(), settings.case.len());
     for c in &settings.case {

@@ -136,7 +136,7 @@ mod tests {
 
     #[test]
     fn repeated_and_resumed_evaluations_come_from_disk() {
-        let dir = tempfile::tempdir().unwrap();
+        let dir = crate::io::TempDir::new("test").unwrap();
         let c = Cached::new(model(), dir.path(), "config A").unwrap();
         assert_eq!(c.simulate(&[0.25]).unwrap(), vec![0.5]);
         assert_eq!(c.simulate(&[0.25]).unwrap(), vec![0.5]);

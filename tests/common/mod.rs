@@ -13,12 +13,12 @@ pub fn root() -> PathBuf {
 /// A temporary project: `studies/{lifetime,dem_cold_test,crush_gen3_rt,calibrate_gen3_rt}.toml` and
 /// `datasets/*.csv` copied from the repo.
 pub struct Scratch {
-    pub dir: tempfile::TempDir,
+    pub dir: partlife::io::TempDir,
 }
 
 impl Scratch {
     pub fn new() -> Self {
-        let dir = tempfile::tempdir().unwrap();
+        let dir = partlife::io::TempDir::new("test").unwrap();
         for sub in ["studies", "datasets"] {
             std::fs::create_dir_all(dir.path().join(sub)).unwrap();
         }

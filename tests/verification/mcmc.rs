@@ -152,7 +152,7 @@ fn a_killed_run_resumes_from_its_checkpoint() {
     let opts = EnsembleOptions { walkers: 8, steps: 600, burn_in: 100, stretch: 2.0, seed: 19 };
     let start = init(8, 2, &[0.0, 0.0], 1.0, 2);
     let full = ensemble(lp, start.clone(), &opts).unwrap();
-    let dir = tempfile::tempdir().unwrap();
+    let dir = partlife::io::TempDir::new("test").unwrap();
     let ck = Checkpoint { path: dir.path().join("chain.json"), every: 50 };
     let calls = AtomicUsize::new(0);
     let dying = |x: &[f64]| if calls.fetch_add(1, Ordering::SeqCst) > 3000 { f64::NAN } else { lp(x) };

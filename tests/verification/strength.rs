@@ -24,8 +24,8 @@ fn root() -> &'static Path {
 }
 
 /// A scratch project with the shipped studies and crush files.
-fn scratch() -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
+fn scratch() -> partlife::io::TempDir {
+    let dir = partlife::io::TempDir::new("test").unwrap();
     for sub in ["studies", "datasets"] {
         std::fs::create_dir_all(dir.path().join(sub)).unwrap();
     }

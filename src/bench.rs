@@ -3,6 +3,10 @@
 //! * σ̄(V) + P_N evaluations per second on one core (goal ≥ 2·10⁷/s);
 //! * Weibull MLE + 10⁴-sample pivotal bounds for N = 50 (goal < 50 ms), on all threads and on one;
 //! * the lifetime study end to end (goal < 5 s), when a study file is given.
+//!
+//! Benchmarks find the repository's studies and datasets from the repository ([`repo_path`]),
+//! whatever the working directory, and write only into scratch directories ([`TempDir`]): a
+//! benchmark never touches `reports/`.
 
 use std::hint::black_box;
 use std::path::Path;
@@ -12,11 +16,51 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::contact::{AveragingDomain, Elastic, Sphere};
-use crate::error::Result;
+use crate::error::{Error, Result};
+use crate::io::TempDir;
 use crate::lifetime::damage::{DamageModel, Law};
 use crate::model::Simulator;
 use crate::strength::{LifetimeChain, LifetimeModel, Population, Sample, StrengthFit};
 use crate::weibull::{Weibull, fit_mle, simulate_pivotal};
+
+/// A file of the repository this binary was built from (`studies/…`, `datasets/…`), or the path
+/// as given relative to the working directory when that checkout is gone.
+pub fn repo_path(rel: &str) -> std::path::PathBuf {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);
+    if p.exists() { p } else { Path::new(rel).to_path_buf() }
+}
+
+/// Copies a directory tree (a report) into `to`.
+fn copy_tree(from: &Path, to: &Path) -> Result<()> {
+    std::fs::create_dir_all(to).map_err(|e| Error::write(to, e))?;
+    for entry in std::fs::read_dir(from).map_err(|e| Error::read(from, e))? {
+        let entry = entry.map_err(|e| Error::read(from, e))?;
+        let (src, dst) = (entry.path(), to.join(entry.file_name()));
+        if src.is_dir() {
+            copy_tree(&src, &dst)?;
+        } else {
+            std::fs::copy(&src, &dst).map_err(|e| Error::write(&dst, e))?;
+        }
+    }
+    Ok(())
+}
+
+/// Times `studies/discrepancy_curves.toml` end to end: (study, headlines, wall seconds), or None
+/// when the repository has no report of its calibration (`reports/calibrate_gen3_rt`). The
+/// calibration report is copied into a scratch reports root, so the run writes nothing under
+/// the repository's `reports/`.
+pub fn curve_discrepancy_speed() -> Result<Option<(std::path::PathBuf, Vec<String>, f64)>> {
+    let study = repo_path("studies/discrepancy_curves.toml");
+    let calibration = repo_path("reports/calibrate_gen3_rt");
+    if !calibration.join("runs.csv").is_file() {
+        return Ok(None);
+    }
+    let root = TempDir::new("bench-curves")?;
+    copy_tree(&calibration, &root.path().join("calibrate_gen3_rt"))?;
+    let loaded = crate::study::load(&study)?;
+    let summary = crate::runner::run(&loaded, &crate::runner::RunOptions { reports_root: root.path().to_path_buf(), progress: false })?;
+    Ok(Some((study, summary.headlines, summary.wall_time_s)))
+}
 
 /// One measured figure.
 #[derive(Debug, Clone)]
@@ -142,7 +186,7 @@ pub fn run_all(study: Option<&Path>) -> Result<Vec<Figure>> {
             crate::study::Study::Calibrate(_) => "< 600 s (complete Bayesian calibration, empty cache)",
             _ => "< 5 s",
         };
-        let root = crate::io::TempDir::new("bench")?;
+        let root = TempDir::new("bench")?;
         let start = Instant::now();
         crate::runner::run_file(path, &crate::runner::RunOptions { reports_root: root.path().to_path_buf(), progress: false })?;
         let secs = start.elapsed().as_secs_f64();
@@ -309,7 +353,7 @@ pub fn fem_speed(repeats: usize) -> Result<Vec<FemSpeed>> {
     Ok(out)
 }
 
-/// The Rosenbrock banana of the MCMC verification (verification.md §2):
+/// The Rosenbrock banana of the MCMC verification (docs/reference.md, verification §2):
 /// `log p = −[100(x₂ − x₁²)² + (1 − x₁)²]/20`.
 pub fn banana_log_prob(x: &[f64]) -> f64 {
     -(100.0 * (x[1] - x[0] * x[0]).powi(2) + (1.0 - x[0]).powi(2)) / 20.0
@@ -387,8 +431,8 @@ pub fn uq_speed(study: &Path) -> Result<UqSpeed> {
     let crate::study::Study::Uq(s) = &loaded.study else {
         return Err(crate::Error::config(study.display().to_string(), "kind", "the UQ benchmark needs a kind = \"uq\" study"));
     };
-    let shared = crate::uq::setup::Shared::new(s, &loaded.path)?;
-    let setup = crate::uq::setup::Setup::new(s, &loaded.path, &s.strength.effects, &s.contact.averaging, &shared)?;
+    let shared = crate::uq::setup::Shared::new(s, &loaded.file.path)?;
+    let setup = crate::uq::setup::Setup::new(s, &loaded.file.path, &s.strength.effects, &s.contact.averaging, &shared)?;
     let samples = 1 << 20;
     let prop = crate::uq::study::Propagation { method: crate::uq::study::Method::Sobol, samples, replicates: 8 };
     let start = Instant::now();
@@ -431,12 +475,11 @@ pub fn discrepancy_speed(settings: &Path) -> Result<DiscrepancySpeed> {
     gen_settings.material.truncate(1);
     gen_settings.material[0].count = 100;
     gen_settings.material[0].file = "bench_crush_100.csv".into();
-    let scratch = crate::io::TempDir::new("bench-discrepancy")?;
+    let scratch = TempDir::new("bench-discrepancy")?;
     let dir = scratch.path();
     crate::synth::synthesize(&gen_settings, dir)?;
     let data = dir.join("bench_crush_100.csv");
-    let loaded = crate::discrepancy::run::quick_study(&data)?;
-    let crate::study::Study::Discrepancy(s) = &loaded.study else { unreachable!("quick_study builds a discrepancy study") };
+    let (file, s) = crate::discrepancy::run::quick_study(&data)?;
     let crush = crate::data::read_crush(&data)?;
     let sample = crate::strength::sample_of(&crush, &s.material[0].elastic, &s.contact)?;
     let settings = crate::strength::NamingSettings { seed: s.seed, ..Default::default() };
@@ -445,7 +488,7 @@ pub fn discrepancy_speed(settings: &Path) -> Result<DiscrepancySpeed> {
     let loop_s = start.elapsed().as_secs_f64();
     let start = Instant::now();
     let opts = crate::runner::RunOptions { reports_root: dir.join("reports"), progress: false };
-    crate::runner::run(&loaded, &opts)?;
+    crate::discrepancy::run::run_discrepancy(&file, &s, &opts)?;
     let report_s = start.elapsed().as_secs_f64();
     Ok(DiscrepancySpeed { particles: sample.strength.len(), named: outcome.named.iter().map(|c| c.name()).collect(), loop_s, report_s })
 }

@@ -30,7 +30,7 @@
 //! **Default: line average with L = κ·a, κ = 2.** Reasons: (1) with L tied to the contact
 //! radius σ̄ is exactly proportional to p0, so the stress measured in a crush test (a/R ≈ 0.18)
 //! and the stress of an impact (a/R ≈ 0.04–0.1) are the same functional of the contact and the
-//! crush → impact transfer carries no a/R bias (with L = R it does, see mechanics.md §3.3);
+//! crush → impact transfer carries no a/R bias (with L = R it does, see docs/reference.md, mechanics §3.3);
 //! (2) ring cracks in brittle spheres start within about 1–1.5 a, so the band [s0 a, 2a] holds
 //! the stresses that matter; (3) the half-space solution stays valid there (2a ≈ 0.36 R at
 //! break). With L = κa the lifetime prediction does not depend on κ at all: κ rescales σ̄ and
@@ -52,7 +52,7 @@
 //! from momentum, J(t) = m* (V_eff − δ̇(t)), and totals 2 m* V_eff. For a sphere on a massive
 //! wall m* = m; for two equal spheres m* = m/2, R* = R/2 and V is the relative velocity.
 //!
-//! Verified by `tests/verification/hertz.rs` (mechanics.md tables §2.1, §2.4, §3.2–3.4) and
+//! Verified by `tests/verification/hertz.rs` (docs/reference.md, mechanics tables §2.1, §2.4, §3.2–3.4) and
 //! the unit tests below (finite-difference stiffness, continuity, limits, impulse).
 
 use serde::{Deserialize, Serialize};
@@ -232,7 +232,7 @@ fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// The tensile zone of the Hertz surface field for one Poisson ratio: onset s0 and the small
-/// contributions from inside the contact (mechanics.md §3.2).
+/// contributions from inside the contact (docs/reference.md, mechanics §3.2).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TensileZone {
     /// Poisson's ratio ν.
@@ -754,7 +754,7 @@ mod tests {
             sum += 2.0 * u / (1.0 - x.powf(2.5)).sqrt() / n as f64;
         }
         assert!((dimensionless_contact_time() - 2.0 * sum).abs() < 1e-6, "{}", 2.0 * sum);
-        // mechanics.md §3.4 prints 2.9432.
+        // docs/reference.md, mechanics §3.4 prints 2.9432.
         assert!((dimensionless_contact_time() - 2.9432).abs() < 1e-4);
     }
 }

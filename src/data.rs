@@ -10,12 +10,19 @@
 //! |---|---|---|
 //! | `id` | – | required, non-empty, unique |
 //! | `material` | – | required, the same on every row |
-//! | `diameter_m` | m | required, finite, 0 < d ≤ 0.1 (metres, not µm) |
-//! | `crush_force_n` | N | required, finite, > 0 |
-//! | `roundness` | – | optional column; empty cell = unknown; else 0 < r ≤ 1 |
-//! | `sphericity` | – | optional column; empty cell = unknown; else 0 < s ≤ 1 |
-//! | `temperature_c` | °C | optional column; empty cell = unknown; else finite, ≥ −273.15 |
-//! | `impacts` | – | optional column: impacts before the crush test; empty = unknown; else a whole number in [0, 10⁶] |
+//! | `diameter_m` | m | required, in [10⁻⁶, 0.1] ([`DIAMETER`]) |
+//! | `crush_force_n` | N | required, in [10⁻⁶, 10⁵] ([`CRUSH_FORCE`]) |
+//! | `roundness` | – | optional column; empty cell = unknown; else in [0.01, 1] ([`ROUNDNESS`]) |
+//! | `sphericity` | – | optional column; empty cell = unknown; else in [0.01, 1] ([`SPHERICITY`]) |
+//! | `temperature_c` | °C | optional column; empty cell = unknown; else in [−273.15, 2100] ([`TEMPERATURE`]) |
+//! | `impacts` | – | optional column: impacts before the crush test; empty = unknown; else a whole number in [0, 10⁶] ([`IMPACTS`]) |
+//!
+//! Every numeric column of every input file has a plausibility range ([`Plausible`], listed
+//! with the reasons in `datasets/README.md`): a value outside it is a unit slip or a corrupt
+//! cell, and would otherwise travel on as an infinite contact radius or an underflowed strength.
+//! The file's shape is checked before any cell ([`crate::io::read_input_text`]): a directory or
+//! unreadable path is named as such, a duplicated column name and a row with fewer or more
+//! fields than the header are errors naming the line.
 //!
 //! Verified by the unit tests below and `tests/bad_input.rs`.
 
@@ -44,7 +51,7 @@ pub struct CrushRecord {
     /// Test temperature (°C), if recorded.
     pub temperature_c: Option<f64>,
     /// Impacts the particle received before the crush test, if recorded (optional column
-    /// `impacts`, not written by the synthetic generator).
+    /// `impacts`; the synthetic generator writes it only with its `prior_impacts` option).
     pub impacts: Option<u64>,
 }
 
@@ -72,59 +79,75 @@ impl CrushData {
     }
 }
 
+/// The covariate columns of a crush file: what a strength model's effects and the discrepancy
+/// workflow's residual trends can use.
+pub const COVARIATE_COLUMNS: [&str; 5] = ["diameter_m", "roundness", "sphericity", "temperature_c", "impacts"];
+
 /// Column names of a crush file, in canonical order.
 pub const CRUSH_COLUMNS: [&str; 7] =
     ["id", "material", "diameter_m", "crush_force_n", "roundness", "sphericity", "temperature_c"];
 const CRUSH_REQUIRED: [&str; 4] = ["id", "material", "diameter_m", "crush_force_n"];
 
-/// Number of comma-separated fields of one CSV line (double quotes respected).
-fn field_count(line: &str) -> usize {
-    let mut n = 1;
-    let mut quoted = false;
-    for c in line.chars() {
-        match c {
-            '"' => quoted = !quoted,
-            ',' if !quoted => n += 1,
-            _ => {}
-        }
-    }
-    n
+/// The plausibility range of a numeric input column (closed), with the reason for it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plausible {
+    /// What the value is (`diameter`).
+    pub what: &'static str,
+    /// Lowest plausible value.
+    pub lo: f64,
+    /// Highest plausible value.
+    pub hi: f64,
+    /// The range as written in messages, with its unit (`[1e-6, 0.1] m`).
+    pub shown: &'static str,
+    /// Why.
+    pub why: &'static str,
 }
 
-/// Explains why polars rejected a CSV file: the first line whose field count differs from the
-/// header's, else polars' own message on one line.
-fn explain_csv_error(path: &Path, polars_message: &str) -> Error {
-    if let Ok(text) = std::fs::read_to_string(path) {
-        let mut lines = text.lines();
-        if let Some(header) = lines.next() {
-            let want = field_count(header);
-            for (i, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
-                let got = field_count(line);
-                if got != want {
-                    return Error::Data {
-                        file: path.display().to_string(),
-                        location: format!("row {} (line {})", i + 1, i + 2),
-                        rule: format!("has {got} fields, the header has {want}"),
-                    };
-                }
-            }
-        }
+impl Plausible {
+    /// Whether v lies in the range.
+    pub fn contains(&self, v: f64) -> bool {
+        v >= self.lo && v <= self.hi
     }
-    let flat = polars_message.split_whitespace().collect::<Vec<_>>().join(" ");
-    Error::data_file(path, "file", format!("not a readable CSV table: {flat}"))
+
+    /// v if it lies in the range, else an error naming file, row and column.
+    pub fn check(&self, path: &Path, row: usize, column: &str, v: f64) -> Result<f64> {
+        let finite = if v.is_finite() { "" } else { "a finite number " };
+        if self.contains(v) { Ok(v) } else { Err(Error::data_row(path, row, column, format!("{} must be {finite}in {} ({}); got {}", self.what, self.shown, self.why, shown(v)))) }
+    }
 }
+
+/// A number as a message shows it: plain in [10⁻⁴, 10⁶), else in scientific notation (1e308,
+/// not 309 digits).
+fn shown(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&v.abs()) { format!("{v}") } else { format!("{v:e}") }
+}
+
+/// Particle diameter.
+pub const DIAMETER: Plausible = Plausible { what: "diameter", lo: 1e-6, hi: 0.1, shown: "[1e-6, 0.1] m", why: "a particle from 1 µm to 10 cm; outside it the value is in µm or mm, not metres" };
+/// Force at break of a single-particle crush test.
+pub const CRUSH_FORCE: Plausible = Plausible { what: "crush force", lo: 1e-6, hi: 1e5, shown: "[1e-6, 1e5] N", why: "from below any load cell's resolution to beyond any single-particle test; outside it the cell is corrupt or in other units" };
+/// Wadell roundness.
+pub const ROUNDNESS: Plausible = Plausible { what: "roundness", lo: 0.01, hi: 1.0, shown: "[0.01, 1]", why: "at most 1 by definition; below 0.01 the grain is a shard, and the contact curvature roundness^q leaves the floating-point range" };
+/// Sphericity.
+pub const SPHERICITY: Plausible = Plausible { what: "sphericity", lo: 0.01, hi: 1.0, shown: "[0.01, 1]", why: "at most 1 by definition; below 0.01 the grain is a needle or flake, not a flowing particle" };
+/// Test temperature.
+pub const TEMPERATURE: Plausible = Plausible { what: "temperature", lo: -273.15, hi: 2100.0, shown: "[-273.15, 2100] °C", why: "from absolute zero to the melting point of alumina (2072 °C), above which no ceramic particle is solid" };
+/// Impacts before a crush test (also a whole number).
+pub const IMPACTS: Plausible = Plausible { what: "impacts", lo: 0.0, hi: 1e6, shown: "[0, 1e6]", why: "10⁶ impacts are over a thousand years at 730 a year" };
+/// Force of a crush curve sample (a small negative value is the load cell's zero offset).
+pub const CURVE_FORCE: Plausible = Plausible { what: "force", lo: -1e3, hi: 1e5, shown: "[-1e3, 1e5] N", why: "a single-particle test; below −1 kN the load cell's zero is wrong, above 100 kN no particle is crushed" };
+/// Impact (normal) speed of a particle on a tube.
+pub const VELOCITY: Plausible = Plausible { what: "speed", lo: 0.0, hi: crate::lifetime::MAX_VELOCITY, shown: "[0, 100] m/s", why: "gravity-driven particle flows hit tubes at a few m/s; beyond 100 m/s the Hertz impact model is out of its range" };
 
 /// Reads a CSV file with every column as text.
 pub fn read_text_table(path: &Path) -> Result<DataFrame> {
-    if !path.is_file() {
-        return Err(Error::read(path, std::io::Error::new(std::io::ErrorKind::NotFound, "no such file")));
-    }
+    crate::io::check_csv_shape(path, &crate::io::read_input_text(path)?)?;
     CsvReadOptions::default()
         .with_has_header(true)
         .with_infer_schema_length(Some(0))
         .try_into_reader_with_file_path(Some(path.to_path_buf()))
         .and_then(|r| r.finish())
-        .map_err(|e| explain_csv_error(path, &e.to_string()))
+        .map_err(|e| crate::io::polars_read_error(path, &e.to_string()))
 }
 
 /// Text cells of one column (`None` for an empty cell); `None` if the column is absent.
@@ -147,10 +170,6 @@ fn parse_number(path: &Path, row: usize, column: &str, cell: &str) -> Result<f64
         return Err(Error::data_row(path, row, column, format!("value \"{cell}\" is not a finite number")));
     }
     Ok(v)
-}
-
-fn require(path: &Path, row: usize, column: &str, ok: bool, rule: &str, v: f64) -> Result<()> {
-    if ok { Ok(()) } else { Err(Error::data_row(path, row, column, format!("{rule} (got {v})"))) }
 }
 
 /// Reads and validates a crush CSV (see the module docs for the rules).
@@ -202,31 +221,22 @@ pub fn read_crush(path: &Path) -> Result<CrushData> {
                 format!("one file holds one material: \"{material}\" differs from \"{first}\" on row 1"),
             ));
         }
-        let d = parse_number(path, row, "diameter_m", &need(&diam, "diameter_m")?)?;
-        require(path, row, "diameter_m", d > 0.0 && d <= 0.1, "diameter must be > 0 and ≤ 0.1 m (metres, not µm)", d)?;
-        let f = parse_number(path, row, "crush_force_n", &need(&force, "crush_force_n")?)?;
-        require(path, row, "crush_force_n", f > 0.0, "crush force must be > 0 N", f)?;
-        let optional = |col: &Option<Vec<Option<String>>>, name: &str| -> Result<Option<f64>> {
+        let d = DIAMETER.check(path, row, "diameter_m", parse_number(path, row, "diameter_m", &need(&diam, "diameter_m")?)?)?;
+        let f = CRUSH_FORCE.check(path, row, "crush_force_n", parse_number(path, row, "crush_force_n", &need(&force, "crush_force_n")?)?)?;
+        let optional = |col: &Option<Vec<Option<String>>>, name: &str, range: &Plausible| -> Result<Option<f64>> {
             match col.as_ref().and_then(|c| c[row].as_deref()) {
                 None => Ok(None),
-                Some(cell) => parse_number(path, row, name, cell).map(Some),
+                Some(cell) => range.check(path, row, name, parse_number(path, row, name, cell)?).map(Some),
             }
         };
-        let roundness = optional(&round, "roundness")?;
-        if let Some(r) = roundness {
-            require(path, row, "roundness", r > 0.0 && r <= 1.0, "roundness must lie in (0, 1]", r)?;
-        }
-        let sphericity = optional(&spher, "sphericity")?;
-        if let Some(s) = sphericity {
-            require(path, row, "sphericity", s > 0.0 && s <= 1.0, "sphericity must lie in (0, 1]", s)?;
-        }
-        let temperature_c = optional(&temp, "temperature_c")?;
-        if let Some(t) = temperature_c {
-            require(path, row, "temperature_c", t >= -273.15, "temperature must be ≥ −273.15 °C", t)?;
-        }
-        let impacts = optional(&imp, "impacts")?;
-        if let Some(k) = impacts {
-            require(path, row, "impacts", (0.0..=1e6).contains(&k) && k.fract() == 0.0, "impacts must be a whole number in [0, 10⁶]", k)?;
+        let roundness = optional(&round, "roundness", &ROUNDNESS)?;
+        let sphericity = optional(&spher, "sphericity", &SPHERICITY)?;
+        let temperature_c = optional(&temp, "temperature_c", &TEMPERATURE)?;
+        let impacts = optional(&imp, "impacts", &IMPACTS)?;
+        if let Some(k) = impacts
+            && k.fract() != 0.0
+        {
+            return Err(Error::data_row(path, row, "impacts", format!("impacts must be a whole number (got {k})")));
         }
         records.push(CrushRecord {
             id,

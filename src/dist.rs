@@ -204,9 +204,7 @@ pub fn read_spectrum(path: &Path, target: &str, row: u32) -> Result<Vec<(f64, f6
     let mut q = vec![(0.0, 0.0)];
     for (p, c) in &cols {
         let v = col_f64(&df, path, c)?[i];
-        if !(v.is_finite() && v >= 0.0) {
-            return Err(Error::data_row(path, i, c, format!("a speed must be finite and ≥ 0, got {v}")));
-        }
+        crate::data::VELOCITY.check(path, i, c, v)?;
         if v < q[q.len() - 1].1 {
             return Err(Error::data_row(path, i, c, format!("quantiles must not decrease ({v} after {})", q[q.len() - 1].1)));
         }
@@ -214,3 +212,28 @@ pub fn read_spectrum(path: &Path, target: &str, row: u32) -> Result<Vec<(f64, f6
     }
     Ok(q)
 }
+
+fn default_particles() -> usize {
+    512
+}
+
+/// A declared population (`population = { … }` of a `[[material]]`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PopulationSpec {
+    /// Particles of the stratified sample (default 512).
+    #[serde(default = "default_particles")]
+    pub particles: usize,
+    /// Diameter distribution (m).
+    pub diameter_m: Dist,
+    /// Roundness distribution, in (0, 1].
+    #[serde(default)]
+    pub roundness: Option<Dist>,
+    /// Sphericity distribution, in (0, 1].
+    #[serde(default)]
+    pub sphericity: Option<Dist>,
+    /// Temperature distribution (°C).
+    #[serde(default)]
+    pub temperature_c: Option<Dist>,
+}
+

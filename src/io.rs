@@ -193,15 +193,78 @@ pub fn scol(name: &str, values: Vec<String>) -> Column {
 
 /// Reads a report table (types inferred from the whole file).
 pub fn read_table(path: &Path) -> Result<DataFrame> {
-    if !path.is_file() {
-        return Err(Error::read(path, std::io::Error::new(std::io::ErrorKind::NotFound, "no such table")));
-    }
+    check_csv_shape(path, &read_input_text(path)?)?;
     CsvReadOptions::default()
         .with_has_header(true)
         .with_infer_schema_length(None)
         .try_into_reader_with_file_path(Some(path.to_path_buf()))
         .and_then(|r| r.finish())
-        .map_err(|e| Error::data_file(path, "file", format!("not a readable CSV table: {e}")))
+        .map_err(|e| polars_read_error(path, &e.to_string()))
+}
+
+/// The text of an input file. A missing path, a directory, an unreadable file and bytes that
+/// are not UTF-8 are each named as such.
+pub fn read_input_text(path: &Path) -> Result<String> {
+    let why = |what: &str| Error::read(path, std::io::Error::other(what.to_string()));
+    match std::fs::metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Err(why("no such file")),
+        Err(e) => return Err(Error::read(path, e)),
+        Ok(m) if m.is_dir() => return Err(why("is a directory, not a file")),
+        Ok(m) if !m.is_file() => return Err(why("is not a regular file")),
+        Ok(_) => {}
+    }
+    let bytes = std::fs::read(path).map_err(|e| Error::read(path, e))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+        Error::data_file(path, format!("line {line}"), "is not UTF-8 text (a CSV file is expected)")
+    })
+}
+
+/// Fields of one CSV line (double quotes respected; quotes and surrounding blanks removed).
+fn csv_fields(line: &str) -> Vec<String> {
+    let mut out = vec![String::new()];
+    let mut quoted = false;
+    for c in line.trim_end_matches('\r').chars() {
+        match c {
+            '"' => quoted = !quoted,
+            ',' if !quoted => out.push(String::new()),
+            _ => out.last_mut().expect("one field at least").push(c),
+        }
+    }
+    out.into_iter().map(|f| f.trim().to_string()).collect()
+}
+
+/// Checks the shape of a CSV text before any cell is read: a header with named, distinct
+/// columns, and every non-blank row with as many fields as the header (shorter rows are not
+/// padded, longer ones not cut).
+pub fn check_csv_shape(path: &Path, text: &str) -> Result<()> {
+    let mut lines = text.lines();
+    let Some(header) = lines.next().filter(|h| !h.trim().is_empty()) else {
+        return Err(Error::data_file(path, "header", "the file is empty or its first line is blank: a header row is expected"));
+    };
+    let names = csv_fields(header);
+    for (k, name) in names.iter().enumerate() {
+        if name.is_empty() {
+            return Err(Error::data_file(path, "header", format!("column {} has no name", k + 1)));
+        }
+        if let Some(j) = names[..k].iter().position(|n| n == name) {
+            return Err(Error::data_file(path, "header", format!("column `{name}` appears twice (columns {} and {})", j + 1, k + 1)));
+        }
+    }
+    for (i, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let got = csv_fields(line).len();
+        if got != names.len() {
+            return Err(Error::Data { file: path.display().to_string(), location: format!("row {} (line {})", i + 1, i + 2), rule: format!("has {got} fields, the header has {}", names.len()) });
+        }
+    }
+    Ok(())
+}
+
+/// Polars' refusal of a CSV file whose shape passed [`check_csv_shape`], on one line.
+pub fn polars_read_error(path: &Path, message: &str) -> Error {
+    let flat = message.split_whitespace().collect::<Vec<_>>().join(" ");
+    Error::data_file(path, "file", format!("not a readable CSV table: {flat}"))
 }
 
 /// A float column of a report table (integers are converted).

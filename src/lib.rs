@@ -30,6 +30,36 @@
 //! Implementers today: [`strength::LifetimeChain`], [`dem::model::TubeBankModel`],
 //! [`fem::model::CrushModel`], [`testfns::Ishigami`].
 //!
+//! ## Module graph
+//!
+//! The modules form layers without cycles: each imports only modules of lower layers
+//! (`tests/structure.rs` reads every `crate::…` path outside the test modules and fails on a
+//! cycle).
+//!
+//! ```text
+//! 15  bench                          speed figures (the CLI, src/main.rs, sits above)
+//! 14  runner                         loaded study → its runner (only main and bench import it)
+//! 13  study                          kind → schema + validation
+//! 12  lifetime_study · uq            the lifetime study; the main study
+//! 11  discrepancy                    the naming loop, KOH, the curve level
+//! 10  strength                       the one lifetime model (its Bayesian draws use calibrate::mcmc)
+//!  9  calibrate                      LSQ, MCMC, emulator, calibration studies, curve generator
+//!  8  dem · fem                      the solvers with their studies
+//!  7  runkit · synth                 run helpers; the crush-data generator
+//!  6  schema                         study files, TOML errors, shared options
+//!  5  dist · report                  declared distributions; figures from tables
+//!  4  data · testfns                 datasets with plausibility ranges; analytic simulators
+//!  3  lifetime · model · weibull     P_N and damage laws; the Simulator seam; ASTM C1239
+//!  2  contact · design · io · params · stats
+//!  1  error · fracture
+//! ```
+//!
+//! Study modules reach the layers below only: the shared run helpers are in [`runkit`], the
+//! study-file layer in [`schema`] (a runner that needs another study reads it with
+//! `schema::StudyFile`), and methods reach solvers only through [`model::Simulator`] (the curve
+//! workflow's FE runs are behind `fem::model::CrushModel`, fracture detection is the neutral
+//! [`fracture`]).
+//!
 //! ## Module map
 //!
 //! | module | what |
@@ -44,17 +74,21 @@
 //! | [`strength`] | the one strength/lifetime model: effects, Weibull regression, pivotal/Bayesian joint draws, populations, `LifetimeModel` and its Simulator, stacking weights |
 //! | [`dist`] | distributions declared in study files and the DEM velocity spectrum, as inverse-CDF marginals |
 //! | [`dem`] | native DEM of the tube bank: Hertz–Mindlin, cell lists, impacts, profiles, VTK; `TubeBankModel` |
-//! | [`fem`] | native crush FE: axisymmetric/plane-strain explicit quads, JH-2, platens, fields, VTU; `CrushModel` |
+//! | [`fem`] | native crush FE: axisymmetric/plane-strain explicit quads, JH-2, platens, fields, VTU; `CrushModel` (also the runs with other contact tips) |
+//! | [`fracture`] | the first sustained force drop on a force–displacement curve, for simulated and measured curves alike |
 //! | [`design`] | Sobol' sequences (Joe–Kuo, 64 dimensions), Latin hypercubes |
 //! | [`calibrate`] | noise models; multi-start Levenberg–Marquardt (or argmin Nelder–Mead / L-BFGS) with covariance and identifiability; ensemble and adaptive-Metropolis MCMC with R̂/ESS; GP emulator; evaluation cache; the `calibrate` study (crush FE and tube-bank DEM); synthetic curve and rig generators |
 //! | [`discrepancy`] | the discrepancy workflow: diagnosis (quantile residuals, bootstrap AD/KS, residual trends), the name → add → diagnose loop over the strength model's effects with a max-T bootstrap guard (also behind `effects = "diagnosed"` and its cross-validated scores), lifetime before/after, detection power; `partlife discrepancy`; Kennedy–O'Hagan GP discrepancy with BIC comparison of model terms, on crush curves too |
 //! | [`uq`] | the main study (`kind = "uq"`): strength models as a model-form choice with stacking weights, Monte Carlo propagation through each material's `LifetimeModel`, damage models and averaging domains side by side, Sobol' indices with bootstrap intervals |
-//! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation |
+//! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation; the plausibility range of every numeric input column |
 //! | [`synth`] | the documented generator of the synthetic crush datasets |
-//! | [`stats`] | median, Pearson correlation with p-value, quantiles (interpolated, nearest-rank, weighted) |
-//! | [`study`] | TOML study schema (unknown keys rejected), validation, dispatch |
-//! | [`runner`] | runs a study into its report (the lifetime study here, through `strength`; the others in their modules) |
-//! | [`io`] | atomic report directories, CSV tables, manifest |
+//! | [`stats`] | median, Pearson correlation with p-value, line fit, the one sample-quantile definition (Hyndman–Fan type 7) and the weighted inverse CDF |
+//! | [`schema`] | the study-file layer under every study module: `StudyFile` (read, kind, parse), TOML errors with line and key, relative paths, shared options (contact, impact, figures, materials) |
+//! | [`runkit`] | what every run shares: options, summary, clock, progress bars, figures' records, the report commit with `manifest.json` |
+//! | [`lifetime_study`] | the lifetime study (`kind = "lifetime"`): schema and run, through `strength` |
+//! | [`study`] | the dispatch from `kind` to each study module's schema and validation: `load` → `LoadedStudy` |
+//! | [`runner`] | the dispatch from a loaded study to its runner (top of the graph: only the CLI and `bench` use it) |
+//! | [`io`] | atomic report directories, CSV tables, manifest; reading input files (path kind, UTF-8, CSV shape: distinct columns, no short or long rows); scratch directories |
 //! | [`report`] | figures from tables only: SVG (plotters) → PNG (resvg) and vector PDF (svg2pdf) |
 //! | [`bench`](mod@bench) | the speed figures the issues ask for |
 //!
@@ -74,13 +108,17 @@ pub mod dem;
 pub mod discrepancy;
 pub mod dist;
 pub mod fem;
+pub mod fracture;
 pub mod error;
 pub mod io;
 pub mod lifetime;
+pub mod lifetime_study;
 pub mod model;
 pub mod params;
 pub mod report;
 pub mod runner;
+pub mod runkit;
+pub mod schema;
 pub mod stats;
 pub mod strength;
 pub mod study;

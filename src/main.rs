@@ -14,8 +14,8 @@ use clap::{Parser, Subcommand};
 #[command(name = "partlife", version, about, long_about = None)]
 struct Cli {
     /// Worker threads (default: all cores). Results do not depend on it.
-    #[arg(long, global = true)]
-    threads: Option<usize>,
+    #[arg(long, global = true, value_parser = clap::value_parser!(u16).range(1..))]
+    threads: Option<u16>,
     #[command(subcommand)]
     command: Command,
 }
@@ -53,10 +53,11 @@ enum Command {
         /// Model to diagnose (the deliverable's Weibull law of the Hertz σ̄ at break).
         #[arg(long, value_enum, default_value = "weibull-hertz", requires = "data")]
         model: DiscrepancyModel,
-        /// Output directory (default: reports/discrepancy-<file stem>/ with --data,
-        /// reports/<study name>/ with a study file).
-        #[arg(long)]
-        out: Option<PathBuf>,
+        /// Root directory of the reports (as for `run`): the report goes to
+        /// <root>/<study name>/ (<root>/discrepancy-<file stem>/ with --data), and a curve-level
+        /// study finds its calibration's report under the same root.
+        #[arg(long, default_value = "reports")]
+        reports_dir: PathBuf,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
@@ -67,8 +68,9 @@ enum Command {
         command: DatasetsCommand,
     },
     /// Measure the speed figures (evaluations per second, fit time, study wall time).
+    #[command(group(clap::ArgGroup::new("benchmark").args(["study", "dem", "fem", "mcmc", "uq", "discrepancy"]).multiple(false)))]
     Bench {
-        /// Also time this study end to end.
+        /// Time the core figures and this study end to end.
         #[arg(long)]
         study: Option<PathBuf>,
         /// Run the DEM benchmark instead (the LIGGGHTS comparison case; about a minute).
@@ -82,7 +84,7 @@ enum Command {
         #[arg(long)]
         mcmc: bool,
         /// A chain CSV (step, walker, x1, x2) and its sampling time in seconds, `FILE:SECONDS`.
-        #[arg(long)]
+        #[arg(long, requires = "mcmc")]
         chain: Option<String>,
         /// Run the UQ benchmark instead: 2²⁰ Monte Carlo samples of the main study's chain and
         /// Sobol' indices of Ishigami at N = 2¹⁴ (compare tests/bench/salib/ishigami.py).
@@ -163,7 +165,7 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     if let Some(n) = cli.threads {
-        rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("setting the thread count")?;
+        rayon::ThreadPoolBuilder::new().num_threads(n.into()).build_global().context("setting the thread count")?;
     }
     match cli.command {
         Command::Run { study, reports_dir, quiet } => {
@@ -174,24 +176,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             out!("wrote {} in {:.2} s", summary.report_dir.display(), summary.wall_time_s);
         }
-        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, out, quiet } => {
-            let mut loaded = match (&study, &data) {
-                (_, Some(d)) => partlife::discrepancy::run::quick_study(d)?,
+        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, reports_dir, quiet } => {
+            let loaded = match (&study, &data) {
+                (_, Some(d)) => {
+                    let (file, s) = partlife::discrepancy::run::quick_study(d)?;
+                    partlife::study::LoadedStudy { file, study: partlife::study::Study::Discrepancy(Box::new(s)) }
+                }
                 (Some(s), None) => partlife::study::load(s)?,
                 (None, None) => anyhow::bail!("give a study file or --data <crush.csv>"),
             };
             if study.is_some() && !matches!(loaded.study, partlife::study::Study::Discrepancy(_) | partlife::study::Study::DiscrepancyCurves(_)) {
-                return Err(partlife::Error::config(loaded.path.display().to_string(), "kind", "`partlife discrepancy` runs studies of kind \"discrepancy\" or \"discrepancy_curves\"").into());
+                return Err(partlife::Error::config(loaded.file.path.display().to_string(), "kind", "`partlife discrepancy` runs studies of kind \"discrepancy\" or \"discrepancy_curves\"").into());
             }
-            let reports_root = match &out {
-                Some(dir) => {
-                    let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).context("--out needs a directory name")?;
-                    loaded.name = name;
-                    dir.parent().map(|p| if p.as_os_str().is_empty() { PathBuf::from(".") } else { p.to_path_buf() }).unwrap_or_else(|| PathBuf::from("."))
-                }
-                None => PathBuf::from("reports"),
-            };
-            let opts = partlife::runner::RunOptions { reports_root, progress: !quiet };
+            let opts = partlife::runner::RunOptions { reports_root: reports_dir, progress: !quiet };
             let summary = partlife::runner::run(&loaded, &opts)?;
             for line in &summary.headlines {
                 out!("{line}");
@@ -226,7 +223,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let s = partlife::calibrate::synth::CurveSynthSettings::load(&settings)?;
             let out = out_dir.unwrap_or_else(|| settings.parent().map(|p| p.to_path_buf()).unwrap_or_default());
             let total: usize = s.case.iter().map(|c| c.particles).sum();
-            let bar = partlife::runner::progress_bar(total as u64, true, partlife::runner::PROGRESS_COUNT);
+            let bar = partlife::runkit::progress_bar(total as u64, true, partlife::runkit::PROGRESS_COUNT);
             for sum in partlife::calibrate::synth::synthesize(&s, &out, &|| bar.inc(1))? {
                 out!("{}: {} particles", sum.path.display(), sum.particles);
                 for (d, rho, f, x) in sum.rows {
@@ -238,7 +235,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Datasets { command: DatasetsCommand::SynthDem { settings, out_dir } } => {
             let (s, model) = partlife::calibrate::synth_dem::DemSynthSettings::load(&settings)?;
             let out = out_dir.unwrap_or_else(|| settings.parent().map(|p| p.to_path_buf()).unwrap_or_default());
-            let bar = partlife::runner::progress_bar(1, true, "{spinner} [{elapsed_precise}] {msg}");
+            let bar = partlife::runkit::progress_bar(1, true, "{spinner} [{elapsed_precise}] {msg}");
             bar.enable_steady_tick(std::time::Duration::from_millis(200));
             bar.set_message(format!("DEM run of {} s at the true coefficients", s.duration));
             let (path, obs) = partlife::calibrate::synth_dem::synthesize(&s, &model, &out)?;
@@ -287,22 +284,30 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Bench { mcmc: true, chain, .. } => {
+            // Checked before the benchmark runs: a bad argument costs nothing.
+            let chain = match chain {
+                Some(spec) => {
+                    let bad = |rule: String| partlife::Error::config("command line", "--chain", rule);
+                    let (file, secs) = spec.rsplit_once(':').ok_or_else(|| bad(format!("takes FILE:SECONDS (got \"{spec}\")")))?;
+                    let secs: f64 = secs.parse().ok().filter(|s: &f64| s.is_finite() && *s > 0.0).ok_or_else(|| bad(format!("SECONDS must be a number > 0 (got \"{secs}\")")))?;
+                    Some((file.to_string(), secs))
+                }
+                None => None,
+            };
             out!("machine: {} threads available to rayon", rayon::current_num_threads());
             let m = partlife::bench::mcmc_banana(40_000)?;
             out!(
                 "ensemble sampler, Rosenbrock banana, 32 walkers × 40 000 steps: {:.2} s, {:.3e} evaluations/s, bulk ESS {:.0}, ESS/s {:.1}",
                 m.seconds, m.evaluations_per_second, m.ess, m.ess_per_second
             );
-            if let Some(spec) = chain {
-                let (file, secs) = spec.rsplit_once(':').context("--chain takes FILE:SECONDS")?;
-                let secs: f64 = secs.parse().context("--chain: SECONDS is not a number")?;
-                let ess = partlife::bench::external_chain_ess(std::path::Path::new(file))?;
+            if let Some((file, secs)) = chain {
+                let ess = partlife::bench::external_chain_ess(std::path::Path::new(&file))?;
                 out!("external chain {file}: bulk ESS {ess:.0} in {secs:.2} s → ESS/s {:.1}; ratio ours/theirs {:.1}×", ess / secs, m.ess_per_second / (ess / secs));
             }
         }
         Command::Bench { discrepancy: true, .. } => {
             out!("machine: {} threads available to rayon", rayon::current_num_threads());
-            let d = partlife::bench::discrepancy_speed(std::path::Path::new("datasets/synth_crush.toml"))?;
+            let d = partlife::bench::discrepancy_speed(&partlife::bench::repo_path("datasets/synth_crush.toml"))?;
             out!(
                 "discrepancy workflow, {} particles (named: {}): naming loop with every candidate, 499 bootstrap replicates per round and 999 permutations per trend {:.3} s; whole report with lifetime bands, 320-dataset power study and figures {:.2} s (goal < 30 s)",
                 d.particles,
@@ -311,24 +316,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 d.report_s
             );
             // The curve level needs the calibration's report (its emulator runs).
-            let study = std::path::Path::new("studies/discrepancy_curves.toml");
-            if PathBuf::from("reports/calibrate_gen3_rt/runs.csv").is_file() {
-                let loaded = partlife::study::load(study)?;
-                let opts = partlife::runner::RunOptions { reports_root: PathBuf::from("reports"), progress: false };
-                let summary = partlife::runner::run(&loaded, &opts)?;
-                out!(
-                    "curve-level discrepancy loop ({}): {} — {:.1} s including the 5 FE runs of the curvature table (goal < 15 min)",
-                    study.display(),
-                    summary.headlines.join("; "),
-                    summary.wall_time_s
-                );
-            } else {
-                out!("curve-level discrepancy loop: not timed — run `partlife run studies/calibrate_gen3_rt.toml` first (its report holds the emulator's runs)");
+            match partlife::bench::curve_discrepancy_speed()? {
+                Some((study, headlines, secs)) => out!("curve-level discrepancy loop ({}): {} — {secs:.1} s including the 5 FE runs of the curvature table (goal < 15 min)", study.display(), headlines.join("; ")),
+                None => out!("curve-level discrepancy loop: not timed — run `partlife run studies/calibrate_gen3_rt.toml` in the repository first (its report holds the emulator's runs)"),
             }
         }
         Command::Bench { uq: true, .. } => {
             out!("machine: {} threads available to rayon", rayon::current_num_threads());
-            let u = partlife::bench::uq_speed(std::path::Path::new("studies/gen4_vs_bl.toml"))?;
+            let u = partlife::bench::uq_speed(&partlife::bench::repo_path("studies/gen4_vs_bl.toml"))?;
             out!(
                 "main-study chain (strength model `{}`, populations of {} and {} particles), {} Sobol' samples × 2 materials × 2 horizons × 3 damage models: {:.3} s ({:.2e} samples/s; goal 2²⁰ in < 2 s)",
                 u.strength_model,

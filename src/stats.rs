@@ -74,15 +74,26 @@ pub fn pearson(x: &[f64], y: &[f64]) -> (f64, f64) {
     (r, correlation_p_value(r, x.len()))
 }
 
-/// Median of a slice (NaN when empty).
+/// Median of a slice (NaN when empty): [`sorted_quantile`] at p = 0.5, the mean of the two
+/// middle values for even n.
 pub fn median(v: &[f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
     let mut s = v.to_vec();
     s.sort_by(f64::total_cmp);
-    let k = s.len();
-    if k % 2 == 1 { s[k / 2] } else { 0.5 * (s[k / 2 - 1] + s[k / 2]) }
+    sorted_quantile(&s, 0.5)
+}
+
+/// The quantile p ∈ [0, 1] of a sorted sample: partlife's one definition of a sample quantile,
+/// Hyndman & Fan (1996) type 7 (linear interpolation between order statistics at
+/// h = (n − 1)p; the default of R and NumPy, and the interpolation of ASTM C1239's tables).
+/// Empty: NaN.
+pub fn sorted_quantile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let h = (sorted.len() - 1) as f64 * p.clamp(0.0, 1.0);
+    let i = h.floor() as usize;
+    let j = (i + 1).min(sorted.len() - 1);
+    sorted[i] + (h - i as f64) * (sorted[j] - sorted[i])
 }
 
 #[cfg(test)]
@@ -130,22 +141,17 @@ mod tests {
     }
 }
 
-/// Interpolated quantiles `ps` of `v` (as C1239's tables, [`crate::weibull::sorted_quantile`]).
+/// Quantiles `ps` of `v` ([`sorted_quantile`], type 7).
 pub fn interpolated_quantiles(mut v: Vec<f64>, ps: &[f64]) -> Vec<f64> {
     v.sort_by(f64::total_cmp);
-    ps.iter().map(|&p| crate::weibull::sorted_quantile(&v, p)).collect()
-}
-
-/// Nearest-rank quantiles `qs` (each in [0, 1]) of `v`, which is sorted in place; `v` must not
-/// be empty.
-pub fn quantiles(v: &mut [f64], qs: &[f64]) -> Vec<f64> {
-    v.sort_by(f64::total_cmp);
-    qs.iter().map(|q| v[((v.len() - 1) as f64 * q).round() as usize]).collect()
+    ps.iter().map(|&p| sorted_quantile(&v, p)).collect()
 }
 
 /// Quantiles `ps` of a weighted sample (value, weight > 0): the inverse of its weighted
 /// empirical CDF, i.e. the smallest value whose cumulative weight reaches p·(total weight).
-/// With equal weights this is the type-1 (inverse empirical CDF) quantile. Empty: NaN.
+/// The one exception to [`sorted_quantile`]: type 7 has no weighted form that respects
+/// arbitrary weights, so the main study's model-averaged bands (samples weighted by the
+/// stacking weights) use this inverse CDF, which is type 1 for equal weights. Empty: NaN.
 pub fn weighted_quantiles(mut v: Vec<(f64, f64)>, ps: &[f64]) -> Vec<f64> {
     if v.is_empty() {
         return vec![f64::NAN; ps.len()];

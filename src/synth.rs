@@ -250,7 +250,7 @@ impl SynthSettings {
     /// Reads and validates the settings file (unknown keys rejected).
     pub fn load(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
-        let s: SynthSettings = crate::study::parse_toml(path, &text)?;
+        let s: SynthSettings = crate::schema::parse_toml(path, &text)?;
         s.validate(&path.display().to_string())?;
         Ok(s)
     }

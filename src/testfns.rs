@@ -2,7 +2,7 @@
 //!
 //! * [`Ishigami`]: f = sin x₁ + a sin² x₂ + b x₃⁴ sin x₁, xᵢ ~ U(−π, π); with a = 7, b = 0.1 the
 //!   variance is 13.844588 and the Sobol indices are known in closed form
-//!   (`../shared/reference/verification.md` §1.1). Verified by `tests::ishigami_variance`.
+//!   (docs/reference.md, verification §1.1). Verified by `tests::ishigami_variance`.
 
 use crate::error::Result;
 use crate::model::{OutputSpec, Simulator};

@@ -322,16 +322,7 @@ pub fn simulate_pivotal(n: usize, replicates: usize, seed: u64) -> Result<Pivota
     Ok(Pivotal { n, pairs, q_sorted, t_sorted })
 }
 
-/// Empirical quantile (type 7, linear interpolation) of sorted data; NaN when empty.
-pub fn sorted_quantile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let h = (sorted.len() - 1) as f64 * p.clamp(0.0, 1.0);
-    let i = h.floor() as usize;
-    let j = (i + 1).min(sorted.len() - 1);
-    sorted[i] + (h - i as f64) * (sorted[j] - sorted[i])
-}
+pub use crate::stats::sorted_quantile;
 
 /// Pivotal confidence bounds and the unbiased modulus of one fit.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -84,7 +84,7 @@ fn non_numeric_cell() {
 fn zero_diameter() {
     check(
         |s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 5, 2, "0")),
-        &["crush_gen4.csv", "row 5 (line 6), column diameter_m", "must be > 0"],
+        &["crush_gen4.csv", "row 5 (line 6), column diameter_m", "diameter must be in [1e-6, 0.1] m"],
     );
 }
 
@@ -92,7 +92,7 @@ fn zero_diameter() {
 fn negative_force() {
     check(
         |s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 2, 3, "-12.5")),
-        &["crush_gen4.csv", "row 2 (line 3), column crush_force_n", "must be > 0 N"],
+        &["crush_gen4.csv", "row 2 (line 3), column crush_force_n", "crush force must be in [1e-6, 1e5] N"],
     );
 }
 
@@ -100,7 +100,7 @@ fn negative_force() {
 fn zero_force() {
     check(
         |s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 7, 3, "0")),
-        &["row 7 (line 8), column crush_force_n", "must be > 0 N"],
+        &["row 7 (line 8), column crush_force_n", "must be in [1e-6, 1e5] N"],
     );
 }
 
@@ -132,18 +132,18 @@ fn empty_required_cell() {
 fn roundness_above_one() {
     check(
         |s| edit_csv(s, "crush_bl1630.csv", |t| set_cell(t, 8, 4, "1.2")),
-        &["row 8 (line 9), column roundness", "(0, 1]"],
+        &["row 8 (line 9), column roundness", "[0.01, 1]"],
     );
 }
 
 #[test]
 fn roundness_zero() {
-    check(|s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 3, 4, "0")), &["column roundness", "(0, 1]"]);
+    check(|s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 3, 4, "0")), &["column roundness", "[0.01, 1]"]);
 }
 
 #[test]
 fn sphericity_negative() {
-    check(|s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 3, 5, "-0.5")), &["column sphericity", "(0, 1]"]);
+    check(|s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 3, 5, "-0.5")), &["column sphericity", "[0.01, 1]"]);
 }
 
 #[test]
@@ -152,6 +152,47 @@ fn ragged_row() {
         |s| edit_csv(s, "crush_gen4.csv", |t| t.replacen("G4-002,Gen 4,", "G4-002,Gen 4,0.001,", 1)),
         &["datasets/crush_gen4.csv: row 2 (line 3)", "has 8 fields, the header has 7"],
     );
+}
+
+#[test]
+fn short_row() {
+    check(
+        |s| edit_csv(s, "crush_gen4.csv", |t| {
+            let mut lines: Vec<String> = t.lines().map(String::from).collect();
+            let cut = lines[4].rfind(',').unwrap();
+            lines[4].truncate(cut);
+            lines.join("\n") + "\n"
+        }),
+        &["datasets/crush_gen4.csv: row 4 (line 5)", "has 6 fields, the header has 7"],
+    );
+}
+
+#[test]
+fn duplicated_column_name() {
+    check(
+        |s| edit_csv(s, "crush_bl1630.csv", |t| t.replacen("sphericity", "roundness", 1)),
+        &["crush_bl1630.csv: header", "column `roundness` appears twice (columns 5 and 6)"],
+    );
+}
+
+#[test]
+fn directory_as_data_file() {
+    check(
+        |s| {
+            std::fs::remove_file(s.path("datasets/crush_gen4.csv")).unwrap();
+            std::fs::create_dir(s.path("datasets/crush_gen4.csv")).unwrap();
+        },
+        &["crush_gen4.csv", "is a directory, not a file"],
+    );
+}
+
+/// Values that parse as numbers but no particle has: they used to travel on as an infinite
+/// contact radius (exit 1) or an underflowed strength.
+#[test]
+fn implausible_force_and_diameter() {
+    check(|s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 3, 3, "1e308")), &["row 3 (line 4), column crush_force_n", "[1e-6, 1e5] N", "got 1e308"]);
+    check(|s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 6, 2, "1e-300")), &["row 6 (line 7), column diameter_m", "[1e-6, 0.1] m"]);
+    check(|s| edit_csv(s, "crush_gen4.csv", |t| set_cell(t, 6, 2, "900")), &["row 6 (line 7), column diameter_m", "µm or mm"]);
 }
 
 #[test]
@@ -259,7 +300,7 @@ fn uq_study_bad_input() {
     s.expect_bad_study(study, "median = 0.1, sd_log = 0.5", "median = 0.1, sd_log = -0.5", &["impact.energy_fraction", "sd_log"]);
     reset(&s);
     let population = "density_kg_m3 = 3060\npopulation = { particles = 64, diameter_m = { distribution = \"uniform\", min = 0.0006, max = 0.0012 }, roundness = { distribution = \"normal\", mean = 0.72, sd = 0.05, min = 0.5, max = 1.5 } }\n";
-    s.expect_bad_study(study, "density_kg_m3 = 3060\n", population, &["material[0].population.roundness", "[0.001, 1]"]);
+    s.expect_bad_study(study, "density_kg_m3 = 3060\n", population, &["material[0].population.roundness", "[0.01, 1]"]);
     reset(&s);
     s.expect_bad_study(study, "years = [1, 10]", "years = [0, 10]", &["impact.years", "> 0"]);
     reset(&s);
@@ -268,13 +309,13 @@ fn uq_study_bad_input() {
     let spectrum = "velocity = { distribution = \"spectrum\", file = \"../datasets/spectrum.csv\", target = \"tube\", row = 0 }";
     let head = "target,row,impacts,mean_v_normal_m_s,q5_v_normal_m_s,q50_v_normal_m_s,q95_v_normal_m_s\n";
     for (row, expect) in [
-        ("tube,0,100,0.2,0.1,-0.2,0.5\n", vec!["spectrum.csv", "q50_v_normal_m_s", "≥ 0"]),
+        ("tube,0,100,0.2,0.1,-0.2,0.5\n", vec!["spectrum.csv", "q50_v_normal_m_s", "[0, 100] m/s", "got -0.2"]),
         ("tube,0,100,0.2,0.1,NaN,0.5\n", vec!["spectrum.csv", "q50_v_normal_m_s", "finite"]),
         ("tube,0,0,0,0,0,0\n", vec!["spectrum.csv", "impacts", "empty"]),
         ("particle,0,100,0.2,0.1,0.2,0.5\n", vec!["spectrum.csv", "no row with target `tube`"]),
     ] {
         // A data error names the data file, its row and column (not the study).
-        s.write(study, &text.replace("velocity = { distribution = \"log_normal\", median = 5.0, sd_log = 0.2, min = 1.0, max = 15.0 }", spectrum));
+        s.write(study, &common::edited(&text, &[("velocity = { distribution = \"log_normal\", median = 5.0, sd_log = 0.2, min = 1.0, max = 15.0 }", spectrum)]));
         s.write("datasets/spectrum.csv", &format!("{head}{row}"));
         let out = s.run(&["run", study, "--quiet"]);
         assert_eq!(out.code, 2, "{}", out.stderr);
@@ -286,10 +327,8 @@ fn uq_study_bad_input() {
     // A good spectrum runs.
     reset(&s);
     s.write("datasets/spectrum.csv", &format!("{head}tube,0,100,0.2,0.1,0.2,0.5\n"));
-    let t = text
-        .replace("velocity = { distribution = \"log_normal\", median = 5.0, sd_log = 0.2, min = 1.0, max = 15.0 }", &spectrum.replace("row = 0 }", "row = 0, scale = 10.0 }"))
-        .replace("samples = 262144", "samples = 8192")
-        .replace("n = 8192", "n = 256");
+    let scaled = common::edited(spectrum, &[("row = 0 }", "row = 0, scale = 10.0 }")]);
+    let t = common::edited(&text, &[("velocity = { distribution = \"log_normal\", median = 5.0, sd_log = 0.2, min = 1.0, max = 15.0 }", &scaled), ("samples = 262144", "samples = 8192"), ("n = 8192", "n = 256")]);
     s.write(study, &t);
     let out = s.run(&["run", study, "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
@@ -344,7 +383,7 @@ fn uq_strength_model_bad_input() {
     // Nine crush tests: the weights cannot be computed.
     reset(&s);
     s.write("datasets/crush_gen4.csv", &gen4.lines().take(10).map(|l| format!("{l}\n")).collect::<String>());
-    let two = text.replace("effects = \"diagnosed\"", "effects = []").replace("strength = [[], [\"roundness\", \"sphericity\"], \"diagnosed\"]", "strength = [[], [\"size\"]]");
+    let two = common::edited(&text, &[("effects = \"diagnosed\"", "effects = []"), ("strength = [[], [\"roundness\", \"sphericity\"], \"diagnosed\"]", "strength = [[], [\"size\"]]")]);
     s.write(study, &two);
     bad_data(&s, study, &["crush_gen4.csv", "too few to weigh strength models", "at least 10"]);
 }
@@ -378,4 +417,31 @@ fn discrepancy_study_bad_input() {
     s.expect_bad_study(study, "particles = [20, 40, 80, 160]", "particles = [5, 40]", &["power.particles", "[10, 100000]"]);
     reset(&s);
     s.expect_bad_study(study, "cv_folds = 10", "cv_folds = 10\nfolds = 3", &["folds"]);
+}
+
+/// Every bad command-line argument is bad input: exit 2, a message naming the argument, no
+/// panic, nothing written.
+#[test]
+fn bad_command_line_arguments() {
+    let s = Scratch::new();
+    let cases: [(&[&str], &[&str]); 9] = [
+        (&["--threads", "0", "run", "studies/lifetime.toml"], &["--threads", "0"]),
+        (&["run"], &["<STUDY>"]),
+        (&["frobnicate"], &["frobnicate"]),
+        (&["bench", "--uq", "--dem"], &["--uq", "--dem", "cannot be used with"]),
+        (&["bench", "--chain", "chain.csv:1.5"], &["--chain", "--mcmc"]),
+        (&["bench", "--mcmc", "--chain", "chain.csv"], &["--chain", "FILE:SECONDS"]),
+        (&["bench", "--mcmc", "--chain", "chain.csv:soon"], &["--chain", "SECONDS"]),
+        (&["discrepancy", "--out", "x", "studies/lifetime.toml"], &["--out"]),
+        (&["datasets", "check", "datasets"], &["datasets", "is a directory, not a file"]),
+    ];
+    for (args, expect) in cases {
+        let out = s.run(args);
+        assert_eq!(out.code, 2, "partlife {args:?}: exit code; stderr: {}", out.stderr);
+        assert!(!out.stderr.contains("panicked"), "partlife {args:?}: {}", out.stderr);
+        for e in expect {
+            assert!(out.stderr.contains(e), "partlife {args:?}: message lacks \"{e}\": {}", out.stderr);
+        }
+        assert!(s.report_files().is_empty(), "partlife {args:?} wrote {:?}", s.report_files());
+    }
 }

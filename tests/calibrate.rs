@@ -28,13 +28,7 @@ fn column(csv: &str, name: &str) -> Vec<String> {
 
 /// Fast settings: 20 design runs, one refinement round, short chains.
 fn fast(study: &str) -> String {
-    study
-        .replace("design = 32", "design = 20")
-        .replace("rounds = 4", "rounds = 1")
-        .replace("points = 8\n", "points = 6\n")
-        .replace("steps = 20000", "steps = 2000")
-        .replace("burn_in = 5000", "burn_in = 800")
-        .replace("check = 12", "check = 4")
+    common::edited(study, &[("design = 32", "design = 20"), ("rounds = 4", "rounds = 1"), ("points = 8\n", "points = 6\n"), ("steps = 20000", "steps = 2000"), ("burn_in = 5000", "burn_in = 800"), ("check = 12", "check = 4")])
 }
 
 #[test]
@@ -261,7 +255,7 @@ walkers = 8
     let out = s.run(&["run", study, "--quiet"]);
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("calibration.design"), "{}", out.stderr);
-    s.write(study, &text.replace("restitution_pw", "stiffness"));
+    s.write(study, &common::edited(&text, &[("restitution_pw", "stiffness")]));
     let out = s.run(&["run", study, "--quiet"]);
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("param[0].name") && out.stderr.contains("stiffness"), "{}", out.stderr);
@@ -275,9 +269,9 @@ walkers = 8
 fn dem_calibration_recovers_the_wall_restitution() {
     let s = Scratch::new();
     let rig = std::fs::read_to_string(root().join("studies/dem_rig.toml")).unwrap();
-    s.write("studies/dem_rig.toml", &rig.replace("width = 0.1\n", "width = 0.05\n"));
+    s.write("studies/dem_rig.toml", &common::edited(&rig, &[("width = 0.1\n", "width = 0.05\n")]));
     let synth = std::fs::read_to_string(root().join("datasets/synth_dem.toml")).unwrap();
-    s.write("datasets/synth_dem.toml", &synth.replace("duration = 0.7 ", "duration = 0.55 "));
+    s.write("datasets/synth_dem.toml", &common::edited(&synth, &[("duration = 0.7 ", "duration = 0.55 ")]));
     let out = s.run(&["datasets", "synth-dem", "--settings", "datasets/synth_dem.toml"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     let data = s.read("datasets/dem_rig_profile.csv");
@@ -285,7 +279,7 @@ fn dem_calibration_recovers_the_wall_restitution() {
     assert!(data.starts_with("output,unit,value,sd\nvz_at_15mm,m/s,") && data.contains("\nmass_flow,kg/s,"), "{data}");
 
     let study = std::fs::read_to_string(root().join("studies/calibrate_dem.toml")).unwrap();
-    let fast = study.replace("design = 16", "design = 10").replace("rounds = 2", "rounds = 0").replace("steps = 10000", "steps = 3000").replace("burn_in = 2500", "burn_in = 1000").replace("check = 4", "check = 2");
+    let fast = common::edited(&study, &[("design = 16", "design = 10"), ("rounds = 2", "rounds = 0"), ("steps = 10000", "steps = 3000"), ("burn_in = 2500", "burn_in = 1000"), ("check = 4", "check = 2")]);
     s.write("studies/calibrate_dem.toml", &fast);
     let out = s.run(&["run", "studies/calibrate_dem.toml", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);

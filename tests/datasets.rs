@@ -106,6 +106,28 @@ fn synth_dem_reproduces_the_committed_file() {
     assert!(std::fs::read(path).unwrap() == old, "datasets/{} differs from what `partlife datasets synth-dem` generates", settings.file);
 }
 
+/// The fast sibling of `synth_curves_reproduce_the_committed_files`: the first particle of each
+/// case, regenerated with its fine-mesh FE crush, is byte for byte the start of the committed
+/// file (three FE runs instead of 24).
+#[test]
+fn synth_curves_reproduce_the_first_particle_of_each_committed_file() {
+    use partlife::calibrate::synth::{CurveSynthSettings, generate_first, write_curves};
+    use rayon::prelude::*;
+    let settings = CurveSynthSettings::load(&root().join("datasets/synth_curves.toml")).unwrap();
+    let dir = partlife::io::TempDir::new("test").unwrap();
+    (0..settings.case.len()).into_par_iter().for_each(|i| {
+        let c = &settings.case[i];
+        let curves = generate_first(&settings, i, 1, &|| {}).unwrap();
+        let path = dir.path().join(&c.file);
+        write_curves(&path, &curves).unwrap();
+        let new = std::fs::read(&path).unwrap();
+        let old = std::fs::read(root().join("datasets").join(&c.file)).unwrap();
+        assert!(new.len() > 200 && old.starts_with(&new), "datasets/{}: its first particle differs from what the generator makes", c.file);
+        // And the next line of the committed file starts the second particle.
+        assert!(old[new.len()..].starts_with(b"2,"), "datasets/{}: particle 1 has more rows in the committed file", c.file);
+    });
+}
+
 /// The synthetic force–displacement curves are what `partlife datasets synth-curves` makes from
 /// the committed settings (24 fine-mesh FE crushes).
 #[test]

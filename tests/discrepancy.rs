@@ -217,7 +217,7 @@ fn damage_from_prior_impacts_is_named_and_its_ratio_recovered() {
     s.write("datasets/hidden.toml", &settings(0.0, 0.0, 60, 75, "20.0", damage));
     assert_eq!(s.run(&["datasets", "synth", "--settings", "datasets/hidden.toml"]).code, 0);
     let study = std::fs::read_to_string(root().join("studies/discrepancy_crush.toml")).unwrap();
-    let study = study[..study.find("[[material]]").unwrap()].replace("replicates = 40", "replicates = 0");
+    let study = common::edited(&study[..study.find("[[material]]").unwrap()], &[("replicates = 40", "replicates = 0")]);
     s.write("studies/damage.toml", &format!("{study}[[material]]\nkey = \"hidden\"\nlabel = \"BL 16/30\"\ndata = \"../datasets/hidden.csv\"\nelastic = {{ youngs_modulus_pa = 112e9, poisson_ratio = 0.25 }}\ndensity_kg_m3 = 3060\n"));
     let out = s.run(&["discrepancy", "studies/damage.toml", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);

@@ -10,12 +10,7 @@ use common::{Scratch, root};
 
 /// Fast calibration settings (as tests/calibrate.rs): 20 design runs, one refinement round.
 fn fast_calibration(study: &str) -> String {
-    study
-        .replace("design = 32", "design = 20")
-        .replace("rounds = 4", "rounds = 1")
-        .replace("steps = 20000", "steps = 2000")
-        .replace("burn_in = 5000", "burn_in = 800")
-        .replace("check = 12", "check = 4")
+    common::edited(study, &[("design = 32", "design = 20"), ("rounds = 4", "rounds = 1"), ("steps = 20000", "steps = 2000"), ("burn_in = 5000", "burn_in = 800"), ("check = 12", "check = 4")])
 }
 
 /// A scratch directory with the Gen 3 RT calibration run.
@@ -63,7 +58,7 @@ fn synth_settings(file: &str, particles: usize, edit: &dyn Fn(String) -> String)
     let text = std::fs::read_to_string(root().join("datasets/synth_curves.toml")).unwrap();
     let mut parts = text.split("[[case]]");
     let head = parts.next().unwrap().to_string();
-    let case = parts.next().unwrap().replace("file = \"crush_curves_gen3_rt.csv\"", &format!("file = \"{file}\"")).replace("particles = 8", &format!("particles = {particles}"));
+    let case = common::edited(parts.next().unwrap(), &[("file = \"crush_curves_gen3_rt.csv\"", &format!("file = \"{file}\"")), ("particles = 8", &format!("particles = {particles}"))]);
     edit(format!("{head}[[case]]{case}"))
 }
 
@@ -100,7 +95,7 @@ fn curve_loop_names_temperature_and_compliance_and_nothing_on_clean_curves() {
     assert!(skipped["skipped"].as_str().unwrap().contains("one temperature"), "{skipped}");
 
     // A compliant testing machine: the same material, c = 0.03 µm/N hidden.
-    s.write("datasets/compliant.toml", &synth_settings("compliant.csv", 6, &|t| t.replace("file = \"compliant.csv\"", "file = \"compliant.csv\"\ncompliance = 3.0e-8")));
+    s.write("datasets/compliant.toml", &synth_settings("compliant.csv", 6, &|t| common::edited(&t, &[("file = \"compliant.csv\"", "file = \"compliant.csv\"\ncompliance = 3.0e-8")])));
     let out = s.run(&["datasets", "synth-curves", "--settings", "datasets/compliant.toml"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     let v = run_verdict(&s, "compliant", &curve_study(&[("compliant.csv", 20.0)]));
@@ -116,7 +111,7 @@ fn curve_loop_names_temperature_and_compliance_and_nothing_on_clean_curves() {
 #[ignore = "slow: fine-mesh asperity crushes and the calibration, about 2 min"]
 fn curve_loop_names_curvature() {
     let s = calibrated();
-    s.write("datasets/round.toml", &synth_settings("round.csv", 8, &|t| t.replace("roundness = [0.95, 1.0]", "roundness = [0.55, 0.65]")));
+    s.write("datasets/round.toml", &synth_settings("round.csv", 8, &|t| common::edited(&t, &[("roundness = [0.95, 1.0]", "roundness = [0.55, 0.65]")])));
     let out = s.run(&["datasets", "synth-curves", "--settings", "datasets/round.toml"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     let v = run_verdict(&s, "round", &curve_study(&[("round.csv", 20.0)]));

@@ -30,7 +30,7 @@ fn every_study_file_parses_and_validates() {
         let p = e.unwrap().path();
         if p.extension().is_some_and(|x| x == "toml") {
             let s = partlife::study::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-            let lines: Vec<&str> = s.text.lines().take(2).collect();
+            let lines: Vec<&str> = s.file.text.lines().take(2).collect();
             assert!(lines.len() == 2 && lines.iter().all(|l| l.starts_with('#')), "{}: two comment lines first", p.display());
             n += 1;
         }

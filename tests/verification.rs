@@ -1,5 +1,5 @@
 //! Verification against analytic and published answers, one reference problem per file
-//! (`../shared/reference/mechanics.md`, `../shared/reference/verification.md`). Each test
+//! (`docs/reference.md`). Each test
 //! states its tolerance: half a unit in the last printed digit of the reference unless noted.
 
 mod verification {

@@ -10,7 +10,7 @@
 //! * the force at K grid displacements `δ_k = k/K · fraction · min_p δ_f,p` (below every
 //!   particle's fracture, so a grid point is never on a post-fracture branch);
 //! * the peak force and the fracture displacement (first sustained drop,
-//!   [`crate::fem::output::FractureDetector`]); a particle whose curve never drops is censored:
+//!   [`crate::fracture::FractureDetector`]); a particle whose curve never drops is censored:
 //!   it contributes its grid forces only.
 //!
 //! σ of each output is the **scatter between particles** (sample sd over particles) with a floor
@@ -26,8 +26,7 @@
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::fem::FractureParams;
-use crate::fem::output::FractureDetector;
+use crate::fracture::{FractureDetector, FractureParams};
 use crate::io::{col_f64, col_str, read_table};
 use crate::model::OutputSpec;
 
@@ -95,11 +94,10 @@ pub fn load_curves(path: &Path) -> Result<Vec<Curve>> {
                 return Err(Error::data_row(path, i, name, format!("{v} is not a finite number")));
             }
         }
-        if !(diam[i] > 0.0 && diam[i] < 0.1) {
-            return Err(Error::data_row(path, i, "diameter_m", format!("{} m is not a particle diameter (0 < d < 0.1 m)", diam[i])));
-        }
-        if disp[i] < 0.0 {
-            return Err(Error::data_row(path, i, "displacement_m", format!("{} is negative", disp[i])));
+        crate::data::DIAMETER.check(path, i, "diameter_m", diam[i])?;
+        crate::data::CURVE_FORCE.check(path, i, "force_n", force[i])?;
+        if !(disp[i] >= 0.0 && disp[i] <= diam[i]) {
+            return Err(Error::data_row(path, i, "displacement_m", format!("displacement must lie in [0, d = {} m] (a platen cannot travel more than the particle's diameter); got {}", diam[i], disp[i])));
         }
         if particle[i].is_empty() {
             return Err(Error::data_row(path, i, "particle", "is empty"));

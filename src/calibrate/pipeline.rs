@@ -360,7 +360,7 @@ pub fn calibrate<S: Simulator>(sim: &S, obs: &Observations, opts: &PipelineOptio
         emulator_evaluations += chains.evaluations;
         let probe = thinned(&chains, opts.probe);
         let eps = epsilons(&em, &agg, &probe);
-        let q = crate::stats::quantiles(&mut eps.clone(), &[0.5, 0.9]);
+        let q = crate::stats::interpolated_quantiles(eps.clone(), &[0.5, 0.9]);
         let eps_q = (q[0], q[1]);
         rounds.push(Round { runs: train_t.len(), epsilon: eps_q, loo: em.leave_one_out() });
         let done = eps_q.1 <= opts.tolerance;

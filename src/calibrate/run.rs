@@ -47,9 +47,9 @@ use crate::fem::CrushSetup;
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
 use crate::model::{Restricted, Simulator};
 use crate::params::{Param, Prior};
-use crate::stats::quantiles;
-use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
-use crate::study::LoadedStudy;
+use crate::stats::interpolated_quantiles;
+use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
+use crate::schema::StudyFile;
 
 /// `[data]`
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -243,6 +243,11 @@ impl CalibrateStudy {
                 if !(*sigma_floor >= 0.0 && *sigma_floor < 1.0) {
                     return Err(Error::config(&file, "data.sigma_floor", format!("must lie in [0, 1), got {sigma_floor}")));
                 }
+                // Replaced by the data's reference diameter, but still checked: a study that
+                // says `diameter = nan` is wrong even where the value is not used.
+                if !crate::data::DIAMETER.contains(crush.diameter) {
+                    return Err(Error::config(&file, "model.crush.diameter", format!("must lie in {}, got {}", crate::data::DIAMETER.shown, crush.diameter)));
+                }
                 let path = existing(&file, "data.file", resolve(data))?;
                 let curves = load_curves(&path)?;
                 let d0 = match reference_diameter {
@@ -261,10 +266,11 @@ impl CalibrateStudy {
             }
             (ModelSpec::Dem { study, duration, heights, window }, DataSpec::Observations { file: data }) => {
                 let spath = existing(&file, "model.study", resolve(study))?;
-                let loaded = crate::study::load(&spath)?;
-                let crate::study::Study::Dem(ds) = &loaded.study else {
+                let loaded = crate::schema::StudyFile::read(&spath)?;
+                if loaded.kind(&["dem"])? != "dem" {
                     return Err(Error::config(&file, "model.study", format!("{} is not a kind = \"dem\" study", spath.display())));
-                };
+                }
+                let ds: crate::dem::run::DemStudy = loaded.parse()?;
                 let setup = ds.setup(&spath.display().to_string())?;
                 if heights.is_empty() || heights.iter().any(|h| !h.is_finite()) || !(*window > 0.0) {
                     return Err(Error::config(&file, "model.heights", "at least one finite height and a window > 0 are required"));
@@ -298,7 +304,7 @@ fn existing(file: &str, key: &str, path: PathBuf) -> Result<PathBuf> {
 }
 
 /// Runs a calibration study.
-pub fn run_calibrate(loaded: &LoadedStudy, s: &CalibrateStudy, opts: &RunOptions) -> Result<RunSummary> {
+pub fn run_calibrate(loaded: &StudyFile, s: &CalibrateStudy, opts: &RunOptions) -> Result<RunSummary> {
     let clock = RunClock::start();
     let resolve = |p: &str| loaded.resolve(std::path::Path::new(p));
     let prep = s.prepare(&loaded.path, &resolve)?;
@@ -307,7 +313,7 @@ pub fn run_calibrate(loaded: &LoadedStudy, s: &CalibrateStudy, opts: &RunOptions
         inputs.push(InputFile::hash(p)?);
     }
     let cache_dir = opts.reports_root.join(".cache").join(&loaded.name);
-    let pb = crate::runner::progress_bar(1, opts.progress, "{spinner} [{elapsed_precise}] {msg}");
+    let pb = crate::runkit::progress_bar(1, opts.progress, "{spinner} [{elapsed_precise}] {msg}");
     pb.enable_steady_tick(std::time::Duration::from_millis(200));
     let progress = |m: &str| pb.set_message(m.to_string());
     let obs = &prep.observations;
@@ -420,11 +426,11 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
     let flats: Vec<Vec<f64>> = (0..p).map(|k| cal.chains.flat(k)).collect();
     let mut stats = Vec::new();
     for k in 0..p {
-        let mut v = flats[k].clone();
+        let v = &flats[k];
         let n = v.len() as f64;
         let mean = v.iter().sum::<f64>() / n;
         let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        let q = quantiles(&mut v, &[0.05, 0.5, 0.95]);
+        let q = interpolated_quantiles(v.clone(), &[0.05, 0.5, 0.95]);
         stats.push((mean, sd, q));
     }
     let prior_sd: Vec<f64> = params.iter().map(|q| q.prior_sd()).collect();
@@ -523,8 +529,8 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
     for i in 0..obs.len() {
         let o = obs.output[i];
         let me2 = (s.calibration.model_error * pr_mean(&preds, o)).powi(2);
-        let mut v: Vec<f64> = preds.iter().map(|pr| pr[o].0 + (obs.sigma[i].powi(2) + pr[o].1 + me2).sqrt() * n01.sample(&mut rng)).collect();
-        let q = quantiles(&mut v, &[0.05, 0.5, 0.95]);
+        let v: Vec<f64> = preds.iter().map(|pr| pr[o].0 + (obs.sigma[i].powi(2) + pr[o].1 + me2).sqrt() * n01.sample(&mut rng)).collect();
+        let q = interpolated_quantiles(v, &[0.05, 0.5, 0.95]);
         q05.push(q[0]);
         q50.push(q[1]);
         q95.push(q[2]);

@@ -107,7 +107,7 @@ impl CurveSynthSettings {
     /// Reads and validates the settings file.
     pub fn load(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
-        let s: CurveSynthSettings = crate::study::parse_toml(path, &text)?;
+        let s: CurveSynthSettings = crate::schema::parse_toml(path, &text)?;
         s.validate(&path.display().to_string())?;
         Ok(s)
     }
@@ -167,6 +167,13 @@ impl CurveSynthSettings {
 
 /// Draws the particles of case `index` and crushes each with the fine-mesh FE (in parallel).
 pub fn generate(settings: &CurveSynthSettings, index: usize, progress: &(dyn Fn() + Sync)) -> Result<Vec<SynthCurve>> {
+    generate_first(settings, index, settings.case[index].particles, progress)
+}
+
+/// The first `first` particles of case `index`, exactly as [`generate`] makes them: every
+/// particle's diameter and roundness are drawn first, then the force noise particle by
+/// particle, so the first particles' curves do not depend on the FE runs of the later ones.
+pub fn generate_first(settings: &CurveSynthSettings, index: usize, first: usize, progress: &(dyn Fn() + Sync)) -> Result<Vec<SynthCurve>> {
     let c = &settings.case[index];
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     rng.set_stream(index as u64);
@@ -184,6 +191,7 @@ pub fn generate(settings: &CurveSynthSettings, index: usize, progress: &(dyn Fn(
         let d = (d * 1e6).round() * 1e-6;
         draws.push((d, uniform.sample(&mut rng)));
     }
+    draws.truncate(first);
     let runs: Vec<Result<crate::fem::CrushResult>> = draws
         .par_iter()
         .map(|&(d, rho)| {
@@ -193,7 +201,7 @@ pub fn generate(settings: &CurveSynthSettings, index: usize, progress: &(dyn Fn(
             r
         })
         .collect();
-    let mut out = Vec::with_capacity(c.particles);
+    let mut out = Vec::with_capacity(draws.len());
     for (k, ((d, rho), run)) in draws.into_iter().zip(runs).enumerate() {
         let mut r = run?;
         // Machine compliance: the recorded displacement is δ + c·F, kept non-decreasing (after

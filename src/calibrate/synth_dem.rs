@@ -87,7 +87,7 @@ impl DemSynthSettings {
     /// Reads and validates the settings file; returns them with the rig model.
     pub fn load(path: &Path) -> Result<(Self, TubeBankModel)> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
-        let s: DemSynthSettings = crate::study::parse_toml(path, &text)?;
+        let s: DemSynthSettings = crate::schema::parse_toml(path, &text)?;
         let model = s.model(path)?;
         Ok((s, model))
     }
@@ -116,10 +116,11 @@ impl DemSynthSettings {
         if !spath.is_file() {
             return bad("study", format!("{} does not exist", spath.display()));
         }
-        let loaded = crate::study::load(&spath)?;
-        let crate::study::Study::Dem(ds) = &loaded.study else {
+        let sf = crate::schema::StudyFile::read(&spath)?;
+        if sf.kind(&["dem"])? != "dem" {
             return bad("study", format!("{} is not a kind = \"dem\" study", spath.display()));
-        };
+        }
+        let ds: crate::dem::run::DemStudy = sf.parse()?;
         let mut setup = ds.setup(&spath.display().to_string())?;
         setup.seed = self.particle_seed;
         TubeBankModel::new(setup, self.duration, self.heights.clone(), self.window).map_err(|e| match e {

@@ -28,8 +28,8 @@ use super::vtk;
 use super::{Dem, DemSetup, Diameters, Inlet, ProbeSetup};
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
-use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
-use crate::study::LoadedStudy;
+use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
+use crate::schema::StudyFile;
 
 /// `[particles]`
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
@@ -283,6 +283,11 @@ impl DemStudy {
                 return Err(Error::config(file, format!("run.snapshots[{k}]"), format!("{t} s is outside [0, duration = {}] s", self.run.duration)));
             }
         }
+        for (key, v) in [("probes.min_impact_velocity", self.probes.min_impact_velocity), ("probes.trace_min_velocity", self.probes.trace_min_velocity)] {
+            if !crate::data::VELOCITY.contains(v) {
+                return Err(Error::config(file, key, format!("must lie in {} (a speed), got {v}", crate::data::VELOCITY.shown)));
+            }
+        }
         for (k, &q) in self.probes.quantiles.iter().enumerate() {
             if !(q > 0.0 && q < 1.0) {
                 return Err(Error::config(file, format!("probes.quantiles[{k}]"), format!("must lie in (0, 1), got {q}")));
@@ -338,7 +343,7 @@ impl DemStudy {
 }
 
 /// Runs a DEM study into `reports/<name>/`.
-pub fn run_dem(loaded: &LoadedStudy, s: &DemStudy, opts: &RunOptions) -> Result<RunSummary> {
+pub fn run_dem(loaded: &StudyFile, s: &DemStudy, opts: &RunOptions) -> Result<RunSummary> {
     let clock = RunClock::start();
     let file = loaded.path.display().to_string();
     let setup = s.setup(&file)?;
@@ -348,7 +353,7 @@ pub fn run_dem(loaded: &LoadedStudy, s: &DemStudy, opts: &RunOptions) -> Result<
     let mut dem = Dem::new(setup, &file)?;
     let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
 
-    let pb = crate::runner::progress_bar(total_steps, opts.progress, "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} steps {msg} (eta {eta})");
+    let pb = crate::runkit::progress_bar(total_steps, opts.progress, "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} steps {msg} (eta {eta})");
     let mut snaps: Vec<f64> = s.run.snapshots.clone();
     snaps.sort_by(f64::total_cmp);
     let mut next_snap = 0;

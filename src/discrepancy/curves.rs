@@ -73,12 +73,12 @@ use crate::calibrate::run::Built;
 use crate::error::{Error, Result};
 use crate::fem::mesh::Shape;
 use crate::fem::model::CrushModel;
-use crate::fem::{CrushTest, FractureParams};
+use crate::fracture::FractureParams;
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
 use crate::model::Simulator;
 use crate::report::Table;
-use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
-use crate::study::{FigureOptions, LoadedStudy, Study, check};
+use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
+use crate::schema::{FigureOptions, StudyFile, check};
 
 /// The FE-level candidate terms.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
@@ -340,22 +340,31 @@ impl RatioTable {
     }
 }
 
+/// The base model's force on the grid at θ (the calibration's emulator means).
+pub type BaseCurve<'a> = dyn Fn(&[f64]) -> Vec<f64> + Sync + 'a;
+
 /// The calibrated model with terms, evaluated at the data points.
 pub struct CurveModel<'a> {
-    emulator: &'a Emulator,
-    grid: &'a [f64],
-    points: &'a [Point],
+    /// Force on the grid at the base θ.
+    pub base: &'a BaseCurve<'a>,
+    /// Grid displacements at D₀ (m).
+    pub grid: &'a [f64],
+    /// Data points.
+    pub points: &'a [Point],
     /// Temperature of each group (°C).
-    temperatures: Vec<f64>,
-    t_ref: f64,
-    table: Option<&'a RatioTable>,
-    base_dim: usize,
+    pub temperatures: Vec<f64>,
+    /// Reference temperature of the softening term (°C).
+    pub t_ref: f64,
+    /// FE ratio table of the curvature term.
+    pub table: Option<&'a RatioTable>,
+    /// Number of base parameters.
+    pub base_dim: usize,
 }
 
 impl CurveModel<'_> {
     /// Forces at every point for θ = (base constants, one parameter per term in `terms` order).
     pub fn eval(&self, terms: &[CurveCandidate], theta: &[f64]) -> Vec<f64> {
-        let base = self.emulator.means(&theta[..self.base_dim], self.grid.len());
+        let base = (self.base)(&theta[..self.base_dim]);
         let mut factor = vec![vec![1.0; self.grid.len()]; self.temperatures.len()];
         let mut compliance = None;
         for (j, t) in terms.iter().enumerate() {
@@ -638,10 +647,11 @@ pub fn load_calibration(study_file: &str, key: &str, path: &Path, reports_root: 
     if !path.is_file() {
         return Err(Error::config(study_file, key, format!("{} does not exist", path.display())));
     }
-    let loaded = crate::study::load(path)?;
-    let Study::Calibrate(cs) = &loaded.study else {
+    let loaded = StudyFile::read(path)?;
+    if loaded.kind(&["calibrate"])? != "calibrate" {
         return Err(Error::config(study_file, key, format!("{} is not a kind = \"calibrate\" study", path.display())));
-    };
+    }
+    let cs: crate::calibrate::run::CalibrateStudy = loaded.parse()?;
     let prep = cs.prepare(&loaded.path, &|p: &str| loaded.resolve(Path::new(p)))?;
     let Built::Crush(model, red) = prep.built else {
         return Err(Error::config(study_file, key, format!("{} calibrates the DEM: the curve workflow needs a crush calibration", path.display())));
@@ -714,24 +724,15 @@ pub fn curvature_table(cal: &Calibrated, spec: &CurvatureTable, progress: &(dyn 
     roundness.sort_by(f64::total_cmp);
     roundness.dedup();
     roundness.push(1.0);
-    let runs: Vec<Vec<f64>> = roundness
-        .par_iter()
-        .map(|&rho| {
-            let mut s = cal.model.setup_at(&cal.theta)?;
-            s.diameter = cal.reference_diameter;
-            s.shape = if rho >= 1.0 { Shape::Sphere } else { Shape::Asperity { roundness: rho, width: spec.width } };
-            let r = CrushTest::new(s, "<curvature table>")?.run(None)?;
-            progress();
-            Ok(cal.grid.iter().map(|&x| crate::fem::model::force_at(&r.curve, x)).collect())
-        })
-        .collect::<Result<_>>()?;
+    let shapes: Vec<Shape> = roundness.iter().map(|&rho| if rho >= 1.0 { Shape::Sphere } else { Shape::Asperity { roundness: rho, width: spec.width } }).collect();
+    let runs = cal.model.forces_with_shapes(&cal.theta, cal.reference_diameter, &shapes, &cal.grid, progress)?;
     let sphere = runs.last().cloned().unwrap_or_default();
     let ratio = runs.iter().map(|f| f.iter().zip(&sphere).map(|(a, b)| if *b > 0.0 { a / b } else { 1.0 }).collect()).collect();
     Ok(RatioTable { roundness, ratio })
 }
 
 /// Runs a `discrepancy_curves` study.
-pub fn run_curves(loaded: &LoadedStudy, s: &CurveStudy, opts: &RunOptions) -> Result<RunSummary> {
+pub fn run_curves(loaded: &StudyFile, s: &CurveStudy, opts: &RunOptions) -> Result<RunSummary> {
     let clock = RunClock::start();
     let file = loaded.path.display().to_string();
     // The curve files first (cheap), then the calibration and its emulator.
@@ -765,7 +766,7 @@ pub fn run_curves(loaded: &LoadedStudy, s: &CurveStudy, opts: &RunOptions) -> Re
     }
     let want_table = s.candidates.contains(&CurveCandidate::Curvature);
     let steps = 2 + s.candidates.len() * s.max_effects + if want_table { s.curvature.roundness.len() + 1 } else { 0 };
-    let pb = progress_bar(steps as u64, opts.progress, crate::runner::PROGRESS_COUNT);
+    let pb = progress_bar(steps as u64, opts.progress, crate::runkit::PROGRESS_COUNT);
     let table = if want_table {
         pb.set_message("curvature table: FE runs at the calibrated constants");
         Some(curvature_table(&cal, &s.curvature, &|| pb.inc(1))?)
@@ -774,8 +775,9 @@ pub fn run_curves(loaded: &LoadedStudy, s: &CurveStudy, opts: &RunOptions) -> Re
     };
     let names: Vec<String> = cal.model.space().params().iter().map(|p| p.name.clone()).collect();
     let bounds: Vec<(f64, f64)> = cal.model.space().params().iter().map(|p| (p.lower, p.upper)).collect();
+    let base = |t: &[f64]| cal.emulator.means(t, cal.grid.len());
     let inputs_loop = CurveInputs {
-        model: CurveModel { emulator: &cal.emulator, grid: &cal.grid, points: &points, temperatures: groups.iter().map(|g| g.temperature).collect(), t_ref: s.data[0].temperature_c, table: table.as_ref(), base_dim: names.len() },
+        model: CurveModel { base: &base, grid: &cal.grid, points: &points, temperatures: groups.iter().map(|g| g.temperature).collect(), t_ref: s.data[0].temperature_c, table: table.as_ref(), base_dim: names.len() },
         names,
         bounds,
         candidates: s.candidates.clone(),
@@ -833,7 +835,7 @@ fn added_parameter(fit: &KohFit) -> (f64, f64, f64) {
     (fit.theta_median[i], fit.theta_90[i].0, fit.theta_90[i].1)
 }
 
-fn curve_verdict(loaded: &LoadedStudy, s: &CurveStudy, groups: &[Group], o: &CurveOutcome, where_: &[Disagreement], trend: &[(f64, f64)]) -> serde_json::Value {
+fn curve_verdict(loaded: &StudyFile, s: &CurveStudy, groups: &[Group], o: &CurveOutcome, where_: &[Disagreement], trend: &[(f64, f64)]) -> serde_json::Value {
     use serde_json::json;
     let (b, a) = (&o.stages[0], o.stages.last().unwrap_or(&o.stages[0]));
     let evidence: Vec<serde_json::Value> = o
@@ -1042,4 +1044,72 @@ fn curve_summary(s: &CurveStudy, groups: &[Group], o: &CurveOutcome, where_: &[D
     }
     md.push_str("\nEquations of the terms, the gap measure and the guard: `partlife::discrepancy::curves` (module documentation). Figure `discrepancy_curves`: measured mean curves with the base and final model (top) and δ̂ with its 90 % band before and after (bottom).\n");
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interpolation_is_exact_on_hertzian_curves_and_compliance_solves_its_equation() {
+        // F = k x^1.5 is linear in F^(2/3): exact between grid points and beyond the last.
+        let k = 3e9;
+        let grid: Vec<f64> = (1..=8).map(|i| i as f64 * 2e-6).collect();
+        let f: Vec<f64> = grid.iter().map(|x| k * x.powf(1.5)).collect();
+        for x in [0.5e-6, 3e-6, 7.7e-6, 15.9e-6, 18e-6] {
+            assert!((interp(&grid, &f, x) / (k * x.powf(1.5)) - 1.0).abs() < 1e-12, "x = {x}");
+        }
+        // With compliance c the recorded force solves F = k (x − cF)^1.5.
+        let c = 0.05e-6;
+        for x in [3e-6, 9e-6, 15e-6] {
+            let got = with_compliance(&grid, &f, x, c);
+            assert!((got - k * (x - c * got).powf(1.5)).abs() < 1e-9 * got, "x = {x}: {got}");
+            assert!(got < k * x.powf(1.5));
+        }
+    }
+
+    #[test]
+    fn ratio_table_interpolates_linearly_in_roundness() {
+        let t = RatioTable { roundness: vec![0.5, 0.75, 1.0], ratio: vec![vec![0.5, 0.7], vec![0.8, 0.9], vec![1.0, 1.0]] };
+        assert_eq!(t.at(0.5, 0), 0.5);
+        assert!((t.at(0.625, 0) - 0.65).abs() < 1e-12);
+        assert!((t.at(0.875, 1) - 0.95).abs() < 1e-12);
+        assert_eq!(t.at(1.0, 1), 1.0);
+        // Clamped outside the table.
+        assert_eq!(t.at(0.2, 0), 0.5);
+    }
+
+    /// The fast sibling of the slow `curve_loop_names_curvature` test (tests/discrepancy_curves.rs,
+    /// which runs the fine-mesh FE): the same loop on a Hertzian base model F = θ·10⁹·x^1.5 with a
+    /// known ratio table Φ(ρ, x_k) = 1 − (1 − ρ)e^(−k/4) (an asperity softens the start of the
+    /// curve), data made with ρ = 0.6. The loop must name curvature first, put ρ = 0.6 in its
+    /// 90 % range, skip temperature (one temperature) and shrink the gap.
+    #[test]
+    fn the_loop_names_a_hidden_curvature_and_recovers_it() {
+        let grid: Vec<f64> = (1..=14).map(|i| i as f64 * 1.5e-6).collect();
+        let phi = |rho: f64| -> Vec<f64> { (0..grid.len()).map(|k| 1.0 - (1.0 - rho) * (-(k as f64) / 4.0).exp()).collect() };
+        let table = RatioTable { roundness: vec![0.4, 0.55, 0.7, 0.85, 1.0], ratio: [0.4, 0.55, 0.7, 0.85, 1.0].iter().map(|&r| phi(r)).collect() };
+        let base = |t: &[f64]| -> Vec<f64> { grid.iter().map(|x| t[0] * 1e9 * x.powf(1.5)).collect() };
+        let truth: Vec<f64> = base(&[1.0]).iter().zip(phi(0.6)).map(|(f, p)| f * p).collect();
+        let points: Vec<Point> = (0..grid.len())
+            .map(|k| Point { group: 0, k, x: grid[k], temperature: 20.0, mean: truth[k], scatter: 0.02 + 0.005 * truth[k], particles: 1, sigma: 0.02 + 0.005 * truth[k] })
+            .collect();
+        let inputs = CurveInputs {
+            model: CurveModel { base: &base, grid: &grid, points: &points, temperatures: vec![20.0], t_ref: 20.0, table: Some(&table), base_dim: 1 },
+            names: vec!["stiffness".into()],
+            bounds: vec![(0.5, 2.0)],
+            candidates: vec![CurveCandidate::Compliance, CurveCandidate::Temperature, CurveCandidate::Curvature],
+            max_effects: 2,
+            koh: KohOptions { walkers: 16, steps: 1500, burn_in: 1000, delta_draws: 100, seed: 7 },
+            prior: None,
+        };
+        let o = inputs.analyse(&|_| {}).unwrap();
+        assert_eq!(o.named.first(), Some(&CurveCandidate::Curvature), "named {:?}", o.named);
+        let stage = &o.stages[1];
+        let (lo, hi) = stage.fit.theta_90[1];
+        assert!(lo <= 0.6 && 0.6 <= hi && hi - lo < 0.2, "ρ range [{lo}, {hi}]");
+        let skipped = o.evidence.iter().find(|e| e.candidate == CurveCandidate::Temperature).and_then(|e| e.skipped.clone()).unwrap_or_default();
+        assert!(skipped.contains("one temperature"), "{skipped}");
+        assert!(stage.gap < 0.5 * o.stages[0].gap, "gap {} → {}", o.stages[0].gap, stage.gap);
+    }
 }

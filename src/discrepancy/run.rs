@@ -47,9 +47,9 @@ use crate::data::{CrushData, read_crush};
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
 use crate::lifetime::impacts_in;
-use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
+use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
 use crate::strength::{Effect, LifetimeModel, ModelFit, NamingSettings, Sample, StrengthFit, Term, Uncertainty, sample_of};
-use crate::study::{ContactOptions, FigureOptions, ImpactOptions, LoadedStudy, MaterialSpec, check, elastic_checked};
+use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSpec, StudyFile, check, elastic_checked};
 
 /// Options of the lifetime bands.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -154,7 +154,7 @@ impl DiscrepancyStudy {
 /// lifetime study's defaults (steel platens and tube, line average to 2a, η = 0.1, 5 m/s,
 /// 730 impacts a year) and the deliverable's Gen 4 constants (E = 112 GPa, ν = 0.25,
 /// 3600 kg/m³); the elastic constants shift σ̄ by a common factor and do not change the verdict.
-pub fn quick_study(data: &Path) -> Result<LoadedStudy> {
+pub fn quick_study(data: &Path) -> Result<(StudyFile, DiscrepancyStudy)> {
     let crush = read_crush(data)?;
     let stem = data.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "data".into());
     let key: String = stem.chars().map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' }).collect();
@@ -182,12 +182,7 @@ pub fn quick_study(data: &Path) -> Result<LoadedStudy> {
     let text = toml::to_string(&study).map_err(|e| Error::numerical("quick study", e.to_string()))?;
     let dir = data.parent().unwrap_or(Path::new("."));
     study.validate(&data.display().to_string())?;
-    Ok(LoadedStudy {
-        name: format!("discrepancy-{stem}"),
-        path: dir.join(format!("{stem}.discrepancy.toml")),
-        text,
-        study: crate::study::Study::Discrepancy(Box::new(study)),
-    })
+    Ok((StudyFile { name: format!("discrepancy-{stem}"), path: dir.join(format!("{stem}.discrepancy.toml")), text }, study))
 }
 
 /// The terms of a model's effects for a sample (the effects were fitted, so each has a term).
@@ -315,7 +310,7 @@ struct MaterialResult {
 }
 
 /// Runs the study.
-pub fn run_discrepancy(loaded: &LoadedStudy, s: &DiscrepancyStudy, opts: &RunOptions) -> Result<RunSummary> {
+pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptions) -> Result<RunSummary> {
     let clock = RunClock::start();
     // Inputs first: every bad-input error before anything is written.
     let mut inputs = Vec::new();
@@ -329,12 +324,12 @@ pub fn run_discrepancy(loaded: &LoadedStudy, s: &DiscrepancyStudy, opts: &RunOpt
         inputs.push(InputFile::hash(&path)?);
         let sample = sample_of(&data, &m.elastic, &s.contact)?;
         validate(&sample)?;
-        let population = m.population(prepared.len(), &data, &loaded.path, s.seed)?;
+        let population = crate::strength::Population::of_material(m, prepared.len(), &data, &loaded.path, s.seed)?;
         prepared.push(Prepared { spec: m.clone(), data, sample, population });
     }
     let settings = s.settings();
     let power_runs = if s.power.replicates > 0 { s.power.particles.len() * s.power.replicates * 2 } else { 0 };
-    let pb = progress_bar((prepared.len() * (2 + power_runs)) as u64, opts.progress, crate::runner::PROGRESS_COUNT);
+    let pb = progress_bar((prepared.len() * (2 + power_runs)) as u64, opts.progress, crate::runkit::PROGRESS_COUNT);
     let mut results = Vec::new();
     for (k, m) in prepared.into_iter().enumerate() {
         pb.set_message(format!("{}: naming loop", m.spec.label));
@@ -393,7 +388,7 @@ fn headline(r: &MaterialResult) -> String {
     )
 }
 
-fn verdict_json(loaded: &LoadedStudy, s: &DiscrepancyStudy, results: &[MaterialResult]) -> serde_json::Value {
+fn verdict_json(loaded: &StudyFile, s: &DiscrepancyStudy, results: &[MaterialResult]) -> serde_json::Value {
     use serde_json::json;
     let mut named = serde_json::Map::new();
     let mut before = serde_json::Map::new();

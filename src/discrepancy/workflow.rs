@@ -37,7 +37,7 @@ use crate::strength::{Effect, ModelFit, NamingSettings, Sample, Term, fit_model,
 pub const MIN_PARTICLES: usize = 10;
 
 /// Covariate columns the diagnosis looks at, in order.
-pub const DIAGNOSED: [&str; 5] = ["diameter_m", "roundness", "sphericity", "temperature_c", "impacts"];
+pub const DIAGNOSED: [&str; 5] = crate::data::COVARIATE_COLUMNS;
 
 /// Evidence for one candidate in one round.
 #[derive(Debug, Clone, PartialEq, Serialize)]

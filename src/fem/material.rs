@@ -5,14 +5,14 @@
 //! out-of-plane `yy`), compression negative, with the deviator `s` and the pressure
 //! `P = −tr σ / 3` (compression positive) kept apart: `σ = s − P I`.
 //!
-//! ## Update per point and step (mechanics.md §1.6)
+//! ## Update per point and step (docs/reference.md, mechanics §1.6)
 //! 1. Jaumann rotation of `s` by the in-plane spin `w·Δt` (objective rate):
 //!    `Δs_rr = 2w s_rz`, `Δs_zz = −2w s_rz`, `Δs_rz = w (s_zz − s_rr)`.
 //! 2. Trial deviator `s_tr = s + 2G dev(Δε)`, Δε = D Δt the rate-of-deformation increment.
 //! 3. Pressure from the current volume ratio, `μ = V₀/V − 1` (exact, not integrated):
 //!    * linear elastic: `P = K ln(1 + μ)` (logarithmic volumetric strain);
 //!    * JH-2: `P = K1 μ + K2 μ² + K3 μ³ + ΔP` for μ > 0, `P = K1 μ` for μ ≤ 0, then the tensile
-//!      cut-off `P ≥ −T (1 − D)` (mechanics.md §1.4).
+//!      cut-off `P ≥ −T (1 − D)` (docs/reference.md, mechanics §1.4).
 //! 4. JH-2 strength, normalised by HEL quantities (§1.1–1.2):
 //!    `σ_i* = A (P* + T*)^N`, `σ_f* = min(B P*^M, SFMAX)`, `σ_y = σ_HEL [(1 − D) σ_i* + D σ_f*]`,
 //!    times `1 + C ln ε̇*` when `ε̇* = ε̇_eq/EPSI ≥ 1`.
@@ -95,7 +95,7 @@ fn one() -> f64 {
 }
 
 impl Jh2Params {
-    /// The Johnson & Holmquist (1994) illustrative ceramic (mechanics.md §1.7, ρ = 3700 kg/m³,
+    /// The Johnson & Holmquist (1994) illustrative ceramic (docs/reference.md, mechanics §1.7, ρ = 3700 kg/m³,
     /// SFMAX uncapped).
     pub fn jh1994() -> Self {
         Jh2Params {

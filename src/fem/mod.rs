@@ -53,7 +53,7 @@ use mesh::{Mesh, MeshParams, Shape};
 #[serde(deny_unknown_fields, default)]
 pub struct PlatenParams {
     /// Speed of each platen after the ramp (m/s, default 1): time scaling of a test run at
-    /// mm/min (mechanics.md §2.3).
+    /// mm/min (docs/reference.md, mechanics §2.3).
     pub speed: f64,
     /// Coulomb friction coefficient (default 0, frictionless).
     pub friction: f64,
@@ -107,29 +107,7 @@ impl Default for SolverParams {
     }
 }
 
-/// Definition of fracture on the force–displacement curve.
-///
-/// Fracture is the **first sustained force drop**: the force falls below `(1 − drop)` times its
-/// running maximum and stays below for at least `sustain` of further total displacement (m). The
-/// fracture displacement is the displacement at that running maximum, the peak force its value.
-/// A drop that recovers (a ring crack, a contact node snapping) is not fracture.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct FractureParams {
-    /// Relative drop (default 0.2).
-    pub drop: f64,
-    /// Displacement the drop must last (m, default 1 µm).
-    pub sustain: f64,
-    /// Run on after fracture by this fraction of the fracture displacement (default 0.15),
-    /// then stop.
-    pub run_on: f64,
-}
-
-impl Default for FractureParams {
-    fn default() -> Self {
-        FractureParams { drop: 0.2, sustain: 1e-6, run_on: 0.15 }
-    }
-}
+pub use crate::fracture::FractureParams;
 
 /// Kinematics of the section.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]

@@ -136,6 +136,25 @@ impl CrushModel {
         check_outputs("crush FE", &self.outputs, theta, &y)?;
         Ok((y, r))
     }
+
+    /// The force of the same particle with other contact tips, at θ and diameter `diameter`
+    /// (m), on the displacements `grid` (m): one FE run per shape of `shapes`, in parallel, each
+    /// calling `progress` when done. The curve-level discrepancy workflow's curvature term is the
+    /// ratio of an asperity's forces to the sphere's.
+    pub fn forces_with_shapes(&self, theta: &[f64], diameter: f64, shapes: &[super::mesh::Shape], grid: &[f64], progress: &(dyn Fn() + Sync)) -> Result<Vec<Vec<f64>>> {
+        use rayon::prelude::*;
+        shapes
+            .par_iter()
+            .map(|shape| {
+                let mut s = self.setup_at(theta)?;
+                s.diameter = diameter;
+                s.shape = *shape;
+                let r = CrushTest::new(s, "<CrushModel shapes>")?.run(None)?;
+                progress();
+                Ok(grid.iter().map(|&x| force_at(&r.curve, x)).collect())
+            })
+            .collect()
+    }
 }
 
 /// Linear interpolation of the force at total displacement `d` on a curve (0 beyond its end).

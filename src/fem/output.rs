@@ -12,7 +12,7 @@ use std::fmt::Write as _;
 
 use super::element::{ElementState, geometry};
 use super::mesh::Mesh;
-use super::{CurveSample, FractureParams, QuasiStatic};
+use super::{CurveSample, QuasiStatic};
 
 /// Per-element fields (one entry per element, mesh order).
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -150,53 +150,7 @@ pub fn axis_column(mesh: &Mesh, nodes: &[[f64; 2]], fields: &ElementFields, plat
     v
 }
 
-/// Online detection of the first sustained force drop ([`FractureParams`]).
-#[derive(Debug, Clone)]
-pub struct FractureDetector {
-    p: FractureParams,
-    max_force: f64,
-    at: f64,
-    drop_start: Option<f64>,
-    fracture: Option<(f64, f64)>,
-}
-
-impl FractureDetector {
-    /// A detector with the given definition.
-    pub fn new(p: FractureParams) -> Self {
-        FractureDetector { p, max_force: 0.0, at: 0.0, drop_start: None, fracture: None }
-    }
-
-    /// Adds a sample; returns the fracture displacement once, when the drop is confirmed.
-    pub fn push(&mut self, displacement: f64, force: f64) -> Option<f64> {
-        if self.fracture.is_some() {
-            return None;
-        }
-        if force > self.max_force {
-            self.max_force = force;
-            self.at = displacement;
-            self.drop_start = None;
-            return None;
-        }
-        if force < (1.0 - self.p.drop) * self.max_force {
-            let start = *self.drop_start.get_or_insert(displacement);
-            if displacement - start >= self.p.sustain {
-                self.fracture = Some((self.max_force, self.at));
-                return Some(self.at);
-            }
-        } else {
-            self.drop_start = None;
-        }
-        None
-    }
-
-    /// (peak force, its displacement, fracture displacement if any).
-    pub fn result(&self) -> (f64, f64, Option<f64>) {
-        match self.fracture {
-            Some((f, d)) => (f, d, Some(d)),
-            None => (self.max_force, self.at, None),
-        }
-    }
-}
+pub use crate::fracture::FractureDetector;
 
 /// The quasi-static check of a curve (see [`QuasiStatic`]) over the samples after the ramp and
 /// up to 95 % of the displacement `peak_at` (m) of the peak force: fracture is dynamic by
@@ -281,6 +235,7 @@ pub fn vtu(mesh: &Mesh, nodes: &[[f64; 2]], fields: &ElementFields) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fracture::FractureParams;
 
     #[test]
     fn fracture_needs_a_sustained_drop() {

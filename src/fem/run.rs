@@ -30,8 +30,8 @@ use super::output::{FIELD_NAMES, axis_column, vtu};
 use super::{CrushResult, CrushSetup, CrushTest};
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
-use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
-use crate::study::LoadedStudy;
+use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
+use crate::schema::StudyFile;
 
 /// One crush case.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -133,12 +133,12 @@ impl CrushStudy {
 }
 
 /// Runs a crush study.
-pub fn run_crush(loaded: &LoadedStudy, s: &CrushStudy, opts: &RunOptions) -> Result<RunSummary> {
+pub fn run_crush(loaded: &StudyFile, s: &CrushStudy, opts: &RunOptions) -> Result<RunSummary> {
     let clock = RunClock::start();
     let file = loaded.path.display().to_string();
     let setups = s.setups(&file)?;
     let inputs = vec![InputFile::hash(&loaded.path)?];
-    let pb = crate::runner::progress_bar(1000, opts.progress, "{spinner} [{elapsed_precise}] {bar:30} {msg} (eta {eta})");
+    let pb = crate::runkit::progress_bar(1000, opts.progress, "{spinner} [{elapsed_precise}] {bar:30} {msg} (eta {eta})");
     let mut runs = Vec::new();
     let mut failures = Vec::new();
     let mut steps_total = 0u64;

@@ -300,8 +300,8 @@ mod tests {
 
     #[test]
     fn tavares_king_damage_by_hand() {
-        // γ = 5, x = 0.5: D = [10/(15 − 5D) · 0.5]² → D = 0.1270 (root of D(15 − 5D)² = 25 with
-        // D < 1: 25D³ − 150D² + 225D − 25 = 0 → D = 0.1206148).
+        // γ = 5, x = 0.5: D = [10/(15 − 5D) · 0.5]², i.e. D(15 − 5D)² = 25, the cubic
+        // 25D³ − 150D² + 225D − 25 = 0, whose root below 1 is D = 0.1206148.
         let d = tk_damage(0.5, 5.0).unwrap();
         assert!((d * (15.0 - 5.0 * d).powi(2) - 25.0).abs() < 1e-9, "D = {d}");
         assert!((d - 0.1206148).abs() < 1e-6, "D = {d}");

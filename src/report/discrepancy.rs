@@ -78,7 +78,7 @@ fn residuals(dir: &Path, width_cm: f64, key: &str) -> Result<Drawn> {
     let effects_after = (0..fm.len()).find(|&i| fm[i] == key && fs[i] == "after").map(|i| fe[i].clone()).unwrap_or_default();
     let y_range = padded(rows.iter().map(|&i| r[i]), 0.05, 0.05);
     let mut panels = Vec::new();
-    for name in crate::discrepancy::workflow::DIAGNOSED {
+    for name in crate::data::COVARIATE_COLUMNS {
         if !t.has(name) {
             continue;
         }

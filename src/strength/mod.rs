@@ -24,7 +24,7 @@
 //! * [`weights`]: stacking and pseudo-BMA weights of competing strength models from their
 //!   cross-validated log scores.
 //!
-//! The lifetime study (`crate::runner`), the main study (`crate::uq`) and the discrepancy
+//! The lifetime study (`crate::lifetime_study`), the main study (`crate::uq`) and the discrepancy
 //! workflow (`crate::discrepancy`) all evaluate a [`LifetimeModel`]; at fixed inputs they give
 //! the same breakage (`tests/verification/strength.rs`).
 
@@ -42,4 +42,5 @@ pub use effects::{ALL, Effect, Term};
 pub use fit::{ModelFit, Sample, StrengthFit, contact_at_break, fit_model, fit_model_near, sample_of};
 pub use model::{LifetimeChain, LifetimeModel};
 pub use options::{NamingSettings, StrengthOptions, StrengthSpec, Uncertainty};
-pub use population::{Particle, Population, PopulationSpec};
+pub use crate::dist::PopulationSpec;
+pub use population::{Particle, Population};

@@ -20,10 +20,9 @@
 //! diameter (a Hertz impact of a sphere on a wall has a peak pressure independent of its
 //! diameter at a given velocity and η, see [`super::model`]).
 
-use serde::{Deserialize, Serialize};
 
 use crate::data::CrushData;
-use crate::dist::{Dist, Marginal};
+use crate::dist::{Dist, Marginal, PopulationSpec};
 use crate::error::{Error, Result};
 
 /// One particle of a population: its covariates.
@@ -37,30 +36,6 @@ pub struct Particle {
     pub sphericity: Option<f64>,
     /// Temperature (°C), if measured or declared.
     pub temperature_c: Option<f64>,
-}
-
-fn default_particles() -> usize {
-    512
-}
-
-/// A declared population (`population = { … }` of a `[[material]]`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PopulationSpec {
-    /// Particles of the stratified sample (default 512).
-    #[serde(default = "default_particles")]
-    pub particles: usize,
-    /// Diameter distribution (m).
-    pub diameter_m: Dist,
-    /// Roundness distribution, in (0, 1].
-    #[serde(default)]
-    pub roundness: Option<Dist>,
-    /// Sphericity distribution, in (0, 1].
-    #[serde(default)]
-    pub sphericity: Option<Dist>,
-    /// Temperature distribution (°C).
-    #[serde(default)]
-    pub temperature_c: Option<Dist>,
 }
 
 /// The particles a prediction averages over.
@@ -94,16 +69,18 @@ impl Population {
             return Err(bad("particles", format!("must lie in [16, 100000] (got {})", spec.particles)));
         }
         let mut marginals: Vec<(&str, Marginal)> = Vec::new();
-        let ranges = [("diameter_m", Some(&spec.diameter_m), 1e-6, 0.1, "m"), ("roundness", spec.roundness.as_ref(), 1e-3, 1.0, "-"), ("sphericity", spec.sphericity.as_ref(), 1e-3, 1.0, "-"), ("temperature_c", spec.temperature_c.as_ref(), -273.15, 3000.0, "°C")];
-        for (name, dist, lo, hi, unit) in ranges {
+        use crate::data::{DIAMETER, ROUNDNESS, SPHERICITY, TEMPERATURE};
+        // The plausibility ranges of the crush data's columns.
+        let ranges = [("diameter_m", Some(&spec.diameter_m), DIAMETER, "m"), ("roundness", spec.roundness.as_ref(), ROUNDNESS, "-"), ("sphericity", spec.sphericity.as_ref(), SPHERICITY, "-"), ("temperature_c", spec.temperature_c.as_ref(), TEMPERATURE, "°C")];
+        for (name, dist, range, unit) in ranges {
             let Some(d) = dist else { continue };
             if matches!(d, Dist::Spectrum { .. }) {
                 return Err(bad(name, "a spectrum is a velocity distribution only".into()));
             }
             let m = d.marginal(file, &format!("{key}.{name}"), unit, resolve)?;
             let (a, b) = (m.quantile(0.0), m.quantile(1.0));
-            if !(a >= lo && b <= hi && a.is_finite() && b.is_finite()) {
-                return Err(bad(name, format!("values must lie in [{lo}, {hi}] {unit}, the distribution spans [{a}, {b}]")));
+            if !(range.contains(a) && range.contains(b)) {
+                return Err(bad(name, format!("values must lie in {} ({}); the distribution spans [{a}, {b}]", range.shown, range.why)));
             }
             marginals.push((name, m));
         }
@@ -116,6 +93,18 @@ impl Population {
             })
             .collect();
         Ok(Population { source: "declared".into(), particles, sampled: false })
+    }
+
+    /// The population of material `index` of the study `file`: declared (`population = { … }`,
+    /// seeded by `seed` and the index) or the particles of `data`.
+    pub fn of_material(m: &crate::schema::MaterialSpec, index: usize, data: &CrushData, file: &std::path::Path, seed: u64) -> Result<Population> {
+        match &m.population {
+            None => Ok(Population::of_data(data)),
+            Some(p) => {
+                let resolve = |q: &str| crate::schema::resolve_relative(file, std::path::Path::new(q));
+                Population::declared(p, &file.display().to_string(), &format!("material[{index}].population"), &resolve, seed ^ (0x909 + index as u64))
+            }
+        }
     }
 
     /// Number of particles.

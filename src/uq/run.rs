@@ -35,10 +35,10 @@ use crate::dist::Marginal;
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
 use crate::lifetime::damage::DamageModel;
-use crate::runner::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
+use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
 use crate::stats::{interpolated_quantiles, weighted_quantiles};
 use crate::strength::{NamingSettings, StrengthSpec, summarise};
-use crate::study::LoadedStudy;
+use crate::schema::StudyFile;
 
 /// One strength model's run: its setup, samples and predictive evidence.
 pub struct Form {
@@ -104,13 +104,13 @@ pub fn forms(s: &UqStudy, path: &std::path::Path, shared: &Shared, tick: &(dyn F
 }
 
 /// Runs the study.
-pub fn run_uq(loaded: &LoadedStudy, s: &UqStudy, opts: &RunOptions) -> Result<RunSummary> {
+pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunSummary> {
     let clock = RunClock::start();
     s.validate(&loaded.path.display().to_string())?;
     let shared = Shared::new(s, &loaded.path)?;
     let specs = s.specs();
     let sens_sizes: Vec<usize> = (0..5).rev().map(|k| (s.sensitivity.n >> k).max(64)).collect();
-    let pb = progress_bar((specs.len() * s.propagation.replicates + sens_sizes.len() + 3) as u64, opts.progress, crate::runner::PROGRESS_COUNT);
+    let pb = progress_bar((specs.len() * s.propagation.replicates + sens_sizes.len() + 3) as u64, opts.progress, crate::runkit::PROGRESS_COUNT);
     pb.set_message("strength models and Monte Carlo propagation");
     let forms = forms(s, &loaded.path, &shared, &|| pb.inc(1))?;
     let mut inputs = vec![InputFile::hash(&loaded.path)?];

@@ -84,7 +84,7 @@ impl Shared {
     /// Builds the shared inputs of a study (`path` its file).
     pub fn new(s: &UqStudy, path: &Path) -> Result<Shared> {
         let file = path.display().to_string();
-        let resolve = |p: &str| crate::study::resolve_relative(path, Path::new(p));
+        let resolve = |p: &str| crate::schema::resolve_relative(path, Path::new(p));
         let m = |d: &crate::dist::Dist, key: &str, unit: &str, lo: f64, hi: f64| -> Result<Marginal> {
             let mg = d.marginal(&file, key, unit, &resolve)?;
             let (a, b) = (mg.quantile(0.0), mg.quantile(1.0));
@@ -144,7 +144,7 @@ impl Setup {
         let mut materials = Vec::new();
         for (slot, &i) in s.order().iter().enumerate() {
             let m = &s.material[i];
-            let dpath = crate::study::resolve_relative(path, &m.data);
+            let dpath = crate::schema::resolve_relative(path, &m.data);
             if !dpath.is_file() {
                 return Err(Error::config(&file, format!("material[{i}].data"), format!("{} does not exist", dpath.display())));
             }
@@ -153,7 +153,7 @@ impl Setup {
             let naming = NamingSettings { seed: s.seed.wrapping_add(7919 * i as u64), ..s.strength.naming.clone() };
             let effects = crate::discrepancy::workflow::resolve(spec, &sample, &naming)?;
             let fit = StrengthFit::new(&sample, &effects, naming.gamma, &m.key)?;
-            let population = m.population(i, &data, path, s.seed)?;
+            let population = crate::strength::Population::of_material(m, i, &data, path, s.seed)?;
             let model = LifetimeModel::new(&m.key, &m.label, m.sphere(&data), s.impact.target, *domain, fit, population)?;
             let (draws, weights) = model.draws(s.strength.uncertainty, s.strength.draws, s.seed ^ (0xA5A5 + slot as u64))?;
             let strength_input = inputs.len();

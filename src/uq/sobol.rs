@@ -19,7 +19,7 @@
 //! [`SobolIndices::negative`], never clipped.
 //!
 //! Verified on the Ishigami function and the Sobol' g-function against their closed forms
-//! (`tests/verification/sobol.rs`, numbers in `../shared/reference/verification.md` §1).
+//! (`tests/verification/sobol.rs`, numbers in docs/reference.md, verification §1).
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -21,7 +21,7 @@ use crate::dist::Dist;
 use crate::error::{Error, Result};
 use crate::lifetime::damage::DamageModel;
 use crate::strength::{StrengthOptions, StrengthSpec};
-use crate::study::{FigureOptions, MaterialSpec};
+use crate::schema::{FigureOptions, MaterialSpec};
 
 /// Impacts and the shared uncertain inputs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -211,8 +211,8 @@ impl UqStudy {
         if !(vlo > 0.0 && vlo < vhi && vhi <= crate::lifetime::MAX_VELOCITY) {
             return bad("impact.velocity_range", format!("needs 0 < low < high ≤ {} m/s, got [{vlo}, {vhi}]", crate::lifetime::MAX_VELOCITY));
         }
-        crate::study::elastic_checked(file, "impact.target", &self.impact.target)?;
-        crate::study::elastic_checked(file, "contact.platen", &self.contact.platen)?;
+        crate::schema::elastic_checked(file, "impact.target", &self.impact.target)?;
+        crate::schema::elastic_checked(file, "contact.platen", &self.contact.platen)?;
         self.contact.averaging.validate(file, "contact.averaging")?;
         self.strength.validate(file, &self.contact.averaging)?;
         for (i, spec) in self.model_form.strength.iter().enumerate() {
@@ -252,7 +252,7 @@ impl UqStudy {
             if !(!m.key.is_empty() && m.key.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')) {
                 return bad(&key("key"), format!("must be lowercase letters, digits or _ (got \"{}\")", m.key));
             }
-            crate::study::elastic_checked(file, &key("elastic"), &m.elastic)?;
+            crate::schema::elastic_checked(file, &key("elastic"), &m.elastic)?;
             if !(m.density_kg_m3 > 0.0 && m.density_kg_m3.is_finite()) {
                 return bad(&key("density_kg_m3"), format!("must be > 0, got {}", m.density_kg_m3));
             }

@@ -10,6 +10,17 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// `text` with each `(from, to)` replaced (every occurrence); panics if a `from` is absent, so a
+/// test that speeds a study up notices when the study changes under it.
+pub fn edited(text: &str, edits: &[(&str, &str)]) -> String {
+    let mut out = text.to_string();
+    for (from, to) in edits {
+        assert!(out.contains(from), "the text has no \"{from}\" to replace");
+        out = out.replace(from, to);
+    }
+    out
+}
+
 /// A temporary project: `studies/{lifetime,dem_cold_test,crush_gen3_rt,calibrate_gen3_rt}.toml` and
 /// `datasets/*.csv` copied from the repo.
 pub struct Scratch {

@@ -1,5 +1,5 @@
 //! Crush FE against exact answers: the elastic sphere between rigid platens vs Hertz
-//! (mechanics.md §2.1), the patch test and rigid-body motion (no spurious stress), and energy
+//! (docs/reference.md, mechanics §2.1), the patch test and rigid-body motion (no spurious stress), and energy
 //! conservation of an undamped elastic run.
 //!
 //! ## Hertz and the finite sphere

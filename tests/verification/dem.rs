@@ -2,7 +2,7 @@
 //! sphere–wall and sphere–sphere impacts, energy conservation of an elastic frictionless dense
 //! packing, the sliding/sticking (and rolling) threshold on an inclined plane, an oblique impact
 //! on a tube, the coordination number of a settled packing, and the LIGGGHTS reference impact of
-//! verification.md (F_max 16.2 N, δ_m 3.63 µm, t_c 2.14 µs).
+//! docs/reference.md, verification §6 (F_max 16.2 N, δ_m 3.63 µm, t_c 2.14 µs).
 
 use partlife::dem::contact::{Interaction, Material};
 use partlife::dem::geometry::{Geometry, Plane, Tube};
@@ -161,7 +161,7 @@ fn hertz_contact_duration_within_2_percent() {
 
 #[test]
 fn liggghts_reference_impact_on_steel() {
-    // verification.md: d = 1 mm, ρ = 3600, E = 112 GPa, ν = 0.25 on steel (E* = 78.7 GPa),
+    // docs/reference.md, verification §6: d = 1 mm, ρ = 3600, E = 112 GPa, ν = 0.25 on steel (E* = 78.7 GPa),
     // V = 5 m/s, e = 1: F_max = 16.2 N, δ_m = 3.63 µm, t_c = 2.14 µs (±0.5 in the last digit + 1 %).
     let (e, tc, f, d) = impact(1.0, 5.0, true, 112e9, STEEL);
     assert!((e - 1.0).abs() < 0.01, "restitution {e}");

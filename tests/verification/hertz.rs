@@ -1,4 +1,4 @@
-//! Hertz contact: mechanics.md §2.1 (effective moduli), §2.4 (crush table), §3.2 (tensile
+//! Hertz contact: docs/reference.md, mechanics §2.1 (effective moduli), §2.4 (crush table), §3.2 (tensile
 //! onset and inner integrals), §3.3 (averages), §3.4 (impact table and closed forms).
 
 use partlife::contact::*;
@@ -134,7 +134,7 @@ fn impact_table_section_3_4() {
 
 #[test]
 fn impact_stress_is_size_independent_on_a_wall() {
-    // p0,max = 0.8370 E*^(4/5) (ρηV²)^(1/5) does not depend on R (mechanics.md §3.4).
+    // p0,max = 0.8370 E*^(4/5) (ρηV²)^(1/5) does not depend on R (docs/reference.md, mechanics §3.4).
     let p = |d: f64| {
         let s = Sphere { diameter: d, density: 3600.0, elastic: bauxite() };
         let imp = Impact::sphere_on_wall(&s, &steel(), 0.5 * d, 0.1);

@@ -1,5 +1,5 @@
 //! Kennedy–O'Hagan discrepancy: the simple machine of Brynjarsdóttir & O'Hagan (2014) and the
-//! ball drop of SEPIA/GPMSA (`../shared/reference/verification.md` §3.1–3.2).
+//! ball drop of SEPIA/GPMSA (docs/reference.md, verification §3.1–3.2).
 
 use partlife::discrepancy::koh::{KohOptions, Problem, compare, least_squares};
 use rand::SeedableRng;

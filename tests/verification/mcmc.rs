@@ -1,4 +1,4 @@
-//! MCMC (`calibrate::mcmc`) against exact posteriors (verification.md §2): the conjugate normal
+//! MCMC (`calibrate::mcmc`) against exact posteriors (docs/reference.md, verification §2): the conjugate normal
 //! mean, the Rosenbrock banana (E x₁ = 1, Var x₁ = 10, E x₂ = 11), a 10-D Gaussian with
 //! condition number 10⁴; the diagnostics against an AR(1) process of known autocorrelation time
 //! and chains stuck apart; the sampler's independence of the thread count. Means are checked

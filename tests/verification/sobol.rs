@@ -1,4 +1,4 @@
-//! Sobol' indices (`uq::sobol`) against the closed forms of verification.md §1: Ishigami
+//! Sobol' indices (`uq::sobol`) against the closed forms of docs/reference.md, verification §1: Ishigami
 //! (a = 7, b = 0.1) and the g-function (a = [0, 1, 4.5, 9, 99, 99, 99, 99]) at N = 2¹⁴ within
 //! 0.01, and bootstrap 95 % intervals that cover the truth for ≥ 90 % of 50 seeds.
 

@@ -85,8 +85,8 @@ fn three_studies_give_the_same_breakage_at_fixed_inputs() {
         let loaded = partlife::study::load(&studies.join("gen4_vs_bl.toml")).unwrap();
         let partlife::study::Study::Uq(s) = &loaded.study else { panic!("not a uq study") };
         let spec = StrengthSpec::Effects(effects.clone());
-        let shared = Shared::new(s, &loaded.path).unwrap();
-        let setup = Setup::new(s, &loaded.path, &spec, &AveragingDomain::default(), &shared).unwrap();
+        let shared = Shared::new(s, &loaded.file.path).unwrap();
+        let setup = Setup::new(s, &loaded.file.path, &spec, &AveragingDomain::default(), &shared).unwrap();
         let mut out = vec![0.0; setup.outputs()];
         let mle = [0, 1].map(|j| (setup.materials[j].model.fit.estimate(), None));
         setup.evaluate_at(mle, [0.1, 5.0, 730.0, 5.0], &mut out).unwrap();

@@ -1,4 +1,4 @@
-//! Weibull per ASTM C1239: Lieblein–Zelen ball-bearing data (verification.md §4.1, reference
+//! Weibull per ASTM C1239: Lieblein–Zelen ball-bearing data (docs/reference.md, verification §4.1, reference
 //! values reproduced by scipy and `reliability`), unbiasing factors (§4.3, C1239 table within
 //! 0.01 as the issue requires) and pivotal quantiles (Monte Carlo reference, ±0.02).
 
@@ -59,7 +59,7 @@ fn lieblein_zelen_fisher_log_wald() {
 
 #[test]
 fn unbiasing_factors_match_the_c1239_table() {
-    // C1239 (Thoman–Bain–Antle) table, verification.md §4.3.
+    // C1239 (Thoman–Bain–Antle) table, docs/reference.md, verification §4.3.
     let table = [(5, 0.700), (10, 0.859), (20, 0.931), (30, 0.955), (40, 0.966), (50, 0.973), (100, 0.986)];
     for (n, uf) in table {
         // Monte Carlo SE of UF ≤ 0.002 with these replicate counts.
@@ -72,7 +72,7 @@ fn unbiasing_factors_match_the_c1239_table() {
 
 #[test]
 fn pivotal_quantiles_match_the_monte_carlo_reference() {
-    // 5 % / 95 % quantiles of m̂/m (verification.md §4.3, 2·10⁴ replicates there).
+    // 5 % / 95 % quantiles of m̂/m (docs/reference.md, verification §4.3, 2·10⁴ replicates there).
     let table = [(5, 0.68, 2.83), (10, 0.74, 1.83), (20, 0.79, 1.46), (30, 0.82, 1.33), (50, 0.86, 1.23), (100, 0.89, 1.15)];
     for (n, q05, q95) in table {
         let piv = simulate_pivotal(n, 40_000, 7 + n as u64).unwrap();

@@ -1,0 +1,114 @@
+//! What every study's run shares, below all of them: the run options and summary, the clock,
+//! progress bars, recording figures, and committing a report directory with its
+//! `manifest.json`. A leaf of the module graph: study runners import it, it imports none.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use crate::error::{Error, Result};
+use crate::io::{InputFile, Manifest, ReportDir, git_state};
+use crate::schema::StudyFile;
+
+/// What a run produced, for the CLI to print.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    /// The committed report directory.
+    pub report_dir: PathBuf,
+    /// Wall time (s).
+    pub wall_time_s: f64,
+    /// One line per material with its headline numbers.
+    pub headlines: Vec<String>,
+}
+
+/// Options of a run that are not part of the study.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// Root of the report directories (`reports`).
+    pub reports_root: PathBuf,
+    /// Show a progress bar on stderr when it is a terminal.
+    pub progress: bool,
+}
+
+/// Default progress template: elapsed time, bar, count and message.
+pub const PROGRESS_COUNT: &str = "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg} (eta {eta})";
+
+/// A progress bar on stderr (hidden when `show` is false) with an indicatif `template`.
+pub fn progress_bar(len: u64, show: bool, template: &str) -> ProgressBar {
+    let target = if show { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
+    let pb = ProgressBar::with_draw_target(Some(len), target);
+    if let Ok(style) = ProgressStyle::with_template(template) {
+        pb.set_style(style);
+    }
+    pb
+}
+
+/// Records rendered figures in the report and any legend that had to hide data as a failure.
+pub fn record_figures(dir: &mut ReportDir, rendered: crate::report::Rendered, failures: &mut Vec<String>) {
+    dir.record(rendered.files);
+    for (fig, n) in rendered.legend_hidden.iter().filter(|(_, n)| *n > 0) {
+        failures.push(format!("figure {fig}: its legend hides {n} data samples (no free corner)"));
+    }
+}
+
+/// When a run started: wall clock for the manifest, monotonic clock for its duration.
+#[derive(Debug, Clone, Copy)]
+pub struct RunClock {
+    start: Instant,
+    started_unix_s: u64,
+}
+
+impl RunClock {
+    /// Now.
+    pub fn start() -> Self {
+        let started_unix_s = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0);
+        RunClock { start: Instant::now(), started_unix_s }
+    }
+    /// Seconds since the start.
+    pub fn seconds(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+}
+
+/// What a run records in its manifest besides the study.
+pub struct RunRecord {
+    /// Every input file with its hash.
+    pub inputs: Vec<InputFile>,
+    /// The study's seed.
+    pub seed: u64,
+    /// When the run started.
+    pub clock: RunClock,
+    /// Model evaluations by kind.
+    pub evaluations: BTreeMap<String, u64>,
+    /// What failed without stopping the run (figures, evaluations).
+    pub failures: Vec<String>,
+}
+
+/// Writes `manifest.json` (listing every file of the report) and renames the report into place.
+pub fn commit_with_manifest(mut dir: ReportDir, loaded: &StudyFile, study_resolved: serde_json::Value, run: RunRecord) -> Result<PathBuf> {
+    let (git_revision, git_dirty) = git_state(loaded.path.parent().unwrap_or(Path::new(".")));
+    let mut outputs = dir.files().to_vec();
+    outputs.push("manifest.json".into());
+    let manifest = Manifest {
+        partlife_version: env!("CARGO_PKG_VERSION").into(),
+        study: loaded.name.clone(),
+        study_file: loaded.path.display().to_string(),
+        study_toml: loaded.text.clone(),
+        study_resolved,
+        inputs: run.inputs,
+        seed: run.seed,
+        threads: rayon::current_num_threads(),
+        git_revision,
+        git_dirty,
+        started_unix_s: run.clock.started_unix_s,
+        wall_time_s: run.clock.seconds(),
+        evaluations: run.evaluations,
+        failures: run.failures,
+        outputs,
+    };
+    let json = serde_json::to_vec_pretty(&manifest).map_err(|e| Error::numerical("manifest", e.to_string()))?;
+    dir.write_bytes("manifest.json", &json)?;
+    dir.commit()
+}

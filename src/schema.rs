@@ -1,0 +1,218 @@
+//! The study-file layer shared by every kind of study: reading a study file ([`StudyFile`]),
+//! TOML parsing with precise errors ([`parse_toml`]), paths relative to the study, the checks
+//! every validator uses, and the option types several kinds share (contact, impact, figures,
+//! materials).
+//!
+//! A study file `studies/<name>.toml` maps one-to-one to `reports/<name>/`. It starts with two
+//! comment lines (purpose; what a good result looks like) and names its `kind`. Each kind's
+//! schema lives with its runner (`lifetime_study`, `dem::run`, `fem::run`, `calibrate::run`,
+//! `uq::study`, `discrepancy::run`, `discrepancy::curves`); a runner that needs another study
+//! (a calibration's model study, a curve study's calibration) reads it here with
+//! [`StudyFile::read`] and [`StudyFile::parse`], so no study module depends on the dispatch in
+//! `crate::study`. Every option has a documented default (the `Default` impls); validation
+//! failures name the file, the dotted key and the rule.
+
+use std::path::{Path, PathBuf};
+
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+
+pub use crate::contact::ContactOptions;
+use crate::contact::Elastic;
+use crate::error::{Error, Result};
+
+/// A study file as read from disk: its name (the file stem, which names the report), path and
+/// text.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyFile {
+    /// Name = file stem; the report goes to `reports/<name>/`.
+    pub name: String,
+    /// The file.
+    pub path: PathBuf,
+    /// Its text, verbatim.
+    pub text: String,
+}
+
+impl StudyFile {
+    /// Reads a study file (a missing path, a directory or non-UTF-8 bytes are named as such).
+    pub fn read(path: &Path) -> Result<StudyFile> {
+        let text = crate::io::read_input_text(path)?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .filter(|s| !s.is_empty() && !s.starts_with('.'))
+            .ok_or_else(|| Error::config(path.display().to_string(), "file name", "a study file needs a name (its stem names the report)"))?;
+        Ok(StudyFile { name, path: path.to_path_buf(), text })
+    }
+
+    /// The `kind` key (an error naming the file when it is missing).
+    pub fn kind(&self, known: &[&str]) -> Result<String> {
+        let head: toml::Table = parse_toml(&self.path, &self.text)?;
+        head.get("kind")
+            .and_then(|k| k.as_str())
+            .map(str::to_string)
+            .ok_or_else(|| Error::config(self.path.display().to_string(), "kind", format!("required: one of {}", known.join(", "))))
+    }
+
+    /// The study parsed as `T` (syntax, types and unknown keys checked; not validated).
+    pub fn parse<T: DeserializeOwned>(&self) -> Result<T> {
+        parse_toml(&self.path, &self.text)
+    }
+
+    /// Resolves a path of the study relative to the study file's directory (lexically:
+    /// `studies/../datasets/x.csv` becomes `datasets/x.csv`).
+    pub fn resolve(&self, p: &Path) -> PathBuf {
+        resolve_relative(&self.path, p)
+    }
+}
+
+/// Parses TOML into `T`; a syntax error, a wrong type or an unknown key becomes one
+/// [`Error::Config`] naming the file, the line and the key.
+pub fn parse_toml<T: DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
+    toml::from_str(text).map_err(|e| {
+        let line = e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+        let snippet = e
+            .span()
+            .and_then(|s| text.get(s.clone()))
+            .map(|s| s.lines().next().unwrap_or("").trim().to_string())
+            .filter(|s| !s.is_empty());
+        let key = match (line, snippet) {
+            (Some(l), Some(s)) => format!("line {l} (`{s}`)"),
+            (Some(l), None) => format!("line {l}"),
+            _ => "document".into(),
+        };
+        Error::config(path.display().to_string(), key, e.message().trim().to_string())
+    })
+}
+
+fn steel() -> Elastic {
+    Elastic { youngs_modulus_pa: 210e9, poisson_ratio: 0.3 }
+}
+
+
+/// Impact options.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ImpactOptions {
+    /// Wall (tube) material hit by the particles (default: steel).
+    pub target: Elastic,
+    /// Elastic energy fraction η ∈ (0, 1] (default 0.1, the deliverable's "trial and error").
+    pub energy_fraction: f64,
+    /// Largest velocity of the curves (m/s, default 20).
+    pub velocity_max_m_s: f64,
+    /// Number of velocities on the curves (default 201).
+    pub velocity_points: usize,
+    /// Impact counts N of the breakage curves (default 1, 100, 2100, 7300).
+    pub impact_counts: Vec<f64>,
+    /// High-velocity impacts per particle and year (default 730).
+    pub impacts_per_year: f64,
+    /// Operating horizons (years) of the summary table (default 1 and 10).
+    pub years: Vec<f64>,
+    /// Velocity of the force–time figure and the summary table (m/s, default 5, "maximum
+    /// velocities on the order of 5 m/s" after the receiver).
+    pub reference_velocity_m_s: f64,
+}
+
+impl Default for ImpactOptions {
+    fn default() -> Self {
+        ImpactOptions {
+            target: steel(),
+            energy_fraction: 0.1,
+            velocity_max_m_s: 20.0,
+            velocity_points: 201,
+            impact_counts: vec![1.0, 100.0, 2100.0, 7300.0],
+            impacts_per_year: crate::lifetime::IMPACTS_PER_YEAR,
+            years: vec![1.0, 10.0],
+            reference_velocity_m_s: 5.0,
+        }
+    }
+}
+
+
+/// Figure options.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FigureOptions {
+    /// Figure width (cm): 8.5 single column (default), 17 double column.
+    pub width_cm: f64,
+}
+
+impl Default for FigureOptions {
+    fn default() -> Self {
+        FigureOptions { width_cm: 8.5 }
+    }
+}
+
+
+/// One particle type.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// Short key used in tables (`bl1630`): lowercase letters, digits, underscore.
+    pub key: String,
+    /// Label for figures (`BL 16/30`).
+    pub label: String,
+    /// Crush dataset (CSV), relative to the study file.
+    pub data: PathBuf,
+    /// Particle elastic constants.
+    pub elastic: Elastic,
+    /// Particle (apparent) density (kg/m³).
+    pub density_kg_m3: f64,
+    /// Diameter of the reference particle of the impact outputs (F_max, force history; m);
+    /// default: median diameter of the crush data. The breakage does not depend on it.
+    #[serde(default)]
+    pub impact_diameter_m: Option<f64>,
+    /// The particles predicted for (default: the crush data's particles, fresh).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub population: Option<crate::dist::PopulationSpec>,
+}
+
+impl MaterialSpec {
+    /// The reference particle of the impact outputs: `impact_diameter_m` or the median
+    /// diameter of `data`.
+    pub fn sphere(&self, data: &crate::data::CrushData) -> crate::contact::Sphere {
+        let diameter = self.impact_diameter_m.unwrap_or_else(|| crate::stats::median(&data.diameters()));
+        crate::contact::Sphere { diameter, density: self.density_kg_m3, elastic: self.elastic }
+    }
+}
+
+
+/// Resolves `p` relative to the directory of the file `study` (lexically:
+/// `studies/../datasets/x.csv` becomes `datasets/x.csv`); absolute paths stay.
+pub fn resolve_relative(study: &Path, p: &Path) -> PathBuf {
+    if p.is_absolute() {
+        return p.to_path_buf();
+    }
+    let joined = study.parent().unwrap_or(Path::new(".")).join(p);
+    let mut out = PathBuf::new();
+    for c in joined.components() {
+        match c {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir if matches!(out.components().next_back(), Some(std::path::Component::Normal(_))) => {
+                out.pop();
+            }
+            other => out.push(other),
+        }
+    }
+    out
+}
+
+
+/// `Ok` if `ok`, else a configuration error naming `file`, `key` and `rule`.
+pub(crate) fn check(file: &str, key: &str, ok: bool, rule: String) -> Result<()> {
+    if ok { Ok(()) } else { Err(Error::config(file, key, rule)) }
+}
+
+
+/// Checks elastic constants, naming the study file and key.
+pub fn elastic_checked(file: &str, key: &str, e: &Elastic) -> Result<()> {
+    elastic(file, key, e)
+}
+
+pub(crate) fn elastic(file: &str, key: &str, e: &Elastic) -> Result<()> {
+    e.validate(key).map_err(|err| match err {
+        Error::Config { key, rule, .. } => Error::config(file, key, rule),
+        other => other,
+    })
+}
+

@@ -252,8 +252,9 @@ impl Geometry {
 impl BankSpec {
     /// Checks the numbers of the bank.
     pub fn validate(&self, file: &str) -> Result<()> {
+        // Lengths of a particle heat exchanger: a few mm to metres; 100 m bounds any plant.
         let pos = |key: &str, v: f64| -> Result<()> {
-            if v > 0.0 && v.is_finite() { Ok(()) } else { Err(Error::config(file, format!("geometry.{key}"), format!("must be > 0, got {v}"))) }
+            if v > 0.0 && v <= 100.0 { Ok(()) } else { Err(Error::config(file, format!("geometry.{key}"), format!("must lie in (0, 100] m, got {v}"))) }
         };
         pos("width", self.width)?;
         pos("slab", self.slab)?;
@@ -262,6 +263,10 @@ impl BankSpec {
         pos("vertical_pitch", self.vertical_pitch)?;
         pos("height_above", self.height_above)?;
         pos("height_below", self.height_below)?;
+        // The tubes of a row are laid out one by one: bound their number before the layout.
+        if self.width / self.horizontal_pitch > 10_000.0 {
+            return Err(Error::config(file, "geometry.horizontal_pitch", format!("{} m across a width of {} m makes more than 10 000 tubes per row", self.horizontal_pitch, self.width)));
+        }
         if self.rows == 0 || self.rows > 100 {
             return Err(Error::config(file, "geometry.rows", format!("must be 1–100, got {}", self.rows)));
         }

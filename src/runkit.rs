@@ -1,6 +1,7 @@
-//! What every study's run shares, below all of them: the run options and summary, the clock,
+//! What every study's run shares: the run options and summary, the clock,
 //! progress bars, recording figures, and committing a report directory with its
-//! `manifest.json`. A leaf of the module graph: study runners import it, it imports none.
+//! `manifest.json`. Below every study module: study runners import it; it imports none of them
+//! (only `io`, `report` and `schema`).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

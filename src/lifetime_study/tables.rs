@@ -1,0 +1,383 @@
+//! The tables of a lifetime study's report (`particles.csv`, `weibull_*.csv`, `size_trend.csv`,
+//! `stress_profile*.csv`, `impact_curves.csv`, `breakage_curves.csv`, `force_time.csv`,
+//! `lifetime_summary.csv`, `strength_fits.csv`) from the per-material results of the run.
+
+use rayon::prelude::*;
+use crate::contact::{ContactState, ContactStress, Hertz};
+use crate::error::{Error, Result};
+use crate::io::{ReportDir, fcol, scol, table, ucol};
+use crate::lifetime::impacts_in;
+use crate::model::Simulator;
+use crate::stats::fit_line;
+use crate::strength::ParameterSummary;
+use crate::weibull::{probability_plot, sorted_quantile};
+
+use super::{LifetimeStudy, MaterialRun, pivotal_seed};
+
+pub(super) fn repeat(s: &str, n: usize) -> Vec<String> {
+    vec![s.to_string(); n]
+}
+
+pub(super) fn write_particles(dir: &mut ReportDir, runs: &[MaterialRun]) -> Result<()> {
+    type Row<'a> = (&'a MaterialRun, &'a crate::data::CrushRecord, &'a ContactState);
+    let rows: Vec<Row> = runs
+        .iter()
+        .flat_map(|run| run.data.records.iter().zip(&run.at_break).map(move |(r, c)| (run, r, c)))
+        .collect();
+    let text = |f: &dyn Fn(&Row) -> String| rows.iter().map(f).collect::<Vec<_>>();
+    let num = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).collect::<Vec<_>>();
+    let mut df = table(vec![
+        scol("material_key", text(&|r| r.0.key.clone())),
+        scol("material", text(&|r| r.0.label.clone())),
+        scol("id", text(&|r| r.1.id.clone())),
+        fcol("diameter_m", num(&|r| r.1.diameter_m)),
+        fcol("crush_force_n", num(&|r| r.1.crush_force_n)),
+        fcol("roundness", num(&|r| r.1.roundness.unwrap_or(f64::NAN))),
+        fcol("sphericity", num(&|r| r.1.sphericity.unwrap_or(f64::NAN))),
+        fcol("temperature_c", num(&|r| r.1.temperature_c.unwrap_or(f64::NAN))),
+        fcol("contact_radius_m", num(&|r| r.2.radius)),
+        fcol("approach_per_contact_m", num(&|r| r.2.approach)),
+        fcol("peak_pressure_pa", num(&|r| r.2.peak_pressure)),
+        fcol("max_tensile_pa", num(&|r| r.2.max_tensile)),
+        fcol("sigma_bar_pa", num(&|r| r.2.mean_tensile)),
+    ])?;
+    dir.write_table("particles", &mut df)
+}
+
+pub(super) fn write_weibull(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -> Result<()> {
+    let n = runs.len();
+    let get = |f: &dyn Fn(&MaterialRun) -> f64| runs.iter().map(f).collect::<Vec<f64>>();
+    let mut fits = table(vec![
+        scol("material_key", runs.iter().map(|r| r.key.clone()).collect()),
+        scol("material", runs.iter().map(|r| r.label.clone()).collect()),
+        ucol("n", runs.iter().map(|r| r.fit.n as u64).collect()),
+        fcol("shape_mle", get(&|r| r.fit.mle.shape)),
+        fcol("unbiasing_factor", get(&|r| r.pivotal.unbiasing_factor)),
+        fcol("shape_unbiased", get(&|r| r.pivotal.shape_unbiased)),
+        fcol("shape_used", get(&|r| r.strength.shape)),
+        fcol("scale_pa", get(&|r| r.fit.mle.scale)),
+        fcol("confidence", get(&|r| r.pivotal.confidence)),
+        fcol("shape_lower", get(&|r| r.pivotal.shape.0)),
+        fcol("shape_upper", get(&|r| r.pivotal.shape.1)),
+        fcol("scale_lower_pa", get(&|r| r.pivotal.scale.0)),
+        fcol("scale_upper_pa", get(&|r| r.pivotal.scale.1)),
+        scol("bound_method", repeat("pivotal Monte Carlo (Thoman-Bain-Antle, ASTM C1239)", n)),
+        fcol("fisher_shape_se", get(&|r| r.fisher.shape_se)),
+        fcol("fisher_scale_se_pa", get(&|r| r.fisher.scale_se)),
+        fcol("fisher_shape_lower", get(&|r| r.fisher.shape.0)),
+        fcol("fisher_shape_upper", get(&|r| r.fisher.shape.1)),
+        fcol("fisher_scale_lower_pa", get(&|r| r.fisher.scale.0)),
+        fcol("fisher_scale_upper_pa", get(&|r| r.fisher.scale.1)),
+        fcol("log_likelihood", get(&|r| r.fit.log_likelihood)),
+        scol("stress_measure", repeat(&s.contact.averaging.describe(), n)),
+    ])?;
+    dir.write_table("weibull_fits", &mut fits)?;
+
+    // Probability-plot points.
+    let (mut k, mut l, mut x, mut f) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for r in runs {
+        for (xi, fi) in probability_plot(&r.sigma_bar) {
+            k.push(r.key.clone());
+            l.push(r.label.clone());
+            x.push(xi);
+            f.push(fi);
+        }
+    }
+    let mut pts = table(vec![scol("material_key", k), scol("material", l), fcol("sigma_bar_pa", x), fcol("cdf_rank", f)])?;
+    dir.write_table("weibull_points", &mut pts)?;
+
+    // CDF curve with the pivotal band, on a common stress grid.
+    let lo = 0.0;
+    let hi = runs.iter().flat_map(|r| r.sigma_bar.iter()).cloned().fold(f64::MIN, f64::max) * 1.25;
+    let grid: Vec<f64> = (0..201).map(|i| lo + (hi - lo) * i as f64 / 200.0).collect();
+    let a = 0.5 * (1.0 - s.weibull.confidence);
+    let (mut k, mut l, mut x, mut c, mut cl, mut cu) = (vec![], vec![], vec![], vec![], vec![], vec![]);
+    for r in runs {
+        let band: Vec<(f64, f64)> = grid
+            .par_iter()
+            .map(|&sig| {
+                let mut v: Vec<f64> = r.draws.iter().map(|w| w.cdf(sig)).collect();
+                v.sort_by(f64::total_cmp);
+                (sorted_quantile(&v, a), sorted_quantile(&v, 1.0 - a))
+            })
+            .collect();
+        for (&sig, b) in grid.iter().zip(band) {
+            k.push(r.key.clone());
+            l.push(r.label.clone());
+            x.push(sig);
+            c.push(r.strength.cdf(sig));
+            cl.push(b.0);
+            cu.push(b.1);
+        }
+    }
+    let mut cdf = table(vec![
+        scol("material_key", k),
+        scol("material", l),
+        fcol("sigma_pa", x),
+        fcol("cdf", c),
+        fcol("cdf_lower", cl),
+        fcol("cdf_upper", cu),
+    ])?;
+    dir.write_table("weibull_cdf", &mut cdf)
+}
+
+pub(super) fn write_size_trend(dir: &mut ReportDir, runs: &[MaterialRun]) -> Result<()> {
+    // Power law σ̄ = e^c d^b: a straight line in log–log coordinates.
+    let mut rows: Vec<[f64; 7]> = Vec::new();
+    for r in runs {
+        let d = r.data.diameters();
+        let x: Vec<f64> = d.iter().map(|d| d.ln()).collect();
+        let y: Vec<f64> = r.sigma_bar.iter().map(|s| s.ln()).collect();
+        let f = fit_line(&x, &y)?;
+        rows.push([
+            f.slope,
+            f.slope_se,
+            f.intercept,
+            f.r,
+            f.p_value,
+            d.iter().cloned().fold(f64::MAX, f64::min),
+            d.iter().cloned().fold(f64::MIN, f64::max),
+        ]);
+    }
+    let col = |i: usize| rows.iter().map(|r| r[i]).collect::<Vec<f64>>();
+    let mut df = table(vec![
+        scol("material_key", runs.iter().map(|r| r.key.clone()).collect()),
+        scol("material", runs.iter().map(|r| r.label.clone()).collect()),
+        fcol("exponent", col(0)),
+        fcol("exponent_se", col(1)),
+        fcol("ln_prefactor", col(2)),
+        fcol("pearson_r_log", col(3)),
+        fcol("p_value", col(4)),
+        fcol("diameter_min_m", col(5)),
+        fcol("diameter_max_m", col(6)),
+    ])?;
+    dir.write_table("size_trend", &mut df)
+}
+
+pub(super) fn write_stress_profile(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -> Result<()> {
+    let (mut k, mut l, mut id, mut rr, mut ra, mut sr) = (vec![], vec![], vec![], vec![], vec![], vec![]);
+    let mut summary: Vec<(String, String, String, [f64; 7])> = Vec::new();
+    for r in runs {
+        // The particle whose σ̄ at break is the median (lower middle for even N).
+        let mut idx: Vec<usize> = (0..r.sigma_bar.len()).collect();
+        idx.sort_by(|&a, &b| r.sigma_bar[a].total_cmp(&r.sigma_bar[b]));
+        let i = idx[(idx.len() - 1) / 2];
+        let rec = &r.data.records[i];
+        let radius = 0.5 * rec.diameter_m;
+        let hertz = Hertz::sphere_on_flat(&r.chain.model().sphere.elastic, &s.contact.platen, radius);
+        let cs = ContactStress::new(hertz, s.contact.averaging, radius);
+        let state = cs.at_force(rec.crush_force_n)?;
+        let a = state.radius;
+        let l_out = s.contact.averaging.outer_limit(a, radius);
+        let r_max = (1.5 * l_out).max(3.0 * a);
+        for j in 0..=400 {
+            let rv = r_max * j as f64 / 400.0;
+            k.push(r.key.clone());
+            l.push(r.label.clone());
+            id.push(rec.id.clone());
+            rr.push(rv);
+            ra.push(rv / a);
+            sr.push(cs.radial_stress_at(rec.crush_force_n, rv));
+        }
+        summary.push((
+            r.key.clone(),
+            r.label.clone(),
+            rec.id.clone(),
+            [rec.diameter_m, rec.crush_force_n, a, state.peak_pressure, state.mean_tensile, cs.zone.s0 * a, l_out],
+        ));
+    }
+    let mut df = table(vec![
+        scol("material_key", k),
+        scol("material", l),
+        scol("particle_id", id),
+        fcol("r_m", rr),
+        fcol("r_over_a", ra),
+        fcol("sigma_r_pa", sr),
+    ])?;
+    dir.write_table("stress_profile", &mut df)?;
+    let col = |i: usize| summary.iter().map(|s| s.3[i]).collect::<Vec<f64>>();
+    let mut df = table(vec![
+        scol("material_key", summary.iter().map(|s| s.0.clone()).collect()),
+        scol("material", summary.iter().map(|s| s.1.clone()).collect()),
+        scol("particle_id", summary.iter().map(|s| s.2.clone()).collect()),
+        fcol("diameter_m", col(0)),
+        fcol("crush_force_n", col(1)),
+        fcol("contact_radius_m", col(2)),
+        fcol("peak_pressure_pa", col(3)),
+        fcol("sigma_bar_pa", col(4)),
+        fcol("domain_start_m", col(5)),
+        fcol("domain_end_m", col(6)),
+    ])?;
+    dir.write_table("stress_profile_summary", &mut df)
+}
+
+/// Impact and breakage curves of every material over the velocity grid, through the
+/// Simulator interface (σ̄ and F_max of the reference sphere; P of the population); returns the
+/// number of evaluations per material.
+pub(super) fn write_curves(
+    dir: &mut ReportDir,
+    runs: &[MaterialRun],
+    s: &LifetimeStudy,
+    failures: &mut Vec<String>,
+) -> Result<Vec<u64>> {
+    let np = s.impact.velocity_points;
+    let velocities: Vec<f64> = (0..np).map(|i| s.impact.velocity_max_m_s * i as f64 / (np - 1) as f64).collect();
+    let (mut ik, mut il, mut iv, mut ifm, mut isb, mut itc, mut ip) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut bk, mut bl, mut bv, mut bn, mut bp) = (vec![], vec![], vec![], vec![], vec![]);
+    let mut evaluations = Vec::new();
+    for run in runs {
+        let thetas: Vec<Vec<f64>> = velocities.iter().map(|&v| run.chain.theta(&run.params, s.impact.energy_fraction, v)).collect();
+        let results = run.chain.simulate_batch(&thetas);
+        evaluations.push(thetas.len() as u64);
+        let impact = run.chain.model().impact(s.impact.energy_fraction);
+        let mut ok = Vec::new();
+        for ((t, r), &v) in thetas.iter().zip(results).zip(&velocities) {
+            match r {
+                Ok(y) => ok.push((v, y)),
+                Err(e) => failures.push(format!("{}: θ = {t:?}: {e}", run.key)),
+            }
+        }
+        if ok.is_empty() {
+            return Err(Error::numerical("impact curves", format!("every evaluation failed for {}", run.key)));
+        }
+        for (v, y) in &ok {
+            ik.push(run.key.clone());
+            il.push(run.label.clone());
+            iv.push(*v);
+            ifm.push(y[0]);
+            isb.push(y[1]);
+            itc.push(if *v > 0.0 { impact.contact_time(*v) } else { f64::NAN });
+            ip.push(y[2]); // counts()[0] is N = 1
+        }
+        for (ci, &c) in run.chain.counts().iter().enumerate().filter(|(_, c)| s.impact.impact_counts.contains(c)) {
+            for (v, y) in &ok {
+                bk.push(run.key.clone());
+                bl.push(run.label.clone());
+                bv.push(*v);
+                bn.push(c);
+                bp.push(y[2 + ci]);
+            }
+        }
+    }
+    let mut df = table(vec![
+        scol("material_key", ik),
+        scol("material", il),
+        fcol("velocity_m_s", iv),
+        fcol("f_max_n", ifm),
+        fcol("sigma_bar_pa", isb),
+        fcol("contact_time_s", itc),
+        fcol("p_single", ip),
+    ])?;
+    dir.write_table("impact_curves", &mut df)?;
+    let mut df = table(vec![
+        scol("material_key", bk),
+        scol("material", bl),
+        fcol("velocity_m_s", bv),
+        fcol("impacts", bn),
+        fcol("p_break", bp),
+    ])?;
+    dir.write_table("breakage_curves", &mut df)?;
+    Ok(evaluations)
+}
+
+pub(super) fn write_force_time(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -> Result<()> {
+    let v = s.impact.reference_velocity_m_s;
+    let (mut k, mut l, mut vv, mut t, mut f, mut j) = (vec![], vec![], vec![], vec![], vec![], vec![]);
+    for r in runs {
+        let impact = r.chain.model().impact(s.impact.energy_fraction);
+        for smp in impact.force_history(v, 301)? {
+            k.push(r.key.clone());
+            l.push(r.label.clone());
+            vv.push(v);
+            t.push(smp.time);
+            f.push(smp.force);
+            j.push(smp.impulse);
+        }
+    }
+    let n = t.len();
+    let mut df = table(vec![
+        scol("material_key", k),
+        scol("material", l),
+        fcol("velocity_m_s", vv),
+        fcol("time_s", t),
+        fcol("force_n", f),
+        fcol("impulse_n_s", j),
+        fcol("energy_fraction", vec![s.impact.energy_fraction; n]),
+    ])?;
+    dir.write_table("force_time", &mut df)
+}
+
+pub(super) fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -> Result<Vec<String>> {
+    let v = s.impact.reference_velocity_m_s;
+    let (mut k, mut l, mut vv, mut yy, mut nn, mut p, mut pl, mut pu) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    let mut headlines = Vec::new();
+    for r in runs {
+        let model = r.chain.model();
+        let counts: Vec<f64> = s.impact.years.iter().map(|&y| impacts_in(y, s.impact.impacts_per_year)).collect();
+        let seed = pivotal_seed(s.seed, r.fit.n) ^ 0x5713;
+        let bands = model.bands(&r.params, s.impact.energy_fraction, v, &counts, s.strength.uncertainty, s.strength.draws, seed, s.weibull.confidence)?;
+        let effects = crate::strength::fit::names(model.fit.effects());
+        let mut line = format!(
+            "{}: N = {}, m = {:.2} (MLE {:.2}, {:.0} % bounds {:.2}–{:.2}), σ_θ = {:.0} MPa; effects: {effects}; at {v} m/s:",
+            r.label,
+            r.fit.n,
+            r.params.shape,
+            model.fit.model.shape(),
+            100.0 * s.weibull.confidence,
+            r.pivotal.shape.0,
+            r.pivotal.shape.1,
+            r.params.mu.exp() / 1e6
+        );
+        for ((&years, &n), (point, lo, hi)) in s.impact.years.iter().zip(&counts).zip(bands) {
+            k.push(r.key.clone());
+            l.push(r.label.clone());
+            vv.push(v);
+            yy.push(years);
+            nn.push(n);
+            p.push(point);
+            pl.push(lo);
+            pu.push(hi);
+            line.push_str(&format!(" P({years} yr) = {point:.2e} [{lo:.1e}, {hi:.1e}]"));
+        }
+        headlines.push(line);
+    }
+    let m = p.len();
+    let mut df = table(vec![
+        scol("material_key", k),
+        scol("material", l),
+        fcol("velocity_m_s", vv),
+        fcol("years", yy),
+        fcol("impacts", nn),
+        fcol("p_break", p),
+        fcol("p_break_lower", pl),
+        fcol("p_break_upper", pu),
+        fcol("confidence", vec![s.weibull.confidence; m]),
+    ])?;
+    dir.write_table("lifetime_summary", &mut df)?;
+    Ok(headlines)
+}
+
+/// The strength model of every material: its effects, population, and each parameter's
+/// estimate (the modulus as used for predictions) with the 90 % range of its draws.
+pub(super) fn write_strength_fits(dir: &mut ReportDir, runs: &[MaterialRun]) -> Result<()> {
+    let mut rows: Vec<(&MaterialRun, &ParameterSummary)> = Vec::new();
+    for r in runs {
+        rows.extend(r.summary.iter().map(|p| (r, p)));
+    }
+    let text = |f: &dyn Fn(&(&MaterialRun, &ParameterSummary)) -> String| rows.iter().map(f).collect::<Vec<_>>();
+    let num = |f: &dyn Fn(&(&MaterialRun, &ParameterSummary)) -> f64| rows.iter().map(f).collect::<Vec<_>>();
+    let mut df = table(vec![
+        scol("material_key", text(&|r| r.0.key.clone())),
+        scol("material", text(&|r| r.0.label.clone())),
+        scol("effects", text(&|r| crate::strength::fit::names(r.0.chain.model().fit.effects()))),
+        scol("population", text(&|r| r.0.chain.model().population.source.clone())),
+        ucol("particles", rows.iter().map(|r| r.0.chain.model().population.len() as u64).collect()),
+        scol("parameter", text(&|r| r.1.name.clone())),
+        scol("unit", text(&|r| r.1.unit.clone())),
+        fcol("mle", num(&|r| r.1.estimate)),
+        fcol("used", num(&|r| if r.1.name == "weibull_modulus" { r.0.params.shape } else { r.1.estimate })),
+        fcol("q05", num(&|r| r.1.q05)),
+        fcol("q95", num(&|r| r.1.q95)),
+    ])?;
+    dir.write_table("strength_fits", &mut df)
+}

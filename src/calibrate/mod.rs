@@ -20,6 +20,7 @@ pub mod mcmc;
 pub mod pipeline;
 pub mod run;
 pub mod synth;
+pub mod study;
 pub mod synth_dem;
 
 use serde::{Deserialize, Serialize};

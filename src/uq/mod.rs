@@ -16,3 +16,4 @@ pub mod run;
 pub mod setup;
 pub mod sobol;
 pub mod study;
+mod summary;

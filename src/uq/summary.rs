@@ -1,0 +1,201 @@
+//! `summary.md` of the main study: every sentence generated from the numbers it describes
+//! (headline, whether accounting for the effects changes which particle is better, the
+//! deliverable's shape hypothesis, what drives the answer, damage models side by side).
+
+use super::setup::Setup;
+use super::sobol::SobolIndices;
+use super::study::UqStudy;
+use crate::lifetime::damage::DamageModel;
+use crate::strength::{StrengthSpec, summarise};
+use super::run::*;
+
+/// "the deliverable's model" or "the `x` model".
+pub(super) fn model_phrase(name: &str) -> String {
+    if name == "deliverable" { "the deliverable's model (no effects)".into() } else { format!("the `{name}` model") }
+}
+
+/// The better particle for P(candidate worse) = p, and how sure.
+pub(super) fn verdict(p: f64, names: [&str; 2]) -> String {
+    let (better, q) = if p > 0.5 { (names[1], p) } else { (names[0], 1.0 - p) };
+    if p == 0.5 {
+        return "neither particle is better".into();
+    }
+    let sure = if q >= 0.99 {
+        "with near certainty"
+    } else if q >= 0.9 {
+        "with high probability"
+    } else if q >= 0.7 {
+        "more likely than not"
+    } else {
+        "but the answer is close to a coin toss"
+    };
+    format!("{better} is the better particle, {sure} ({q:.3})")
+}
+
+/// The effects each material carries under a model, in words.
+pub(super) fn effects_phrase(f: &Form) -> String {
+    f.setup.materials.iter().map(|m| format!("{}: {}", m.model.label, crate::strength::fit::names(m.model.fit.effects()).replace('+', ", "))).collect::<Vec<_>>().join("; ")
+}
+
+/// The plain-language summary; every sentence with a number is built from the numbers it
+/// states.
+pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying: &[usize], outputs: &[String], headline: &Headline, averaging: &[AveragingRow]) -> String {
+    let st = &forms[0].setup;
+    let [a, b] = [&st.materials[0].model.label, &st.materials[1].model.label];
+    let names = [a.as_str(), b.as_str()];
+    let primary_damage = st.models[0];
+    let first_h = st.years[0];
+    let row = |strength: &str, damage: DamageModel, years: f64| headline.rows.iter().find(|r| r.strength == strength && r.damage == damage && r.years == years);
+    let mut md = format!("# {a} against {b}: breakage over {} years, with its uncertainty\n\n", st.years.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" and "));
+    md.push_str(&format!(
+        "{} Monte Carlo samples per strength model ({:?}, {} independent blocks for the standard errors) of every uncertain input; {} strength model{} compared; damage model of the headline: {}. **The crush data are synthetic stand-ins** (datasets/README.md).\n\n",
+        forms[0].prop.count(),
+        s.propagation.method,
+        forms[0].prop.blocks.len(),
+        forms.len(),
+        if forms.len() == 1 { "" } else { "s" },
+        primary_damage.label()
+    ));
+    md.push_str("## Headline\n\n");
+    for l in &headline.lines {
+        md.push_str(&format!("* {}\n", l.trim()));
+    }
+    md.push_str(&format!("\n| strength model | effects | weight (stacking) | {} |\n|---|---|---|{}\n", st.years.iter().map(|y| format!("P({a} worse), {y} yr")).collect::<Vec<_>>().join(" | "), "---|".repeat(st.years.len())));
+    let n = forms[0].prop.count();
+    for f in forms {
+        let cells: Vec<String> = st.years.iter().map(|&y| row(&f.setup.spec.name(), primary_damage, y).map_or("–".into(), |r| pm(r.worse, r.se, n))).collect();
+        md.push_str(&format!("| {} | {} | {:.3} | {} |\n", f.setup.spec.name(), effects_phrase(f), f.weight, cells.join(" | ")));
+    }
+    if forms.len() > 1 {
+        let cells: Vec<String> = st.years.iter().map(|&y| row(AVERAGED, primary_damage, y).map_or("–".into(), |r| pm(r.worse, r.se, n))).collect();
+        md.push_str(&format!("| {AVERAGED} | | 1 | {} |\n", cells.join(" | ")));
+    }
+
+    // The question in plain words.
+    if forms.len() > 1 {
+        md.push_str(&format!("\n## Does accounting for the effects change which particle is better? ({first_h} yr, {})\n\n", primary_damage.label()));
+        let base = forms.iter().find(|f| f.setup.spec == StrengthSpec::default());
+        if let Some(r0) = base.and_then(|f| row(&f.setup.spec.name(), primary_damage, first_h)) {
+            md.push_str(&format!("Under {} {a} breaks more than {b} with probability {}: {}.\n", model_phrase("deliverable"), pm(r0.worse, r0.se, n), verdict(r0.worse, names)));
+            for f in forms.iter().filter(|f| f.setup.spec != StrengthSpec::default()) {
+                let Some(r) = row(&f.setup.spec.name(), primary_damage, first_h) else { continue };
+                let same = (r.worse > 0.5) == (r0.worse > 0.5);
+                md.push_str(&format!(
+                    "Under {} ({}), with probability {}: {}; accounting for these effects {} which particle is better.\n",
+                    model_phrase(&f.setup.spec.name()),
+                    effects_phrase(f),
+                    pm(r.worse, r.se, n),
+                    verdict(r.worse, names),
+                    if same { "does not change" } else { "changes" }
+                ));
+            }
+            if let Some(r) = row(AVERAGED, primary_damage, first_h) {
+                let best = forms.iter().max_by(|x, y| x.weight.total_cmp(&y.weight)).map(|f| (f.setup.spec.name(), f.weight)).unwrap_or_default();
+                md.push_str(&format!(
+                    "\nThe stacking weights (from the cross-validated log density of the {} crush tests) put {:.3} on {}. Averaged over the strength models, P({a} breaks more) = {}: {}.\n",
+                    forms[0].lpd[0].len() + forms[0].lpd[1].len(),
+                    best.1,
+                    model_phrase(&best.0),
+                    pm(r.worse, r.se, n),
+                    verdict(r.worse, names)
+                ));
+            }
+            // The deliverable's hypothesis: shape effects would favour the candidate.
+            let shape: Vec<&Form> = forms.iter().filter(|f| f.setup.materials.iter().any(|m| m.model.fit.effects().iter().any(|e| e.is_contact_geometry()))).collect();
+            if !shape.is_empty() {
+                md.push_str(&format!("\nThe deliverable expected that accounting for the particles' shape (roundness, non-sphericity) would make the lifetime model favour {a}. "));
+                let parts: Vec<String> = shape
+                    .iter()
+                    .filter_map(|f| row(&f.setup.spec.name(), primary_damage, first_h).map(|r| (f, r)))
+                    .map(|(f, r)| format!("under {} P({a} breaks less than {b}) = {:.3}", model_phrase(&f.setup.spec.name()), 1.0 - r.worse))
+                    .collect();
+                let favoured = shape.iter().filter_map(|f| row(&f.setup.spec.name(), primary_damage, first_h)).any(|r| r.worse < 0.5);
+                md.push_str(&format!(
+                    "With shape effects fitted to these data, {}, against {:.3} under the deliverable's model: the hypothesis is {}.\n",
+                    parts.join(", "),
+                    1.0 - r0.worse,
+                    if favoured { format!("supported ({a} is favoured)") } else if shape.iter().filter_map(|f| row(&f.setup.spec.name(), primary_damage, first_h)).all(|r| r.worse > r0.worse) { format!("not supported: the shape effects make {b} look even better") } else { format!("not supported: {b} stays the better particle") }
+                ));
+            }
+        }
+    }
+
+    md.push_str("\n## Breaking probability per strength model (median and 90 % band)\n\n| strength model | material | horizon | median P | 90 % band |\n|---|---|---|---|---|\n");
+    let strengths: Vec<String> = forms.iter().map(|f| f.setup.spec.name()).chain((forms.len() > 1).then(|| AVERAGED.to_string())).collect();
+    for name in &strengths {
+        for &y in &st.years {
+            if let Some(r) = row(name, primary_damage, y) {
+                for j in 0..2 {
+                    md.push_str(&format!("| {name} | {} | {y} yr | {:.2e} | {:.1e} – {:.1e} |\n", names[j], r.median[j], r.band[j].0, r.band[j].1));
+                }
+            }
+        }
+    }
+
+    md.push_str("\n## The strength models (per material: effects, modulus and 90 % range of the draws)\n\n| strength model | material | effects | m | other parameters |\n|---|---|---|---|---|\n");
+    for f in forms {
+        for m in &f.setup.materials {
+            let sums = summarise(&m.model.fit, &m.draws);
+            let other: Vec<String> = sums.iter().skip(2).map(|p| format!("{} = {:.3} [{:.3}, {:.3}]", p.name, p.estimate, p.q05, p.q95)).collect();
+            md.push_str(&format!("| {} | {} | {} | {:.2} [{:.2}, {:.2}] | {} |\n", f.setup.spec.name(), m.model.label, crate::strength::fit::names(m.model.fit.effects()), sums[0].estimate, sums[0].q05, sums[0].q95, other.join("; ")));
+        }
+    }
+
+    md.push_str(&format!("\n## What drives it (Sobol' total indices, last horizon, strength model `{}`)\n\n", st.spec.name()));
+    for (o, si) in ind.iter().enumerate() {
+        let mut order: Vec<usize> = (0..varying.len()).collect();
+        order.sort_by(|&p, &q| si.total[q].total_cmp(&si.total[p]));
+        let top: Vec<String> = order.iter().take(3).map(|&k| format!("{} (S_T = {:.2}, S = {:.2})", st.inputs[varying[k]].name, si.total[k], si.first[k])).collect();
+        md.push_str(&format!("* `{}`: {}\n", outputs[o], top.join("; ")));
+        let neg: Vec<String> = si.negative().iter().map(|&k| st.inputs[varying[k]].name.clone()).collect();
+        if !neg.is_empty() {
+            md.push_str(&format!("  (negative estimates, i.e. zero within Monte Carlo error: {})\n", neg.join(", ")));
+        }
+    }
+
+    md.push_str(&format!("\n## Damage models side by side (strength model `{}`)\n\n| model | horizon | P({a} worse) | both equal | median P {a} | median P {b} |\n|---|---|---|---|---|---|\n", st.spec.name()));
+    let primary_rows: Vec<&Row> = headline.rows.iter().filter(|r| r.strength == st.spec.name()).collect();
+    for r in &primary_rows {
+        md.push_str(&format!("| {} | {} yr | {:.3} | {:.3} | {:.2e} | {:.2e} |\n", r.damage.label(), r.years, r.worse, r.ties, r.median[0], r.median[1]));
+    }
+    md.push('\n');
+    md.push_str(&damage_sentences(st, &primary_rows, names));
+    md.push_str("The spread between the damage models is model-form uncertainty that more crush data cannot remove: it needs repeated-impact tests.\n");
+
+    if averaging.len() > st.years.len() {
+        md.push_str("\n## Averaging domain of σ̄ (deliverable's strength model, independent trials)\n\n| domain | horizon | P(candidate worse) | median P candidate | median P reference |\n|---|---|---|---|---|\n");
+        for (d, years, worse, se, pa, pb) in averaging {
+            md.push_str(&format!("| {d} | {years} yr | {worse:.4} ± {se:.4} | {pa:.2e} | {pb:.2e} |\n"));
+        }
+        md.push_str("\nEvery domain whose outer limit is a multiple of the contact radius gives σ̄ = r·p0 in the crush test and in the impact alike, so r cancels between the Weibull scale and the impact stress: those domains give identical answers up to Monte Carlo error. Only a domain reaching the particle radius (σ̄ depends on a/R, which differs between the crush at break and a 5 m/s impact) changes them.\n");
+    }
+    md
+}
+
+/// How each damage model's medians compare with independent trials', generated from the rows
+/// (last horizon).
+pub(super) fn damage_sentences(st: &Setup, rows: &[&Row], names: [&str; 2]) -> String {
+    let last = *st.years.last().unwrap_or(&1.0);
+    let Some(indep) = rows.iter().find(|r| r.damage == DamageModel::Independent && r.years == last) else { return String::new() };
+    let mut out = String::new();
+    for r in rows.iter().filter(|r| r.damage != DamageModel::Independent && r.years == last) {
+        let parts: Vec<String> = (0..2)
+            .map(|j| {
+                let (x, y) = (r.median[j], indep.median[j]);
+                let times = |r: f64| if r >= 1000.0 { format!("{r:.1e}") } else if r >= 10.0 { format!("{r:.0}") } else { format!("{r:.2}") };
+                let cmp = if x == 0.0 && y > 0.0 {
+                    "no breakage in most samples (below its energy threshold)".to_string()
+                } else if x > y {
+                    format!("larger median probabilities ({x:.2e} against {y:.2e}, × {})", times(x / y))
+                } else if x < y {
+                    format!("smaller median probabilities ({x:.2e} against {y:.2e}, × {})", times(x / y))
+                } else {
+                    format!("the same median probability ({x:.2e})")
+                };
+                format!("for {} {cmp}", names[j])
+            })
+            .collect();
+        out.push_str(&format!("Over {last} years {} gives, compared with independent trials, {}; under it P({} breaks more) = {:.3}.\n", r.damage.label(), parts.join(", and "), names[0], r.worse));
+    }
+    out
+}

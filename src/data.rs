@@ -141,13 +141,7 @@ pub const VELOCITY: Plausible = Plausible { what: "speed", lo: 0.0, hi: crate::l
 
 /// Reads a CSV file with every column as text.
 pub fn read_text_table(path: &Path) -> Result<DataFrame> {
-    crate::io::check_csv_shape(path, &crate::io::read_input_text(path)?)?;
-    CsvReadOptions::default()
-        .with_has_header(true)
-        .with_infer_schema_length(Some(0))
-        .try_into_reader_with_file_path(Some(path.to_path_buf()))
-        .and_then(|r| r.finish())
-        .map_err(|e| crate::io::polars_read_error(path, &e.to_string()))
+    crate::io::read_csv(path, Some(0))
 }
 
 /// Text cells of one column (`None` for an empty cell); `None` if the column is absent.

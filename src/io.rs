@@ -193,12 +193,20 @@ pub fn scol(name: &str, values: Vec<String>) -> Column {
 
 /// Reads a report table (types inferred from the whole file).
 pub fn read_table(path: &Path) -> Result<DataFrame> {
-    check_csv_shape(path, &read_input_text(path)?)?;
+    read_csv(path, None)
+}
+
+/// Reads a CSV input file once: its text ([`read_input_text`]), its shape
+/// ([`check_csv_shape`]), then the table parsed by polars from that text, with types inferred
+/// from the first `infer` rows (`Some(0)`: every column as text; `None`: the whole file).
+pub fn read_csv(path: &Path, infer: Option<usize>) -> Result<DataFrame> {
+    let text = read_input_text(path)?;
+    check_csv_shape(path, &text)?;
     CsvReadOptions::default()
         .with_has_header(true)
-        .with_infer_schema_length(None)
-        .try_into_reader_with_file_path(Some(path.to_path_buf()))
-        .and_then(|r| r.finish())
+        .with_infer_schema_length(infer)
+        .into_reader_with_file_handle(std::io::Cursor::new(text.into_bytes()))
+        .finish()
         .map_err(|e| polars_read_error(path, &e.to_string()))
 }
 

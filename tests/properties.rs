@@ -30,14 +30,20 @@ const NASTY: [&str; 24] = [
 const SPLICE: [&str; 10] = ["\"", "\0", "\r\n", "\u{feff}", "é", ",,,", "[[", "]]", " = ", "#"];
 
 /// One parser under test: the valid file it starts from and what it returns (every number of
-/// the parsed value, to check they are finite).
+/// the parsed value, to check they are finite). A case is written next to its valid file
+/// (`datasets/case.csv`, `studies/case.toml`), so that a study's relative paths resolve.
 struct Parser {
     name: &'static str,
     /// The valid file, relative to the repository.
     base: &'static str,
-    /// Where the case is written in the scratch copy of the repository.
-    target: &'static str,
     parse: fn(&Path) -> partlife::Result<Vec<f64>>,
+}
+
+impl Parser {
+    /// Where a case is written in the scratch copy of the repository.
+    fn target(&self) -> &'static str {
+        if self.base.ends_with(".toml") { "studies/case.toml" } else { "datasets/case.csv" }
+    }
 }
 
 fn crush(p: &Path) -> partlife::Result<Vec<f64>> {
@@ -87,23 +93,22 @@ fn collect_floats(v: &toml::Value, out: &mut Vec<f64>) {
 }
 
 const CSV_PARSERS: [Parser; 5] = [
-    Parser { name: "crush CSV", base: "datasets/crush_gen4.csv", target: "datasets/case.csv", parse: crush },
-    Parser { name: "curve CSV", base: "datasets/crush_curves_gen3_rt.csv", target: "datasets/case.csv", parse: curves },
-    Parser { name: "observation CSV", base: "datasets/dem_rig_profile.csv", target: "datasets/case.csv", parse: observations },
-    Parser { name: "spectrum CSV", base: "datasets/dem_cold_test_impact_spectrum.csv", target: "datasets/case.csv", parse: spectrum },
-    Parser { name: "Table 1 CSV", base: "datasets/table1_particle_properties.csv", target: "datasets/case.csv", parse: table1 },
+    Parser { name: "crush CSV", base: "datasets/crush_gen4.csv", parse: crush },
+    Parser { name: "curve CSV", base: "datasets/crush_curves_gen3_rt.csv", parse: curves },
+    Parser { name: "observation CSV", base: "datasets/dem_rig_profile.csv", parse: observations },
+    Parser { name: "spectrum CSV", base: "datasets/dem_cold_test_impact_spectrum.csv", parse: spectrum },
+    Parser { name: "Table 1 CSV", base: "datasets/table1_particle_properties.csv", parse: table1 },
 ];
 
-/// One shipped study of every kind (the case is written next to the studies, so that its
-/// relative paths resolve).
+/// One shipped study of every kind.
 const STUDY_PARSERS: [Parser; 7] = [
-    Parser { name: "lifetime study", base: "studies/lifetime.toml", target: "studies/case.toml", parse: study },
-    Parser { name: "dem study", base: "studies/dem_cold_test.toml", target: "studies/case.toml", parse: study },
-    Parser { name: "crush study", base: "studies/crush_gen3_rt.toml", target: "studies/case.toml", parse: study },
-    Parser { name: "calibrate study", base: "studies/calibrate_gen3_rt.toml", target: "studies/case.toml", parse: study },
-    Parser { name: "uq study", base: "studies/gen4_vs_bl.toml", target: "studies/case.toml", parse: study },
-    Parser { name: "discrepancy study", base: "studies/discrepancy_crush.toml", target: "studies/case.toml", parse: study },
-    Parser { name: "discrepancy_curves study", base: "studies/discrepancy_curves.toml", target: "studies/case.toml", parse: study },
+    Parser { name: "lifetime study", base: "studies/lifetime.toml", parse: study },
+    Parser { name: "dem study", base: "studies/dem_cold_test.toml", parse: study },
+    Parser { name: "crush study", base: "studies/crush_gen3_rt.toml", parse: study },
+    Parser { name: "calibrate study", base: "studies/calibrate_gen3_rt.toml", parse: study },
+    Parser { name: "uq study", base: "studies/gen4_vs_bl.toml", parse: study },
+    Parser { name: "discrepancy study", base: "studies/discrepancy_crush.toml", parse: study },
+    Parser { name: "discrepancy_curves study", base: "studies/discrepancy_curves.toml", parse: study },
 ];
 
 /// A scratch copy of the repository's studies/ and datasets/.
@@ -207,7 +212,7 @@ struct Tally {
 /// message is one line naming the file).
 fn check(dir: &Path, p: &Parser, bytes: &[u8], tally: &Tally) -> Result<(), TestCaseError> {
     use std::sync::atomic::Ordering::Relaxed;
-    let path: PathBuf = dir.join(p.target);
+    let path: PathBuf = dir.join(p.target());
     std::fs::write(&path, bytes).unwrap();
     let start = std::time::Instant::now();
     let parsed = (p.parse)(&path);
@@ -224,7 +229,7 @@ fn check(dir: &Path, p: &Parser, bytes: &[u8], tally: &Tally) -> Result<(), Test
         Err(e) => {
             // A study's message may name a file the study points at rather than the study.
             let msg = e.to_string();
-            prop_assert!(msg.contains("case.") || p.target.ends_with(".toml"), "{}: the message does not name the file: {msg}", p.name);
+            prop_assert!(msg.contains("case.") || p.target().ends_with(".toml"), "{}: the message does not name the file: {msg}", p.name);
             prop_assert!(!msg.trim().contains('\n'), "{}: the message is not one line: {msg}", p.name);
         }
     }
@@ -243,7 +248,7 @@ fn all_parsers(cases: u32, fixed_seed: bool) {
         let base = std::fs::read_to_string(common::root().join(p.base)).unwrap();
         // The valid file itself parses.
         check(dir.path(), p, base.as_bytes(), &Tally::default()).unwrap();
-        (p.parse)(&dir.path().join(p.target)).unwrap_or_else(|e| panic!("{}: the shipped file fails: {e}", p.name));
+        (p.parse)(&dir.path().join(p.target())).unwrap_or_else(|e| panic!("{}: the shipped file fails: {e}", p.name));
         let header = base.lines().next().unwrap_or("").to_string();
         let bytes = (any::<bool>(), prop::collection::vec(any::<u8>(), 0..400)).prop_map(move |(with_header, b)| if with_header { [header.as_bytes(), b"\n", &b].concat() } else { b });
         let (raw, mutated) = (Tally::default(), Tally::default());

@@ -184,8 +184,8 @@ pub fn validate_lifetime(s: &LifetimeStudy, file: &str) -> Result<()> {
             check(
                 file,
                 &key("impact_diameter_m"),
-                d.is_finite() && d > 0.0 && d <= 0.1,
-                format!("must be > 0 and ≤ 0.1 m (got {d})"),
+                crate::data::DIAMETER.contains(d),
+                format!("must lie in {} (got {d})", crate::data::DIAMETER.shown),
             )?;
         }
     }

@@ -257,9 +257,9 @@ impl UqStudy {
                 return bad(&key("density_kg_m3"), format!("must be > 0, got {}", m.density_kg_m3));
             }
             if let Some(d) = m.impact_diameter_m
-                && !(d > 0.0 && d <= 0.1)
+                && !crate::data::DIAMETER.contains(d)
             {
-                return bad(&key("impact_diameter_m"), format!("must be > 0 and ≤ 0.1 m, got {d}"));
+                return bad(&key("impact_diameter_m"), format!("must lie in {}, got {d}", crate::data::DIAMETER.shown));
             }
         }
         if !(4.0..=40.0).contains(&self.figures.width_cm) {

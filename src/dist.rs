@@ -85,8 +85,14 @@ pub enum Marginal {
     Fixed(f64),
     /// A truncated prior.
     Param(Param),
-    /// A piecewise-linear quantile function (p ascending from 0, v ascending).
-    Quantiles(Vec<(f64, f64)>),
+    /// A piecewise-linear quantile function: values `v` at probabilities `p` (ascending from 0,
+    /// v ascending).
+    Quantiles {
+        /// Probabilities.
+        p: Vec<f64>,
+        /// Values.
+        v: Vec<f64>,
+    },
     /// One of K joint draws (of a strength model's parameters): the value is the draw's index.
     Index(usize),
 }
@@ -102,13 +108,11 @@ impl Marginal {
         match self {
             Marginal::Fixed(v) => *v,
             Marginal::Param(p) => p.quantile(u),
-            Marginal::Quantiles(q) => {
-                let k = q.partition_point(|&(p, _)| p <= u).clamp(1, q.len() - 1);
-                let ((p0, v0), (p1, v1)) = (q[k - 1], q[k]);
-                if u >= q[q.len() - 1].0 {
-                    return q[q.len() - 1].1;
+            Marginal::Quantiles { p, v } => {
+                if u >= p[p.len() - 1] {
+                    return v[v.len() - 1];
                 }
-                v0 + (v1 - v0) * (u - p0) / (p1 - p0)
+                crate::stats::lerp(v, crate::stats::locate(p, u))
             }
             Marginal::Index(k) => ((u * *k as f64) as usize).min(k - 1) as f64,
         }
@@ -168,7 +172,7 @@ impl Dist {
                     return bad(format!("the spectrum file {} does not exist", path.display()));
                 }
                 let q = read_spectrum(&path, target, *row)?;
-                Ok(Marginal::Quantiles(q.into_iter().map(|(p, v)| (p, v * scale)).collect()))
+                Ok(Marginal::Quantiles { p: q.iter().map(|x| x.0).collect(), v: q.iter().map(|x| x.1 * scale).collect() })
             }
         }
     }

@@ -68,6 +68,28 @@ impl Drop for TempDir {
     }
 }
 
+/// Appends one ASCII VTK XML `<DataArray>` to `s`: the crate's one VTK array writer, used by
+/// the FE's `.vtu` and the DEM's `.vtp`. `comps` values per tuple (NumberOfComponents when > 1),
+/// one tuple per line; `integer` writes the values as integers (ids, connectivity, offsets,
+/// cell types), otherwise in `{:e}` notation (round-trips every f64).
+pub fn vtk_data_array(s: &mut String, ty: &str, name: &str, comps: usize, values: impl Iterator<Item = f64>, integer: bool) {
+    use std::fmt::Write as _;
+    let _ = write!(s, "<DataArray type=\"{ty}\" Name=\"{name}\"");
+    if comps > 1 {
+        let _ = write!(s, " NumberOfComponents=\"{comps}\"");
+    }
+    s.push_str(" format=\"ascii\">\n");
+    for (k, v) in values.enumerate() {
+        if integer {
+            let _ = write!(s, "{}", v as i64);
+        } else {
+            let _ = write!(s, "{v:e}");
+        }
+        s.push(if (k + 1) % comps.max(1) == 0 { '\n' } else { ' ' });
+    }
+    s.push_str("</DataArray>\n");
+}
+
 /// SHA-256 of bytes, hex.
 pub fn sha256_hex(bytes: &[u8]) -> String {
     let digest = Sha256::digest(bytes);

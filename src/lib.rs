@@ -34,12 +34,14 @@
 //!
 //! The modules form layers without cycles: each imports only modules of lower layers
 //! (`tests/structure.rs` reads every `crate::…` path outside the test modules and fails on a
-//! cycle).
+//! cycle, on an import that does not point to a lower layer of this table, and on a module
+//! missing from it).
 //!
 //! ```text
-//! 15  bench                          speed figures (the CLI, src/main.rs, sits above)
-//! 14  runner                         loaded study → its runner (only main and bench import it)
-//! 13  study                          kind → schema + validation
+//! 16  bench                          speed figures (the CLI, src/main.rs, sits above)
+//! 15  runner                         loaded study → its runner (only main and bench import it)
+//! 14  study                          kind → schema + validation
+//! 13  experiments                    experiment design on the main study's state of knowledge
 //! 12  lifetime_study · uq            the lifetime study; the main study
 //! 11  discrepancy                    the naming loop, KOH, the curve level
 //! 10  strength                       the one lifetime model (its Bayesian draws use calibrate::mcmc)
@@ -82,13 +84,13 @@
 //! | [`uq`] | the main study (`kind = "uq"`): strength models as a model-form choice with stacking weights, Monte Carlo propagation through each material's `LifetimeModel`, damage models and averaging domains side by side, Sobol' indices with bootstrap intervals |
 //! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation; the plausibility range of every numeric input column |
 //! | [`synth`] | the documented generator of the synthetic crush datasets |
-//! | [`stats`] | median, Pearson correlation with p-value, line fit, the one sample-quantile definition (Hyndman–Fan type 7) and the weighted inverse CDF |
+//! | [`stats`] | median, Pearson correlation with p-value, line fit, the one sample-quantile definition (Hyndman–Fan type 7) and the weighted inverse CDF, the one linear interpolation (`locate` + `lerp`), the one ranking |
 //! | [`schema`] | the study-file layer under every study module: `StudyFile` (read, kind, parse), TOML errors with line and key, relative paths, shared options (contact, impact, figures, materials) |
 //! | [`runkit`] | what every run shares: options, summary, clock, progress bars, figures' records, the report commit with `manifest.json` |
 //! | [`lifetime_study`] | the lifetime study (`kind = "lifetime"`): schema and run, through `strength` |
 //! | [`study`] | the dispatch from `kind` to each study module's schema and validation: `load` → `LoadedStudy` |
 //! | [`runner`] | the dispatch from a loaded study to its runner (top of the graph: only the CLI and `bench` use it) |
-//! | [`io`] | atomic report directories, CSV tables, manifest; reading input files (path kind, UTF-8, CSV shape: distinct columns, no short or long rows); scratch directories |
+//! | [`io`] | atomic report directories, CSV tables, manifest, the one VTK `DataArray` writer; reading input files (path kind, UTF-8, CSV shape: distinct columns, no short or long rows); scratch directories |
 //! | [`report`] | figures from tables only: SVG (plotters) → PNG (resvg) and vector PDF (svg2pdf) |
 //! | [`bench`](mod@bench) | the speed figures the issues ask for |
 //!

@@ -1,6 +1,7 @@
 //! Small statistics shared by the data tools and the runner: median, Pearson correlation with
 //! its two-sided p-value (t = r √((n − 2)/(1 − r²)), Student t with n − 2 degrees of freedom),
-//! and straight-line least squares with the slope's standard error (nalgebra SVD).
+//! straight-line least squares with the slope's standard error (nalgebra SVD), and the crate's one
+//! sample quantile, one linear interpolation ([`locate`] + [`lerp`]) and one ranking ([`ranks`]).
 //!
 //! Verified by the unit tests below (exact line; the tabulated two-sided 5 % critical value
 //! r = 0.279 at n = 50; a regression with known coefficients and standard error).
@@ -96,6 +97,47 @@ pub fn sorted_quantile(sorted: &[f64], p: f64) -> f64 {
     sorted[i] + (h - i as f64) * (sorted[j] - sorted[i])
 }
 
+/// Where `x` falls on an ascending grid `xs` (at least 2 points): the segment
+/// [xs[j − 1], xs[j]] (1 ≤ j < n) and the fraction t along it. The one linear interpolation of
+/// the crate, with [`lerp`]: every table and curve lookup (FE and measured force–displacement
+/// curves, the curve-discrepancy tables, the Tavares–King critical ratio) goes through it and
+/// decides for itself what lies outside the grid. Inside, xs[j − 1] < x ≤ xs[j] (x on a knot
+/// ends the segment below it; the first knot starts the first segment, t = 0). Below the grid
+/// j = 1 and t < 0, above it j = n − 1 and t > 1 (unclamped, so callers can clamp, extrapolate
+/// or refuse). A zero-length segment gives t = 0.
+pub fn locate(xs: &[f64], x: f64) -> (usize, f64) {
+    let j = xs.partition_point(|&v| v < x).clamp(1, xs.len() - 1);
+    let (x0, x1) = (xs[j - 1], xs[j]);
+    let t = if x1 > x0 { (x - x0) / (x1 - x0) } else { 0.0 };
+    (j, t)
+}
+
+/// The value at `(j, t)` from [`locate`]: ys[j − 1] + t (ys[j] − ys[j − 1]).
+pub fn lerp(ys: &[f64], (j, t): (usize, f64)) -> f64 {
+    ys[j - 1] + t * (ys[j] - ys[j - 1])
+}
+
+/// Ranks of `x`, 1-based, ties given their average rank (the crate's one ranking: Spearman's ρ
+/// and the rank-normalised R̂ use it).
+pub fn ranks(x: &[f64]) -> Vec<f64> {
+    let mut idx: Vec<usize> = (0..x.len()).collect();
+    idx.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
+    let mut r = vec![0.0; x.len()];
+    let mut i = 0;
+    while i < idx.len() {
+        let mut j = i;
+        while j + 1 < idx.len() && x[idx[j + 1]] == x[idx[i]] {
+            j += 1;
+        }
+        let avg = 0.5 * (i + j) as f64 + 1.0;
+        for &k in &idx[i..=j] {
+            r[k] = avg;
+        }
+        i = j + 1;
+    }
+    r
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -138,6 +180,29 @@ mod tests {
         assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
         assert!(median(&[]).is_nan());
+    }
+
+    #[test]
+    fn locate_and_lerp_inside_on_knots_and_outside() {
+        let xs = [0.0, 1.0, 3.0];
+        let ys = [10.0, 20.0, 0.0];
+        assert_eq!(locate(&xs, 2.0), (2, 0.5));
+        assert_eq!(lerp(&ys, locate(&xs, 2.0)), 10.0);
+        // A knot ends the segment below it; the first knot starts the first.
+        assert_eq!(locate(&xs, 1.0), (1, 1.0));
+        assert_eq!(locate(&xs, 0.0), (1, 0.0));
+        // Outside: unclamped fractions for the caller to clamp or extrapolate.
+        assert_eq!(locate(&xs, -1.0), (1, -1.0));
+        assert_eq!(locate(&xs, 5.0), (2, 2.0));
+        assert_eq!(lerp(&ys, locate(&xs, 5.0)), -20.0);
+        // A zero-length segment gives its first value.
+        assert_eq!(locate(&[1.0, 1.0], 1.0), (1, 0.0));
+    }
+
+    #[test]
+    fn ranks_average_ties() {
+        assert_eq!(ranks(&[3.0, 1.0, 2.0, 1.0]), vec![4.0, 1.5, 3.0, 1.5]);
+        assert_eq!(ranks(&[]), Vec::<f64>::new());
     }
 }
 

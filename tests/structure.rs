@@ -93,6 +93,41 @@ fn the_module_graph_has_no_cycle() {
     assert!(users.is_empty(), "modules below the top import crate::runner: {users:?}");
 }
 
+/// Module → layer, from the table in `src/lib.rs` (lines `//! NN  a · b   description`).
+fn layers() -> BTreeMap<String, u32> {
+    let lib = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs")).unwrap();
+    let graph = lib.split("//! ## Module graph").nth(1).expect("a module graph section in src/lib.rs");
+    let block = graph.split("//! ```text").nth(1).expect("a layer table in src/lib.rs").split("//! ```").next().unwrap();
+    let mut out = BTreeMap::new();
+    for line in block.lines() {
+        let line = line.trim_start_matches("//!").trim();
+        let Some((n, rest)) = line.split_once("  ") else { continue };
+        let Ok(n) = n.trim().parse::<u32>() else { continue };
+        let names = rest.trim().split("  ").next().unwrap();
+        for m in names.split('·') {
+            out.insert(m.trim().to_string(), n);
+        }
+    }
+    out
+}
+
+#[test]
+fn every_import_points_to_a_lower_layer_of_the_stated_graph() {
+    let (g, layer) = (graph(), layers());
+    assert!(layer.len() > 20, "read only {} layered modules: {layer:?}", layer.len());
+    let missing: Vec<&String> = g.keys().filter(|m| !layer.contains_key(*m)).collect();
+    assert!(missing.is_empty(), "modules missing from the layer table in src/lib.rs: {missing:?}");
+    let mut wrong = Vec::new();
+    for (m, deps) in &g {
+        for d in deps.iter().filter(|d| layer.contains_key(*d)) {
+            if layer[d] >= layer[m] {
+                wrong.push(format!("{m} (layer {}) → {d} (layer {})", layer[m], layer[d]));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "imports that do not point down the stated layers: {wrong:?}");
+}
+
 #[test]
 fn the_cycle_finder_finds_a_cycle() {
     let g: BTreeMap<String, BTreeSet<String>> = [("a", vec!["b"]), ("b", vec!["c"]), ("c", vec!["a"]), ("d", vec![])]

@@ -55,18 +55,16 @@ impl Curve {
         }
     }
 
-    /// Linear interpolation of the force at `x` (None outside the curve).
+    /// Linear interpolation ([`crate::stats::locate`]) of the force at `x` (None outside the curve).
     pub fn force_at(&self, x: f64) -> Option<f64> {
-        let i = self.displacement.partition_point(|&d| d < x);
-        if i == 0 {
-            return (self.displacement.first() == Some(&x)).then(|| self.force[0]);
-        }
-        if i >= self.displacement.len() {
+        let (&first, &last) = (self.displacement.first()?, self.displacement.last()?);
+        if !(x >= first && x <= last) {
             return None;
         }
-        let (x0, x1) = (self.displacement[i - 1], self.displacement[i]);
-        let t = if x1 > x0 { (x - x0) / (x1 - x0) } else { 1.0 };
-        Some(self.force[i - 1] + t * (self.force[i] - self.force[i - 1]))
+        if self.displacement.len() == 1 {
+            return Some(self.force[0]);
+        }
+        Some(crate::stats::lerp(&self.force, crate::stats::locate(&self.displacement, x)))
     }
 
     /// (peak force, fracture displacement) by the first sustained drop; None if it never drops.

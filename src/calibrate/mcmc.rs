@@ -385,27 +385,14 @@ fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len() as f64
 }
 
-/// Rank-normalises the pooled draws (average ranks for ties).
+/// Rank-normalises the pooled draws (average ranks for ties, [`crate::stats::ranks`]):
+/// z = Φ⁻¹((r − 3/8)/(S + 1/4)) over all S draws.
 fn rank_normalise(chains: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    let mut all: Vec<(f64, usize, usize)> = chains.iter().enumerate().flat_map(|(c, v)| v.iter().enumerate().map(move |(i, &x)| (x, c, i))).collect();
-    all.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let s = all.len() as f64;
+    let pooled: Vec<f64> = chains.iter().flatten().copied().collect();
+    let s = pooled.len() as f64;
     let normal = Normal::new(0.0, 1.0).expect("standard normal");
-    let mut out: Vec<Vec<f64>> = chains.iter().map(|c| vec![0.0; c.len()]).collect();
-    let mut i = 0;
-    while i < all.len() {
-        let mut j = i;
-        while j + 1 < all.len() && all[j + 1].0 == all[i].0 {
-            j += 1;
-        }
-        let r = 0.5 * ((i + 1) + (j + 1)) as f64;
-        let z = normal.inverse_cdf((r - 0.375) / (s + 0.25));
-        for item in &all[i..=j] {
-            out[item.1][item.2] = z;
-        }
-        i = j + 1;
-    }
-    out
+    let mut z = crate::stats::ranks(&pooled).into_iter().map(|r| normal.inverse_cdf((r - 0.375) / (s + 0.25)));
+    chains.iter().map(|c| c.iter().map(|_| z.next().expect("one rank per draw")).collect()).collect()
 }
 
 /// Split-R̂ of (already split) chains.

@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 
 use super::particles::Particles;
+use crate::io::vtk_data_array;
 
 /// The `.vtp` text of the particles at time `time`.
 pub fn polydata(p: &Particles, time: f64) -> String {
@@ -17,35 +18,18 @@ pub fn polydata(p: &Particles, time: f64) -> String {
     s.push_str("</DataArray>\n</FieldData>\n");
     let _ = writeln!(s, "<Piece NumberOfPoints=\"{n}\" NumberOfVerts=\"{n}\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">");
     s.push_str("<PointData Scalars=\"diameter\" Vectors=\"velocity\">\n");
-    array(&mut s, "Int64", "id", 1, p.id.iter().map(|&v| v as f64), true);
-    array(&mut s, "Float64", "diameter", 1, p.radius.iter().map(|&r| 2.0 * r), false);
-    array(&mut s, "Float64", "velocity", 3, p.vel.iter().flat_map(|v| v.iter().copied()), false);
-    array(&mut s, "Float64", "speed", 1, p.vel.iter().map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()), false);
-    array(&mut s, "Float64", "angular_velocity", 3, p.omega.iter().flat_map(|v| v.iter().copied()), false);
+    vtk_data_array(&mut s, "Int64", "id", 1, p.id.iter().map(|&v| v as f64), true);
+    vtk_data_array(&mut s, "Float64", "diameter", 1, p.radius.iter().map(|&r| 2.0 * r), false);
+    vtk_data_array(&mut s, "Float64", "velocity", 3, p.vel.iter().flat_map(|v| v.iter().copied()), false);
+    vtk_data_array(&mut s, "Float64", "speed", 1, p.vel.iter().map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()), false);
+    vtk_data_array(&mut s, "Float64", "angular_velocity", 3, p.omega.iter().flat_map(|v| v.iter().copied()), false);
     s.push_str("</PointData>\n<Points>\n");
-    array(&mut s, "Float64", "Points", 3, p.pos.iter().flat_map(|v| v.iter().copied()), false);
+    vtk_data_array(&mut s, "Float64", "Points", 3, p.pos.iter().flat_map(|v| v.iter().copied()), false);
     s.push_str("</Points>\n<Verts>\n");
-    array(&mut s, "Int64", "connectivity", 1, (0..n).map(|k| k as f64), true);
-    array(&mut s, "Int64", "offsets", 1, (1..=n).map(|k| k as f64), true);
+    vtk_data_array(&mut s, "Int64", "connectivity", 1, (0..n).map(|k| k as f64), true);
+    vtk_data_array(&mut s, "Int64", "offsets", 1, (1..=n).map(|k| k as f64), true);
     s.push_str("</Verts>\n</Piece>\n</PolyData>\n</VTKFile>\n");
     s
-}
-
-fn array(s: &mut String, ty: &str, name: &str, comps: usize, values: impl Iterator<Item = f64>, integer: bool) {
-    let _ = write!(s, "<DataArray type=\"{ty}\" Name=\"{name}\"");
-    if comps > 1 {
-        let _ = write!(s, " NumberOfComponents=\"{comps}\"");
-    }
-    s.push_str(" format=\"ascii\">\n");
-    for (k, v) in values.enumerate() {
-        if integer {
-            let _ = write!(s, "{}", v as i64);
-        } else {
-            let _ = write!(s, "{v:e}");
-        }
-        s.push(if (k + 1) % comps == 0 { '\n' } else { ' ' });
-    }
-    s.push_str("</DataArray>\n");
 }
 
 /// Reads the points and a named scalar back from a `.vtp` written by [`polydata`] (a check

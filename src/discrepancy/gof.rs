@@ -103,29 +103,9 @@ pub fn weibull_gof(data: &[f64], b: usize, seed: u64) -> Result<GoodnessOfFit> {
     Ok(GoodnessOfFit { fit, ad, ks, p_ad: p(ad, |s| s.0), p_ks: p(ks, |s| s.1), replicates: ok.len() })
 }
 
-/// Ranks (1-based, ties averaged).
-fn ranks(x: &[f64]) -> Vec<f64> {
-    let mut idx: Vec<usize> = (0..x.len()).collect();
-    idx.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
-    let mut r = vec![0.0; x.len()];
-    let mut i = 0;
-    while i < idx.len() {
-        let mut j = i;
-        while j + 1 < idx.len() && x[idx[j + 1]] == x[idx[i]] {
-            j += 1;
-        }
-        let avg = 0.5 * (i + j) as f64 + 1.0;
-        for &k in &idx[i..=j] {
-            r[k] = avg;
-        }
-        i = j + 1;
-    }
-    r
-}
-
 /// Spearman's rank correlation of `x` and `y`.
 pub fn spearman(x: &[f64], y: &[f64]) -> f64 {
-    crate::stats::pearson(&ranks(x), &ranks(y)).0
+    crate::stats::pearson(&crate::stats::ranks(x), &crate::stats::ranks(y)).0
 }
 
 /// Spearman's ρ of residuals against a covariate and its two-sided permutation p-value
@@ -137,7 +117,7 @@ pub fn covariate_trend(residuals: &[f64], covariate: &[f64], permutations: usize
     if let Some(v) = covariate.iter().find(|v| !v.is_finite()) {
         return Err(Error::numerical("covariate trend", format!("a covariate value is {v}")));
     }
-    let (rr, rc) = (ranks(residuals), ranks(covariate));
+    let (rr, rc) = (crate::stats::ranks(residuals), crate::stats::ranks(covariate));
     let rho = crate::stats::pearson(&rr, &rc).0;
     let hits: usize = (0..permutations)
         .into_par_iter()

@@ -609,6 +609,16 @@ fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> Result<()> {
     Ok(())
 }
 
+/// One row of the summary's evidence table: the numbers of the guard and the verdict they gave.
+fn evidence_row(e: &super::workflow::Evidence) -> String {
+    if let Some(reason) = &e.skipped {
+        return format!("| {} | {} | | | | | | | skipped: {} |\n", e.round, e.candidate.name(), reason);
+    }
+    let par = e.parameter.as_ref().map(|(k, v, se)| if se.is_finite() { format!("{k} = {v:.3} ± {se:.3}") } else { format!("{k} = {v:.3}") }).unwrap_or_default();
+    let verdict = if e.named { "**named**" } else if e.passed { "passed, weaker" } else { "not supported" };
+    format!("| {} | {} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {} | {} |\n", e.round, e.candidate.name(), e.lr, e.lr_critical, e.p_family, e.delta_bic, e.delta_cv, par, verdict)
+}
+
 fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> String {
     let mut md = String::from("# Discrepancy of the Weibull–Hertz strength model\n\n");
     md.push_str(&format!(
@@ -639,16 +649,7 @@ fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> String {
         md.push_str(&format!("\nWith nothing missing G ≈ {} (one per covariate diagnosed).\n\n", b.findings.len()));
         md.push_str("| round | candidate | Λ | Λ critical | p (family) | ΔBIC | ΔCV log score | parameter | verdict |\n|---|---|---|---|---|---|---|---|---|\n");
         for e in &r.outcome.evidence {
-            if let Some(reason) = &e.skipped {
-                md.push_str(&format!("| {} | {} | | | | | | | skipped: {} |\n", e.round, e.candidate.name(), reason));
-                continue;
-            }
-            let par = e.parameter.as_ref().map(|(k, v, se)| if se.is_finite() { format!("{k} = {v:.3} ± {se:.3}") } else { format!("{k} = {v:.3}") }).unwrap_or_default();
-            let verdict = if e.named { "**named**" } else if e.passed { "passed, weaker" } else { "not supported" };
-            md.push_str(&format!(
-                "| {} | {} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {} | {} |\n",
-                e.round, e.candidate.name(), e.lr, e.lr_critical, e.p_family, e.delta_bic, e.delta_cv, par, verdict
-            ));
+            md.push_str(&evidence_row(e));
         }
         if let Some(f) = b.findings.first() {
             md.push_str(&format!(
@@ -686,4 +687,61 @@ fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> String {
         }
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::discrepancy::workflow::Evidence;
+
+    /// The Wilson bounds are where the score test is just significant at 90 %:
+    /// (p̂ − p₀)² = z² p₀(1 − p₀)/n, an independent characterisation of the closed form.
+    #[test]
+    fn wilson_bounds_invert_the_score_test() {
+        let z = 1.644_853_626_951_472_2_f64;
+        for (k, n) in [(0, 10), (3, 10), (10, 10), (1, 200), (57, 100)] {
+            let (lo, hi) = wilson90(k, n);
+            assert!(lo <= k as f64 / n as f64 && k as f64 / n as f64 <= hi, "{k}/{n}: [{lo}, {hi}]");
+            for p0 in [lo, hi] {
+                if p0 > 0.0 && p0 < 1.0 {
+                    let p = k as f64 / n as f64;
+                    assert!(((p - p0).powi(2) - z * z * p0 * (1.0 - p0) / n as f64).abs() < 1e-12, "{k}/{n}: bound {p0}");
+                }
+            }
+        }
+        // k = 0: lower bound 0, upper z²/(n + z²); no data: [0, 1].
+        let (lo, hi) = wilson90(0, 10);
+        assert_eq!(lo, 0.0);
+        assert!((hi - z * z / (10.0 + z * z)).abs() < 1e-15, "{hi}");
+        assert_eq!(wilson90(0, 0), (0.0, 1.0));
+    }
+
+    fn evidence(named: bool, passed: bool, skipped: Option<&str>, se: f64) -> Evidence {
+        Evidence {
+            round: 2,
+            candidate: Effect::Roundness,
+            skipped: skipped.map(String::from),
+            loglik: -10.0,
+            lr: 12.3456,
+            p_bootstrap: 0.001,
+            p_family: 0.0042,
+            lr_critical: 6.5,
+            delta_bic: -8.1304,
+            delta_cv: 0.3751,
+            parameter: Some(("β".into(), 0.5, se)),
+            meaning: String::new(),
+            shape: 5.0,
+            passed,
+            named,
+        }
+    }
+
+    #[test]
+    fn evidence_rows_carry_the_guard_numbers_and_their_verdict() {
+        let name = Effect::Roundness.name();
+        assert_eq!(evidence_row(&evidence(true, true, None, 0.125)), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 ± 0.125 | **named** |\n"));
+        assert_eq!(evidence_row(&evidence(false, true, None, f64::NAN)), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 | passed, weaker |\n"));
+        assert_eq!(evidence_row(&evidence(false, false, None, 0.125)), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 ± 0.125 | not supported |\n"));
+        assert_eq!(evidence_row(&evidence(false, false, Some("no roundness column"), 0.125)), format!("| 2 | {name} | | | | | | | skipped: no roundness column |\n"));
+    }
 }

@@ -157,15 +157,16 @@ impl CrushModel {
     }
 }
 
-/// Linear interpolation of the force at total displacement `d` on a curve (0 beyond its end).
+/// Linear interpolation ([`crate::stats::locate`]) of the force at total displacement `d` on a
+/// curve; 0 outside it (before its first or beyond its last sample).
 pub fn force_at(curve: &[super::CurveSample], d: f64) -> f64 {
-    for w in curve.windows(2) {
-        if d >= w[0].displacement && d <= w[1].displacement {
-            let t = (d - w[0].displacement) / (w[1].displacement - w[0].displacement).max(f64::MIN_POSITIVE);
-            return w[0].force + t * (w[1].force - w[0].force);
-        }
+    let (Some(first), Some(last)) = (curve.first(), curve.last()) else { return 0.0 };
+    if curve.len() < 2 || !(d >= first.displacement && d <= last.displacement) {
+        return 0.0;
     }
-    0.0
+    let x: Vec<f64> = curve.iter().map(|s| s.displacement).collect();
+    let f: Vec<f64> = curve.iter().map(|s| s.force).collect();
+    crate::stats::lerp(&f, crate::stats::locate(&x, d))
 }
 
 impl Simulator for CrushModel {

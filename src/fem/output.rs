@@ -12,6 +12,7 @@ use std::fmt::Write as _;
 
 use super::element::{ElementState, geometry};
 use super::mesh::Mesh;
+use crate::io::vtk_data_array;
 use super::{CurveSample, QuasiStatic};
 
 /// Per-element fields (one entry per element, mesh order).
@@ -204,29 +205,15 @@ pub fn vtu(mesh: &Mesh, nodes: &[[f64; 2]], fields: &ElementFields) -> String {
     let (np, ne) = (nodes.len(), mesh.elements.len());
     s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n");
     let _ = writeln!(s, "<Piece NumberOfPoints=\"{np}\" NumberOfCells=\"{ne}\">");
-    s.push_str("<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-    for p in nodes {
-        let _ = writeln!(s, "{:e} {:e} 0", p[0], p[1]);
-    }
-    s.push_str("</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
-    for c in &mesh.elements {
-        let _ = writeln!(s, "{} {} {} {}", c[0], c[1], c[2], c[3]);
-    }
-    s.push_str("</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
-    for e in 0..ne {
-        let _ = write!(s, "{} ", 4 * (e + 1));
-    }
-    s.push_str("\n</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
-    for _ in 0..ne {
-        s.push_str("9 ");
-    }
-    s.push_str("\n</DataArray>\n</Cells>\n<CellData>\n");
+    s.push_str("<Points>\n");
+    vtk_data_array(&mut s, "Float64", "Points", 3, nodes.iter().flat_map(|p| [p[0], p[1], 0.0]), false);
+    s.push_str("</Points>\n<Cells>\n");
+    vtk_data_array(&mut s, "Int64", "connectivity", 1, mesh.elements.iter().flat_map(|c| c.iter().map(|&k| k as f64)), true);
+    vtk_data_array(&mut s, "Int64", "offsets", 1, (1..=ne).map(|e| (4 * e) as f64), true);
+    vtk_data_array(&mut s, "UInt8", "types", 1, (0..ne).map(|_| 9.0), true);
+    s.push_str("</Cells>\n<CellData>\n");
     for ((name, _), col) in FIELD_NAMES.iter().zip(fields.columns()) {
-        let _ = writeln!(s, "<DataArray type=\"Float64\" Name=\"{name}\" format=\"ascii\">");
-        for v in col {
-            let _ = write!(s, "{:e} ", v);
-        }
-        s.push_str("\n</DataArray>\n");
+        vtk_data_array(&mut s, "Float64", name, 1, col.iter().copied(), false);
     }
     s.push_str("</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
     s

@@ -205,10 +205,8 @@ impl CriticalRatioTable {
 
     /// ln x*(N, γ), linear in γ between the table's points (γ clamped to the table).
     pub fn ln_ratio(&self, gamma: f64) -> f64 {
-        let g = &self.gamma;
-        let k = g.partition_point(|&v| v <= gamma).clamp(1, g.len() - 1);
-        let t = ((gamma - g[k - 1]) / (g[k] - g[k - 1])).clamp(0.0, 1.0);
-        self.ln_x[k - 1] + t * (self.ln_x[k] - self.ln_x[k - 1])
+        let (k, t) = crate::stats::locate(&self.gamma, gamma);
+        crate::stats::lerp(&self.ln_x, (k, t.clamp(0.0, 1.0)))
     }
 }
 

@@ -82,17 +82,12 @@ fn velocity_profile(dir: &Path, width_cm: f64) -> Result<Drawn> {
 
 /// Perceptually uniform colour map (viridis anchors, linear interpolation).
 pub(crate) fn viridis(t: f64) -> RGBColor {
-    const A: [(f64, (u8, u8, u8)); 6] =
-        [(0.0, (68, 1, 84)), (0.2, (65, 68, 135)), (0.4, (42, 120, 142)), (0.6, (34, 168, 132)), (0.8, (122, 209, 81)), (1.0, (253, 231, 37))];
+    const AT: [f64; 6] = [0.0, 0.2, 0.4, 0.6, 0.8, 1.0];
+    const RGB: [[f64; 6]; 3] = [[68.0, 65.0, 42.0, 34.0, 122.0, 253.0], [1.0, 68.0, 120.0, 168.0, 209.0, 231.0], [84.0, 135.0, 142.0, 132.0, 81.0, 37.0]];
     let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
-    for w in A.windows(2) {
-        if t <= w[1].0 {
-            let f = (t - w[0].0) / (w[1].0 - w[0].0);
-            let m = |a: u8, b: u8| (a as f64 + f * (b as f64 - a as f64)).round() as u8;
-            return RGBColor(m(w[0].1.0, w[1].1.0), m(w[0].1.1, w[1].1.1), m(w[0].1.2, w[1].1.2));
-        }
-    }
-    RGBColor(253, 231, 37)
+    let at = crate::stats::locate(&AT, t);
+    let m = |c: &[f64; 6]| crate::stats::lerp(c, at).round() as u8;
+    RGBColor(m(&RGB[0]), m(&RGB[1]), m(&RGB[2]))
 }
 
 fn speed_map(dir: &Path, width_cm: f64) -> Result<Drawn> {

@@ -187,6 +187,16 @@ pub struct Headline {
 /// The name of the averaged rows.
 pub const AVERAGED: &str = "model-averaged";
 
+/// The model-averaged (P(candidate worse), its standard error, tie fraction) from the strength
+/// models' rows and their stacking weights: P̄ = Σ w P, se = (Σ w² se²)^½ (independent runs),
+/// ties = Σ w ties.
+pub(super) fn averaged(weights: &[f64], rows: &[Row]) -> (f64, f64, f64) {
+    let worse = weights.iter().zip(rows).map(|(w, r)| w * r.worse).sum();
+    let se = weights.iter().zip(rows).map(|(w, r)| (w * r.se).powi(2)).sum::<f64>().sqrt();
+    let ties = weights.iter().zip(rows).map(|(w, r)| w * r.ties).sum();
+    (worse, se, ties)
+}
+
 fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
     let st = &forms[0].setup;
     let names = [&st.materials[0].model.label, &st.materials[1].model.label];
@@ -224,9 +234,8 @@ fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
             }
             if forms.len() > 1 {
                 // The weighted mixture of the models' samples.
-                let worse: f64 = forms.iter().zip(&rows[rows.len() - forms.len()..]).map(|(f, r)| f.weight * r.worse).sum();
-                let se = forms.iter().zip(&rows[rows.len() - forms.len()..]).map(|(f, r)| (f.weight * r.se).powi(2)).sum::<f64>().sqrt();
-                let ties = forms.iter().zip(&rows[rows.len() - forms.len()..]).map(|(f, r)| f.weight * r.ties).sum();
+                let weights: Vec<f64> = forms.iter().map(|f| f.weight).collect();
+                let (worse, se, ties) = averaged(&weights, &rows[rows.len() - forms.len()..]);
                 let mut median = [0.0; 2];
                 let mut band = [(0.0, 0.0); 2];
                 for (j, slot) in [a, b].into_iter().enumerate() {

@@ -163,10 +163,10 @@ impl Setup {
                 let mut v: Vec<f64> = draws.iter().map(|d| e.natural(d.beta[l])).collect();
                 v.sort_by(f64::total_cmp);
                 let k = v.len();
-                let q: Vec<(f64, f64)> = v.into_iter().enumerate().map(|(r, x)| (r as f64 / (k - 1) as f64, x)).collect();
+                let p: Vec<f64> = (0..k).map(|r| r as f64 / (k - 1) as f64).collect();
                 let (sym, _, _) = e.parameter(0.0, 1.0);
                 effect_inputs.push(inputs.len());
-                inputs.push(Input { name: format!("{}_{sym}_{}", e.name(), m.key), unit: "-".into(), marginal: Marginal::Quantiles(q) });
+                inputs.push(Input { name: format!("{}_{sym}_{}", e.name(), m.key), unit: "-".into(), marginal: Marginal::Quantiles { p, v } });
             }
             materials.push(Material { model, draws, weights, sample, path: dpath, strength_input, effect_inputs });
         }

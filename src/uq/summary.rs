@@ -2,7 +2,6 @@
 //! (headline, whether accounting for the effects changes which particle is better, the
 //! deliverable's shape hypothesis, what drives the answer, damage models side by side).
 
-use super::setup::Setup;
 use super::sobol::SobolIndices;
 use super::study::UqStudy;
 use crate::lifetime::damage::DamageModel;
@@ -159,7 +158,7 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
         md.push_str(&format!("| {} | {} yr | {:.3} | {:.3} | {:.2e} | {:.2e} |\n", r.damage.label(), r.years, r.worse, r.ties, r.median[0], r.median[1]));
     }
     md.push('\n');
-    md.push_str(&damage_sentences(st, &primary_rows, names));
+    md.push_str(&damage_sentences(*st.years.last().unwrap_or(&1.0), &primary_rows, names));
     md.push_str("The spread between the damage models is model-form uncertainty that more crush data cannot remove: it needs repeated-impact tests.\n");
 
     if averaging.len() > st.years.len() {
@@ -173,9 +172,8 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
 }
 
 /// How each damage model's medians compare with independent trials', generated from the rows
-/// (last horizon).
-pub(super) fn damage_sentences(st: &Setup, rows: &[&Row], names: [&str; 2]) -> String {
-    let last = *st.years.last().unwrap_or(&1.0);
+/// at horizon `last` (years).
+pub(super) fn damage_sentences(last: f64, rows: &[&Row], names: [&str; 2]) -> String {
     let Some(indep) = rows.iter().find(|r| r.damage == DamageModel::Independent && r.years == last) else { return String::new() };
     let mut out = String::new();
     for r in rows.iter().filter(|r| r.damage != DamageModel::Independent && r.years == last) {
@@ -198,4 +196,70 @@ pub(super) fn damage_sentences(st: &Setup, rows: &[&Row], names: [&str; 2]) -> S
         out.push_str(&format!("Over {last} years {} gives, compared with independent trials, {}; under it P({} breaks more) = {:.3}.\n", r.damage.label(), parts.join(", and "), names[0], r.worse));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    //! The summary's sentences and the averaged headline against hand-made rows: a wrong
+    //! comparison, ratio or weight would show here.
+    use super::super::run::{Row, averaged, pm};
+    use super::*;
+
+    fn row(damage: DamageModel, years: f64, worse: f64, se: f64, ties: f64, median: [f64; 2]) -> Row {
+        Row { strength: "m".into(), damage, years, worse, se, ties, median, band: [(0.0, 1.0); 2] }
+    }
+
+    #[test]
+    fn averaged_headline_is_the_weighted_mean_with_independent_errors() {
+        let rows = [row(DamageModel::Independent, 1.0, 0.2, 0.02, 0.1, [0.0; 2]), row(DamageModel::Independent, 1.0, 0.6, 0.04, 0.3, [0.0; 2])];
+        let (p, se, ties) = averaged(&[0.25, 0.75], &rows);
+        assert!((p - 0.5).abs() < 1e-15, "{p}");
+        assert!((se - (0.005f64.powi(2) + 0.03f64.powi(2)).sqrt()).abs() < 1e-15, "{se}");
+        assert!((ties - 0.25).abs() < 1e-15, "{ties}");
+    }
+
+    #[test]
+    fn verdict_names_the_better_particle_and_how_sure() {
+        let n = ["Gen 4", "BL 16/30"];
+        assert_eq!(verdict(0.9999, n), "BL 16/30 is the better particle, with near certainty (1.000)");
+        assert_eq!(verdict(0.05, n), "Gen 4 is the better particle, with high probability (0.950)");
+        assert_eq!(verdict(0.75, n), "BL 16/30 is the better particle, more likely than not (0.750)");
+        assert_eq!(verdict(0.4, n), "Gen 4 is the better particle, but the answer is close to a coin toss (0.600)");
+        assert_eq!(verdict(0.5, n), "neither particle is better");
+    }
+
+    #[test]
+    fn pm_never_prints_a_zero_error() {
+        assert_eq!(pm(1.0, 0.0, 1000), "1.0000 (in all 1000 samples)");
+        assert_eq!(pm(0.9999, 2.9e-6, 10), "0.9999 ± 2.9e-6");
+        assert_eq!(pm(0.25, 0.0123, 10), "0.2500 ± 0.0123");
+    }
+
+    #[test]
+    fn damage_sentences_compare_each_model_with_independent_trials() {
+        let names = ["A", "B"];
+        let rows = [
+            row(DamageModel::Independent, 10.0, 0.9, 0.0, 0.0, [1e-3, 2e-4]),
+            row(DamageModel::VogelPeukert, 10.0, 0.8, 0.0, 0.0, [0.0, 2e-3]),
+            row(DamageModel::TavaresKing, 10.0, 0.7, 0.0, 0.0, [5e-2, 2e-4]),
+            // Another horizon: ignored.
+            row(DamageModel::TavaresKing, 1.0, 0.1, 0.0, 0.0, [1.0, 1.0]),
+        ];
+        let refs: Vec<&Row> = rows.iter().collect();
+        let text = damage_sentences(10.0, &refs, names);
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 2, "{text}");
+        assert_eq!(
+            lines[0],
+            "Over 10 years Vogel–Peukert gives, compared with independent trials, for A no breakage in most samples (below its energy threshold), and for B larger median probabilities (2.00e-3 against 2.00e-4, × 10); under it P(A breaks more) = 0.800."
+                .replace("Vogel–Peukert", DamageModel::VogelPeukert.label())
+        );
+        assert_eq!(
+            lines[1],
+            "Over 10 years Tavares–King gives, compared with independent trials, for A larger median probabilities (5.00e-2 against 1.00e-3, × 50), and for B the same median probability (2.00e-4); under it P(A breaks more) = 0.700."
+                .replace("Tavares–King", DamageModel::TavaresKing.label())
+        );
+        // Without an independent-trials row there is nothing to compare with.
+        assert_eq!(damage_sentences(10.0, &refs[1..], names), "");
+    }
 }

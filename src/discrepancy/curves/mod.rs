@@ -302,7 +302,7 @@ pub fn run_curves(loaded: &StudyFile, s: &CurveStudy, opts: &RunOptions) -> Resu
     let verdict = curve_verdict(loaded, s, &groups, &outcome, &where_, &trend);
     let json = serde_json::to_string_pretty(&verdict).map_err(|e| Error::numerical("verdict.json", e.to_string()))?;
     dir.write_bytes("verdict.json", json.as_bytes())?;
-    dir.write_bytes("summary.md", curve_summary(s, &groups, &outcome, &where_, &trend).as_bytes())?;
+    dir.write_bytes("summary.md", curve_summary(&s.calibration, &groups, &outcome, &where_, &trend).as_bytes())?;
     pb.set_message("figures");
     let mut failures = Vec::new();
     let rendered = crate::report::discrepancy::render_curves(dir.path(), s.figures.width_cm)?;

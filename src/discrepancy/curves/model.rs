@@ -7,6 +7,7 @@ use rayon::prelude::*;
 use crate::discrepancy::koh::{self, BIC_STRONG, KohFit, KohOptions, Problem};
 use crate::calibrate::data::Curve;
 use crate::error::{Error, Result};
+use crate::stats;
 use crate::fracture::FractureParams;
 use super::CurveCandidate;
 
@@ -79,10 +80,13 @@ pub fn reduce(paths: &[PathBuf], groups: &[Group], grid: &[f64], fracture: Fract
 /// a Hertzian curve); linear extrapolation of the last segment beyond the grid.
 fn interp(grid: &[f64], f: &[f64], x: f64) -> f64 {
     let g = |v: f64| v.max(0.0).powf(2.0 / 3.0);
-    let j = grid.partition_point(|&v| v < x).min(grid.len() - 1);
-    let (x0, g0) = if j == 0 { (0.0, 0.0) } else { (grid[j - 1], g(f[j - 1])) };
-    let (x1, g1) = (grid[j], g(f[j]));
-    let v = g0 + (x - x0) / (x1 - x0).max(f64::MIN_POSITIVE) * (g1 - g0);
+    let v = if x <= grid[0] || grid.len() == 1 {
+        // The segment from the origin to the first grid point.
+        stats::lerp(&[0.0, g(f[0])], stats::locate(&[0.0, grid[0]], x))
+    } else {
+        let (j, t) = stats::locate(grid, x);
+        stats::lerp(&[g(f[j - 1]), g(f[j])], (1, t))
+    };
     v.max(0.0).powf(1.5)
 }
 
@@ -111,10 +115,8 @@ pub struct RatioTable {
 
 impl RatioTable {
     fn at(&self, rho: f64, k: usize) -> f64 {
-        let r = &self.roundness;
-        let j = r.partition_point(|&v| v < rho).clamp(1, r.len() - 1);
-        let t = ((rho - r[j - 1]) / (r[j] - r[j - 1])).clamp(0.0, 1.0);
-        self.ratio[j - 1][k] + t * (self.ratio[j][k] - self.ratio[j - 1][k])
+        let (j, t) = stats::locate(&self.roundness, rho);
+        stats::lerp(&[self.ratio[j - 1][k], self.ratio[j][k]], (1, t.clamp(0.0, 1.0)))
     }
 }
 

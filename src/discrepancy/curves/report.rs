@@ -185,10 +185,11 @@ pub(super) fn write_curve_tables(dir: &mut ReportDir, groups: &[Group], points: 
     Ok(())
 }
 
-pub(super) fn curve_summary(s: &CurveStudy, groups: &[Group], o: &CurveOutcome, where_: &[Disagreement], trend: &[(f64, f64)]) -> String {
+/// `summary.md` of a curve-level study whose calibration study file is `calibration`.
+pub(super) fn curve_summary(calibration: &str, groups: &[Group], o: &CurveOutcome, where_: &[Disagreement], trend: &[(f64, f64)]) -> String {
     let (b, a) = (&o.stages[0], o.stages.last().unwrap_or(&o.stages[0]));
     let mut md = String::from("# Discrepancy of the calibrated crush FE against measured curves\n\n");
-    md.push_str(&format!("Calibration: `{}` (its emulator and posterior). Data: ", s.calibration));
+    md.push_str(&format!("Calibration: `{}` (its emulator and posterior). Data: ", calibration));
     md.push_str(&groups.iter().map(|g| format!("{} ({} curves, {} °C)", g.label, g.curves.len(), g.temperature)).collect::<Vec<_>>().join(", "));
     md.push_str(&format!(".\n\n**Terms named: {}.** Gap RMS(δ̂/σ) {:.2} → {:.2}; RMS δ̂ {:.3} N → {:.3} N; BIC {:.1} → {:.1}.\n\n", term_names(&o.named), b.gap, a.gap, b.fit.delta_rms, a.fit.delta_rms, b.fit.bic, a.fit.bic));
     md.push_str("## Where the calibrated model disagrees (base model, |δ̂| > 2σ of the mean curve)\n\n");
@@ -233,4 +234,77 @@ pub(super) fn curve_summary(s: &CurveStudy, groups: &[Group], o: &CurveOutcome, 
     }
     md.push_str("\nEquations of the terms, the gap measure and the guard: `partlife::discrepancy::curves` (module documentation). Figure `discrepancy_curves`: measured mean curves with the base and final model (top) and δ̂ with its 90 % band before and after (bottom).\n");
     md
+}
+
+#[cfg(test)]
+mod tests {
+    //! The headline and summary of a hand-made outcome: every verdict must follow its ΔBIC and
+    //! every number must be the one given.
+    use super::*;
+    use crate::calibrate::data::Curve;
+
+    fn fit(names: &[&str], median: &[f64], bic: f64, delta_rms: f64) -> KohFit {
+        KohFit {
+            name: "m".into(),
+            names: names.iter().map(|n| n.to_string()).collect(),
+            theta_map: median.to_vec(),
+            theta_median: median.to_vec(),
+            theta_90: median.iter().map(|m| (0.5 * m, 2.0 * m)).collect(),
+            sigma_delta: 1.0,
+            lengths: vec![1.0],
+            max_loglik: -bic / 2.0,
+            bic,
+            delta: vec![],
+            delta_sd: vec![],
+            delta_rms,
+        }
+    }
+
+    fn outcome() -> CurveOutcome {
+        use CurveCandidate::*;
+        let base = fit(&["k1", "k2"], &[10.0, 2.0], 100.0, 2.5);
+        let with_c = fit(&["k1", "k2", "c"], &[11.0, 2.5, 0.25], 80.0, 0.4);
+        let ev = |round, candidate, fit: Option<KohFit>, delta_bic, named| CurveEvidence { round, candidate, skipped: fit.is_none().then(|| "no temperature spread".into()), fit, delta_bic, gap: 0.9, named };
+        CurveOutcome {
+            named: vec![Compliance],
+            evidence: vec![
+                ev(0, Compliance, Some(with_c.clone()), -20.0, true),
+                ev(0, Curvature, Some(fit(&["k1", "k2", "r"], &[10.0, 2.0, 0.75], 96.0, 1.0)), -7.0, false),
+                ev(0, Temperature, None, f64::NAN, false),
+                ev(1, Curvature, Some(fit(&["k1", "k2", "c", "r"], &[10.0, 2.0, 0.25, 0.5], 83.0, 0.4)), 3.0, false),
+            ],
+            stages: vec![
+                CurveStage { terms: vec![], fit: base, model: vec![], gap: 3.25 },
+                CurveStage { terms: vec![Compliance], fit: with_c, model: vec![], gap: 0.75 },
+            ],
+            theta_ls: vec![10.0, 2.0],
+        }
+    }
+
+    #[test]
+    fn headline_states_the_named_terms_and_the_gap_before_and_after() {
+        assert_eq!(curve_headline(&outcome()), format!("crush curves: terms named: {}; gap RMS(δ/σ) 3.25 → 0.75; RMS δ 2.500 N → 0.400 N", CurveCandidate::Compliance.name()));
+    }
+
+    #[test]
+    fn summary_verdicts_follow_delta_bic_and_numbers_are_the_given_ones() {
+        use CurveCandidate::*;
+        let curve = Curve { particle: "p".into(), diameter: 1e-3, displacement: vec![0.0, 1e-6], force: vec![0.0, 1.0] };
+        let groups = [Group { label: "RT".into(), temperature: 20.0, curves: vec![curve.clone(); 3] }, Group { label: "800 °C".into(), temperature: 800.0, curves: vec![curve; 2] }];
+        let md = curve_summary("cal.toml", &groups, &outcome(), &[Some((2e-6, 8e-6, 0.125)), None], &[(0.5, 0.01), (-0.25, 0.5)]);
+        for line in [
+            "Calibration: `cal.toml` (its emulator and posterior). Data: RT (3 curves, 20 °C), 800 °C (2 curves, 800 °C).".to_string(),
+            format!("**Terms named: {}.** Gap RMS(δ̂/σ) 3.25 → 0.75; RMS δ̂ 2.500 N → 0.400 N; BIC 100.0 → 80.0.", Compliance.name()),
+            "* RT: from 2.0 to 8.0 µm (normalised), largest |δ̂|/F 12.5 %; least-squares residual trend along the curve: Spearman ρ 0.50 (permutation p 0.010)".to_string(),
+            "* 800 °C: nowhere; least-squares residual trend along the curve: Spearman ρ -0.25 (permutation p 0.500)".to_string(),
+            format!("| 1 | {} | -20.0 | 0.90 | {} | 0.2500 [0.1250, 0.5000] | **named** |", Compliance.name(), Compliance.parameter()),
+            format!("| 1 | {} | -7.0 | 0.90 | {} | 0.7500 [0.3750, 1.5000] | passed, weaker |", Curvature.name(), Curvature.parameter()),
+            format!("| 1 | {} | – | – | – | – | skipped: no temperature spread |", Temperature.name()),
+            format!("| 2 | {} | 3.0 | 0.90 | {} | 0.5000 [0.2500, 1.0000] | not supported |", Curvature.name(), Curvature.parameter()),
+            "| k1 | 1.0000e1 [5.0000e0, 2.0000e1] | 1.1000e1 [5.5000e0, 2.2000e1] |".to_string(),
+            "| c | – | 2.5000e-1 [1.2500e-1, 5.0000e-1] |".to_string(),
+        ] {
+            assert!(md.lines().any(|l| l == line), "missing line\n{line}\nin\n{md}");
+        }
+    }
 }

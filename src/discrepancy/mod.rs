@@ -9,7 +9,8 @@
 //! * [`workflow`]: the name → add → diagnose-again loop with the bootstrap-calibrated
 //!   false-discovery guard and the gap measure.
 //! * [`run`]: the study (`kind = "discrepancy"`, `partlife discrepancy`): lifetime before and
-//!   after, detection power vs number of particles, tables, figures and `verdict.json`.
+//!   after, detection power vs number of particles; its tables, `verdict.json` and `summary.md`
+//!   are written by the private `report` module.
 //! * [`koh`]: Kennedy–O'Hagan calibration with a GP discrepancy δ(x) and the name → add →
 //!   shrink comparison of candidate model terms, verified on the simple machine and the ball drop.
 //! * [`curves`]: the same loop at the force–displacement level (`kind = "discrepancy_curves"`):
@@ -19,5 +20,6 @@
 pub mod curves;
 pub mod gof;
 pub mod koh;
+mod report;
 pub mod run;
 pub mod workflow;

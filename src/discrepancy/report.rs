@@ -1,0 +1,386 @@
+//! The report of a discrepancy study: tables, `verdict.json`, headline and `summary.md`, each
+//! generated from the numbers it describes.
+
+use std::collections::BTreeMap;
+
+use super::run::{DiscrepancyStudy, LifetimeBand, MaterialResult, PowerRow, wilson90};
+use super::workflow::GAP_MEASURE;
+use crate::error::Result;
+use crate::io::{ReportDir, fcol, scol, table, ucol};
+use crate::schema::StudyFile;
+use crate::strength::{Effect, ModelFit};
+
+pub(super) fn names(c: &[Effect]) -> String {
+    if c.is_empty() { "none".into() } else { c.iter().map(|c| c.name()).collect::<Vec<_>>().join(" then ") }
+}
+
+pub(super) fn headline(r: &MaterialResult) -> String {
+    let (b, a) = (r.outcome.before(), r.outcome.after());
+    format!(
+        "{}: effects named: {}; gap G {:.1} → {:.1}; Weibull modulus {:.1} → {:.1}",
+        r.spec.label,
+        names(&r.outcome.named),
+        b.gap,
+        a.gap,
+        b.model.shape(),
+        a.model.shape()
+    )
+}
+
+pub(super) fn verdict_json(loaded: &StudyFile, s: &DiscrepancyStudy, results: &[MaterialResult]) -> serde_json::Value {
+    use serde_json::json;
+    let mut named = serde_json::Map::new();
+    let mut before = serde_json::Map::new();
+    let mut after = serde_json::Map::new();
+    let mut evidence = serde_json::Map::new();
+    let mut details = Vec::new();
+    for r in results {
+        let key = r.spec.key.clone();
+        let (b, a) = (r.outcome.before(), r.outcome.after());
+        named.insert(key.clone(), json!(r.outcome.named.iter().map(|c| c.name()).collect::<Vec<_>>()));
+        before.insert(key.clone(), json!(b.gap));
+        after.insert(key.clone(), json!(a.gap));
+        let ev: Vec<serde_json::Value> = r
+            .outcome
+            .evidence
+            .iter()
+            .map(|e| {
+                json!({
+                    "round": e.round,
+                    "candidate": e.candidate.name(),
+                    "equation": e.candidate.equation(),
+                    "covariate": e.candidate.covariate(),
+                    "skipped": e.skipped,
+                    "log_likelihood": finite(e.loglik),
+                    "likelihood_ratio": finite(e.lr),
+                    "likelihood_ratio_critical": finite(e.lr_critical),
+                    "p_bootstrap": finite(e.p_bootstrap),
+                    "p_family": finite(e.p_family),
+                    "delta_bic": finite(e.delta_bic),
+                    "delta_cv_log_score": finite(e.delta_cv),
+                    "parameter": e.parameter.as_ref().map(|(k, v, se)| json!({"name": k, "value": finite(*v), "se": finite(*se)})),
+                    "meaning": e.meaning,
+                    "weibull_modulus": finite(e.shape),
+                    "passed_guard": e.passed,
+                    "named": e.named,
+                })
+            })
+            .collect();
+        evidence.insert(key.clone(), json!(ev));
+        let stage = |st: &super::workflow::Stage| {
+            json!({
+                "effects": st.model.effects.iter().map(|c| c.name()).collect::<Vec<_>>(),
+                "weibull_modulus": st.model.shape(),
+                "log_likelihood": st.model.loglik(),
+                "anderson_darling": st.ad, "p_anderson_darling": st.p_ad,
+                "kolmogorov_smirnov": st.ks, "p_kolmogorov_smirnov": st.p_ks,
+                "gap": st.gap,
+            })
+        };
+        details.push(json!({
+            "key": key,
+            "label": r.spec.label,
+            "data": r.data.path.display().to_string(),
+            "particles": r.sample.strength.len(),
+            "covariates_diagnosed": r.outcome.stages[0].findings.iter().map(|f| f.covariate.clone()).collect::<Vec<_>>(),
+            "covariates_skipped": r.outcome.skipped_covariates,
+            "stages": r.outcome.stages.iter().map(stage).collect::<Vec<_>>(),
+            "lifetime": r.lifetime.iter().map(|(k, v)| json!({"model": k, "bands": v})).collect::<Vec<_>>(),
+        }));
+    }
+    json!({
+        "study": loaded.name,
+        "gap_measure": GAP_MEASURE,
+        "guard": format!("family-wise (max-T) bootstrap p < {} with ΔBIC < 0 and a better {}-fold cross-validated log score", s.discrepancy.alpha, s.discrepancy.cv_folds),
+        "effects_named": named,
+        "gap_before": before,
+        "gap_after": after,
+        "evidence": evidence,
+        "materials": details,
+    })
+}
+
+fn finite(v: f64) -> serde_json::Value {
+    if v.is_finite() { serde_json::json!(v) } else { serde_json::Value::Null }
+}
+
+/// Mean ln σ_i of a model over the sample: the scale of the strengths adjusted to the sample's
+/// average covariates (x_i · e^(mean − ln σ_i)), which the probability plot shows.
+fn reference_ln_scale(model: &ModelFit) -> f64 {
+    let d = model.design();
+    (0..model.n).map(|i| model.reg.ln_scale(&d, i)).sum::<f64>() / model.n.max(1) as f64
+}
+
+pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> Result<()> {
+    // materials.csv
+    let mut t = table(vec![
+        scol("key", results.iter().map(|r| r.spec.key.clone()).collect()),
+        scol("label", results.iter().map(|r| r.spec.label.clone()).collect()),
+        ucol("particles", results.iter().map(|r| r.sample.strength.len() as u64).collect()),
+        scol("effects_named", results.iter().map(|r| names(&r.outcome.named)).collect()),
+    ])?;
+    dir.write_table("materials", &mut t)?;
+
+    // evidence.csv
+    let ev: Vec<(&str, &super::workflow::Evidence)> = results.iter().flat_map(|r| r.outcome.evidence.iter().map(move |e| (r.spec.key.as_str(), e))).collect();
+    let par = |f: fn(&(String, f64, f64)) -> f64| ev.iter().map(move |(_, e)| e.parameter.as_ref().map_or(f64::NAN, f)).collect::<Vec<f64>>();
+    let mut t = table(vec![
+        scol("material", ev.iter().map(|(k, _)| k.to_string()).collect()),
+        ucol("round", ev.iter().map(|(_, e)| e.round as u64).collect()),
+        scol("candidate", ev.iter().map(|(_, e)| e.candidate.name().to_string()).collect()),
+        scol("skipped", ev.iter().map(|(_, e)| e.skipped.clone().unwrap_or_default()).collect()),
+        fcol("likelihood_ratio", ev.iter().map(|(_, e)| e.lr).collect()),
+        fcol("likelihood_ratio_critical", ev.iter().map(|(_, e)| e.lr_critical).collect()),
+        fcol("p_bootstrap", ev.iter().map(|(_, e)| e.p_bootstrap).collect()),
+        fcol("p_family", ev.iter().map(|(_, e)| e.p_family).collect()),
+        fcol("delta_bic", ev.iter().map(|(_, e)| e.delta_bic).collect()),
+        fcol("delta_cv_log_score", ev.iter().map(|(_, e)| e.delta_cv).collect()),
+        scol("parameter", ev.iter().map(|(_, e)| e.parameter.as_ref().map(|p| p.0.clone()).unwrap_or_default()).collect()),
+        fcol("value", par(|p| p.1)),
+        fcol("se", par(|p| p.2)),
+        fcol("weibull_modulus", ev.iter().map(|(_, e)| e.shape).collect()),
+        scol("passed_guard", ev.iter().map(|(_, e)| e.passed.to_string()).collect()),
+        scol("named", ev.iter().map(|(_, e)| e.named.to_string()).collect()),
+    ])?;
+    dir.write_table("evidence", &mut t)?;
+
+    // stages.csv
+    let st: Vec<(&MaterialResult, usize, &super::workflow::Stage)> = results.iter().flat_map(|r| r.outcome.stages.iter().enumerate().map(move |(i, s)| (r, i, s))).collect();
+    let mut t = table(vec![
+        scol("material", st.iter().map(|(r, _, _)| r.spec.key.clone()).collect()),
+        ucol("round", st.iter().map(|(_, i, _)| *i as u64).collect()),
+        scol("effects", st.iter().map(|(_, _, s)| names(&s.model.effects)).collect()),
+        fcol("weibull_modulus", st.iter().map(|(_, _, s)| s.model.shape()).collect()),
+        fcol("log_likelihood", st.iter().map(|(_, _, s)| s.model.loglik()).collect()),
+        fcol("anderson_darling", st.iter().map(|(_, _, s)| s.ad).collect()),
+        fcol("p_anderson_darling", st.iter().map(|(_, _, s)| s.p_ad).collect()),
+        fcol("kolmogorov_smirnov", st.iter().map(|(_, _, s)| s.ks).collect()),
+        fcol("p_kolmogorov_smirnov", st.iter().map(|(_, _, s)| s.p_ks).collect()),
+        fcol("gap", st.iter().map(|(_, _, s)| s.gap).collect()),
+        ucol("covariates_diagnosed", st.iter().map(|(_, _, s)| s.findings.len() as u64).collect()),
+    ])?;
+    dir.write_table("stages", &mut t)?;
+
+    // findings.csv: residual trends per stage.
+    let fi: Vec<(&str, usize, &super::gof::CovariateFinding)> = results
+        .iter()
+        .flat_map(|r| r.outcome.stages.iter().enumerate().flat_map(move |(i, s)| s.findings.iter().map(move |f| (r.spec.key.as_str(), i, f))))
+        .collect();
+    let mut t = table(vec![
+        scol("material", fi.iter().map(|(k, _, _)| k.to_string()).collect()),
+        ucol("round", fi.iter().map(|(_, i, _)| *i as u64).collect()),
+        scol("covariate", fi.iter().map(|(_, _, f)| f.covariate.clone()).collect()),
+        fcol("spearman_rho", fi.iter().map(|(_, _, f)| f.rho).collect()),
+        fcol("p_permutation", fi.iter().map(|(_, _, f)| f.p).collect()),
+        fcol("worst_tertile_from", fi.iter().map(|(_, _, f)| f.worst_range.0).collect()),
+        fcol("worst_tertile_to", fi.iter().map(|(_, _, f)| f.worst_range.1).collect()),
+        fcol("worst_tertile_mean_residual", fi.iter().map(|(_, _, f)| f.worst_range.2).collect()),
+    ])?;
+    dir.write_table("findings", &mut t)?;
+
+    // residuals.csv: per particle, before and after, with the covariates and the strength
+    // adjusted to the sample's average covariates (for the probability plot).
+    let mut cols: BTreeMap<&str, Vec<String>> = BTreeMap::new();
+    let mut num: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    for r in results {
+        for (stage, st) in [("before", r.outcome.before()), ("after", r.outcome.after())] {
+            let d = st.model.design();
+            let centre = reference_ln_scale(&st.model);
+            for i in 0..r.sample.strength.len() {
+                cols.entry("material").or_default().push(r.spec.key.clone());
+                cols.entry("id").or_default().push(r.data.records[i].id.clone());
+                cols.entry("stage").or_default().push(stage.into());
+                let x = r.sample.strength[i];
+                num.entry("strength_pa").or_default().push(x);
+                num.entry("adjusted_pa").or_default().push(x * (centre - st.model.reg.ln_scale(&d, i)).exp());
+                num.entry("residual").or_default().push(st.residuals[i]);
+                for (name, v) in &r.sample.covariates {
+                    let key: &str = super::workflow::DIAGNOSED.iter().find(|d| **d == name).copied().unwrap_or("other");
+                    num.entry(key).or_default().push(v[i].unwrap_or(f64::NAN));
+                }
+            }
+        }
+    }
+    let mut columns = vec![scol("material", cols.remove("material").unwrap_or_default()), scol("id", cols.remove("id").unwrap_or_default()), scol("stage", cols.remove("stage").unwrap_or_default())];
+    for k in ["strength_pa", "adjusted_pa", "residual"].iter().chain(super::workflow::DIAGNOSED.iter()) {
+        columns.push(fcol(k, num.remove(k).unwrap_or_default()));
+    }
+    let mut t = table(columns)?;
+    dir.write_table("residuals", &mut t)?;
+
+    // fits.csv: the Weibull law of the adjusted strengths of each stage (probability plot).
+    let mut t = table(vec![
+        scol("material", results.iter().flat_map(|r| [r.spec.key.clone(), r.spec.key.clone()]).collect()),
+        scol("stage", results.iter().flat_map(|_| ["before".to_string(), "after".to_string()]).collect()),
+        scol("effects", results.iter().flat_map(|r| [names(&r.outcome.before().model.effects), names(&r.outcome.after().model.effects)]).collect()),
+        fcol("weibull_modulus", results.iter().flat_map(|r| [r.outcome.before().model.shape(), r.outcome.after().model.shape()]).collect()),
+        fcol("scale_pa", results.iter().flat_map(|r| [reference_ln_scale(&r.outcome.before().model).exp(), reference_ln_scale(&r.outcome.after().model).exp()]).collect()),
+    ])?;
+    dir.write_table("fits", &mut t)?;
+
+    // lifetime.csv
+    let lt: Vec<(&str, &str, &LifetimeBand)> = results.iter().flat_map(|r| r.lifetime.iter().flat_map(move |(st, v)| v.iter().map(move |b| (r.spec.key.as_str(), st.as_str(), b)))).collect();
+    let mut t = table(vec![
+        scol("material", lt.iter().map(|x| x.0.to_string()).collect()),
+        scol("stage", lt.iter().map(|x| x.1.to_string()).collect()),
+        fcol("years", lt.iter().map(|x| x.2.years).collect()),
+        fcol("p_break", lt.iter().map(|x| x.2.estimate).collect()),
+        fcol("q05", lt.iter().map(|x| x.2.q05).collect()),
+        fcol("q95", lt.iter().map(|x| x.2.q95).collect()),
+    ])?;
+    dir.write_table("lifetime", &mut t)?;
+
+    // power.csv
+    let pw: Vec<(&str, &PowerRow)> = results.iter().flat_map(|r| r.power.iter().map(move |p| (r.spec.key.as_str(), p))).collect();
+    let rate = |k: usize, n: usize| if n == 0 { f64::NAN } else { k as f64 / n as f64 };
+    let mut t = table(vec![
+        scol("material", pw.iter().map(|x| x.0.to_string()).collect()),
+        scol("scenario", pw.iter().map(|x| x.1.scenario.clone()).collect()),
+        scol("effects", pw.iter().map(|x| if x.1.scenario == "none" { "none".to_string() } else { names(&results.iter().find(|r| r.spec.key == x.0).map(|r| r.outcome.named.clone()).unwrap_or_default()) }).collect()),
+        ucol("particles", pw.iter().map(|x| x.1.particles as u64).collect()),
+        ucol("replicates", pw.iter().map(|x| x.1.replicates as u64).collect()),
+        fcol("rate_first", pw.iter().map(|x| rate(x.1.first, x.1.replicates)).collect()),
+        fcol("rate_all", pw.iter().map(|x| rate(x.1.all, x.1.replicates)).collect()),
+        fcol("rate_all_lo90", pw.iter().map(|x| wilson90(x.1.all, x.1.replicates).0).collect()),
+        fcol("rate_all_hi90", pw.iter().map(|x| wilson90(x.1.all, x.1.replicates).1).collect()),
+    ])?;
+    dir.write_table("power", &mut t)?;
+    Ok(())
+}
+
+/// One row of the summary's evidence table: the numbers of the guard and the verdict they gave.
+fn evidence_row(e: &super::workflow::Evidence) -> String {
+    if let Some(reason) = &e.skipped {
+        return format!("| {} | {} | | | | | | | skipped: {} |\n", e.round, e.candidate.name(), reason);
+    }
+    let par = e.parameter.as_ref().map(|(k, v, se)| if se.is_finite() { format!("{k} = {v:.3} ± {se:.3}") } else { format!("{k} = {v:.3}") }).unwrap_or_default();
+    let verdict = if e.named { "**named**" } else if e.passed { "passed, weaker" } else { "not supported" };
+    format!("| {} | {} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {} | {} |\n", e.round, e.candidate.name(), e.lr, e.lr_critical, e.p_family, e.delta_bic, e.delta_cv, par, verdict)
+}
+
+pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> String {
+    let mut md = String::from("# Discrepancy of the Weibull–Hertz strength model\n\n");
+    md.push_str(&format!(
+        "Each crush dataset is reduced as in the deliverable (σ̄ at break, Hertz contact with R = d/2, {}) and fitted with one Weibull law. The workflow then looks for structure the model misses, names the missing effect only when it passes the guard (family-wise bootstrap p < {}, ΔBIC < 0, better {}-fold cross-validated log score), adds it and diagnoses again.\n\nGap measure: {}.\n",
+        s.contact.averaging.describe(),
+        s.discrepancy.alpha,
+        s.discrepancy.cv_folds,
+        GAP_MEASURE
+    ));
+    for r in results {
+        let (b, a) = (r.outcome.before(), r.outcome.after());
+        md.push_str(&format!("\n## {} ({} particles, `{}`)\n\n", r.spec.label, r.sample.strength.len(), r.data.path.display()));
+        md.push_str(&format!("**Effects named, in order: {}.**\n\n", names(&r.outcome.named)));
+        md.push_str("| model | Weibull m | AD (p) | KS (p) | gap G |\n|---|---|---|---|---|\n");
+        for (i, st) in r.outcome.stages.iter().enumerate() {
+            md.push_str(&format!(
+                "| {}{} | {:.1} | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.1} |\n",
+                if i == 0 { "base" } else { "+ " },
+                if i == 0 { String::new() } else { names(&st.model.effects) },
+                st.model.shape(),
+                st.ad,
+                st.p_ad,
+                st.ks,
+                st.p_ks,
+                st.gap
+            ));
+        }
+        md.push_str(&format!("\nWith nothing missing G ≈ {} (one per covariate diagnosed).\n\n", b.findings.len()));
+        md.push_str("| round | candidate | Λ | Λ critical | p (family) | ΔBIC | ΔCV log score | parameter | verdict |\n|---|---|---|---|---|---|---|---|---|\n");
+        for e in &r.outcome.evidence {
+            md.push_str(&evidence_row(e));
+        }
+        if let Some(f) = b.findings.first() {
+            md.push_str(&format!(
+                "\nLargest residual trend before: `{}` (Spearman ρ = {:.2}, permutation p = {:.3}); the residuals depart most for {} in [{:.4}, {:.4}] (mean residual {:+.2}).\n",
+                f.covariate, f.rho, f.p, f.covariate, f.worst_range.0, f.worst_range.1, f.worst_range.2
+            ));
+        }
+        if let Some(f) = a.findings.first() {
+            md.push_str(&format!("After: largest trend `{}` (ρ = {:.2}, p = {:.3}).\n", f.covariate, f.rho, f.p));
+        }
+        md.push_str(&format!(
+            "\n**Lifetime at {} m/s, η = {}, {} impacts a year** (population of the measured particles; 90 % band of the strength model's joint draws — pivotal bootstrap of its parameters and Bayesian bootstrap of the population):\n\n| horizon | base model | final model |\n|---|---|---|\n",
+            s.impact.reference_velocity_m_s, s.impact.energy_fraction, s.impact.impacts_per_year
+        ));
+        let (lb, la) = (&r.lifetime[0].1, &r.lifetime[1].1);
+        for (x, y) in lb.iter().zip(la) {
+            md.push_str(&format!("| {} yr | {:.3e} [{:.2e}, {:.2e}] | {:.3e} [{:.2e}, {:.2e}] |\n", x.years, x.estimate, x.q05, x.q95, y.estimate, y.q05, y.q95));
+        }
+        if !r.outcome.named.is_empty() {
+            md.push_str(&format!(
+                "\nAt {} m/s the impact stress lies far below the crush strengths, so the prediction is an extrapolation into the lower tail of the strength law, which the Weibull modulus governs: once the named effects explain part of the scatter the modulus is {:.1} instead of {:.1}, and the tail — hence the lifetime — changes accordingly.\n",
+                s.impact.reference_velocity_m_s,
+                a.model.shape(),
+                b.model.shape()
+            ));
+        }
+        if !r.power.is_empty() {
+            md.push_str("\n**Detection power** (datasets drawn from the fitted model; rate of naming every effect found here, and the false-positive rate with no effect):\n\n| particles | power | false positives |\n|---|---|---|\n");
+            for n in &s.power.particles {
+                let pe = r.power.iter().find(|p| p.scenario == "effects" && p.particles == *n);
+                let pn = r.power.iter().find(|p| p.scenario == "none" && p.particles == *n);
+                let f = |p: Option<&PowerRow>| p.map(|p| format!("{}/{}", p.all, p.replicates)).unwrap_or_else(|| "–".into());
+                md.push_str(&format!("| {n} | {} | {} |\n", f(pe), f(pn)));
+            }
+        }
+    }
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::discrepancy::workflow::Evidence;
+
+    /// The Wilson bounds are where the score test is just significant at 90 %:
+    /// (p̂ − p₀)² = z² p₀(1 − p₀)/n, an independent characterisation of the closed form.
+    #[test]
+    fn wilson_bounds_invert_the_score_test() {
+        let z = 1.644_853_626_951_472_2_f64;
+        for (k, n) in [(0, 10), (3, 10), (10, 10), (1, 200), (57, 100)] {
+            let (lo, hi) = wilson90(k, n);
+            assert!(lo <= k as f64 / n as f64 && k as f64 / n as f64 <= hi, "{k}/{n}: [{lo}, {hi}]");
+            for p0 in [lo, hi] {
+                if p0 > 0.0 && p0 < 1.0 {
+                    let p = k as f64 / n as f64;
+                    assert!(((p - p0).powi(2) - z * z * p0 * (1.0 - p0) / n as f64).abs() < 1e-12, "{k}/{n}: bound {p0}");
+                }
+            }
+        }
+        // k = 0: lower bound 0, upper z²/(n + z²); no data: [0, 1].
+        let (lo, hi) = wilson90(0, 10);
+        assert_eq!(lo, 0.0);
+        assert!((hi - z * z / (10.0 + z * z)).abs() < 1e-15, "{hi}");
+        assert_eq!(wilson90(0, 0), (0.0, 1.0));
+    }
+
+    fn evidence(named: bool, passed: bool, skipped: Option<&str>, se: f64) -> Evidence {
+        Evidence {
+            round: 2,
+            candidate: Effect::Roundness,
+            skipped: skipped.map(String::from),
+            loglik: -10.0,
+            lr: 12.3456,
+            p_bootstrap: 0.001,
+            p_family: 0.0042,
+            lr_critical: 6.5,
+            delta_bic: -8.1304,
+            delta_cv: 0.3751,
+            parameter: Some(("β".into(), 0.5, se)),
+            meaning: String::new(),
+            shape: 5.0,
+            passed,
+            named,
+        }
+    }
+
+    #[test]
+    fn evidence_rows_carry_the_guard_numbers_and_their_verdict() {
+        let name = Effect::Roundness.name();
+        assert_eq!(evidence_row(&evidence(true, true, None, 0.125)), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 ± 0.125 | **named** |\n"));
+        assert_eq!(evidence_row(&evidence(false, true, None, f64::NAN)), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 | passed, weaker |\n"));
+        assert_eq!(evidence_row(&evidence(false, false, None, 0.125)), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 ± 0.125 | not supported |\n"));
+        assert_eq!(evidence_row(&evidence(false, false, Some("no roundness column"), 0.125)), format!("| 2 | {name} | | | | | | | skipped: no roundness column |\n"));
+    }
+}

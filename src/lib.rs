@@ -81,6 +81,7 @@
 //! | [`design`] | Sobol' sequences (Joe–Kuo, 64 dimensions), Latin hypercubes |
 //! | [`calibrate`] | noise models; multi-start Levenberg–Marquardt (or argmin Nelder–Mead / L-BFGS) with covariance and identifiability; ensemble and adaptive-Metropolis MCMC with R̂/ESS; GP emulator; evaluation cache; the `calibrate` study (crush FE and tube-bank DEM); synthetic curve and rig generators |
 //! | [`discrepancy`] | the discrepancy workflow: diagnosis (quantile residuals, bootstrap AD/KS, residual trends), the name → add → diagnose loop over the strength model's effects with a max-T bootstrap guard (also behind `effects = "diagnosed"` and its cross-validated scores), lifetime before/after, detection power; `partlife discrepancy`; Kennedy–O'Hagan GP discrepancy with BIC comparison of model terms, on crush curves too |
+//! | [`experiments`] | decision-driven experiment design: preposterior analysis of candidate experiments by importance reweighting of the state of knowledge (probability of correct selection, EVSI, expected posterior bands and model weights) |
 //! | [`uq`] | the main study (`kind = "uq"`): strength models as a model-form choice with stacking weights, Monte Carlo propagation through each material's `LifetimeModel`, damage models and averaging domains side by side, Sobol' indices with bootstrap intervals |
 //! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation; the plausibility range of every numeric input column |
 //! | [`synth`] | the documented generator of the synthetic crush datasets |
@@ -112,6 +113,7 @@ pub mod dist;
 pub mod fem;
 pub mod fracture;
 pub mod error;
+pub mod experiments;
 pub mod io;
 pub mod lifetime;
 pub mod lifetime_study;

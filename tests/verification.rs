@@ -6,6 +6,7 @@ mod verification {
     mod crush_fe;
     mod discrepancy;
     mod dem;
+    mod experiments;
     mod gp;
     mod hertz;
     mod jh2;

@@ -1,0 +1,337 @@
+//! Preposterior analysis of one candidate experiment by importance reweighting of the current
+//! state of knowledge.
+//!
+//! # The state of knowledge
+//!
+//! K weighted prior samples ([`Knowledge`]): sample k has weight w_k (Σ w = 1), the loss
+//! L_ka of every action a of the decision, the values q_kj of the quantities whose posterior
+//! is of interest (log10 P_break of each material, say) and labels c_kl (which damage model
+//! and which strength model the sample came from).
+//!
+//! # One outer draw
+//!
+//! 1. A truth t is drawn from the prior (index t with probability w_t).
+//! 2. The experiment's data y are simulated under sample t ([`Experiment::simulate`]).
+//! 3. The posterior is the prior reweighted by the likelihood, w'_k ∝ w_k p(y | k) for k ≠ t,
+//!    w'_t = 0: the truth is left out of the reweighted set so that it is not scored as its
+//!    own best fit (with it, a sharp experiment would look better than it is).
+//! 4. Its effective sample size ESS = 1 / Σ w'² is checked against `min_ess`; below it the
+//!    experiment's own [`Experiment::fallback`] posterior (a refit on the data, say) is used,
+//!    and when it has none the draw is counted as collapsed and kept (its numbers are then
+//!    less reliable; the count is reported).
+//! 5. The Bayes action a* = argmin_a Σ_k w'_k L_ka is taken; it is a correct selection when it
+//!    is also the best action under the truth (argmin_a L_ta).
+//!
+//! # Metrics (means over J outer draws, each with its Monte Carlo standard error sd/√J)
+//!
+//! * probability of correct selection, PCS = P(a* is the truth's best action), against the
+//!   prior's PCS_0 = Σ_k w_k [a₀ best for k] for the prior Bayes action a₀;
+//! * expected value of sample information, EVSI = min_a Σ_k w_k L_ka − E_y[min_a Σ_k w'_k L_ka]
+//!   (prior Bayes risk minus preposterior Bayes risk, ≥ 0);
+//! * per quantity: the expected posterior mean, variance and width of the central 90 % band
+//!   (weighted quantiles, [`crate::stats::weighted_quantiles`]);
+//! * per label: the expected posterior weight of the truth's label.
+//!
+//! Outer draw j uses its own random stream (ChaCha8, stream j + 1 of `seed`) and the draws are
+//! evaluated in parallel and collected in order, so the result does not depend on the number of
+//! threads.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+
+/// Weighted prior samples with their losses, quantities and labels (row-major per sample).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Knowledge {
+    /// Weights, summing to 1.
+    pub weights: Vec<f64>,
+    /// Number of actions A.
+    pub actions: usize,
+    /// Loss of each action, K × A.
+    pub loss: Vec<f64>,
+    /// Number of quantities Q.
+    pub quantities: usize,
+    /// Quantity values, K × Q.
+    pub values: Vec<f64>,
+    /// Number of label kinds.
+    pub label_kinds: usize,
+    /// Labels, K × label kinds.
+    pub labels: Vec<u32>,
+}
+
+impl Knowledge {
+    /// Checks the shapes and normalises the weights.
+    pub fn new(weights: Vec<f64>, actions: usize, loss: Vec<f64>, quantities: usize, values: Vec<f64>, label_kinds: usize, labels: Vec<u32>) -> Result<Knowledge> {
+        let k = weights.len();
+        let bad = |rule: String| Err(Error::numerical("state of knowledge", rule));
+        if k < 2 || actions < 1 {
+            return bad(format!("needs at least 2 samples and 1 action, got {k} and {actions}"));
+        }
+        if loss.len() != k * actions || values.len() != k * quantities || labels.len() != k * label_kinds {
+            return bad(format!("shapes: {k} samples, {} losses for {actions} actions, {} values for {quantities} quantities, {} labels for {label_kinds} kinds", loss.len(), values.len(), labels.len()));
+        }
+        if weights.iter().any(|w| !(w.is_finite() && *w >= 0.0)) || loss.iter().any(|v| !v.is_finite()) {
+            return bad("weights must be finite and ≥ 0, losses finite".into());
+        }
+        let total: f64 = weights.iter().sum();
+        if total <= 0.0 {
+            return bad("the weights sum to 0".into());
+        }
+        Ok(Knowledge { weights: weights.iter().map(|w| w / total).collect(), actions, loss, quantities, values, label_kinds, labels })
+    }
+
+    /// Number of samples K.
+    pub fn len(&self) -> usize {
+        self.weights.len()
+    }
+
+    /// Whether there is no sample.
+    pub fn is_empty(&self) -> bool {
+        self.weights.is_empty()
+    }
+
+    /// The loss of action a under sample k.
+    pub fn loss_of(&self, k: usize, a: usize) -> f64 {
+        self.loss[k * self.actions + a]
+    }
+
+    /// The best action under sample k (the first of equals).
+    pub fn best_action(&self, k: usize) -> usize {
+        argmin(&self.loss[k * self.actions..(k + 1) * self.actions])
+    }
+
+    /// Expected loss of every action under weights `w`.
+    pub fn expected_loss(&self, w: &[f64]) -> Vec<f64> {
+        let mut e = vec![0.0; self.actions];
+        for (k, &wk) in w.iter().enumerate() {
+            if wk > 0.0 {
+                for (a, ea) in e.iter_mut().enumerate() {
+                    *ea += wk * self.loss_of(k, a);
+                }
+            }
+        }
+        e
+    }
+
+    /// The summary of the distribution with weights `w` over these samples.
+    pub fn summarise(&self, w: &[f64]) -> Posterior {
+        let expected_loss = self.expected_loss(w);
+        let mut mean = vec![0.0; self.quantities];
+        let mut var = vec![0.0; self.quantities];
+        let mut width90 = vec![0.0; self.quantities];
+        for j in 0..self.quantities {
+            let v = |k: usize| self.values[k * self.quantities + j];
+            let m: f64 = w.iter().enumerate().map(|(k, wk)| wk * v(k)).sum();
+            mean[j] = m;
+            var[j] = w.iter().enumerate().map(|(k, wk)| wk * (v(k) - m).powi(2)).sum();
+            let pairs: Vec<(f64, f64)> = w.iter().enumerate().filter(|(_, wk)| **wk > 0.0).map(|(k, wk)| (v(k), *wk)).collect();
+            let q = crate::stats::weighted_quantiles(pairs, &[0.05, 0.95]);
+            width90[j] = q[1] - q[0];
+        }
+        let label_weight = |kind: usize, label: u32| w.iter().enumerate().filter(|(k, _)| self.labels[k * self.label_kinds + kind] == label).map(|(_, wk)| wk).sum();
+        Posterior { expected_loss, mean, var, width90, label_weights: (0..self.label_kinds).map(|kind| (0..=self.labels.iter().copied().max().unwrap_or(0)).map(|l| label_weight(kind, l)).collect()).collect() }
+    }
+}
+
+/// The index of the smallest value (the first of equals).
+fn argmin(v: &[f64]) -> usize {
+    let mut best = 0;
+    for (i, x) in v.iter().enumerate() {
+        if *x < v[best] {
+            best = i;
+        }
+    }
+    best
+}
+
+/// A distribution over the state of knowledge, summarised.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Posterior {
+    /// Expected loss of each action.
+    pub expected_loss: Vec<f64>,
+    /// Mean of each quantity.
+    pub mean: Vec<f64>,
+    /// Variance of each quantity.
+    pub var: Vec<f64>,
+    /// Width of the central 90 % band of each quantity.
+    pub width90: Vec<f64>,
+    /// Weight of each label, per label kind.
+    pub label_weights: Vec<Vec<f64>>,
+}
+
+impl Posterior {
+    /// The Bayes action.
+    pub fn action(&self) -> usize {
+        argmin(&self.expected_loss)
+    }
+}
+
+/// A candidate experiment: data simulated under a prior sample, and their likelihood under
+/// every sample.
+pub trait Experiment: Sync {
+    /// One simulated dataset.
+    type Data: Send;
+    /// Data simulated under prior sample `truth`.
+    fn simulate(&self, truth: usize, rng: &mut ChaCha8Rng) -> Self::Data;
+    /// ln p(data | sample k), up to a constant common to every k (−∞ allowed).
+    fn loglik(&self, data: &Self::Data, k: usize) -> f64;
+    /// The posterior by another route when reweighting collapses (a refit on the data); None
+    /// when the experiment has none.
+    fn fallback(&self, _data: &Self::Data, _truth: usize) -> Option<Result<Posterior>> {
+        None
+    }
+}
+
+/// Settings of the preposterior analysis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// Outer draws J (simulated datasets).
+    pub outer: usize,
+    /// Smallest effective sample size of a reweighted posterior before the fallback.
+    pub min_ess: f64,
+    /// Seed of the outer draws.
+    pub seed: u64,
+}
+
+/// One outer draw's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Draw {
+    /// The truth's index.
+    pub truth: usize,
+    /// The posterior.
+    pub posterior: Posterior,
+    /// Effective sample size of the reweighted prior.
+    pub ess: f64,
+    /// How the posterior was obtained.
+    pub route: Route,
+}
+
+/// How an outer draw's posterior was obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Route {
+    /// Reweighting with an adequate ESS.
+    Reweighted,
+    /// The experiment's fallback (ESS below the threshold).
+    Fallback,
+    /// ESS below the threshold and no fallback: reweighted anyway.
+    Collapsed,
+}
+
+/// A mean with its Monte Carlo standard error.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// Mean.
+    pub mean: f64,
+    /// Standard error.
+    pub se: f64,
+}
+
+impl Estimate {
+    /// Mean and sd/√n of `v`.
+    pub fn of(v: &[f64]) -> Estimate {
+        let n = v.len() as f64;
+        let mean = v.iter().sum::<f64>() / n;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+        Estimate { mean, se: (var / n).sqrt() }
+    }
+}
+
+/// The metrics of one candidate at one size.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Metrics {
+    /// The prior's summary.
+    pub prior: Posterior,
+    /// Prior probability that the prior Bayes action is the best.
+    pub prior_pcs: f64,
+    /// Probability of correct selection after the experiment.
+    pub pcs: Estimate,
+    /// Expected value of sample information (in the loss's unit).
+    pub evsi: Estimate,
+    /// Expected posterior mean, per quantity.
+    pub mean: Vec<Estimate>,
+    /// Expected posterior variance, per quantity.
+    pub var: Vec<Estimate>,
+    /// Expected width of the posterior 90 % band, per quantity.
+    pub width90: Vec<Estimate>,
+    /// Expected posterior weight of the truth's label, per label kind.
+    pub true_label_weight: Vec<Estimate>,
+    /// Prior weight of the truth's label (its expectation over truths), per label kind.
+    pub prior_true_label_weight: Vec<f64>,
+    /// Median ESS of the reweighted posteriors.
+    pub median_ess: f64,
+    /// Outer draws that used the fallback.
+    pub fallbacks: usize,
+    /// Outer draws whose reweighting collapsed without a fallback.
+    pub collapsed: usize,
+    /// Every outer draw.
+    pub draws: Vec<Draw>,
+}
+
+/// The preposterior analysis of `experiment` on `knowledge`.
+pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settings: Settings) -> Result<Metrics> {
+    if settings.outer < 2 {
+        return Err(Error::numerical("preposterior analysis", format!("needs at least 2 outer draws, got {}", settings.outer)));
+    }
+    let kn = knowledge;
+    let mut cum = Vec::with_capacity(kn.len());
+    let mut c = 0.0;
+    for w in &kn.weights {
+        c += w;
+        cum.push(c);
+    }
+    let draws: Vec<Draw> = (0..settings.outer)
+        .into_par_iter()
+        .map(|j| {
+            let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+            rng.set_stream(j as u64 + 1);
+            let u: f64 = rng.random::<f64>() * c;
+            let truth = cum.partition_point(|&x| x <= u).min(kn.len() - 1);
+            let data = experiment.simulate(truth, &mut rng);
+            let ll: Vec<f64> = (0..kn.len()).map(|k| if k == truth || kn.weights[k] == 0.0 { f64::NEG_INFINITY } else { experiment.loglik(&data, k) }).collect();
+            let top = ll.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let mut w: Vec<f64> = if top.is_finite() { ll.iter().zip(&kn.weights).map(|(l, wk)| wk * (l - top).exp()).collect() } else { vec![0.0; kn.len()] };
+            let total: f64 = w.iter().sum();
+            let ess = if total > 0.0 {
+                w.iter_mut().for_each(|x| *x /= total);
+                1.0 / w.iter().map(|x| x * x).sum::<f64>()
+            } else {
+                0.0
+            };
+            if ess >= settings.min_ess {
+                return Ok(Draw { truth, posterior: kn.summarise(&w), ess, route: Route::Reweighted });
+            }
+            match experiment.fallback(&data, truth) {
+                Some(p) => Ok(Draw { truth, posterior: p?, ess, route: Route::Fallback }),
+                None if total > 0.0 => Ok(Draw { truth, posterior: kn.summarise(&w), ess, route: Route::Collapsed }),
+                None => Err(Error::numerical("preposterior analysis", format!("outer draw {j}: the simulated data have zero likelihood under every other prior sample"))),
+            }
+        })
+        .collect::<Result<_>>()?;
+    let prior = kn.summarise(&kn.weights);
+    let a0 = prior.action();
+    let prior_pcs = (0..kn.len()).filter(|&k| kn.best_action(k) == a0).map(|k| kn.weights[k]).sum();
+    let prior_risk = prior.expected_loss[a0];
+    let col = |f: &dyn Fn(&Draw) -> f64| Estimate::of(&draws.iter().map(f).collect::<Vec<_>>());
+    let pcs = col(&|d| if d.posterior.action() == kn.best_action(d.truth) { 1.0 } else { 0.0 });
+    let evsi = col(&|d| prior_risk - d.posterior.expected_loss[d.posterior.action()]);
+    let label = |kind: usize, k: usize| kn.labels[k * kn.label_kinds + kind] as usize;
+    let mut ess: Vec<f64> = draws.iter().map(|d| d.ess).collect();
+    ess.sort_by(f64::total_cmp);
+    Ok(Metrics {
+        prior_pcs,
+        pcs,
+        evsi,
+        mean: (0..kn.quantities).map(|j| col(&|d| d.posterior.mean[j])).collect(),
+        var: (0..kn.quantities).map(|j| col(&|d| d.posterior.var[j])).collect(),
+        width90: (0..kn.quantities).map(|j| col(&|d| d.posterior.width90[j])).collect(),
+        true_label_weight: (0..kn.label_kinds).map(|kind| col(&|d| d.posterior.label_weights[kind].get(label(kind, d.truth)).copied().unwrap_or(0.0))).collect(),
+        prior_true_label_weight: (0..kn.label_kinds).map(|kind| (0..kn.len()).map(|k| kn.weights[k] * prior.label_weights[kind][label(kind, k)]).sum()).collect(),
+        median_ess: crate::stats::sorted_quantile(&ess, 0.5),
+        fallbacks: draws.iter().filter(|d| d.route == Route::Fallback).count(),
+        collapsed: draws.iter().filter(|d| d.route == Route::Collapsed).count(),
+        prior,
+        draws,
+    })
+}

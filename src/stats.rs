@@ -98,10 +98,10 @@ pub fn sorted_quantile(sorted: &[f64], p: f64) -> f64 {
 }
 
 /// Where `x` falls on an ascending grid `xs` (at least 2 points): the segment
-/// [xs[j − 1], xs[j]] (1 ≤ j < n) and the fraction t along it. The one linear interpolation of
+/// `[xs[j − 1], xs[j]]` (1 ≤ j < n) and the fraction t along it. The one linear interpolation of
 /// the crate, with [`lerp`]: every table and curve lookup (FE and measured force–displacement
 /// curves, the curve-discrepancy tables, the Tavares–King critical ratio) goes through it and
-/// decides for itself what lies outside the grid. Inside, xs[j − 1] < x ≤ xs[j] (x on a knot
+/// decides for itself what lies outside the grid. Inside, `xs[j − 1] < x ≤ xs[j]` (x on a knot
 /// ends the segment below it; the first knot starts the first segment, t = 0). Below the grid
 /// j = 1 and t < 0, above it j = n − 1 and t > 1 (unclamped, so callers can clamp, extrapolate
 /// or refuse). A zero-length segment gives t = 0.
@@ -112,7 +112,7 @@ pub fn locate(xs: &[f64], x: f64) -> (usize, f64) {
     (j, t)
 }
 
-/// The value at `(j, t)` from [`locate`]: ys[j − 1] + t (ys[j] − ys[j − 1]).
+/// The value at `(j, t)` from [`locate`]: `ys[j − 1] + t (ys[j] − ys[j − 1])`.
 pub fn lerp(ys: &[f64], (j, t): (usize, f64)) -> f64 {
     ys[j - 1] + t * (ys[j] - ys[j - 1])
 }

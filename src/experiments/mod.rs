@@ -1,7 +1,7 @@
 //! Decision-driven design of further experiments: which crush or impact tests, how many, and
 //! how much more confident the Gen 4 vs BL 16/30 answer will be afterwards.
 //!
-//! The engine is a preposterior analysis ([`preposterior`]): the current state of knowledge is a
+//! The engine is a preposterior analysis ([`preposterior()`]): the current state of knowledge is a
 //! set of weighted joint samples of everything uncertain (each material's strength-model
 //! parameters, the strength and damage model, η, V), a candidate experiment is simulated under a
 //! truth drawn from that state, the state is updated on the simulated data by importance
@@ -10,10 +10,28 @@
 //! the better particle, the expected value of sample information for a declared loss, the
 //! expected posterior bands and the expected posterior weight of the true model.
 //!
+//! * [`mod@preposterior`]: the engine, generic over [`Experiment`].
+//! * [`state`]: the main study's state of knowledge ([`crate::uq::run::weighed`]: the strength
+//!   models with their stacking weights, each sampled jointly through
+//!   [`crate::uq::setup::Setup`]) with the decision "which particle for the plant".
+//! * [`impact`]: single- and repeated-impact breakage tests (multinomial counts of the broken
+//!   particles after each impact count).
+//! * [`measure`]: measurements of η or of the impact velocity with a lognormal error.
+//!
 //! Verified against the closed forms of the normal–normal model (preposterior variance, EVSI of a
-//! two-action decision) and on a decision that is already certain (value 0):
-//! `tests/verification/experiments.rs`.
+//! two-action decision), on a decision that is already certain (value 0), on an η measurement
+//! on the main study's state (conjugate posterior variance of ln η), and by the discrimination
+//! of Tavares–King damage by repeated impacts: `tests/verification/experiments.rs`.
+//!
+//! Not yet here (next steps of the issue): crush-test candidates with the strength-model refit as
+//! fallback, the `kind = "experiments"` study with costs, budget allocation, report and figures.
 
+pub mod impact;
+pub mod measure;
 pub mod preposterior;
+pub mod state;
 
+pub use impact::ImpactTest;
+pub use measure::{Measured, Measurement};
 pub use preposterior::{Draw, Estimate, Experiment, Knowledge, Metrics, Posterior, Route, Settings, preposterior};
+pub use state::{State, StateSample};

@@ -10,17 +10,20 @@
 //!
 //! # One outer draw
 //!
-//! 1. A truth t is drawn from the prior (index t with probability w_t).
+//! 1. A truth t is drawn from the prior (index t with probability w_t; optionally only among
+//!    the samples with a given label, to ask "if the truth were …").
 //! 2. The experiment's data y are simulated under sample t ([`Experiment::simulate`]).
 //! 3. The posterior is the prior reweighted by the likelihood, w'_k ∝ w_k p(y | k) for k ≠ t,
 //!    w'_t = 0: the truth is left out of the reweighted set so that it is not scored as its
 //!    own best fit (with it, a sharp experiment would look better than it is).
-//! 4. Its effective sample size ESS = 1 / Σ w'² is checked against `min_ess`; below it the
-//!    experiment's own [`Experiment::fallback`] posterior (a refit on the data, say) is used,
-//!    and when it has none the draw is counted as collapsed and kept (its numbers are then
-//!    less reliable; the count is reported).
+//! 4. Its effective sample size ESS = 1 / Σ w'² is checked against `min_ess`; below it a reserve
+//!    of further prior samples ([`Settings::active`]) is reweighted together with the prior
+//!    (the resampling fallback), then the experiment's own [`Experiment::fallback`] posterior
+//!    (a refit on the data, say) is tried; when neither reaches `min_ess` the draw is counted as
+//!    collapsed and kept (its numbers are then less reliable; the count is reported).
 //! 5. The Bayes action a* = argmin_a Σ_k w'_k L_ka is taken; it is a correct selection when it
-//!    is also the best action under the truth (argmin_a L_ta).
+//!    is also a best action under the truth (L_ta* = min_a L_ta; under a tie every tied action
+//!    is correct).
 //!
 //! # Metrics (means over J outer draws, each with its Monte Carlo standard error sd/√J)
 //!
@@ -97,9 +100,10 @@ impl Knowledge {
         self.loss[k * self.actions + a]
     }
 
-    /// The best action under sample k (the first of equals).
-    pub fn best_action(&self, k: usize) -> usize {
-        argmin(&self.loss[k * self.actions..(k + 1) * self.actions])
+    /// Whether action a is a best action under sample k (ties: every tied action is best).
+    pub fn is_best(&self, k: usize, a: usize) -> bool {
+        let row = &self.loss[k * self.actions..(k + 1) * self.actions];
+        row[a] <= row[argmin(row)]
     }
 
     /// Expected loss of every action under weights `w`.
@@ -193,6 +197,13 @@ pub struct Settings {
     pub min_ess: f64,
     /// Seed of the outer draws.
     pub seed: u64,
+    /// Draw the truths only among the samples with this (label kind, label): "if the truth
+    /// were Tavares–King damage, …". None: from the whole prior.
+    pub truth: Option<(usize, u32)>,
+    /// The first `active` samples are the prior of every outer draw; the rest are a reserve of
+    /// further prior samples, reweighted together with them only when the ESS falls below
+    /// `min_ess` (the resampling fallback). None: no reserve.
+    pub active: Option<usize>,
 }
 
 /// One outer draw's result.
@@ -277,9 +288,15 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
     let kn = knowledge;
     let mut cum = Vec::with_capacity(kn.len());
     let mut c = 0.0;
-    for w in &kn.weights {
-        c += w;
+    let active = settings.active.unwrap_or(kn.len()).clamp(2, kn.len());
+    for (k, w) in kn.weights.iter().enumerate() {
+        if k < active && settings.truth.is_none_or(|(kind, label)| kn.labels[k * kn.label_kinds + kind] == label) {
+            c += w;
+        }
         cum.push(c);
+    }
+    if c <= 0.0 {
+        return Err(Error::numerical("preposterior analysis", format!("no prior sample has the truth's label {:?}", settings.truth)));
     }
     let draws: Vec<Draw> = (0..settings.outer)
         .into_par_iter()
@@ -288,19 +305,30 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
             rng.set_stream(j as u64 + 1);
             let u: f64 = rng.random::<f64>() * c;
             let truth = cum.partition_point(|&x| x <= u).min(kn.len() - 1);
+            debug_assert!(kn.weights[truth] > 0.0);
             let data = experiment.simulate(truth, &mut rng);
-            let ll: Vec<f64> = (0..kn.len()).map(|k| if k == truth || kn.weights[k] == 0.0 { f64::NEG_INFINITY } else { experiment.loglik(&data, k) }).collect();
-            let top = ll.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let mut w: Vec<f64> = if top.is_finite() { ll.iter().zip(&kn.weights).map(|(l, wk)| wk * (l - top).exp()).collect() } else { vec![0.0; kn.len()] };
-            let total: f64 = w.iter().sum();
-            let ess = if total > 0.0 {
-                w.iter_mut().for_each(|x| *x /= total);
-                1.0 / w.iter().map(|x| x * x).sum::<f64>()
-            } else {
-                0.0
+            let reweigh = |n: usize| -> (Vec<f64>, f64, f64) {
+                let ll: Vec<f64> = (0..kn.len()).map(|k| if k >= n || k == truth || kn.weights[k] == 0.0 { f64::NEG_INFINITY } else { experiment.loglik(&data, k) }).collect();
+                let top = ll.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                let mut w: Vec<f64> = if top.is_finite() { ll.iter().zip(&kn.weights).map(|(l, wk)| wk * (l - top).exp()).collect() } else { vec![0.0; kn.len()] };
+                let total: f64 = w.iter().sum();
+                let ess = if total > 0.0 {
+                    w.iter_mut().for_each(|x| *x /= total);
+                    1.0 / w.iter().map(|x| x * x).sum::<f64>()
+                } else {
+                    0.0
+                };
+                (w, ess, total)
             };
+            let (w, ess, total) = reweigh(active);
             if ess >= settings.min_ess {
                 return Ok(Draw { truth, posterior: kn.summarise(&w), ess, route: Route::Reweighted });
+            }
+            if active < kn.len() {
+                let (w, ess, _) = reweigh(kn.len());
+                if ess >= settings.min_ess {
+                    return Ok(Draw { truth, posterior: kn.summarise(&w), ess, route: Route::Fallback });
+                }
             }
             match experiment.fallback(&data, truth) {
                 Some(p) => Ok(Draw { truth, posterior: p?, ess, route: Route::Fallback }),
@@ -309,12 +337,16 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
             }
         })
         .collect::<Result<_>>()?;
-    let prior = kn.summarise(&kn.weights);
+    let prior_w: Vec<f64> = {
+        let t: f64 = kn.weights[..active].iter().sum();
+        kn.weights.iter().enumerate().map(|(k, w)| if k < active { w / t } else { 0.0 }).collect()
+    };
+    let prior = kn.summarise(&prior_w);
     let a0 = prior.action();
-    let prior_pcs = (0..kn.len()).filter(|&k| kn.best_action(k) == a0).map(|k| kn.weights[k]).sum();
+    let prior_pcs = (0..active).filter(|&k| kn.is_best(k, a0)).map(|k| prior_w[k]).sum();
     let prior_risk = prior.expected_loss[a0];
     let col = |f: &dyn Fn(&Draw) -> f64| Estimate::of(&draws.iter().map(f).collect::<Vec<_>>());
-    let pcs = col(&|d| if d.posterior.action() == kn.best_action(d.truth) { 1.0 } else { 0.0 });
+    let pcs = col(&|d| if kn.is_best(d.truth, d.posterior.action()) { 1.0 } else { 0.0 });
     let evsi = col(&|d| prior_risk - d.posterior.expected_loss[d.posterior.action()]);
     let label = |kind: usize, k: usize| kn.labels[k * kn.label_kinds + kind] as usize;
     let mut ess: Vec<f64> = draws.iter().map(|d| d.ess).collect();
@@ -327,7 +359,7 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
         var: (0..kn.quantities).map(|j| col(&|d| d.posterior.var[j])).collect(),
         width90: (0..kn.quantities).map(|j| col(&|d| d.posterior.width90[j])).collect(),
         true_label_weight: (0..kn.label_kinds).map(|kind| col(&|d| d.posterior.label_weights[kind].get(label(kind, d.truth)).copied().unwrap_or(0.0))).collect(),
-        prior_true_label_weight: (0..kn.label_kinds).map(|kind| (0..kn.len()).map(|k| kn.weights[k] * prior.label_weights[kind][label(kind, k)]).sum()).collect(),
+        prior_true_label_weight: (0..kn.label_kinds).map(|kind| (0..active).map(|k| prior_w[k] * prior.label_weights[kind][label(kind, k)]).sum()).collect(),
         median_ess: crate::stats::sorted_quantile(&ess, 0.5),
         fallbacks: draws.iter().filter(|d| d.route == Route::Fallback).count(),
         collapsed: draws.iter().filter(|d| d.route == Route::Collapsed).count(),

@@ -78,8 +78,32 @@ fn naming(s: &UqStudy, i: usize) -> NamingSettings {
     NamingSettings { seed: s.seed.wrapping_add(7919 * i as u64), ..s.strength.naming.clone() }
 }
 
+/// One strength model fitted and weighed, not yet propagated.
+pub struct Weighed {
+    /// The prepared comparison.
+    pub setup: Setup,
+    /// Cross-validated log density of each crush test, per material (empty with one model).
+    pub lpd: [Vec<f64>; 2],
+    /// Stacking weight.
+    pub weight: f64,
+    /// Pseudo-BMA weight.
+    pub weight_pbma: f64,
+}
+
 /// Fits, weighs and propagates every strength model of the study.
 pub fn forms(s: &UqStudy, path: &std::path::Path, shared: &Shared, tick: &(dyn Fn() + Sync)) -> Result<Vec<Form>> {
+    weighed(s, path, shared)?
+        .into_iter()
+        .map(|w| {
+            let prop = propagate(&w.setup, &s.propagation, s.seed, tick)?;
+            Ok(Form { setup: w.setup, prop, lpd: w.lpd, weight: w.weight, weight_pbma: w.weight_pbma })
+        })
+        .collect()
+}
+
+/// Fits and weighs every strength model of the study: the main study's state of knowledge
+/// (also the prior of experiment design).
+pub fn weighed(s: &UqStudy, path: &std::path::Path, shared: &Shared) -> Result<Vec<Weighed>> {
     let specs = s.specs();
     let setups: Vec<Setup> = specs.iter().map(|spec| Setup::new(s, path, spec, &s.contact.averaging, shared)).collect::<Result<_>>()?;
     let order = s.order();
@@ -96,12 +120,7 @@ pub fn forms(s: &UqStudy, path: &std::path::Path, shared: &Shared, tick: &(dyn F
     };
     let pooled: Vec<Vec<f64>> = lpd.iter().map(|l| l[0].iter().chain(&l[1]).copied().collect()).collect();
     let (w, wp) = if setups.len() > 1 { (crate::strength::weights::stacking(&pooled)?, crate::strength::weights::pseudo_bma(&pooled)?) } else { (vec![1.0], vec![1.0]) };
-    let mut out = Vec::new();
-    for (((setup, lpd), weight), weight_pbma) in setups.into_iter().zip(lpd).zip(w).zip(wp) {
-        let prop = propagate(&setup, &s.propagation, s.seed, tick)?;
-        out.push(Form { setup, prop, lpd, weight, weight_pbma });
-    }
-    Ok(out)
+    Ok(setups.into_iter().zip(lpd).zip(w).zip(wp).map(|(((setup, lpd), weight), weight_pbma)| Weighed { setup, lpd, weight, weight_pbma }).collect())
 }
 
 /// Runs the study.

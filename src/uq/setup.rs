@@ -187,7 +187,7 @@ impl Setup {
     }
 
     /// Index of input `eta`, `velocity`, `per_year` or `gamma` (0–3).
-    fn shared(&self, k: usize) -> usize {
+    pub fn shared(&self, k: usize) -> usize {
         self.shared_at + k
     }
 

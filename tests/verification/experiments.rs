@@ -45,7 +45,7 @@ fn normal_normal_preposterior_variance_and_evsi_match_their_closed_forms() {
     let (mu0, tau, sigma, n) = (0.3, 1.0, 1.0, 4.0);
     let (theta, kn) = prior(mu0, tau, 4000);
     let exp = Means { theta, sigma, n };
-    let m = preposterior(&kn, &exp, Settings { outer: 8000, min_ess: 50.0, seed: 7 }).unwrap();
+    let m = preposterior(&kn, &exp, Settings { outer: 8000, min_ess: 50.0, seed: 7, truth: None, active: None }).unwrap();
     let tau_n2: f64 = 1.0 / (1.0 / (tau * tau) + n / (sigma * sigma));
     let s = (tau * tau - tau_n2).sqrt();
     let z = SNormal::new(0.0, 1.0).unwrap();
@@ -73,7 +73,7 @@ fn a_decision_that_is_already_certain_has_no_value_of_information() {
     // θ ~ N(5, 0.1²): adopting is best for every prior sample, whatever the data say.
     let (theta, kn) = prior(5.0, 0.1, 2000);
     let exp = Means { theta, sigma: 1.0, n: 10.0 };
-    let m = preposterior(&kn, &exp, Settings { outer: 500, min_ess: 50.0, seed: 11 }).unwrap();
+    let m = preposterior(&kn, &exp, Settings { outer: 500, min_ess: 50.0, seed: 11, truth: None, active: None }).unwrap();
     assert!((m.prior_pcs - 1.0).abs() < 1e-12, "{}", m.prior_pcs);
     assert_eq!(m.pcs.mean, 1.0);
     assert!(m.evsi.mean.abs() <= 4.0 * m.evsi.se + 1e-12, "{:?}", m.evsi);
@@ -83,7 +83,7 @@ fn a_decision_that_is_already_certain_has_no_value_of_information() {
 fn the_result_does_not_depend_on_the_thread_count() {
     let (theta, kn) = prior(0.1, 1.0, 500);
     let exp = Means { theta, sigma: 2.0, n: 3.0 };
-    let settings = Settings { outer: 200, min_ess: 10.0, seed: 3 };
+    let settings = Settings { outer: 200, min_ess: 10.0, seed: 3, truth: None, active: None };
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| preposterior(&kn, &exp, settings).unwrap());
     let many = preposterior(&kn, &exp, settings).unwrap();
     assert_eq!(one, many);
@@ -105,7 +105,66 @@ impl Experiment for Sharp {
 #[test]
 fn collapsed_reweighting_is_counted() {
     let (theta, kn) = prior(0.0, 1.0, 300);
-    let m = preposterior(&kn, &Sharp(theta), Settings { outer: 50, min_ess: 20.0, seed: 5 }).unwrap();
+    let m = preposterior(&kn, &Sharp(theta), Settings { outer: 50, min_ess: 20.0, seed: 5, truth: None, active: None }).unwrap();
     assert_eq!(m.collapsed, 50, "median ESS {}", m.median_ess);
     assert!(m.median_ess < 20.0);
+}
+
+/// The main study's state of knowledge with fewer strength draws (test speed).
+fn main_study_state(k: usize) -> partlife::experiments::State {
+    use partlife::schema::StudyFile;
+    use partlife::uq::{run::weighed, setup::Shared, study::UqStudy};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/gen4_vs_bl.toml");
+    let loaded = StudyFile::read(&path).unwrap();
+    let mut s: UqStudy = loaded.parse().unwrap();
+    s.strength.draws = 400;
+    let shared = Shared::new(&s, &path).unwrap();
+    let forms = weighed(&s, &path, &shared).unwrap();
+    let n = forms[0].setup.models.len();
+    partlife::experiments::State::new(forms, vec![1.0 / n as f64; n], 0, 1.0, k, 17).unwrap()
+}
+
+/// With data generated under Tavares–King damage, repeated impacts (counts 1, 10, 100, 1000 at
+/// 15 m/s) must give Tavares–King a higher expected posterior weight than single impacts on as
+/// many particles, and so rank first for model discrimination.
+#[test]
+fn repeated_impacts_identify_tavares_king_damage_and_rank_first_for_discrimination() {
+    use partlife::experiments::ImpactTest;
+    use partlife::lifetime::damage::DamageModel;
+    let state = main_study_state(8000);
+    let tk = state.damage.iter().position(|d| *d == DamageModel::TavaresKing).unwrap() as u32;
+    let settings = Settings { outer: 300, min_ess: 50.0, seed: 1, truth: Some((0, tk)), active: Some(4000) };
+    let candidates = [("single impact", vec![1]), ("repeated impacts", vec![1, 10, 100, 1000])];
+    let weight: Vec<(f64, f64, f64)> = candidates
+        .iter()
+        .map(|(_, counts)| {
+            let m = preposterior(&state.knowledge, &ImpactTest::new(&state, 0, 100, 15.0, counts.clone()).unwrap(), settings).unwrap();
+            (m.true_label_weight[0].mean, m.true_label_weight[0].se, m.prior_true_label_weight[0])
+        })
+        .collect();
+    eprintln!("expected posterior weight of Tavares–King: {weight:?}");
+    let best = (0..candidates.len()).max_by(|&a, &b| weight[a].0.total_cmp(&weight[b].0)).unwrap();
+    assert_eq!(candidates[best].0, "repeated impacts", "{weight:?}");
+    let (single, repeated) = (weight[0], weight[1]);
+    assert!(repeated.0 - single.0 > 4.0 * (single.1.hypot(repeated.1)), "{weight:?}");
+    // Single impacts barely move the prior weight (1/3); repeated impacts at least double it.
+    assert!(repeated.0 > 2.0 * repeated.2, "{weight:?}");
+}
+
+/// Measuring η n times with lognormal error s on the main study's state: ln η's prior is
+/// N(ln 0.1, 0.5²) (truncated far out, at ±4.6 sd), so its expected posterior variance is the
+/// normal–normal (1/0.5² + n/s²)⁻¹.
+#[test]
+fn an_energy_fraction_measurement_narrows_ln_eta_as_the_conjugate_model_says() {
+    use partlife::experiments::{Measured, Measurement};
+    let state = main_study_state(8000);
+    let (n, sd) = (4, 0.5);
+    let m = preposterior(&state.knowledge, &Measurement::new(&state, Measured::EnergyFraction, n, sd).unwrap(), Settings { outer: 400, min_ess: 50.0, seed: 2, truth: None, active: Some(4000) }).unwrap();
+    let q = state.ln_eta_quantity();
+    let exact = 1.0 / (1.0 / 0.25 + n as f64 / (sd * sd));
+    eprintln!("E[var ln η] {:?} (conjugate {exact}), prior var {}, median ESS {}", m.var[q], m.prior.var[q], m.median_ess);
+    assert!((m.prior.var[q] - 0.25).abs() < 0.02, "prior var {}", m.prior.var[q]);
+    // 4 standard errors plus the O(1/ESS) bias of reweighting (ESS ≈ 1800 here): 2 %.
+    assert!((m.var[q].mean - exact).abs() < 4.0 * m.var[q].se + 0.02 * exact, "{:?} vs {exact}", m.var[q]);
+    assert!(m.evsi.mean >= -4.0 * m.evsi.se, "{:?}", m.evsi);
 }

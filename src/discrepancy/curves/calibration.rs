@@ -111,7 +111,7 @@ fn gaussian_posterior(path: &Path, names: &[String]) -> Result<(Vec<f64>, nalgeb
     Ok((mean, inv))
 }
 
-/// FE runs of the curvature table at θ: Φ[r][k] = F_asperity(x_k)/F_sphere(x_k).
+/// FE runs of the curvature table at θ: `Φ[r][k] = F_asperity(x_k)/F_sphere(x_k)`.
 pub fn curvature_table(cal: &Calibrated, spec: &CurvatureTable, progress: &(dyn Fn() + Sync)) -> Result<RatioTable> {
     let mut roundness: Vec<f64> = spec.roundness.clone();
     roundness.sort_by(f64::total_cmp);

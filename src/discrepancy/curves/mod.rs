@@ -160,7 +160,7 @@ pub struct CurveFile {
 pub struct CurvatureTable {
     /// Pole curvature ratios run (each in (0, 1)); the sphere (1) is added.
     pub roundness: Vec<f64>,
-    /// Angular half-width of the asperity (rad), as [`Shape::Asperity`].
+    /// Angular half-width of the asperity (rad), as `fem::Shape::Asperity`.
     pub width: f64,
 }
 

@@ -109,7 +109,7 @@ fn with_compliance(grid: &[f64], f: &[f64], x: f64, c: f64) -> f64 {
 pub struct RatioTable {
     /// Pole curvature ratios, ascending, the last 1 (sphere).
     pub roundness: Vec<f64>,
-    /// Φ[r][k].
+    /// `Φ[r][k]`.
     pub ratio: Vec<Vec<f64>>,
 }
 

@@ -1,0 +1,109 @@
+//! Impact breakage tests as candidate experiments: n particles of one material, each shot
+//! repeatedly at velocity V, the broken ones counted after each of N₁ < N₂ < … < N_m impacts
+//! (a single-impact test counts after N = 1 only).
+//!
+//! Under sample k the probability that a particle drawn from the material's population is broken
+//! by N impacts is the population's P_N at V with the sample's strength parameters, η, γ and
+//! damage model ([`crate::strength::LifetimeModel::breakage_into`], the chain every study uses).
+//! A particle therefore breaks in interval i — after N_{i−1} and by N_i impacts (N₀ = 0) — with
+//! probability π_i = P_{N_i} − P_{N_{i−1}}, and survives all N_m with π_{m+1} = 1 − P_{N_m}.
+//! The counts c of n independent particles are multinomial:
+//! ln p(c | k) = Σ_i c_i ln π_i(k) + const. Single-impact tests measure the joint effect of η
+//! and the strength law; repeated impacts separate the damage models (independent trials,
+//! Vogel–Peukert and Tavares–King differ in how P_N grows with N).
+
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Binomial, Distribution};
+use rayon::prelude::*;
+
+use super::preposterior::Experiment;
+use super::state::State;
+use crate::error::{Error, Result};
+use crate::lifetime::damage::{CriticalRatioTable, DamageModel, Law};
+use crate::uq::setup::Mode;
+
+/// Smallest interval probability in the likelihood (keeps ln finite for impossible counts).
+const PI_FLOOR: f64 = 1e-300;
+
+/// An impact test with its interval probabilities under every sample.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImpactTest {
+    /// Material (0 candidate, 1 reference).
+    pub material: usize,
+    /// Particles tested.
+    pub particles: u64,
+    /// Impact velocity (m/s).
+    pub velocity: f64,
+    /// Impact counts at which broken particles are counted, increasing.
+    pub counts: Vec<u64>,
+    /// π per sample, K × (m + 1).
+    probs: Vec<f64>,
+}
+
+impl ImpactTest {
+    /// The test on `state`'s samples.
+    pub fn new(state: &State, material: usize, particles: u64, velocity: f64, counts: Vec<u64>) -> Result<ImpactTest> {
+        let bad = |rule: String| Err(Error::numerical("impact test", rule));
+        if material > 1 || particles == 0 || !(velocity.is_finite() && velocity > 0.0) || counts.is_empty() || counts[0] == 0 || counts.windows(2).any(|w| w[1] <= w[0]) {
+            return bad(format!("material {material}, {particles} particles, V = {velocity} m/s, counts {counts:?}: needs particles ≥ 1, V > 0 and increasing counts ≥ 1"));
+        }
+        let (glo, ghi) = state.gamma_range;
+        let tk: Option<Vec<CriticalRatioTable>> = state.damage.contains(&DamageModel::TavaresKing).then(|| counts.iter().map(|&n| CriticalRatioTable::new(n, glo, ghi.max(glo + 1e-9), 41)).collect());
+        let m = counts.len();
+        let per: Vec<Vec<f64>> = state
+            .samples
+            .par_iter()
+            .map(|s| -> Result<Vec<f64>> {
+                let st = &state.forms[s.form].setup;
+                let (p, w) = st.params(material, &s.x, Mode::Joint);
+                let (eta, gamma) = (s.x[st.shared(0)], s.x[st.shared(3)]);
+                let model = state.damage[s.damage];
+                let laws: Vec<Law> = counts.iter().enumerate().map(|(i, &n)| Law::new(model, p.shape, n as f64, tk.as_ref().map_or(0.0, |t| t[i].ln_ratio(gamma)))).collect();
+                let mut pn = vec![0.0; m];
+                let lm = &st.materials[material].model;
+                lm.breakage_into(&p, w, lm.ln_impact_stress(eta, velocity)?, &laws, &mut pn);
+                let mut pi = Vec::with_capacity(m + 1);
+                let mut prev = 0.0;
+                for &x in &pn {
+                    let x = x.clamp(prev, 1.0);
+                    pi.push(x - prev);
+                    prev = x;
+                }
+                pi.push(1.0 - prev);
+                Ok(pi)
+            })
+            .collect::<Result<_>>()?;
+        Ok(ImpactTest { material, particles, velocity, counts, probs: per.concat() })
+    }
+
+    /// π of sample k.
+    pub fn probabilities(&self, k: usize) -> &[f64] {
+        let w = self.counts.len() + 1;
+        &self.probs[k * w..(k + 1) * w]
+    }
+}
+
+impl Experiment for ImpactTest {
+    /// Particles broken in each interval, then the survivors.
+    type Data = Vec<u64>;
+
+    fn simulate(&self, truth: usize, rng: &mut ChaCha8Rng) -> Vec<u64> {
+        let pi = self.probabilities(truth);
+        let mut left = self.particles;
+        let mut rest = 1.0;
+        let mut out = Vec::with_capacity(pi.len());
+        for &p in &pi[..pi.len() - 1] {
+            let q = if rest > 0.0 { (p / rest).clamp(0.0, 1.0) } else { 0.0 };
+            let c = if left == 0 || q == 0.0 { 0 } else { Binomial::new(left, q).expect("0 ≤ q ≤ 1").sample(rng) };
+            out.push(c);
+            left -= c;
+            rest -= p;
+        }
+        out.push(left);
+        out
+    }
+
+    fn loglik(&self, c: &Vec<u64>, k: usize) -> f64 {
+        self.probabilities(k).iter().zip(c).filter(|(_, n)| **n > 0).map(|(p, &n)| n as f64 * p.max(PI_FLOOR).ln()).sum()
+    }
+}

@@ -1,0 +1,144 @@
+//! The main study's state of knowledge as weighted samples for experiment design.
+//!
+//! Each sample carries everything uncertain in the main study (`kind = "uq"`): a strength model
+//! M (drawn with its stacking weight), a damage model D (drawn with its prior weight), and, under
+//! M, one joint draw of both materials' strength parameters with their population weights, η, V,
+//! impacts per year and γ ([`crate::uq::setup::Setup`] in joint mode, so no second copy of the
+//! chain). Its outputs are both materials' P_break at every horizon under D.
+//!
+//! The decision is which particle to choose for a plant: action 0 = the candidate, 1 = the
+//! reference. Choosing the particle that breaks more at the decision horizon costs the declared
+//! loss L; a tie costs nothing. The quantities are log10 P_break per material and horizon
+//! (floored at [`P_FLOOR`]), ln η and ln V, and
+//! the indicator that the candidate breaks more (its posterior mean is the posterior
+//! P(candidate worse)); the labels are D and M.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use super::preposterior::Knowledge;
+use crate::error::{Error, Result};
+use crate::lifetime::damage::DamageModel;
+use crate::uq::run::Weighed;
+use crate::uq::setup::Mode;
+
+/// P_break below which the quantities log10 P are floored: Vogel–Peukert's threshold gives
+/// P = 0 exactly for many samples, and a band reaching log10 0 = −∞ would have no width to
+/// compare; 10⁻¹² over a plant's horizon is "no breakage" for every purpose here.
+pub const P_FLOOR: f64 = 1e-12;
+
+/// One sample of the state of knowledge.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StateSample {
+    /// Strength model (index into [`State::forms`]).
+    pub form: usize,
+    /// Damage model (index into [`State::damage`]).
+    pub damage: usize,
+    /// The setup's inputs (joint mode).
+    pub x: Vec<f64>,
+    /// P_break of material j at horizon h under the sample's damage model, at j·H + h.
+    pub p: Vec<f64>,
+}
+
+/// The state of knowledge.
+pub struct State {
+    /// The strength models with their stacking weights.
+    pub forms: Vec<Weighed>,
+    /// The damage models.
+    pub damage: Vec<DamageModel>,
+    /// Their prior weights.
+    pub damage_weights: Vec<f64>,
+    /// Horizons (years).
+    pub years: Vec<f64>,
+    /// Index of the decision's horizon.
+    pub horizon: usize,
+    /// The samples.
+    pub samples: Vec<StateSample>,
+    /// Names of the quantities, in [`Knowledge`] order.
+    pub quantity_names: Vec<String>,
+    /// The weighted samples with the decision's losses.
+    pub knowledge: Knowledge,
+    /// Range of the Tavares–King γ.
+    pub gamma_range: (f64, f64),
+}
+
+/// Draws index i with probability w_i / Σ w from u ∈ [0, 1).
+fn categorical(w: &[f64], u: f64) -> usize {
+    let total: f64 = w.iter().sum();
+    let mut c = 0.0;
+    for (i, wi) in w.iter().enumerate() {
+        c += wi / total;
+        if u < c {
+            return i;
+        }
+    }
+    w.len() - 1
+}
+
+impl State {
+    /// `k` samples of the state of knowledge of the weighed strength models `forms` (damage
+    /// models `damage` with prior weights `damage_weights`), the decision at horizon index
+    /// `horizon` with loss `loss` for choosing the particle that breaks more.
+    pub fn new(forms: Vec<Weighed>, damage_weights: Vec<f64>, horizon: usize, loss: f64, k: usize, seed: u64) -> Result<State> {
+        let first = &forms.first().ok_or_else(|| Error::numerical("state of knowledge", "no strength model"))?.setup;
+        let (years, damage) = (first.years.clone(), first.models.clone());
+        if damage_weights.len() != damage.len() || horizon >= years.len() {
+            return Err(Error::numerical("state of knowledge", format!("{} damage weights for {} models, horizon {horizon} of {}", damage_weights.len(), damage.len(), years.len())));
+        }
+        let gamma = &first.inputs[first.shared(3)].marginal;
+        let gamma_range = (gamma.quantile(0.0), gamma.quantile(1.0));
+        let form_weights: Vec<f64> = forms.iter().map(|f| f.weight).collect();
+        let h_n = years.len();
+        let samples: Vec<StateSample> = (0..k)
+            .into_par_iter()
+            .map(|i| {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                rng.set_stream(i as u64 + 1);
+                let form = categorical(&form_weights, rng.random());
+                let d = categorical(&damage_weights, rng.random());
+                let st = &forms[form].setup;
+                let u: Vec<f64> = (0..st.varying(Mode::Joint).len()).map(|_| rng.random()).collect();
+                let x = st.values(&u, Mode::Joint);
+                let mut all = vec![0.0; st.outputs()];
+                st.evaluate_into(&x, Mode::Joint, &mut all)?;
+                let p = (0..2).flat_map(|j| (0..h_n).map(move |h| (j, h))).map(|(j, h)| all[st.slot(j, h, d)]).collect();
+                Ok(StateSample { form, damage: d, x, p })
+            })
+            .collect::<Result<_>>()?;
+        let keys = [first.materials[0].model.key.clone(), first.materials[1].model.key.clone()];
+        let mut quantity_names: Vec<String> = (0..2).flat_map(|j| years.iter().map(move |y| (j, y))).map(|(j, y)| format!("log10_p_{}_{y}yr", keys[j])).collect();
+        quantity_names.extend(["ln_energy_fraction".to_string(), "ln_velocity".to_string()]);
+        quantity_names.push(format!("{}_worse_{}yr", keys[0], years[horizon]));
+        let q = quantity_names.len();
+        let mut loss_v = Vec::with_capacity(2 * k);
+        let mut values = Vec::with_capacity(q * k);
+        let mut labels = Vec::with_capacity(2 * k);
+        for s in &samples {
+            let (a, b) = (s.p[horizon], s.p[h_n + horizon]);
+            loss_v.extend([if a > b { loss } else { 0.0 }, if b > a { loss } else { 0.0 }]);
+            values.extend(s.p.iter().map(|p| p.max(P_FLOOR).log10()));
+            let st = &forms[s.form].setup;
+            values.extend([s.x[st.shared(0)].ln(), s.x[st.shared(1)].ln()]);
+            values.push(if a > b { 1.0 } else { 0.0 });
+            labels.extend([s.damage as u32, s.form as u32]);
+        }
+        let knowledge = Knowledge::new(vec![1.0; k], 2, loss_v, q, values, 2, labels)?;
+        Ok(State { forms, damage, damage_weights, years, horizon, samples, quantity_names, knowledge, gamma_range })
+    }
+
+    /// Index of the quantity "candidate breaks more at the decision horizon".
+    pub fn worse_quantity(&self) -> usize {
+        self.quantity_names.len() - 1
+    }
+
+    /// Index of the quantity ln η (ln V is the next).
+    pub fn ln_eta_quantity(&self) -> usize {
+        2 * self.years.len()
+    }
+
+    /// Index of the quantity log10 P_break of material j at horizon h.
+    pub fn log10_p_quantity(&self, j: usize, h: usize) -> usize {
+        j * self.years.len() + h
+    }
+}

@@ -17,20 +17,25 @@
 //! * [`impact`]: single- and repeated-impact breakage tests (multinomial counts of the broken
 //!   particles after each impact count).
 //! * [`measure`]: measurements of η or of the impact velocity with a lognormal error.
+//! * [`crush`]: crush tests of n more particles (optionally a sieve fraction) with their
+//!   covariates measured.
 //!
 //! Verified against the closed forms of the normal–normal model (preposterior variance, EVSI of a
 //! two-action decision), on a decision that is already certain (value 0), on an η measurement
 //! on the main study's state (conjugate posterior variance of ln η), and by the discrimination
 //! of Tavares–King damage by repeated impacts: `tests/verification/experiments.rs`.
 //!
-//! Not yet here (next steps of the issue): crush-test candidates with the strength-model refit as
-//! fallback, the `kind = "experiments"` study with costs, budget allocation, report and figures.
+//! Not yet here (next steps of the issue): crush tests without the shape measurement or at another
+//! temperature, the strength-model refit as their fallback, the `kind = "experiments"` study with
+//! costs, budget allocation, report and figures.
 
+pub mod crush;
 pub mod impact;
 pub mod measure;
 pub mod preposterior;
 pub mod state;
 
+pub use crush::CrushTest;
 pub use impact::ImpactTest;
 pub use measure::{Measured, Measurement};
 pub use preposterior::{Draw, Estimate, Experiment, Knowledge, Metrics, Posterior, Route, Settings, preposterior};

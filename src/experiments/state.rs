@@ -9,7 +9,7 @@
 //! The decision is which particle to choose for a plant: action 0 = the candidate, 1 = the
 //! reference. Choosing the particle that breaks more at the decision horizon costs the declared
 //! loss L; a tie costs nothing. The quantities are log10 P_break per material and horizon
-//! (floored at [`P_FLOOR`]), ln η and ln V, and
+//! (floored at [`P_FLOOR`]), ln η and ln V, each material's Weibull modulus m, and
 //! the indicator that the candidate breaks more (its posterior mean is the posterior
 //! P(candidate worse)); the labels are D and M.
 
@@ -108,7 +108,7 @@ impl State {
             .collect::<Result<_>>()?;
         let keys = [first.materials[0].model.key.clone(), first.materials[1].model.key.clone()];
         let mut quantity_names: Vec<String> = (0..2).flat_map(|j| years.iter().map(move |y| (j, y))).map(|(j, y)| format!("log10_p_{}_{y}yr", keys[j])).collect();
-        quantity_names.extend(["ln_energy_fraction".to_string(), "ln_velocity".to_string()]);
+        quantity_names.extend(["ln_energy_fraction".to_string(), "ln_velocity".to_string(), format!("weibull_m_{}", keys[0]), format!("weibull_m_{}", keys[1])]);
         quantity_names.push(format!("{}_worse_{}yr", keys[0], years[horizon]));
         let q = quantity_names.len();
         let mut loss_v = Vec::with_capacity(2 * k);
@@ -119,7 +119,7 @@ impl State {
             loss_v.extend([if a > b { loss } else { 0.0 }, if b > a { loss } else { 0.0 }]);
             values.extend(s.p.iter().map(|p| p.max(P_FLOOR).log10()));
             let st = &forms[s.form].setup;
-            values.extend([s.x[st.shared(0)].ln(), s.x[st.shared(1)].ln()]);
+            values.extend([s.x[st.shared(0)].ln(), s.x[st.shared(1)].ln(), st.params(0, &s.x, Mode::Joint).0.shape, st.params(1, &s.x, Mode::Joint).0.shape]);
             values.push(if a > b { 1.0 } else { 0.0 });
             labels.extend([s.damage as u32, s.form as u32]);
         }
@@ -135,6 +135,11 @@ impl State {
     /// Index of the quantity ln η (ln V is the next).
     pub fn ln_eta_quantity(&self) -> usize {
         2 * self.years.len()
+    }
+
+    /// Index of the quantity "Weibull modulus m of material j".
+    pub fn weibull_m_quantity(&self, j: usize) -> usize {
+        2 * self.years.len() + 2 + j
     }
 
     /// Index of the quantity log10 P_break of material j at horizon h.

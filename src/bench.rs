@@ -62,6 +62,39 @@ pub fn curve_discrepancy_speed() -> Result<Option<(std::path::PathBuf, Vec<Strin
     Ok(Some((study, summary.headlines, summary.wall_time_s)))
 }
 
+/// Speed of the shipped experiment-design study.
+#[derive(Debug, Clone)]
+pub struct ExperimentsSpeed {
+    /// Its headline.
+    pub headline: String,
+    /// Wall time on every thread (s).
+    pub seconds: f64,
+    /// Wall time on one thread (s).
+    pub seconds_one_thread: f64,
+    /// Whether every table is byte-identical between the two runs.
+    pub identical: bool,
+}
+
+/// Times `studies/experiments.toml` end to end on every thread and on one, each into its own
+/// scratch reports root (nothing under the repository's `reports/`), and compares the tables.
+pub fn experiments_speed() -> Result<ExperimentsSpeed> {
+    let loaded = crate::study::load(&repo_path("studies/experiments.toml"))?;
+    let run = |threads: Option<usize>| -> Result<(TempDir, crate::runner::RunSummary)> {
+        let root = TempDir::new("bench-experiments")?;
+        let opts = crate::runner::RunOptions { reports_root: root.path().to_path_buf(), progress: false };
+        let s = match threads {
+            None => crate::runner::run(&loaded, &opts)?,
+            Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| Error::numerical("thread pool", e.to_string()))?.install(|| crate::runner::run(&loaded, &opts))?,
+        };
+        Ok((root, s))
+    };
+    let (all, a) = run(None)?;
+    let (one, b) = run(Some(1))?;
+    let tables = ["plans.csv", "allocation.csv", "prior.csv", "summary.md"];
+    let identical = tables.iter().all(|t| std::fs::read(all.path().join("experiments").join(t)).ok() == std::fs::read(one.path().join("experiments").join(t)).ok());
+    Ok(ExperimentsSpeed { headline: a.headlines.join(" "), seconds: a.wall_time_s, seconds_one_thread: b.wall_time_s, identical })
+}
+
 /// One measured figure.
 #[derive(Debug, Clone)]
 pub struct Figure {

@@ -68,7 +68,7 @@ enum Command {
         command: DatasetsCommand,
     },
     /// Measure the speed figures (evaluations per second, fit time, study wall time).
-    #[command(group(clap::ArgGroup::new("benchmark").args(["study", "dem", "fem", "mcmc", "uq", "discrepancy"]).multiple(false)))]
+    #[command(group(clap::ArgGroup::new("benchmark").args(["study", "dem", "fem", "mcmc", "uq", "discrepancy", "experiments"]).multiple(false)))]
     Bench {
         /// Time the core figures and this study end to end.
         #[arg(long)]
@@ -95,6 +95,10 @@ enum Command {
         /// the report of studies/calibrate_gen3_rt.toml).
         #[arg(long)]
         discrepancy: bool,
+        /// Run the experiment-design benchmark instead: studies/experiments.toml end to end
+        /// into a scratch reports directory, on all threads and on one (same results).
+        #[arg(long)]
+        experiments: bool,
     },
 }
 
@@ -320,6 +324,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 Some((study, headlines, secs)) => out!("curve-level discrepancy loop ({}): {} — {secs:.1} s including the 5 FE runs of the curvature table (goal < 15 min)", study.display(), headlines.join("; ")),
                 None => out!("curve-level discrepancy loop: not timed — run `partlife run studies/calibrate_gen3_rt.toml` in the repository first (its report holds the emulator's runs)"),
             }
+        }
+        Command::Bench { experiments: true, .. } => {
+            out!("machine: {} threads available to rayon", rayon::current_num_threads());
+            let e = partlife::bench::experiments_speed()?;
+            out!("studies/experiments.toml end to end ({}): {:.1} s on {} threads (goal < 60 s), {:.1} s on 1 thread; tables identical on both: {}", e.headline, e.seconds, rayon::current_num_threads(), e.seconds_one_thread, e.identical);
         }
         Command::Bench { uq: true, .. } => {
             out!("machine: {} threads available to rayon", rayon::current_num_threads());

@@ -19,6 +19,7 @@ pub fn run(study: &LoadedStudy, opts: &RunOptions) -> Result<RunSummary> {
         Study::Uq(s) => crate::uq::run::run_uq(&study.file, s, opts),
         Study::Discrepancy(s) => crate::discrepancy::run::run_discrepancy(&study.file, s, opts),
         Study::DiscrepancyCurves(s) => crate::discrepancy::curves::run_curves(&study.file, s, opts),
+        Study::Experiments(s) => crate::experiments::run_experiments(&study.file, s, opts),
     }
 }
 

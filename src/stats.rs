@@ -222,14 +222,27 @@ pub fn weighted_quantiles(mut v: Vec<(f64, f64)>, ps: &[f64]) -> Vec<f64> {
         return vec![f64::NAN; ps.len()];
     }
     v.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let total: f64 = v.iter().map(|x| x.1).sum();
-    let mut cum = Vec::with_capacity(v.len());
-    let mut c = 0.0;
-    for x in &v {
-        c += x.1;
-        cum.push(c);
-    }
-    ps.iter().map(|&p| v[cum.partition_point(|&c| c < p.clamp(0.0, 1.0) * total * (1.0 - 1e-12)).min(v.len() - 1)].0).collect()
+    weighted_quantiles_sorted(v.iter().copied(), ps)
+}
+
+/// [`weighted_quantiles`] of a weighted sample already in ascending order of value (callers that
+/// keep the order between reweightings skip the sort). Empty: NaN.
+pub fn weighted_quantiles_sorted<I: Iterator<Item = (f64, f64)> + Clone>(sorted: I, ps: &[f64]) -> Vec<f64> {
+    let total: f64 = sorted.clone().map(|x| x.1).sum();
+    ps.iter()
+        .map(|&p| {
+            let target = p.clamp(0.0, 1.0) * total * (1.0 - 1e-12);
+            let (mut c, mut last) = (0.0, f64::NAN);
+            for (v, w) in sorted.clone() {
+                c += w;
+                last = v;
+                if c >= target {
+                    break;
+                }
+            }
+            last
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -24,7 +24,7 @@ pub use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSp
 pub use crate::lifetime_study::{LifetimeStudy, ShapeEstimate, WeibullOptions, validate_lifetime};
 
 /// The kinds of study this version can run.
-pub const KINDS: [&str; 7] = ["lifetime", "dem", "crush", "calibrate", "uq", "discrepancy", "discrepancy_curves"];
+pub const KINDS: [&str; 8] = ["lifetime", "dem", "crush", "calibrate", "uq", "discrepancy", "discrepancy_curves", "experiments"];
 
 /// A parsed, validated study.
 #[derive(Debug, Clone, PartialEq)]
@@ -45,6 +45,8 @@ pub enum Study {
     /// kind = "discrepancy_curves": the same at the force–displacement level, against a crush
     /// calibration.
     DiscrepancyCurves(Box<crate::discrepancy::curves::CurveStudy>),
+    /// kind = "experiments": which crush or impact tests next, decided by their value.
+    Experiments(Box<crate::experiments::ExperimentsStudy>),
 }
 
 /// A study file loaded from disk and validated.
@@ -95,6 +97,11 @@ pub fn load(path: &Path) -> Result<LoadedStudy> {
             let s: crate::discrepancy::curves::CurveStudy = file.parse()?;
             s.validate(&name)?;
             Study::DiscrepancyCurves(Box::new(s))
+        }
+        "experiments" => {
+            let s: crate::experiments::ExperimentsStudy = file.parse()?;
+            s.validate(&name, None)?;
+            Study::Experiments(Box::new(s))
         }
         other => {
             return Err(Error::config(&name, "kind", format!("unknown kind \"{other}\"; known: {}", KINDS.join(", "))));

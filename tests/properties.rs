@@ -101,7 +101,7 @@ const CSV_PARSERS: [Parser; 5] = [
 ];
 
 /// One shipped study of every kind.
-const STUDY_PARSERS: [Parser; 7] = [
+const STUDY_PARSERS: [Parser; 8] = [
     Parser { name: "lifetime study", base: "studies/lifetime.toml", parse: study },
     Parser { name: "dem study", base: "studies/dem_cold_test.toml", parse: study },
     Parser { name: "crush study", base: "studies/crush_gen3_rt.toml", parse: study },
@@ -109,6 +109,7 @@ const STUDY_PARSERS: [Parser; 7] = [
     Parser { name: "uq study", base: "studies/gen4_vs_bl.toml", parse: study },
     Parser { name: "discrepancy study", base: "studies/discrepancy_crush.toml", parse: study },
     Parser { name: "discrepancy_curves study", base: "studies/discrepancy_curves.toml", parse: study },
+    Parser { name: "experiments study", base: "studies/experiments.toml", parse: study },
 ];
 
 /// A scratch copy of the repository's studies/ and datasets/.

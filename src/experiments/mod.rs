@@ -25,18 +25,27 @@
 //! on the main study's state (conjugate posterior variance of ln η), and by the discrimination
 //! of Tavares–King damage by repeated impacts: `tests/verification/experiments.rs`.
 //!
+//! * [`study`], [`run`], [`plan`]: the `kind = "experiments"` study — candidates with costs and
+//!   sizes, the ranked plans, the greedy allocation of a budget (plans evaluated jointly), tables,
+//!   the figure `experiments_metrics` and a generated `summary.md`.
+//!
 //! Not yet here (next steps of the issue): crush tests without the shape measurement or at another
-//! temperature, the strength-model refit as their fallback, the `kind = "experiments"` study with
-//! costs, budget allocation, report and figures.
+//! temperature, the strength-model refit as their fallback.
 
 pub mod crush;
 pub mod impact;
 pub mod measure;
+pub mod plan;
 pub mod preposterior;
+pub mod run;
 pub mod state;
+pub mod study;
+mod summary;
 
 pub use crush::CrushTest;
 pub use impact::ImpactTest;
 pub use measure::{Measured, Measurement};
 pub use preposterior::{Draw, Estimate, Experiment, Knowledge, Metrics, Posterior, Route, Settings, preposterior};
+pub use run::run_experiments;
 pub use state::{State, StateSample};
+pub use study::ExperimentsStudy;

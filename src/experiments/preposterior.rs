@@ -62,6 +62,9 @@ pub struct Knowledge {
     pub label_kinds: usize,
     /// Labels, K × label kinds.
     pub labels: Vec<u32>,
+    /// Per quantity, the sample indices in ascending order of its value (for the weighted
+    /// quantiles without a sort per posterior).
+    order: Vec<Vec<u32>>,
 }
 
 impl Knowledge {
@@ -82,7 +85,14 @@ impl Knowledge {
         if total <= 0.0 {
             return bad("the weights sum to 0".into());
         }
-        Ok(Knowledge { weights: weights.iter().map(|w| w / total).collect(), actions, loss, quantities, values, label_kinds, labels })
+        let order = (0..quantities)
+            .map(|j| {
+                let mut idx: Vec<u32> = (0..k as u32).collect();
+                idx.sort_by(|&a, &b| values[a as usize * quantities + j].total_cmp(&values[b as usize * quantities + j]));
+                idx
+            })
+            .collect();
+        Ok(Knowledge { weights: weights.iter().map(|w| w / total).collect(), actions, loss, quantities, values, label_kinds, labels, order })
     }
 
     /// Number of samples K.
@@ -130,8 +140,8 @@ impl Knowledge {
             let m: f64 = w.iter().enumerate().map(|(k, wk)| wk * v(k)).sum();
             mean[j] = m;
             var[j] = w.iter().enumerate().map(|(k, wk)| wk * (v(k) - m).powi(2)).sum();
-            let pairs: Vec<(f64, f64)> = w.iter().enumerate().filter(|(_, wk)| **wk > 0.0).map(|(k, wk)| (v(k), *wk)).collect();
-            let q = crate::stats::weighted_quantiles(pairs, &[0.05, 0.95]);
+            let sorted = self.order[j].iter().map(|&k| k as usize).filter(|&k| w[k] > 0.0).map(|k| (v(k), w[k]));
+            let q = crate::stats::weighted_quantiles_sorted(sorted, &[0.05, 0.95]);
             width90[j] = q[1] - q[0];
         }
         let label_weight = |kind: usize, label: u32| w.iter().enumerate().filter(|(k, _)| self.labels[k * self.label_kinds + kind] == label).map(|(_, wk)| wk).sum();

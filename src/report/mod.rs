@@ -21,6 +21,7 @@ pub mod map;
 pub mod panel;
 pub mod uq;
 pub mod discrepancy;
+pub mod experiments;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -190,6 +191,7 @@ pub fn redraw(report_dir: &Path) -> Result<Rendered> {
         Some("uq") => return uq::render(report_dir, width),
         Some("discrepancy") => return discrepancy::render(report_dir, width),
         Some("discrepancy_curves") => return discrepancy::render_curves(report_dir, width),
+        Some("experiments") => return experiments::render(report_dir, width),
         _ => {}
     }
     render(report_dir, width)

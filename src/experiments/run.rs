@@ -1,0 +1,278 @@
+//! Runs a `kind = "experiments"` study: the main study's state of knowledge, every candidate at
+//! every size through the preposterior analysis, the ranked plans, the greedy allocation of the
+//! budget, tables, figures and `summary.md`.
+//!
+//! # Ranking
+//!
+//! Each (candidate, size) gets the study's objective ([`Objective`]) with its Monte Carlo error,
+//! and the plans are ranked by objective per cost.
+//!
+//! # Budget allocation (greedy)
+//!
+//! Starting from no experiment, each step adds the (candidate, size) — at most one size per
+//! candidate — whose addition to the plan so far gives the largest gain of the objective per
+//! cost among those that fit the remaining budget, the plan being evaluated jointly (its
+//! tests' likelihoods multiply, so overlapping information is not counted twice). It stops when
+//! nothing fits or no addition gains more than two Monte Carlo standard errors.
+
+use rayon::prelude::*;
+
+use super::crush::CrushTest;
+use super::impact::ImpactTest;
+use super::measure::{Measured, Measurement};
+use super::plan::{Candidate, Plan};
+use super::preposterior::{Metrics, Settings, preposterior};
+use super::state::State;
+use super::study::{ExperimentsStudy, Objective, TestKind};
+use crate::error::{Error, Result};
+use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
+use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
+use crate::schema::StudyFile;
+use crate::uq::study::UqStudy;
+
+/// One evaluated (candidate, size) or plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Evaluated {
+    /// Candidate names (one for a single candidate).
+    pub names: Vec<String>,
+    /// Sizes, in the order of `names`.
+    pub sizes: Vec<u64>,
+    /// Total cost.
+    pub cost: f64,
+    /// The metrics.
+    pub metrics: Metrics,
+    /// The objective and its Monte Carlo standard error.
+    pub objective: (f64, f64),
+}
+
+/// The objective of metrics `m` on `state` (value, Monte Carlo se).
+pub fn objective(o: Objective, state: &State, m: &Metrics) -> (f64, f64) {
+    match o {
+        Objective::Evsi => (m.evsi.mean, m.evsi.se),
+        Objective::Pcs => (m.pcs.mean - m.prior_pcs, m.pcs.se),
+        Objective::DamageModel => (m.true_label_weight[0].mean - m.prior_true_label_weight[0], m.true_label_weight[0].se),
+        Objective::BandWidth => {
+            let h = state.years.len() - 1;
+            let q = [state.log10_p_quantity(0, h), state.log10_p_quantity(1, h)];
+            (q.iter().map(|&q| m.prior.width90[q] - m.width90[q].mean).sum(), q.iter().map(|&q| m.width90[q].se.powi(2)).sum::<f64>().sqrt())
+        }
+    }
+}
+
+/// The main study the experiments study builds on, validated (its path, study, material keys
+/// in the order candidate, reference).
+fn main_study(loaded: &StudyFile, s: &ExperimentsStudy) -> Result<(std::path::PathBuf, UqStudy, Vec<String>)> {
+    let file = loaded.path.display().to_string();
+    let path = loaded.resolve(std::path::Path::new(&s.study));
+    if !path.is_file() {
+        return Err(Error::config(&file, "study", format!("the main study {} does not exist", path.display())));
+    }
+    let main = StudyFile::read(&path)?;
+    if main.kind(&["uq"])? != "uq" {
+        return Err(Error::config(&file, "study", format!("{} is not a main study (kind = \"uq\")", path.display())));
+    }
+    let u: UqStudy = main.parse()?;
+    u.validate(&path.display().to_string())?;
+    let keys = u.order().iter().map(|&i| u.material[i].key.clone()).collect();
+    Ok((path, u, keys))
+}
+
+/// Runs the study.
+pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptions) -> Result<RunSummary> {
+    let clock = RunClock::start();
+    let file = loaded.path.display().to_string();
+    s.validate(&file, None)?;
+    let (main_path, u, keys) = main_study(loaded, s)?;
+    s.validate(&file, Some(&keys))?;
+    let horizon = u.impact.years.iter().position(|&y| y == s.decision.horizon_years).ok_or_else(|| Error::config(&file, "decision.horizon_years", format!("must be one of the main study's horizons {:?}, got {}", u.impact.years, s.decision.horizon_years)))?;
+    let shared = crate::uq::setup::Shared::new(&u, &main_path)?;
+    let damage_weights = s.decision.damage_weights.clone().unwrap_or_else(|| vec![1.0; shared.models.len()]);
+    if damage_weights.len() != shared.models.len() {
+        return Err(Error::config(&file, "decision.damage_weights", format!("needs one weight per damage model of the main study ({}), got {}", shared.models.iter().map(|m| m.name()).collect::<Vec<_>>().join(", "), damage_weights.len())));
+    }
+    let inputs = vec![InputFile::hash(&loaded.path)?, InputFile::hash(&main_path)?];
+    let runs: usize = s.candidate.iter().map(|c| c.sizes.len()).sum();
+    let pb = progress_bar((1 + runs + s.candidate.len() * runs) as u64, opts.progress, crate::runkit::PROGRESS_COUNT);
+    pb.set_message("state of knowledge (the main study's strength models)");
+    let forms = crate::uq::run::weighed(&u, &main_path, &shared)?;
+    let a = s.analysis;
+    let state = State::new(forms, damage_weights, horizon, s.decision.loss, a.samples + a.reserve, s.seed)?;
+    pb.inc(1);
+    let mut inputs = inputs;
+    for m in &state.forms[0].setup.materials {
+        inputs.push(InputFile::hash(&m.path)?);
+    }
+
+    // Every candidate at every size.
+    pb.set_message("candidates");
+    let mut built: Vec<Vec<Candidate>> = Vec::new();
+    for c in &s.candidate {
+        let material = c.material.as_ref().map(|m| keys.iter().position(|k| k == m).unwrap_or(0)).unwrap_or(0);
+        built.push(
+            c.sizes
+                .iter()
+                .map(|&n| -> Result<Candidate> {
+                    let n = n as u64;
+                    Ok(match c.test {
+                        TestKind::Crush => Candidate::Crush(CrushTest::new(&state, material, n as usize, c.diameter_m.map(|[lo, hi]| (lo, hi)))?),
+                        TestKind::Impact => Candidate::Impact(ImpactTest::new(&state, material, n, c.velocity_m_s.unwrap_or(0.0), c.counts.clone().unwrap_or_default().iter().map(|&k| k as u64).collect())?),
+                        TestKind::EtaMeasurement => Candidate::Measure(Measurement::new(&state, Measured::EnergyFraction, n, c.sd_log.unwrap_or(0.0))?),
+                        TestKind::VelocityMeasurement => Candidate::Measure(Measurement::new(&state, Measured::Velocity, n, c.sd_log.unwrap_or(0.0))?),
+                    })
+                })
+                .collect::<Result<_>>()?,
+        );
+    }
+    let settings = |salt: u64| Settings { outer: a.outer, min_ess: a.min_ess, seed: s.seed ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15), truth: None, active: Some(a.samples) };
+    let evaluate = |picks: &[(usize, usize)], salt: u64| -> Result<Evaluated> {
+        let plan = Plan(picks.iter().map(|&(i, j)| &built[i][j]).collect());
+        let metrics = preposterior(&state.knowledge, &plan, settings(salt))?;
+        let objective = objective(s.decision.objective, &state, &metrics);
+        Ok(Evaluated {
+            names: picks.iter().map(|&(i, _)| s.candidate[i].name.clone()).collect(),
+            sizes: picks.iter().map(|&(i, j)| s.candidate[i].sizes[j] as u64).collect(),
+            cost: picks.iter().map(|&(i, j)| s.candidate[i].cost(s.candidate[i].sizes[j] as u64)).sum(),
+            metrics,
+            objective,
+        })
+    };
+    let mut singles = Vec::new();
+    for (i, c) in s.candidate.iter().enumerate() {
+        for j in 0..c.sizes.len() {
+            singles.push(((i, j), evaluate(&[(i, j)], 1 + (i * 64 + j) as u64)?));
+            pb.inc(1);
+        }
+    }
+
+    // Greedy allocation of the budget.
+    pb.set_message("budget allocation");
+    let mut plan: Vec<(usize, usize)> = Vec::new();
+    let mut steps: Vec<Evaluated> = Vec::new();
+    let (mut spent, mut current) = (0.0, 0.0);
+    loop {
+        let options: Vec<(usize, usize)> = (0..s.candidate.len()).filter(|i| !plan.iter().any(|p| p.0 == *i)).flat_map(|i| (0..s.candidate[i].sizes.len()).map(move |j| (i, j))).filter(|&(i, j)| spent + s.candidate[i].cost(s.candidate[i].sizes[j] as u64) <= s.budget.total).collect();
+        if options.is_empty() {
+            break;
+        }
+        let tried: Vec<((usize, usize), Evaluated)> = if plan.is_empty() {
+            singles.iter().filter(|(p, _)| options.contains(p)).cloned().collect()
+        } else {
+            options
+                .par_iter()
+                .map(|&p| {
+                    let mut picks = plan.clone();
+                    picks.push(p);
+                    evaluate(&picks, 0x5EED + (steps.len() * 4096 + p.0 * 64 + p.1) as u64).map(|e| (p, e))
+                })
+                .collect::<Result<_>>()?
+        };
+        pb.inc(tried.len() as u64);
+        let gain = |e: &Evaluated| (e.objective.0 - current) / (e.cost - spent);
+        let Some((p, best)) = tried.into_iter().filter(|(_, e)| e.objective.0 - current > 2.0 * e.objective.1).max_by(|x, y| gain(&x.1).total_cmp(&gain(&y.1))) else { break };
+        plan.push(p);
+        spent = best.cost;
+        current = best.objective.0;
+        steps.push(best);
+    }
+    pb.set_position(pb.length().unwrap_or(0));
+
+    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    write_tables(&mut dir, s, &state, &keys, &singles, &steps)?;
+    let summary = super::summary::summary(s, &state, &singles, &steps);
+    dir.write_bytes("summary.md", summary.text.as_bytes())?;
+    pb.set_message("figures");
+    let mut failures = Vec::new();
+    let rendered = crate::report::experiments::render(dir.path(), s.figures.width_cm)?;
+    record_figures(&mut dir, rendered, &mut failures);
+    let mut evaluations = std::collections::BTreeMap::new();
+    evaluations.insert("prior_samples".to_string(), state.samples.len() as u64);
+    evaluations.insert("simulated_datasets".to_string(), (singles.len() + steps.len()) as u64 * a.outer as u64);
+    let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
+    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
+    pb.finish_and_clear();
+    Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: summary.headlines })
+}
+
+/// `plans.csv` (every candidate at every size, ranked), `allocation.csv` (the greedy steps),
+/// `prior.csv` (the state of knowledge's prior metrics).
+fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: &[String], singles: &[((usize, usize), Evaluated)], steps: &[Evaluated]) -> Result<()> {
+    let h = state.years.len() - 1;
+    let last = state.years[h];
+    let qs = [state.log10_p_quantity(0, h), state.log10_p_quantity(1, h)];
+    let worse = state.worse_quantity();
+    // Rank 1 = the largest objective per cost (ties share their average rank).
+    let rank = crate::stats::ranks(&singles.iter().map(|(_, e)| -e.objective.0 / e.cost).collect::<Vec<_>>());
+    let col = |f: &dyn Fn(&Evaluated) -> f64, rows: &[&Evaluated]| rows.iter().map(|e| f(e)).collect::<Vec<f64>>();
+    let metric_columns = |rows: &[&Evaluated]| -> Vec<polars::prelude::Column> {
+        let mut c = vec![
+            fcol("cost", col(&|e| e.cost, rows)),
+            fcol("objective", col(&|e| e.objective.0, rows)),
+            fcol("objective_se", col(&|e| e.objective.1, rows)),
+            fcol("objective_per_cost", col(&|e| e.objective.0 / e.cost, rows)),
+            fcol("pcs", col(&|e| e.metrics.pcs.mean, rows)),
+            fcol("pcs_se", col(&|e| e.metrics.pcs.se, rows)),
+            fcol("p_candidate_worse", col(&|e| e.metrics.mean[worse].mean, rows)),
+            fcol("evsi", col(&|e| e.metrics.evsi.mean, rows)),
+            fcol("evsi_se", col(&|e| e.metrics.evsi.se, rows)),
+            fcol("evsi_per_cost", col(&|e| e.metrics.evsi.mean / e.cost, rows)),
+        ];
+        for (j, &q) in qs.iter().enumerate() {
+            c.push(fcol(&format!("width90_log10_p_{}_{last}yr", keys[j]), col(&|e| e.metrics.width90[q].mean, rows)));
+            c.push(fcol(&format!("width90_log10_p_{}_{last}yr_se", keys[j]), col(&|e| e.metrics.width90[q].se, rows)));
+        }
+        c.extend([
+            fcol("true_damage_model_weight", col(&|e| e.metrics.true_label_weight[0].mean, rows)),
+            fcol("true_damage_model_weight_se", col(&|e| e.metrics.true_label_weight[0].se, rows)),
+            fcol("true_strength_model_weight", col(&|e| e.metrics.true_label_weight[1].mean, rows)),
+            fcol("true_strength_model_weight_se", col(&|e| e.metrics.true_label_weight[1].se, rows)),
+            fcol("median_ess", col(&|e| e.metrics.median_ess, rows)),
+            ucol("fallbacks", rows.iter().map(|e| e.metrics.fallbacks as u64).collect()),
+            ucol("collapsed", rows.iter().map(|e| e.metrics.collapsed as u64).collect()),
+        ]);
+        c
+    };
+    let rows: Vec<&Evaluated> = singles.iter().map(|(_, e)| e).collect();
+    let mut cols = vec![
+        fcol("rank", rank),
+        scol("candidate", singles.iter().map(|((i, _), _)| s.candidate[*i].name.clone()).collect()),
+        scol("test", singles.iter().map(|((i, _), _)| serde_json::to_value(s.candidate[*i].test).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default()).collect()),
+        scol("material", singles.iter().map(|((i, _), _)| s.candidate[*i].material.clone().unwrap_or_else(|| "both".into())).collect()),
+        ucol("size", singles.iter().map(|(_, e)| e.sizes[0]).collect()),
+        scol("unit", singles.iter().map(|((i, _), _)| s.candidate[*i].test.unit().to_string()).collect()),
+        scol("currency", vec![s.decision.currency.clone(); singles.len()]),
+    ];
+    cols.extend(metric_columns(&rows));
+    dir.write_table("plans", &mut table(cols)?)?;
+
+    let steps_ref: Vec<&Evaluated> = steps.iter().collect();
+    let mut cols = vec![
+        ucol("step", (1..=steps.len() as u64).collect()),
+        scol("added", steps.iter().map(|e| e.names.last().cloned().unwrap_or_default()).collect()),
+        ucol("added_size", steps.iter().map(|e| *e.sizes.last().unwrap_or(&0)).collect()),
+        scol("plan", steps.iter().map(|e| e.names.iter().zip(&e.sizes).map(|(n, k)| format!("{n} × {k}")).collect::<Vec<_>>().join(" + ")).collect()),
+    ];
+    cols.extend(metric_columns(&steps_ref));
+    dir.write_table("allocation", &mut table(cols)?)?;
+
+    let p = &singles[0].1.metrics;
+    let mut cols = vec![
+        scol("quantity", state.quantity_names.clone()),
+        fcol("prior_mean", p.prior.mean.clone()),
+        fcol("prior_sd", p.prior.var.iter().map(|v| v.sqrt()).collect()),
+        fcol("prior_width90", p.prior.width90.clone()),
+    ];
+    cols.push(fcol("prior_pcs", vec![p.prior_pcs; state.quantity_names.len()]));
+    dir.write_table("prior", &mut table(cols)?)?;
+    let mut t = table(vec![
+        scol("key", keys.to_vec()),
+        scol("label", state.forms[0].setup.materials.iter().map(|m| m.model.label.clone()).collect()),
+        scol("role", vec!["candidate".into(), "reference".into()]),
+    ])?;
+    dir.write_table("materials", &mut t)?;
+    let mut t = table(vec![
+        scol("model", state.damage.iter().map(|d| d.name().to_string()).collect()),
+        fcol("prior_weight", { let t: f64 = state.damage_weights.iter().sum(); state.damage_weights.iter().map(|w| w / t).collect() }),
+    ])?;
+    dir.write_table("damage_models", &mut t)?;
+    Ok(())
+}

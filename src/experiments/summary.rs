@@ -1,0 +1,155 @@
+//! `summary.md` of an experiments study: every sentence generated from the numbers it states.
+
+use super::run::Evaluated;
+use super::state::State;
+use super::study::ExperimentsStudy;
+
+/// The summary and the headline lines printed by the CLI.
+pub struct Summary {
+    /// Markdown.
+    pub text: String,
+    /// Headline lines.
+    pub headlines: Vec<String>,
+}
+
+/// "Gen 4 × 100 particles" for a single candidate or a plan.
+fn plan_phrase(s: &ExperimentsStudy, e: &Evaluated) -> String {
+    e.names
+        .iter()
+        .zip(&e.sizes)
+        .map(|(n, k)| {
+            let unit = s.candidate.iter().find(|c| &c.name == n).map_or("units", |c| c.test.unit());
+            format!("{n} ({k} {unit})")
+        })
+        .collect::<Vec<_>>()
+        .join(" + ")
+}
+
+/// "1 year" or "10 years".
+fn years(y: f64) -> String {
+    if y == 1.0 { "1 year".into() } else { format!("{y} years") }
+}
+
+/// Value ± error, to the error's precision.
+fn pm(v: f64, se: f64) -> String {
+    if se > 0.0 && se.is_finite() {
+        let d = (-(se.log10().floor()) + 1.0).clamp(0.0, 8.0) as usize;
+        format!("{v:.d$} ± {se:.d$}")
+    } else {
+        format!("{v:.4}")
+    }
+}
+
+/// The summary of the study.
+pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), Evaluated)], steps: &[Evaluated]) -> Summary {
+    let cur = &s.decision.currency;
+    let labels: Vec<String> = state.forms[0].setup.materials.iter().map(|m| m.model.label.clone()).collect();
+    let h = state.years.len() - 1;
+    let last = state.years[h];
+    let qs = [state.log10_p_quantity(0, h), state.log10_p_quantity(1, h)];
+    let worse = state.worse_quantity();
+    let prior = &singles[0].1.metrics;
+    let mut md = format!("# Which experiment next? {} against {}\n\n", labels[0], labels[1]);
+    md.push_str(&format!(
+        "Prior: the state of knowledge of the main study `{}` ({} samples and a reserve of {}: strength models with their stacking weights, damage models {} with prior weights {}). Decision: which particle to choose for a plant over {}, a wrong choice costing {} {cur}. Each candidate and size: {} simulated datasets (preposterior analysis by importance reweighting; `partlife::experiments`). **The crush data are synthetic stand-ins** (datasets/README.md).\n\n",
+        s.study,
+        s.analysis.samples,
+        s.analysis.reserve,
+        state.damage.iter().map(|d| d.label()).collect::<Vec<_>>().join(", "),
+        state.damage_weights.iter().map(|w| format!("{w}")).collect::<Vec<_>>().join(", "),
+        years(state.years[state.horizon]),
+        s.decision.loss,
+        s.analysis.outer
+    ));
+    md.push_str("## Today\n\n");
+    md.push_str(&format!(
+        "P({} breaks more than {} in {}) = {:.3}; choosing the better particle today is right with probability {:.3}. The 90 % bands of log10 P_break over {} span {:.1} decades for {} and {:.1} for {} (P floored at 10⁻¹²: Vogel–Peukert's threshold gives P = 0 for many samples). The prior weight of the true damage model is {:.3} on average.\n\n",
+        labels[0],
+        labels[1],
+        years(state.years[state.horizon]),
+        prior.prior.mean[worse],
+        prior.prior_pcs,
+        years(last),
+        prior.prior.width90[qs[0]],
+        labels[0],
+        prior.prior.width90[qs[1]],
+        labels[1],
+        prior.prior_true_label_weight[0]
+    ));
+
+    md.push_str(&format!("## Candidates ranked by {} per cost\n\n", s.decision.objective.describe()));
+    md.push_str(&format!("| rank | candidate | size | cost ({cur}) | objective | P(correct choice) | EVSI ({cur}) | width90 log10 P {} | width90 log10 P {} | weight of true damage model |\n|---|---|---|---|---|---|---|---|---|---|\n", labels[0], labels[1]));
+    let mut order: Vec<usize> = (0..singles.len()).collect();
+    order.sort_by(|&a, &b| (singles[b].1.objective.0 / singles[b].1.cost).total_cmp(&(singles[a].1.objective.0 / singles[a].1.cost)));
+    for (r, &i) in order.iter().enumerate() {
+        let e = &singles[i].1;
+        let m = &e.metrics;
+        md.push_str(&format!(
+            "| {} | {} | {} | {:.0} | {} | {} | {} | {:.2} | {:.2} | {} |\n",
+            r + 1,
+            e.names[0],
+            e.sizes[0],
+            e.cost,
+            pm(e.objective.0, e.objective.1),
+            pm(m.pcs.mean, m.pcs.se),
+            pm(m.evsi.mean, m.evsi.se),
+            m.width90[qs[0]].mean,
+            m.width90[qs[1]].mean,
+            pm(m.true_label_weight[0].mean, m.true_label_weight[0].se)
+        ));
+    }
+
+    md.push_str(&format!("\n## The budget ({} {cur}), allocated greedily\n\n", s.budget.total));
+    let mut headlines = Vec::new();
+    match steps.first() {
+        None => {
+            let line = format!("With a budget of {} {cur}, no candidate gains more than two Monte Carlo standard errors of the objective ({}): on these numbers no further test is worth its cost.", s.budget.total, s.decision.objective.describe());
+            md.push_str(&format!("{line}\n"));
+            headlines.push(line);
+        }
+        Some(first) => {
+            let m = &first.metrics;
+            let line = format!(
+                "With a budget of {} {cur}, the most informative next step is {} for {:.0} {cur}: it raises the probability of choosing the better particle from {:.3} to {}, the expected weight of the true damage model from {:.3} to {}, and narrows the 90 % band of log10 P_break over {} from {:.1} to {:.1} decades ({}) and from {:.1} to {:.1} ({}); its expected value of information is {} {cur}.",
+                s.budget.total,
+                plan_phrase(s, first),
+                first.cost,
+                m.prior_pcs,
+                pm(m.pcs.mean, m.pcs.se),
+                m.prior_true_label_weight[0],
+                pm(m.true_label_weight[0].mean, m.true_label_weight[0].se),
+                years(last),
+                m.prior.width90[qs[0]],
+                m.width90[qs[0]].mean,
+                labels[0],
+                m.prior.width90[qs[1]],
+                m.width90[qs[1]].mean,
+                labels[1],
+                pm(m.evsi.mean, m.evsi.se)
+            );
+            md.push_str(&format!("{line}\n\n"));
+            headlines.push(line);
+            md.push_str("| step | plan | cost | objective | P(correct choice) | weight of true damage model |\n|---|---|---|---|---|---|\n");
+            for (k, e) in steps.iter().enumerate() {
+                md.push_str(&format!("| {} | {} | {:.0} | {} | {} | {} |\n", k + 1, plan_phrase(s, e), e.cost, pm(e.objective.0, e.objective.1), pm(e.metrics.pcs.mean, e.metrics.pcs.se), pm(e.metrics.true_label_weight[0].mean, e.metrics.true_label_weight[0].se)));
+            }
+            let total = steps.last().map_or(0.0, |e| e.cost);
+            md.push_str(&format!("\nThe plan spends {total:.0} of {} {cur}; the rule (largest gain per cost, stop below two standard errors) is stated in `partlife::experiments::run`.\n", s.budget.total));
+        }
+    }
+    let max_evsi = singles.iter().map(|(_, e)| e.metrics.evsi.mean + 2.0 * e.metrics.evsi.se).fold(f64::NEG_INFINITY, f64::max);
+    if max_evsi < 0.01 * s.decision.loss {
+        md.push_str(&format!(
+            "\nNo candidate's expected value of information exceeds 1 % of the loss (largest upper 2-se bound {:.3e} {cur}): the choice between the particles is already settled by today's knowledge ({:.3}), and the tests are worth running for what they teach about the lifetime itself — the damage model and the breakage bands — rather than for the choice.\n",
+            max_evsi, prior.prior_pcs
+        ));
+    }
+    let collapsed: usize = singles.iter().map(|(_, e)| e.metrics.collapsed).sum();
+    let fallbacks: usize = singles.iter().map(|(_, e)| e.metrics.fallbacks).sum();
+    md.push_str(&format!(
+        "\nReweighting: {fallbacks} of {} simulated datasets needed the reserve samples, {collapsed} stayed below the effective-sample-size threshold of {} (their posteriors are less reliable; see `plans.csv`).\n",
+        singles.len() * s.analysis.outer,
+        s.analysis.min_ess
+    ));
+    Summary { text: md, headlines }
+}

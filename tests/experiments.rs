@@ -75,3 +75,11 @@ fn bad_experiments_inputs_exit_2_naming_the_key() {
         s.expect_bad_study(study, from, to, expect);
     }
 }
+
+#[test]
+fn a_sieve_fraction_without_crushed_particles_is_bad_input() {
+    let s = scratch();
+    let text = s.read("studies/experiments.toml");
+    s.write("studies/experiments.toml", &edited(&text, &[("fixed_cost = 500\n\n[[candidate]]\nname = \"crush BL 16/30\"", "fixed_cost = 500\ndiameter_m = [0.002, 0.003]\n\n[[candidate]]\nname = \"crush BL 16/30\"")]));
+    s.expect_bad_study("studies/experiments.toml", "seed = 20261124", "seed = 20261124", &["candidate[0]", "no crushed particle", "diameter range"]);
+}

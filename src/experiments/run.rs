@@ -90,7 +90,7 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     if damage_weights.len() != shared.models.len() {
         return Err(Error::config(&file, "decision.damage_weights", format!("needs one weight per damage model of the main study ({}), got {}", shared.models.iter().map(|m| m.name()).collect::<Vec<_>>().join(", "), damage_weights.len())));
     }
-    let inputs = vec![InputFile::hash(&loaded.path)?, InputFile::hash(&main_path)?];
+    let mut inputs = vec![InputFile::hash(&loaded.path)?, InputFile::hash(&main_path)?];
     let runs: usize = s.candidate.iter().map(|c| c.sizes.len()).sum();
     let pb = progress_bar((1 + runs + s.candidate.len() * runs) as u64, opts.progress, crate::runkit::PROGRESS_COUNT);
     pb.set_message("state of knowledge (the main study's strength models)");
@@ -98,7 +98,6 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     let a = s.analysis;
     let state = State::new(forms, damage_weights, horizon, s.decision.loss, a.samples + a.reserve, s.seed)?;
     pb.inc(1);
-    let mut inputs = inputs;
     for m in &state.forms[0].setup.materials {
         inputs.push(InputFile::hash(&m.path)?);
     }
@@ -106,7 +105,7 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     // Every candidate at every size.
     pb.set_message("candidates");
     let mut built: Vec<Vec<Candidate>> = Vec::new();
-    for c in &s.candidate {
+    for (i, c) in s.candidate.iter().enumerate() {
         let material = c.material.as_ref().map(|m| keys.iter().position(|k| k == m).unwrap_or(0)).unwrap_or(0);
         built.push(
             c.sizes
@@ -120,7 +119,10 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
                         TestKind::VelocityMeasurement => Candidate::Measure(Measurement::new(&state, Measured::Velocity, n, c.sd_log.unwrap_or(0.0))?),
                     })
                 })
-                .collect::<Result<_>>()?,
+                .collect::<Result<_>>()
+                // What fails here is the candidate as declared (a sieve fraction with no crushed
+                // particle, a strength model without a crush likelihood): bad input.
+                .map_err(|e| Error::config(&file, format!("candidate[{i}]"), format!("\"{}\": {e}", c.name)))?,
         );
     }
     let settings = |salt: u64| Settings { outer: a.outer, min_ess: a.min_ess, seed: s.seed ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15), truth: None, active: Some(a.samples) };

@@ -22,8 +22,9 @@
 //!
 //! Verified against the closed forms of the normal–normal model (preposterior variance, EVSI of a
 //! two-action decision), on a decision that is already certain (value 0), on an η measurement
-//! on the main study's state (conjugate posterior variance of ln η), and by the discrimination
-//! of Tavares–King damage by repeated impacts: `tests/verification/experiments.rs`.
+//! on the main study's state (conjugate posterior variance of ln η), on crush tests against
+//! ASTM C1239's pivotal widths and against brute-force nested refitting, and by the
+//! discrimination of Tavares–King damage by repeated impacts: `tests/verification/experiments.rs`.
 //!
 //! * [`study`], [`run`], [`plan`]: the `kind = "experiments"` study — candidates with costs and
 //!   sizes, the ranked plans, the greedy allocation of a budget (plans evaluated jointly), tables,

@@ -64,7 +64,7 @@ fn metrics(dir: &Path, width_cm: f64) -> Result<Drawn> {
                 // data of the first panel.
                 y_range: if pi == 0 {
                     let lo = y.iter().cloned().fold(1.0, f64::min);
-                    (1.0 - 8.0 * (1.0 - lo).max(0.005), 1.0 + 0.1 * (1.0 - lo).max(0.005))
+                    (1.0 - 25.0 * (1.0 - lo).max(0.005), 1.0 + 0.1 * (1.0 - lo).max(0.005))
                 } else {
                     padded(y.iter().cloned(), 0.1, 0.15)
                 },

@@ -5,12 +5,15 @@
 //! * [`setup`]: one strength model's comparison of the two particle types — every uncertain
 //!   input as a marginal, one sample evaluated through each material's
 //!   [`crate::strength::LifetimeModel`].
+//! * [`forms`]: each strength model fitted, weighed by stacking (the state of knowledge, also
+//!   experiment design's prior) and propagated.
 //! * [`propagate`]: blocks of Monte Carlo, LHS or shifted Sobol' samples, collected in order.
 //! * [`run`]: the run — strength models with stacking weights, the model-averaged headline,
 //!   damage models and averaging domains side by side, Sobol' indices, tables and summary.
 //! * [`sobol`]: Saltelli design, first-order (Saltelli 2010) and total (Jansen) Sobol' indices
 //!   with bootstrap intervals.
 
+pub mod forms;
 pub mod propagate;
 pub mod run;
 pub mod setup;

@@ -22,4 +22,5 @@ pub mod gof;
 pub mod koh;
 mod report;
 pub mod run;
+pub mod study;
 pub mod workflow;

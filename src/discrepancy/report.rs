@@ -3,12 +3,26 @@
 
 use std::collections::BTreeMap;
 
-use super::run::{DiscrepancyStudy, LifetimeBand, MaterialResult, PowerRow, wilson90};
+use super::study::{DiscrepancyStudy, LifetimeBand, MaterialResult, PowerRow};
 use super::workflow::GAP_MEASURE;
 use crate::error::Result;
 use crate::io::{ReportDir, fcol, scol, table, ucol};
 use crate::schema::StudyFile;
 use crate::strength::{Effect, ModelFit};
+
+/// Wilson score interval of k successes in n at the two-sided level 90 %.
+pub fn wilson90(k: usize, n: usize) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 1.0);
+    }
+    let z = 1.644_853_626_951_472_2;
+    let (k, n) = (k as f64, n as f64);
+    let p = k / n;
+    let den = 1.0 + z * z / n;
+    let c = (p + z * z / (2.0 * n)) / den;
+    let h = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt() / den;
+    ((c - h).max(0.0), (c + h).min(1.0))
+}
 
 pub(super) fn names(c: &[Effect]) -> String {
     if c.is_empty() { "none".into() } else { c.iter().map(|c| c.name()).collect::<Vec<_>>().join(" then ") }

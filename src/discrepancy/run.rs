@@ -40,116 +40,18 @@ use std::path::{Path, PathBuf};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
+pub use super::study::{DiscrepancyStudy, LifetimeBand, LifetimeOptions, MaterialResult, PowerOptions, PowerRow};
+pub use super::report::wilson90;
 use super::report::{headline, summary, verdict_json, write_tables};
-use super::workflow::{MIN_PARTICLES, Outcome, analyse, validate};
+use super::workflow::{Outcome, analyse, validate};
 use crate::data::{CrushData, read_crush};
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir};
 use crate::lifetime::impacts_in;
 use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
 use crate::strength::{Effect, LifetimeModel, ModelFit, NamingSettings, Sample, StrengthFit, Term, Uncertainty, sample_of};
-use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSpec, StudyFile, check, elastic_checked};
-
-/// Options of the lifetime bands.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct LifetimeOptions {
-    /// Parametric-bootstrap replicates of the 90 % bands (default 200).
-    pub bootstrap: usize,
-}
-
-impl Default for LifetimeOptions {
-    fn default() -> Self {
-        LifetimeOptions { bootstrap: 200 }
-    }
-}
-
-/// Options of the detection-power study.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct PowerOptions {
-    /// Sample sizes (default 20, 40, 80, 160).
-    pub particles: Vec<usize>,
-    /// Synthetic datasets per size and scenario (default 40; 0 switches the study off).
-    pub replicates: usize,
-    /// Bootstrap replicates per round inside each (default 199).
-    pub bootstrap: usize,
-}
-
-impl Default for PowerOptions {
-    fn default() -> Self {
-        PowerOptions { particles: vec![20, 40, 80, 160], replicates: 40, bootstrap: 199 }
-    }
-}
-
-/// A discrepancy study.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DiscrepancyStudy {
-    /// `discrepancy`.
-    pub kind: String,
-    /// Seed of every random draw.
-    pub seed: u64,
-    /// Crush contact (the strength reduction).
-    #[serde(default)]
-    pub contact: ContactOptions,
-    /// Impacts (the lifetime change).
-    #[serde(default)]
-    pub impact: ImpactOptions,
-    /// The naming loop.
-    #[serde(default)]
-    pub discrepancy: NamingSettings,
-    /// The lifetime bands.
-    #[serde(default)]
-    pub lifetime: LifetimeOptions,
-    /// The detection-power study.
-    #[serde(default)]
-    pub power: PowerOptions,
-    /// Figures.
-    #[serde(default)]
-    pub figures: FigureOptions,
-    /// Crush datasets, one per material.
-    pub material: Vec<MaterialSpec>,
-}
-
-impl DiscrepancyStudy {
-    /// Validates every option (file named in messages).
-    pub fn validate(&self, file: &str) -> Result<()> {
-        elastic_checked(file, "contact.platen", &self.contact.platen)?;
-        self.contact.averaging.validate(file, "contact.averaging")?;
-        elastic_checked(file, "impact.target", &self.impact.target)?;
-        let i = &self.impact;
-        check(file, "impact.energy_fraction", i.energy_fraction > 0.0 && i.energy_fraction <= 1.0, format!("must lie in (0, 1] (got {})", i.energy_fraction))?;
-        check(file, "impact.reference_velocity_m_s", i.reference_velocity_m_s > 0.0 && i.reference_velocity_m_s <= crate::lifetime::MAX_VELOCITY, format!("must lie in (0, {}] m/s (got {})", crate::lifetime::MAX_VELOCITY, i.reference_velocity_m_s))?;
-        check(file, "impact.impacts_per_year", i.impacts_per_year > 0.0 && i.impacts_per_year.is_finite(), format!("must be > 0 (got {})", i.impacts_per_year))?;
-        check(file, "impact.years", !i.years.is_empty() && i.years.iter().all(|y| *y > 0.0 && y.is_finite()), format!("needs at least one horizon, each > 0 (got {:?})", i.years))?;
-        self.discrepancy.validate(file, "discrepancy")?;
-        check(file, "lifetime.bootstrap", self.lifetime.bootstrap >= 20, format!("must be ≥ 20 (got {})", self.lifetime.bootstrap))?;
-        let p = &self.power;
-        if p.replicates > 0 {
-            check(file, "power.particles", !p.particles.is_empty() && p.particles.iter().all(|n| *n >= MIN_PARTICLES && *n <= 100_000), format!("sizes must lie in [{MIN_PARTICLES}, 100000] (got {:?})", p.particles))?;
-            check(file, "power.bootstrap", p.bootstrap >= 99, format!("must be ≥ 99 (got {})", p.bootstrap))?;
-        }
-        check(file, "figures.width_cm", self.figures.width_cm >= 4.0 && self.figures.width_cm <= 40.0, format!("must lie in [4, 40] cm (got {})", self.figures.width_cm))?;
-        check(file, "material", !self.material.is_empty(), "at least one [[material]] is required".into())?;
-        let mut keys = Vec::new();
-        for (k, m) in self.material.iter().enumerate() {
-            let key = |s: &str| format!("material[{k}].{s}");
-            check(file, &key("key"), !m.key.is_empty() && m.key.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_'), format!("must be lowercase letters, digits or _ (got \"{}\")", m.key))?;
-            check(file, &key("key"), !keys.contains(&m.key), format!("\"{}\" is used twice", m.key))?;
-            keys.push(m.key.clone());
-            elastic_checked(file, &key("elastic"), &m.elastic)?;
-            check(file, &key("density_kg_m3"), m.density_kg_m3 > 0.0 && m.density_kg_m3.is_finite(), format!("must be > 0 (got {})", m.density_kg_m3))?;
-        }
-        Ok(())
-    }
-
-    fn settings(&self) -> NamingSettings {
-        NamingSettings { seed: self.seed, ..self.discrepancy.clone() }
-    }
-}
+use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSpec, StudyFile};
 
 /// The quick study of `partlife discrepancy --data <crush.csv> --model weibull-hertz`: the
 /// lifetime study's defaults (steel platens and tube, line average to 2a, η = 0.1, 5 m/s,
@@ -191,19 +93,6 @@ fn terms_of(effects: &[Effect], sample: &Sample, gamma: f64) -> Vec<(Effect, Ter
     effects.iter().filter_map(|c| c.term(&sample.covariates, gamma).ok().map(|t| (*c, t))).collect()
 }
 
-/// Lifetime prediction of one model: per horizon (median-free point estimate, 5 %, 95 %).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct LifetimeBand {
-    /// Horizon (years).
-    pub years: f64,
-    /// Point estimate from the fitted model.
-    pub estimate: f64,
-    /// 5 % bootstrap quantile.
-    pub q05: f64,
-    /// 95 % bootstrap quantile.
-    pub q95: f64,
-}
-
 /// The lifetime band of a fitted stage model, as an instance of the strength model.
 fn lifetime_bands(model: &ModelFit, sample: &Sample, m: &Prepared, s: &DiscrepancyStudy, seed: u64) -> Result<Vec<LifetimeBand>> {
     let terms = terms_of(&model.effects, sample, s.discrepancy.gamma);
@@ -220,22 +109,6 @@ struct Prepared {
     data: CrushData,
     sample: Sample,
     population: crate::strength::Population,
-}
-
-/// Detection power at one sample size.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct PowerRow {
-    /// `effects` (data drawn from the fitted final model) or `none` (from the base model).
-    pub scenario: String,
-    /// Sample size.
-    pub particles: usize,
-    /// Datasets run.
-    pub replicates: usize,
-    /// Datasets in which the first effect named in the data was named first (`effects`), or
-    /// any effect was named (`none`).
-    pub first: usize,
-    /// Datasets in which every effect named in the data was named (`effects`); = `first` for `none`.
-    pub all: usize,
 }
 
 fn power_study(sample: &Sample, outcome: &Outcome, settings: &NamingSettings, p: &PowerOptions, tick: &(dyn Fn() + Sync)) -> Vec<PowerRow> {
@@ -284,30 +157,6 @@ fn power_study(sample: &Sample, outcome: &Outcome, settings: &NamingSettings, p:
         }
     }
     rows
-}
-
-/// Wilson score interval of k successes in n at the two-sided level 90 %.
-pub fn wilson90(k: usize, n: usize) -> (f64, f64) {
-    if n == 0 {
-        return (0.0, 1.0);
-    }
-    let z = 1.644_853_626_951_472_2;
-    let (k, n) = (k as f64, n as f64);
-    let p = k / n;
-    let den = 1.0 + z * z / n;
-    let c = (p + z * z / (2.0 * n)) / den;
-    let h = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt() / den;
-    ((c - h).max(0.0), (c + h).min(1.0))
-}
-
-/// Everything computed for one material.
-pub(super) struct MaterialResult {
-    pub(super) spec: MaterialSpec,
-    pub(super) data: CrushData,
-    pub(super) sample: Sample,
-    pub(super) outcome: Outcome,
-    pub(super) lifetime: Vec<(String, Vec<LifetimeBand>)>,
-    pub(super) power: Vec<PowerRow>,
 }
 
 /// Runs the study.

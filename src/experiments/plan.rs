@@ -7,7 +7,7 @@ use rand_chacha::ChaCha8Rng;
 use super::crush::CrushTest;
 use super::impact::ImpactTest;
 use super::measure::Measurement;
-use super::preposterior::Experiment;
+use super::preposterior::{Experiment, Metrics};
 
 /// One candidate experiment of any kind.
 #[derive(Debug, Clone, PartialEq)]
@@ -29,6 +29,20 @@ pub enum Data {
     Impact(Vec<u64>),
     /// Mean log-measurement.
     Measure(f64),
+}
+
+impl Candidate {
+    /// The same test with `n` particles or measurements (the likelihood tables are shared
+    /// knowledge of the samples, not of the size).
+    pub fn sized(&self, n: u64) -> Candidate {
+        let mut c = self.clone();
+        match &mut c {
+            Candidate::Crush(t) => t.particles = n as usize,
+            Candidate::Impact(t) => t.particles = n,
+            Candidate::Measure(t) => t.n = n,
+        }
+        c
+    }
 }
 
 impl Experiment for Candidate {
@@ -66,4 +80,19 @@ impl Experiment for Plan<'_> {
     fn loglik(&self, data: &Vec<Data>, k: usize) -> f64 {
         self.0.iter().zip(data).map(|(c, d)| c.loglik(d, k)).sum()
     }
+}
+
+/// One evaluated (candidate, size) or plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Evaluated {
+    /// Candidate names (one for a single candidate).
+    pub names: Vec<String>,
+    /// Sizes, in the order of `names`.
+    pub sizes: Vec<u64>,
+    /// Total cost.
+    pub cost: f64,
+    /// The metrics.
+    pub metrics: Metrics,
+    /// The objective and its Monte Carlo standard error.
+    pub objective: (f64, f64),
 }

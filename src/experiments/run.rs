@@ -20,6 +20,7 @@ use rayon::prelude::*;
 use super::crush::CrushTest;
 use super::impact::ImpactTest;
 use super::measure::{Measured, Measurement};
+pub use super::plan::Evaluated;
 use super::plan::{Candidate, Plan};
 use super::preposterior::{Metrics, Settings, preposterior};
 use super::state::State;
@@ -29,21 +30,6 @@ use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
 use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
 use crate::schema::StudyFile;
 use crate::uq::study::UqStudy;
-
-/// One evaluated (candidate, size) or plan.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Evaluated {
-    /// Candidate names (one for a single candidate).
-    pub names: Vec<String>,
-    /// Sizes, in the order of `names`.
-    pub sizes: Vec<u64>,
-    /// Total cost.
-    pub cost: f64,
-    /// The metrics.
-    pub metrics: Metrics,
-    /// The objective and its Monte Carlo standard error.
-    pub objective: (f64, f64),
-}
 
 /// The objective of metrics `m` on `state` (value, Monte Carlo se).
 pub fn objective(o: Objective, state: &State, m: &Metrics) -> (f64, f64) {
@@ -107,23 +93,19 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     let mut built: Vec<Vec<Candidate>> = Vec::new();
     for (i, c) in s.candidate.iter().enumerate() {
         let material = c.material.as_ref().map(|m| keys.iter().position(|k| k == m).unwrap_or(0)).unwrap_or(0);
-        built.push(
-            c.sizes
-                .iter()
-                .map(|&n| -> Result<Candidate> {
-                    let n = n as u64;
-                    Ok(match c.test {
-                        TestKind::Crush => Candidate::Crush(CrushTest::new(&state, material, n as usize, c.diameter_m.map(|[lo, hi]| (lo, hi)))?),
-                        TestKind::Impact => Candidate::Impact(ImpactTest::new(&state, material, n, c.velocity_m_s.unwrap_or(0.0), c.counts.clone().unwrap_or_default().iter().map(|&k| k as u64).collect())?),
-                        TestKind::EtaMeasurement => Candidate::Measure(Measurement::new(&state, Measured::EnergyFraction, n, c.sd_log.unwrap_or(0.0))?),
-                        TestKind::VelocityMeasurement => Candidate::Measure(Measurement::new(&state, Measured::Velocity, n, c.sd_log.unwrap_or(0.0))?),
-                    })
-                })
-                .collect::<Result<_>>()
-                // What fails here is the candidate as declared (a sieve fraction with no crushed
-                // particle, a strength model without a crush likelihood): bad input.
-                .map_err(|e| Error::config(&file, format!("candidate[{i}]"), format!("\"{}\": {e}", c.name)))?,
-        );
+        // The per-sample likelihood tables do not depend on the size: built once at the first
+        // size, then resized.
+        let n0 = c.sizes[0] as u64;
+        let base = match c.test {
+            TestKind::Crush => CrushTest::new(&state, material, n0 as usize, c.diameter_m.map(|[lo, hi]| (lo, hi))).map(Candidate::Crush),
+            TestKind::Impact => ImpactTest::new(&state, material, n0, c.velocity_m_s.unwrap_or(0.0), c.counts.clone().unwrap_or_default().iter().map(|&k| k as u64).collect()).map(Candidate::Impact),
+            TestKind::EtaMeasurement => Measurement::new(&state, Measured::EnergyFraction, n0, c.sd_log.unwrap_or(0.0)).map(Candidate::Measure),
+            TestKind::VelocityMeasurement => Measurement::new(&state, Measured::Velocity, n0, c.sd_log.unwrap_or(0.0)).map(Candidate::Measure),
+        }
+        // What fails here is the candidate as declared (a sieve fraction with no crushed
+        // particle, a strength model without a crush likelihood): bad input.
+        .map_err(|e| Error::config(&file, format!("candidate[{i}]"), format!("\"{}\": {e}", c.name)))?;
+        built.push(c.sizes.iter().map(|&n| base.sized(n as u64)).collect());
     }
     let settings = |salt: u64| Settings { outer: a.outer, min_ess: a.min_ess, seed: s.seed ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15), truth: None, active: Some(a.samples) };
     let evaluate = |picks: &[(usize, usize)], salt: u64| -> Result<Evaluated> {

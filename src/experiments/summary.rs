@@ -1,6 +1,6 @@
 //! `summary.md` of an experiments study: every sentence generated from the numbers it states.
 
-use super::run::Evaluated;
+use super::plan::Evaluated;
 use super::state::State;
 use super::study::ExperimentsStudy;
 

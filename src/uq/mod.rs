@@ -7,6 +7,7 @@
 //!   [`crate::strength::LifetimeModel`].
 //! * [`forms`]: each strength model fitted, weighed by stacking (the state of knowledge, also
 //!   experiment design's prior) and propagated.
+//! * [`headline`]: the comparison rows, their model average and the ± notation.
 //! * [`propagate`]: blocks of Monte Carlo, LHS or shifted Sobol' samples, collected in order.
 //! * [`run`]: the run — strength models with stacking weights, the model-averaged headline,
 //!   damage models and averaging domains side by side, Sobol' indices, tables and summary.
@@ -14,6 +15,7 @@
 //!   with bootstrap intervals.
 
 pub mod forms;
+pub mod headline;
 pub mod propagate;
 pub mod run;
 pub mod setup;

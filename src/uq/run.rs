@@ -41,19 +41,7 @@ use crate::stats::{interpolated_quantiles, weighted_quantiles};
 use crate::strength::{StrengthSpec, summarise};
 use crate::schema::StudyFile;
 pub use super::forms::{Form, Weighed, forms, weighed};
-
-/// P ± its Monte Carlo standard error, the error written so that it never reads as zero: to four
-/// decimals, in scientific notation below 5·10⁻⁵, and as "in all n samples" when every sample
-/// agreed (se = 0, p = 0 or 1).
-pub fn pm(p: f64, se: f64, n: usize) -> String {
-    if se == 0.0 && (p == 0.0 || p == 1.0) {
-        format!("{p:.4} (in all {n} samples)")
-    } else if se < 5e-5 {
-        format!("{p:.4} ± {se:.1e}")
-    } else {
-        format!("{p:.4} ± {se:.4}")
-    }
-}
+pub use super::headline::{AVERAGED, AveragingRow, Headline, Row, averaged, pm};
 
 /// log10 of a probability, floored at 1e-300.
 fn lg(p: f64) -> f64 {
@@ -108,49 +96,6 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: headline.lines })
-}
-
-/// One row of the comparison: P(candidate worse) of a strength model (or the average) under a
-/// damage model at a horizon, with the medians of both materials.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Row {
-    /// Strength model name, or `model-averaged`.
-    pub strength: String,
-    /// Damage model.
-    pub damage: DamageModel,
-    /// Horizon (years).
-    pub years: f64,
-    /// P(candidate breaks more).
-    pub worse: f64,
-    /// Its Monte Carlo standard error.
-    pub se: f64,
-    /// Fraction of samples with equal P.
-    pub ties: f64,
-    /// Median P of candidate and reference.
-    pub median: [f64; 2],
-    /// 5 % and 95 % quantiles of P, candidate and reference.
-    pub band: [(f64, f64); 2],
-}
-
-/// The headline lines and every comparison row.
-pub struct Headline {
-    /// Printed lines.
-    pub lines: Vec<String>,
-    /// Per strength model (then `model-averaged`), damage model and horizon.
-    pub rows: Vec<Row>,
-}
-
-/// The name of the averaged rows.
-pub const AVERAGED: &str = "model-averaged";
-
-/// The model-averaged (P(candidate worse), its standard error, tie fraction) from the strength
-/// models' rows and their stacking weights: P̄ = Σ w P, se = (Σ w² se²)^½ (independent runs),
-/// ties = Σ w ties.
-pub(super) fn averaged(weights: &[f64], rows: &[Row]) -> (f64, f64, f64) {
-    let worse = weights.iter().zip(rows).map(|(w, r)| w * r.worse).sum();
-    let se = weights.iter().zip(rows).map(|(w, r)| (w * r.se).powi(2)).sum::<f64>().sqrt();
-    let ties = weights.iter().zip(rows).map(|(w, r)| w * r.ties).sum();
-    (worse, se, ties)
 }
 
 fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
@@ -513,9 +458,6 @@ fn write_inputs(dir: &mut ReportDir, st: &Setup) -> Result<()> {
     }
     dir.write_table("inputs", &mut table(vec![scol("input", it.0), scol("unit", it.1), fcol("q05", it.2), fcol("median", it.3), fcol("q95", it.4)])?)
 }
-
-/// One row of `averaging.csv`: domain, horizon, P(candidate worse), se, medians.
-pub(super) type AveragingRow = (String, f64, f64, f64, f64, f64);
 
 /// The study's domain and every `[model_form] averaging` alternative, each a rerun of the
 /// chain with the deliverable's strength model (its own Weibull fit) and a quarter of the

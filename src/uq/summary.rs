@@ -6,7 +6,8 @@ use super::sobol::SobolIndices;
 use super::study::UqStudy;
 use crate::lifetime::damage::DamageModel;
 use crate::strength::{StrengthSpec, summarise};
-use super::run::*;
+use super::forms::Form;
+use super::headline::{AVERAGED, AveragingRow, Headline, Row, pm};
 
 /// "the deliverable's model" or "the `x` model".
 pub(super) fn model_phrase(name: &str) -> String {
@@ -202,7 +203,7 @@ pub(super) fn damage_sentences(last: f64, rows: &[&Row], names: [&str; 2]) -> St
 mod tests {
     //! The summary's sentences and the averaged headline against hand-made rows: a wrong
     //! comparison, ratio or weight would show here.
-    use super::super::run::{Row, averaged, pm};
+    use super::super::headline::{Row, averaged, pm};
     use super::*;
 
     fn row(damage: DamageModel, years: f64, worse: f64, se: f64, ties: f64, median: [f64; 2]) -> Row {

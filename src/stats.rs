@@ -1,7 +1,8 @@
 //! Small statistics shared by the data tools and the runner: median, Pearson correlation with
 //! its two-sided p-value (t = r √((n − 2)/(1 − r²)), Student t with n − 2 degrees of freedom),
 //! straight-line least squares with the slope's standard error (nalgebra SVD), and the crate's one
-//! sample quantile, one linear interpolation ([`locate`] + [`lerp`]) and one ranking ([`ranks`]).
+//! sample quantile, one linear interpolation ([`locate`] + [`lerp`]) and its cubic Hermite sibling ([`hermite`]), one ranking ([`ranks`]) and one
+//! categorical draw ([`Categorical`]).
 //!
 //! Verified by the unit tests below (exact line; the tabulated two-sided 5 % critical value
 //! r = 0.279 at n = 50; a regression with known coefficients and standard error).
@@ -117,6 +118,52 @@ pub fn lerp(ys: &[f64], (j, t): (usize, f64)) -> f64 {
     ys[j - 1] + t * (ys[j] - ys[j - 1])
 }
 
+/// A discrete distribution over indices 0..n with weights w_i ≥ 0, drawn by inversion: the
+/// crate's one categorical draw (the experiment design's strength- and damage-model draws and its
+/// truth draws).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Categorical {
+    /// Cumulative weights.
+    cum: Vec<f64>,
+}
+
+impl Categorical {
+    /// The distribution of weights `w` (None when no weight is positive or one is negative or
+    /// not finite).
+    pub fn new(w: &[f64]) -> Option<Categorical> {
+        let mut c = 0.0;
+        let mut cum = Vec::with_capacity(w.len());
+        for &wi in w {
+            if !(wi >= 0.0 && wi.is_finite()) {
+                return None;
+            }
+            c += wi;
+            cum.push(c);
+        }
+        (c > 0.0).then_some(Categorical { cum })
+    }
+
+    /// Total weight.
+    pub fn total(&self) -> f64 {
+        *self.cum.last().expect("a categorical distribution has a weight")
+    }
+
+    /// The index i with cum_{i−1} ≤ u·Σw < cum_i, for u ∈ [0, 1): i is drawn with probability
+    /// w_i / Σw, and an index of zero weight never.
+    pub fn draw(&self, u: f64) -> usize {
+        let t = u * self.total();
+        self.cum.partition_point(|&c| c <= t).min(self.cum.len() - 1)
+    }
+}
+
+/// Cubic Hermite interpolation on a uniform grid of step `h`: the value at `(j, t)` from
+/// [`locate`] (segment `[j − 1, j]`, fraction t) from the values `ys` and the slopes `dys`
+/// (dy/dx) at the knots. Exact for cubics; error h⁴ max|y⁽⁴⁾|/384.
+pub fn hermite(ys: &[f64], dys: &[f64], h: f64, (j, t): (usize, f64)) -> f64 {
+    let (t2, t3) = (t * t, t * t * t);
+    (2.0 * t3 - 3.0 * t2 + 1.0) * ys[j - 1] + (t3 - 2.0 * t2 + t) * h * dys[j - 1] + (3.0 * t2 - 2.0 * t3) * ys[j] + (t3 - t2) * h * dys[j]
+}
+
 /// Ranks of `x`, 1-based, ties given their average rank (the crate's one ranking: Spearman's ρ
 /// and the rank-normalised R̂ use it).
 pub fn ranks(x: &[f64]) -> Vec<f64> {
@@ -141,6 +188,29 @@ pub fn ranks(x: &[f64]) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hermite_is_exact_for_cubics() {
+        let f = |x: f64| 2.0 - x + 0.5 * x * x - 0.25 * x * x * x;
+        let df = |x: f64| -1.0 + x - 0.75 * x * x;
+        let xs: Vec<f64> = (0..5).map(|i| i as f64 * 0.5).collect();
+        let (ys, dys): (Vec<f64>, Vec<f64>) = xs.iter().map(|&x| (f(x), df(x))).unzip();
+        for x in [0.0, 0.1, 0.77, 1.5, 1.99] {
+            assert!((hermite(&ys, &dys, 0.5, locate(&xs, x)) - f(x)).abs() < 1e-12, "x = {x}");
+        }
+    }
+
+    #[test]
+    fn categorical_draws_by_inversion_and_skips_zero_weights() {
+        let c = Categorical::new(&[1.0, 0.0, 3.0]).unwrap();
+        assert_eq!(c.total(), 4.0);
+        assert_eq!([c.draw(0.0), c.draw(0.2499), c.draw(0.25), c.draw(0.9999)], [0, 0, 2, 2]);
+        // Frequencies on a fine grid of u are the weights.
+        let n = 100_000;
+        let hits = (0..n).filter(|&i| c.draw((i as f64 + 0.5) / n as f64) == 2).count();
+        assert_eq!(hits, 75_000);
+        assert!(Categorical::new(&[0.0, 0.0]).is_none() && Categorical::new(&[1.0, -1.0]).is_none() && Categorical::new(&[f64::NAN]).is_none());
+    }
 
     #[test]
     fn pearson_of_a_line_and_the_critical_value() {

@@ -44,6 +44,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::stats::Categorical;
 
 /// Weighted prior samples with their losses, quantities and labels (row-major per sample).
 #[derive(Debug, Clone, PartialEq)]
@@ -278,7 +279,8 @@ pub struct Metrics {
     pub width90: Vec<Estimate>,
     /// Expected posterior weight of the truth's label, per label kind.
     pub true_label_weight: Vec<Estimate>,
-    /// Prior weight of the truth's label (its expectation over truths), per label kind.
+    /// Prior weight of the truth's label (its expectation over the truths' distribution), per
+    /// label kind.
     pub prior_true_label_weight: Vec<f64>,
     /// Median ESS of the reweighted posteriors.
     pub median_ess: f64,
@@ -296,25 +298,15 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
         return Err(Error::numerical("preposterior analysis", format!("needs at least 2 outer draws, got {}", settings.outer)));
     }
     let kn = knowledge;
-    let mut cum = Vec::with_capacity(kn.len());
-    let mut c = 0.0;
     let active = settings.active.unwrap_or(kn.len()).clamp(2, kn.len());
-    for (k, w) in kn.weights.iter().enumerate() {
-        if k < active && settings.truth.is_none_or(|(kind, label)| kn.labels[k * kn.label_kinds + kind] == label) {
-            c += w;
-        }
-        cum.push(c);
-    }
-    if c <= 0.0 {
-        return Err(Error::numerical("preposterior analysis", format!("no prior sample has the truth's label {:?}", settings.truth)));
-    }
+    let eligible: Vec<f64> = kn.weights.iter().enumerate().map(|(k, &w)| if k < active && settings.truth.is_none_or(|(kind, label)| kn.labels[k * kn.label_kinds + kind] == label) { w } else { 0.0 }).collect();
+    let truths = Categorical::new(&eligible).ok_or_else(|| Error::numerical("preposterior analysis", format!("no prior sample has the truth's label {:?}", settings.truth)))?;
     let draws: Vec<Draw> = (0..settings.outer)
         .into_par_iter()
         .map(|j| {
             let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
             rng.set_stream(j as u64 + 1);
-            let u: f64 = rng.random::<f64>() * c;
-            let truth = cum.partition_point(|&x| x <= u).min(kn.len() - 1);
+            let truth = truths.draw(rng.random());
             debug_assert!(kn.weights[truth] > 0.0);
             let data = experiment.simulate(truth, &mut rng);
             let reweigh = |n: usize| -> (Vec<f64>, f64, f64) {
@@ -369,7 +361,8 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
         var: (0..kn.quantities).map(|j| col(&|d| d.posterior.var[j])).collect(),
         width90: (0..kn.quantities).map(|j| col(&|d| d.posterior.width90[j])).collect(),
         true_label_weight: (0..kn.label_kinds).map(|kind| col(&|d| d.posterior.label_weights[kind].get(label(kind, d.truth)).copied().unwrap_or(0.0))).collect(),
-        prior_true_label_weight: (0..kn.label_kinds).map(|kind| (0..active).map(|k| prior_w[k] * prior.label_weights[kind][label(kind, k)]).sum()).collect(),
+        // Over the truths' distribution (the prior, or its part with the conditioned label).
+        prior_true_label_weight: (0..kn.label_kinds).map(|kind| (0..active).map(|k| eligible[k] / truths.total() * prior.label_weights[kind][label(kind, k)]).sum()).collect(),
         median_ess: crate::stats::sorted_quantile(&ess, 0.5),
         fallbacks: draws.iter().filter(|d| d.route == Route::Fallback).count(),
         collapsed: draws.iter().filter(|d| d.route == Route::Collapsed).count(),

@@ -20,6 +20,7 @@ use rayon::prelude::*;
 use super::preposterior::Knowledge;
 use crate::error::{Error, Result};
 use crate::lifetime::damage::DamageModel;
+use crate::stats::Categorical;
 use crate::uq::run::Weighed;
 use crate::uq::setup::Mode;
 
@@ -63,19 +64,6 @@ pub struct State {
     pub gamma_range: (f64, f64),
 }
 
-/// Draws index i with probability w_i / Σ w from u ∈ [0, 1).
-fn categorical(w: &[f64], u: f64) -> usize {
-    let total: f64 = w.iter().sum();
-    let mut c = 0.0;
-    for (i, wi) in w.iter().enumerate() {
-        c += wi / total;
-        if u < c {
-            return i;
-        }
-    }
-    w.len() - 1
-}
-
 impl State {
     /// `k` samples of the state of knowledge of the weighed strength models `forms` (damage
     /// models `damage` with prior weights `damage_weights`), the decision at horizon index
@@ -89,14 +77,17 @@ impl State {
         let gamma = &first.inputs[first.shared(3)].marginal;
         let gamma_range = (gamma.quantile(0.0), gamma.quantile(1.0));
         let form_weights: Vec<f64> = forms.iter().map(|f| f.weight).collect();
+        let bad = |what: &str, w: &[f64]| Error::numerical("state of knowledge", format!("{what} weights {w:?}: need non-negative weights, one positive"));
+        let form_draw = Categorical::new(&form_weights).ok_or_else(|| bad("strength-model", &form_weights))?;
+        let damage_draw = Categorical::new(&damage_weights).ok_or_else(|| bad("damage-model", &damage_weights))?;
         let h_n = years.len();
         let samples: Vec<StateSample> = (0..k)
             .into_par_iter()
             .map(|i| {
                 let mut rng = ChaCha8Rng::seed_from_u64(seed);
                 rng.set_stream(i as u64 + 1);
-                let form = categorical(&form_weights, rng.random());
-                let d = categorical(&damage_weights, rng.random());
+                let form = form_draw.draw(rng.random());
+                let d = damage_draw.draw(rng.random());
                 let st = &forms[form].setup;
                 let u: Vec<f64> = (0..st.varying(Mode::Joint).len()).map(|_| rng.random()).collect();
                 let x = st.values(&u, Mode::Joint);

@@ -60,7 +60,7 @@ fn experiments_study_writes_ranked_plans_allocation_summary_and_figure() {
 #[test]
 fn bad_experiments_inputs_exit_2_naming_the_key() {
     let study = "studies/experiments.toml";
-    let cases: [(&str, &str, &[&str]); 8] = [
+    let cases: [(&str, &str, &[&str]); 11] = [
         ("sizes = [25, 50, 100]\ncost_per_unit = 40           # one crush", "sizes = [0, 50, 100]\ncost_per_unit = 40           # one crush", &["candidate[0].sizes", "≥ 1"]),
         ("cost_per_unit = 40           # one crush", "cost_per_unit = -40           # one crush", &["candidate[0].cost_per_unit", "> 0"]),
         ("velocity_m_s = 15            # fast enough", "velocity_m_s = 0            # fast enough", &["candidate[2].velocity_m_s"]),
@@ -69,6 +69,9 @@ fn bad_experiments_inputs_exit_2_naming_the_key() {
         ("sd_log = 0.3", "sd_log = 0.0", &["candidate[5].sd_log", "> 0"]),
         ("total = 15000", "total = 100", &["budget.total", "cheapest"]),
         ("horizon_years = 1", "horizon_years = 3", &["decision.horizon_years", "horizons"]),
+        ("counts = [1]\n", "counts = [1]\nshape_measured = false\n", &["candidate[2].shape_measured", "only crush tests"]),
+        ("material = \"gen4\"\nsizes = [25, 50, 100]", "material = \"gen4\"\ntemperature_c = -300\nsizes = [25, 50, 100]", &["candidate[0].temperature_c", "absolute zero"]),
+        ("total = 15000", "total = 15000\nallocation = \"exhaustive\"", &["budget.allocation", "max_plans = 200"]),
     ];
     for (from, to, expect) in cases {
         let s = scratch();
@@ -76,10 +79,72 @@ fn bad_experiments_inputs_exit_2_naming_the_key() {
     }
 }
 
-#[test]
-fn a_sieve_fraction_without_crushed_particles_is_bad_input() {
+/// The first crush candidate with `line` added must be refused after the state of knowledge is
+/// built (exit 2, the message naming `expect`).
+fn first_crush_candidate_refused(line: &str, expect: &[&str]) {
     let s = scratch();
     let text = s.read("studies/experiments.toml");
-    s.write("studies/experiments.toml", &edited(&text, &[("fixed_cost = 500\n\n[[candidate]]\nname = \"crush BL 16/30\"", "fixed_cost = 500\ndiameter_m = [0.002, 0.003]\n\n[[candidate]]\nname = \"crush BL 16/30\"")]));
-    s.expect_bad_study("studies/experiments.toml", "seed = 20261124", "seed = 20261124", &["candidate[0]", "no crushed particle", "diameter range"]);
+    let at = "fixed_cost = 500\n\n[[candidate]]\nname = \"crush BL 16/30\"";
+    s.write("studies/experiments.toml", &edited(&text, &[(at, &at.replacen("\n", &format!("\n{line}\n"), 1))]));
+    s.expect_bad_study("studies/experiments.toml", "seed = 20261124", "seed = 20261124", expect);
+}
+
+#[test]
+fn a_sieve_fraction_without_crushed_particles_is_bad_input() {
+    first_crush_candidate_refused("diameter_m = [0.002, 0.003]", &["candidate[0]", "no crushed particle", "diameter range"]);
+}
+
+/// A crush test at a temperature the crush data do not cover cannot be predicted by the main
+/// study's strength models: bad input naming the candidate and the temperatures.
+#[test]
+fn a_crush_test_outside_the_data_temperatures_is_bad_input() {
+    first_crush_candidate_refused("temperature_c = 800", &["candidate[0]", "temperature_c = 800", "20–20 °C"]);
+}
+
+/// Exhaustive allocation over a small grid: every affordable plan (at most one size per
+/// candidate) is evaluated, ranked by objective, and the recommended plan is the cheapest within
+/// two standard errors of the best; crush tests without the shape measurement and at the data's
+/// temperature run.
+#[test]
+fn exhaustive_allocation_evaluates_every_affordable_plan() {
+    let s = scratch();
+    let text = s.read("studies/experiments.toml");
+    let head = &text[..text.find("[budget]").unwrap()];
+    let study = format!(
+        "{head}[budget]\ntotal = 6000\nallocation = \"exhaustive\"\n\n\
+         [[candidate]]\nname = \"crush Gen 4, shape not measured\"\ntest = \"crush\"\nmaterial = \"gen4\"\nshape_measured = false\ntemperature_c = 20\nsizes = [25, 100]\ncost_per_unit = 20\nfixed_cost = 500\n\n\
+         [[candidate]]\nname = \"repeated impacts Gen 4\"\ntest = \"impact\"\nmaterial = \"gen4\"\nvelocity_m_s = 15\ncounts = [1, 10, 100, 1000]\nsizes = [25, 50]\ncost_per_unit = 60\nfixed_cost = 1000\n\n\
+         [[candidate]]\nname = \"η from rebound tests\"\ntest = \"eta_measurement\"\nsd_log = 0.3\nsizes = [5, 20]\ncost_per_unit = 50\nfixed_cost = 2000\n"
+    );
+    s.write("studies/experiments.toml", &study);
+    let out = s.run(&["run", "studies/experiments.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    // Affordable plans, counted by hand: costs crush 1000 | 2500, impacts 2500 | 4000,
+    // η 2250 | 3000; every subset with at most one size each and total ≤ 6000.
+    let costs = [vec![1000.0, 2500.0], vec![2500.0, 4000.0], vec![2250.0, 3000.0]];
+    let mut affordable = 0;
+    for a in 0..3 {
+        for b in 0..3 {
+            for c in 0..3 {
+                let total: f64 = [(0, a), (1, b), (2, c)].iter().filter(|(_, k)| *k > 0).map(|&(i, k)| costs[i][k - 1]).sum();
+                if (a, b, c) != (0, 0, 0) && total <= 6000.0 {
+                    affordable += 1;
+                }
+            }
+        }
+    }
+    let a = s.path("reports/experiments/allocation.csv");
+    let df = partlife::io::read_table(&a).unwrap();
+    let (obj, se, cost) = (partlife::io::col_f64(&df, &a, "objective").unwrap(), partlife::io::col_f64(&df, &a, "objective_se").unwrap(), partlife::io::col_f64(&df, &a, "cost").unwrap());
+    let (plan, rec) = (partlife::io::col_str(&df, &a, "plan").unwrap(), partlife::io::col_str(&df, &a, "recommended").unwrap());
+    assert_eq!(obj.len(), affordable, "{plan:?}");
+    assert!(cost.iter().all(|c| *c <= 6000.0) && obj.windows(2).all(|w| w[0] >= w[1]), "{cost:?} {obj:?}");
+    let chosen: Vec<usize> = (0..rec.len()).filter(|&i| rec[i] == "yes").collect();
+    assert_eq!(chosen.len(), 1, "{rec:?}");
+    let c = chosen[0];
+    assert!(obj[c] >= obj[0] - 2.0 * se[0], "recommended {} ({}) not within 2 se of {} ({} ± {})", plan[c], obj[c], plan[0], obj[0], se[0]);
+    assert!((0..obj.len()).all(|i| obj[i] < obj[0] - 2.0 * se[0] || cost[i] >= cost[c]), "a cheaper plan is within 2 se of the best");
+    let summary = s.read("reports/experiments/summary.md");
+    assert!(summary.contains(&format!("allocated exhaustively over its {affordable} affordable plans")), "{summary}");
+    assert!(summary.contains(&format!("Recommended: {}", plan[c].split(" + ").next().unwrap().split(" × ").next().unwrap())), "{summary}");
 }

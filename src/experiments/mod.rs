@@ -5,7 +5,8 @@
 //! set of weighted joint samples of everything uncertain (each material's strength-model
 //! parameters, the strength and damage model, η, V), a candidate experiment is simulated under a
 //! truth drawn from that state, the state is updated on the simulated data by importance
-//! reweighting (with an effective-sample-size check and the experiment's own refit as fallback),
+//! reweighting (with an effective-sample-size check and a reserve of further prior samples as
+//! fallback; an experiment may add its own refit),
 //! and the decision is taken again. Averaged over truths this gives the probability of choosing
 //! the better particle, the expected value of sample information for a declared loss, the
 //! expected posterior bands and the expected posterior weight of the true model.
@@ -17,21 +18,26 @@
 //! * [`impact`]: single- and repeated-impact breakage tests (multinomial counts of the broken
 //!   particles after each impact count).
 //! * [`measure`]: measurements of η or of the impact velocity with a lognormal error.
-//! * [`crush`]: crush tests of n more particles (optionally a sieve fraction) with their
-//!   covariates measured.
+//! * [`crush`]: crush tests of n more particles (optionally a sieve fraction), with or without
+//!   each particle's shape measured (unmeasured: a mixture over the population's shapes), at a
+//!   temperature the crush data cover.
 //!
 //! Verified against the closed forms of the normal–normal model (preposterior variance, EVSI of a
 //! two-action decision), on a decision that is already certain (value 0), on an η measurement
 //! on the main study's state (conjugate posterior variance of ln η), on crush tests against
-//! ASTM C1239's pivotal widths and against brute-force nested refitting, and by the
-//! discrimination of Tavares–King damage by repeated impacts: `tests/verification/experiments.rs`.
+//! ASTM C1239's pivotal widths and against brute-force nested refitting, by the
+//! discrimination of Tavares–King damage by repeated impacts, and by the worth of the shape
+//! measurement (none under a model without shape effects; the shape model identified with it,
+//! barely without): `tests/verification/experiments.rs`.
 //!
 //! * [`study`], [`run`], [`plan`]: the `kind = "experiments"` study — candidates with costs and
-//!   sizes, the ranked plans, the greedy allocation of a budget (plans evaluated jointly), tables,
-//!   the figure `experiments_metrics` and a generated `summary.md`.
+//!   sizes, the ranked plans, the allocation of a budget (greedy, or exhaustive over a small
+//!   grid; plans evaluated jointly), tables, the figure `experiments_metrics` and a generated
+//!   `summary.md`.
 //!
-//! Not yet here (next steps of the issue): crush tests without the shape measurement or at another
-//! temperature, the strength-model refit as their fallback.
+//! Not yet here: a refit of the strength model on the pooled crush data as the fallback when
+//! reweighting collapses (the reserve samples are the fallback), and crush tests at temperatures
+//! the crush data do not cover (they need a temperature model of the parameters).
 
 pub mod crush;
 pub mod impact;
@@ -43,7 +49,7 @@ pub mod state;
 pub mod study;
 mod summary;
 
-pub use crush::CrushTest;
+pub use crush::{CrushOptions, CrushTest};
 pub use impact::ImpactTest;
 pub use measure::{Measured, Measurement};
 pub use preposterior::{Draw, Estimate, Experiment, Knowledge, Metrics, Posterior, Route, Settings, preposterior};

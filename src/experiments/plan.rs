@@ -1,6 +1,7 @@
 //! A plan: several candidate experiments run together. Their data are simulated under the same
 //! truth (one after the other from the outer draw's stream) and their log-likelihoods add (the
-//! tests are independent given the sample).
+//! tests are independent given the sample). The evaluated plans and the allocation of a budget
+//! over them (the rules are stated in [`crate::experiments::run`]).
 
 use rand_chacha::ChaCha8Rng;
 
@@ -8,6 +9,7 @@ use super::crush::CrushTest;
 use super::impact::ImpactTest;
 use super::measure::Measurement;
 use super::preposterior::{Experiment, Metrics};
+use super::study::ExperimentsStudy;
 
 /// One candidate experiment of any kind.
 #[derive(Debug, Clone, PartialEq)]
@@ -95,4 +97,42 @@ pub struct Evaluated {
     pub metrics: Metrics,
     /// The objective and its Monte Carlo standard error.
     pub objective: (f64, f64),
+}
+
+/// The allocation of the budget.
+#[derive(Debug, Clone)]
+pub enum Allocated {
+    /// The greedy steps, each the plan so far.
+    Greedy(Vec<Evaluated>),
+    /// Every affordable plan by decreasing objective, and the recommended one's index.
+    Exhaustive {
+        /// The plans.
+        plans: Vec<Evaluated>,
+        /// Index of the recommended plan (None: no affordable plan).
+        chosen: Option<usize>,
+    },
+}
+
+impl Allocated {
+    /// The evaluated plans (steps or every affordable plan).
+    pub fn plans(&self) -> &[Evaluated] {
+        match self {
+            Allocated::Greedy(p) | Allocated::Exhaustive { plans: p, .. } => p,
+        }
+    }
+
+    /// The recommended plan.
+    pub fn recommended(&self) -> Option<&Evaluated> {
+        match self {
+            Allocated::Greedy(p) => p.last(),
+            Allocated::Exhaustive { plans, chosen } => chosen.map(|i| &plans[i]),
+        }
+    }
+}
+
+/// The most informative next step: the greedy rule's first step (the affordable single
+/// (candidate, size) with the largest objective per cost among those gaining more than two
+/// standard errors).
+pub fn first_step<'a>(s: &ExperimentsStudy, singles: &'a [((usize, usize), Evaluated)]) -> Option<&'a Evaluated> {
+    singles.iter().map(|(_, e)| e).filter(|e| e.cost <= s.budget.total && e.objective.0 > 2.0 * e.objective.1).max_by(|x, y| (x.objective.0 / x.cost).total_cmp(&(y.objective.0 / y.cost)))
 }

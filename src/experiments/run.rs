@@ -1,30 +1,40 @@
 //! Runs a `kind = "experiments"` study: the main study's state of knowledge, every candidate at
-//! every size through the preposterior analysis, the ranked plans, the greedy allocation of the
-//! budget, tables, figures and `summary.md`.
+//! every size through the preposterior analysis, the ranked plans, the allocation of the budget
+//! (greedy or exhaustive), tables, figures and `summary.md`.
 //!
 //! # Ranking
 //!
 //! Each (candidate, size) gets the study's objective ([`Objective`]) with its Monte Carlo error,
 //! and the plans are ranked by objective per cost.
 //!
-//! # Budget allocation (greedy)
+//! # Budget allocation
 //!
-//! Starting from no experiment, each step adds the (candidate, size) — at most one size per
-//! candidate — whose addition to the plan so far gives the largest gain of the objective per
-//! cost among those that fit the remaining budget, the plan being evaluated jointly (its
-//! tests' likelihoods multiply, so overlapping information is not counted twice). It stops when
-//! nothing fits or no addition gains more than two Monte Carlo standard errors.
+//! Every plan takes at most one size per candidate and is evaluated jointly: its tests'
+//! likelihoods multiply, so overlapping information is not counted twice.
+//!
+//! **Greedy** (the default): starting from no experiment, each step adds the (candidate, size)
+//! whose addition to the plan so far gives the largest gain of the objective per cost among
+//! those that fit the remaining budget. It stops when nothing fits or no addition gains more
+//! than two Monte Carlo standard errors. Its first step is the "most informative next step" of
+//! the summary under either rule.
+//!
+//! **Exhaustive** (`allocation = "exhaustive"`, for small grids): every affordable plan is
+//! evaluated with the same outer draws (common random numbers, so plans are compared on the
+//! same simulated truths); the recommended plan is the cheapest whose objective lies within two
+//! Monte Carlo standard errors of the largest — more money for a difference the analysis
+//! cannot resolve is not recommended. Greedy allocation can miss the best plan when a costly
+//! test is worth more than two cheap ones together (a knapsack); exhaustive cannot, on its grid.
 
 use rayon::prelude::*;
 
-use super::crush::CrushTest;
+use super::crush::{CrushOptions, CrushTest};
 use super::impact::ImpactTest;
 use super::measure::{Measured, Measurement};
-pub use super::plan::Evaluated;
+pub use super::plan::{Allocated, Evaluated, first_step};
 use super::plan::{Candidate, Plan};
 use super::preposterior::{Metrics, Settings, preposterior};
 use super::state::State;
-use super::study::{ExperimentsStudy, Objective, TestKind};
+use super::study::{Allocation, ExperimentsStudy, Objective, TestKind};
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
 use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
@@ -97,7 +107,7 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
         // size, then resized.
         let n0 = c.sizes[0] as u64;
         let base = match c.test {
-            TestKind::Crush => CrushTest::new(&state, material, n0 as usize, c.diameter_m.map(|[lo, hi]| (lo, hi))).map(Candidate::Crush),
+            TestKind::Crush => CrushTest::new(&state, material, n0 as usize, &CrushOptions { diameter: c.diameter_m.map(|[lo, hi]| (lo, hi)), shape_measured: c.shape_measured.unwrap_or(true), temperature_c: c.temperature_c }).map(Candidate::Crush),
             TestKind::Impact => ImpactTest::new(&state, material, n0, c.velocity_m_s.unwrap_or(0.0), c.counts.clone().unwrap_or_default().iter().map(|&k| k as u64).collect()).map(Candidate::Impact),
             TestKind::EtaMeasurement => Measurement::new(&state, Measured::EnergyFraction, n0, c.sd_log.unwrap_or(0.0)).map(Candidate::Measure),
             TestKind::VelocityMeasurement => Measurement::new(&state, Measured::Velocity, n0, c.sd_log.unwrap_or(0.0)).map(Candidate::Measure),
@@ -128,8 +138,50 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
         }
     }
 
-    // Greedy allocation of the budget.
-    pb.set_message("budget allocation");
+    let allocated = match s.budget.allocation {
+        Allocation::Greedy => {
+            pb.set_message("budget allocation (greedy)");
+            Allocated::Greedy(greedy(s, &singles, &evaluate, &pb)?)
+        }
+        Allocation::Exhaustive => {
+            pb.set_message("budget allocation (exhaustive)");
+            let plans = s.affordable_plans(s.budget.max_plans);
+            pb.set_length((1 + runs + plans.len()) as u64);
+            // One salt for every plan: common random numbers.
+            let mut evaluated = Vec::with_capacity(plans.len());
+            for p in &plans {
+                evaluated.push(evaluate(p, 0xE7A7)?);
+                pb.inc(1);
+            }
+            evaluated.sort_by(|a, b| b.objective.0.total_cmp(&a.objective.0).then(a.cost.total_cmp(&b.cost)));
+            let chosen = evaluated.first().map(|best| {
+                let floor = best.objective.0 - 2.0 * best.objective.1;
+                (0..evaluated.len()).filter(|&i| evaluated[i].objective.0 >= floor).min_by(|&a, &b| evaluated[a].cost.total_cmp(&evaluated[b].cost).then(a.cmp(&b))).unwrap_or(0)
+            });
+            Allocated::Exhaustive { plans: evaluated, chosen }
+        }
+    };
+    pb.set_position(pb.length().unwrap_or(0));
+
+    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    write_tables(&mut dir, s, &state, &keys, &singles, &allocated)?;
+    let summary = super::summary::summary(s, &state, &singles, &allocated);
+    dir.write_bytes("summary.md", summary.text.as_bytes())?;
+    pb.set_message("figures");
+    let mut failures = Vec::new();
+    let rendered = crate::report::experiments::render(dir.path(), s.figures.width_cm)?;
+    record_figures(&mut dir, rendered, &mut failures);
+    let mut evaluations = std::collections::BTreeMap::new();
+    evaluations.insert("prior_samples".to_string(), state.samples.len() as u64);
+    evaluations.insert("simulated_datasets".to_string(), (singles.len() + allocated.plans().len()) as u64 * a.outer as u64);
+    let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
+    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
+    pb.finish_and_clear();
+    Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: summary.headlines })
+}
+
+/// The greedy allocation (module docs).
+fn greedy(s: &ExperimentsStudy, singles: &[((usize, usize), Evaluated)], evaluate: &(dyn Fn(&[(usize, usize)], u64) -> Result<Evaluated> + Sync), pb: &indicatif::ProgressBar) -> Result<Vec<Evaluated>> {
     let mut plan: Vec<(usize, usize)> = Vec::new();
     let mut steps: Vec<Evaluated> = Vec::new();
     let (mut spent, mut current) = (0.0, 0.0);
@@ -158,28 +210,13 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
         current = best.objective.0;
         steps.push(best);
     }
-    pb.set_position(pb.length().unwrap_or(0));
-
-    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
-    write_tables(&mut dir, s, &state, &keys, &singles, &steps)?;
-    let summary = super::summary::summary(s, &state, &singles, &steps);
-    dir.write_bytes("summary.md", summary.text.as_bytes())?;
-    pb.set_message("figures");
-    let mut failures = Vec::new();
-    let rendered = crate::report::experiments::render(dir.path(), s.figures.width_cm)?;
-    record_figures(&mut dir, rendered, &mut failures);
-    let mut evaluations = std::collections::BTreeMap::new();
-    evaluations.insert("prior_samples".to_string(), state.samples.len() as u64);
-    evaluations.insert("simulated_datasets".to_string(), (singles.len() + steps.len()) as u64 * a.outer as u64);
-    let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
-    pb.finish_and_clear();
-    Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: summary.headlines })
+    Ok(steps)
 }
 
-/// `plans.csv` (every candidate at every size, ranked), `allocation.csv` (the greedy steps),
+/// `plans.csv` (every candidate at every size, ranked), `allocation.csv` (the greedy steps, or
+/// every affordable plan by decreasing objective with the recommended one marked),
 /// `prior.csv` (the state of knowledge's prior metrics).
-fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: &[String], singles: &[((usize, usize), Evaluated)], steps: &[Evaluated]) -> Result<()> {
+fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: &[String], singles: &[((usize, usize), Evaluated)], allocated: &Allocated) -> Result<()> {
     let h = state.years.len() - 1;
     let last = state.years[h];
     let qs = [state.log10_p_quantity(0, h), state.log10_p_quantity(1, h)];
@@ -228,13 +265,18 @@ fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: 
     cols.extend(metric_columns(&rows));
     dir.write_table("plans", &mut table(cols)?)?;
 
+    let steps = allocated.plans();
     let steps_ref: Vec<&Evaluated> = steps.iter().collect();
-    let mut cols = vec![
-        ucol("step", (1..=steps.len() as u64).collect()),
-        scol("added", steps.iter().map(|e| e.names.last().cloned().unwrap_or_default()).collect()),
-        ucol("added_size", steps.iter().map(|e| *e.sizes.last().unwrap_or(&0)).collect()),
-        scol("plan", steps.iter().map(|e| e.names.iter().zip(&e.sizes).map(|(n, k)| format!("{n} × {k}")).collect::<Vec<_>>().join(" + ")).collect()),
-    ];
+    let plan_names = scol("plan", steps.iter().map(|e| e.names.iter().zip(&e.sizes).map(|(n, k)| format!("{n} × {k}")).collect::<Vec<_>>().join(" + ")).collect());
+    let mut cols = match allocated {
+        Allocated::Greedy(_) => vec![
+            ucol("step", (1..=steps.len() as u64).collect()),
+            scol("added", steps.iter().map(|e| e.names.last().cloned().unwrap_or_default()).collect()),
+            ucol("added_size", steps.iter().map(|e| *e.sizes.last().unwrap_or(&0)).collect()),
+            plan_names,
+        ],
+        Allocated::Exhaustive { chosen, .. } => vec![ucol("rank", (1..=steps.len() as u64).collect()), plan_names, scol("recommended", (0..steps.len()).map(|i| if Some(i) == *chosen { "yes" } else { "" }.to_string()).collect())],
+    };
     cols.extend(metric_columns(&steps_ref));
     dir.write_table("allocation", &mut table(cols)?)?;
 

@@ -20,6 +20,8 @@
 //!
 //! [budget]
 //! total = 20000                      # in the decision's currency
+//! allocation = "greedy"              # greedy | exhaustive (every affordable plan; small grids)
+//! max_plans = 200                    # exhaustive: refuse grids with more affordable plans
 //!
 //! [[candidate]]
 //! name = "repeated impacts, Gen 4"
@@ -28,6 +30,8 @@
 //! velocity_m_s = 15                  # impact tests
 //! counts = [1, 10, 100, 1000]        # impact tests: broken particles counted after these impacts
 //! diameter_m = [0.0008, 0.001]       # crush tests: a sieve fraction (optional)
+//! shape_measured = true              # crush tests: roundness and sphericity measured per particle (default)
+//! temperature_c = 20                 # crush tests: test temperature, within the crush data's (optional)
 //! sd_log = 0.2                       # measurements: sd of ln of one measurement
 //! sizes = [25, 50, 100]              # particles (tests) or measurements
 //! cost_per_unit = 60                 # per particle or measurement
@@ -140,6 +144,27 @@ impl Default for AnalysisOptions {
 pub struct BudgetOptions {
     /// Total budget.
     pub total: f64,
+    /// How the budget is allocated across candidates.
+    #[serde(default)]
+    pub allocation: Allocation,
+    /// Exhaustive allocation: the most plans it may evaluate.
+    #[serde(default = "max_plans")]
+    pub max_plans: usize,
+}
+
+fn max_plans() -> usize {
+    200
+}
+
+/// How the budget is allocated ([`crate::experiments::run`] states each rule).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Allocation {
+    /// Add the best gain per cost, step by step.
+    #[default]
+    Greedy,
+    /// Every affordable plan (at most one size per candidate), evaluated jointly.
+    Exhaustive,
 }
 
 /// One `[[candidate]]`.
@@ -172,6 +197,12 @@ pub struct CandidateSpec {
     /// Measurement error (sd of ln).
     #[serde(default)]
     pub sd_log: Option<f64>,
+    /// Crush tests: each particle's roundness and sphericity measured (default true).
+    #[serde(default)]
+    pub shape_measured: Option<bool>,
+    /// Crush tests: the test temperature (°C).
+    #[serde(default)]
+    pub temperature_c: Option<f64>,
 }
 
 impl CandidateSpec {
@@ -272,9 +303,16 @@ impl ExperimentsStudy {
                         return bad(key("counts"), format!("an impact test needs 1 to 16 increasing impact counts ≥ 1, got {:?}", c.counts));
                     }
                     only(c.diameter_m.is_some(), "diameter_m", "crush tests")?;
+                    only(c.shape_measured.is_some(), "shape_measured", "crush tests")?;
+                    only(c.temperature_c.is_some(), "temperature_c", "crush tests")?;
                     only(c.sd_log.is_some(), "sd_log", "measurements")?;
                 }
                 TestKind::Crush => {
+                    if let Some(t) = c.temperature_c
+                        && !(t.is_finite() && t > -273.15)
+                    {
+                        return bad(key("temperature_c"), format!("must be a finite temperature above absolute zero (−273.15 °C), got {t}"));
+                    }
                     if let Some([lo, hi]) = c.diameter_m
                         && !(positive(lo) && lo < hi && hi.is_finite())
                     {
@@ -291,6 +329,8 @@ impl ExperimentsStudy {
                     only(c.velocity_m_s.is_some(), "velocity_m_s", "impact tests")?;
                     only(c.counts.is_some(), "counts", "impact tests")?;
                     only(c.diameter_m.is_some(), "diameter_m", "crush tests")?;
+                    only(c.shape_measured.is_some(), "shape_measured", "crush tests")?;
+                    only(c.temperature_c.is_some(), "temperature_c", "crush tests")?;
                 }
             }
             cheapest = cheapest.min(c.cost(c.sizes[0] as u64));
@@ -298,6 +338,40 @@ impl ExperimentsStudy {
         if self.budget.total < cheapest {
             return bad("budget.total".into(), format!("{} {} is below the cheapest test ({cheapest} {})", self.budget.total, self.decision.currency, self.decision.currency));
         }
+        if self.budget.allocation == Allocation::Exhaustive {
+            let n = self.affordable_plans(self.budget.max_plans + 1).len();
+            if n > self.budget.max_plans {
+                return bad("budget.allocation".into(), format!("exhaustive allocation would evaluate more than budget.max_plans = {} affordable plans: use \"greedy\", fewer sizes or candidates, or raise max_plans", self.budget.max_plans));
+            }
+        }
         Ok(())
+    }
+
+    /// Every non-empty plan — at most one size per candidate, as (candidate, size index) pairs in
+    /// candidate order — whose cost fits the budget, in lexicographic order; at most `limit`.
+    pub fn affordable_plans(&self, limit: usize) -> Vec<Vec<(usize, usize)>> {
+        fn walk(s: &ExperimentsStudy, i: usize, spent: f64, plan: &mut Vec<(usize, usize)>, out: &mut Vec<Vec<(usize, usize)>>, limit: usize) {
+            if out.len() >= limit {
+                return;
+            }
+            if i == s.candidate.len() {
+                if !plan.is_empty() {
+                    out.push(plan.clone());
+                }
+                return;
+            }
+            walk(s, i + 1, spent, plan, out, limit);
+            for (j, &n) in s.candidate[i].sizes.iter().enumerate() {
+                let c = spent + s.candidate[i].cost(n as u64);
+                if c <= s.budget.total {
+                    plan.push((i, j));
+                    walk(s, i + 1, c, plan, out, limit);
+                    plan.pop();
+                }
+            }
+        }
+        let mut out = Vec::new();
+        walk(self, 0, 0.0, &mut Vec::new(), &mut out, limit);
+        out
     }
 }

@@ -1,6 +1,6 @@
 //! `summary.md` of an experiments study: every sentence generated from the numbers it states.
 
-use super::plan::Evaluated;
+use super::plan::{Allocated, Evaluated, first_step};
 use super::state::State;
 use super::study::ExperimentsStudy;
 
@@ -41,7 +41,7 @@ fn pm(v: f64, se: f64) -> String {
 }
 
 /// The summary of the study.
-pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), Evaluated)], steps: &[Evaluated]) -> Summary {
+pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), Evaluated)], allocated: &Allocated) -> Summary {
     let cur = &s.decision.currency;
     let labels: Vec<String> = state.forms[0].setup.materials.iter().map(|m| m.model.label.clone()).collect();
     let h = state.years.len() - 1;
@@ -99,9 +99,13 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         ));
     }
 
-    md.push_str(&format!("\n## The budget ({} {cur}), allocated greedily\n\n", s.budget.total));
+    let rule = match allocated {
+        Allocated::Greedy(_) => "greedily".to_string(),
+        Allocated::Exhaustive { plans, .. } => format!("exhaustively over its {} affordable plans", plans.len()),
+    };
+    md.push_str(&format!("\n## The budget ({} {cur}), allocated {rule}\n\n", s.budget.total));
     let mut headlines = Vec::new();
-    match steps.first() {
+    match first_step(s, singles) {
         None => {
             let line = format!("With a budget of {} {cur}, no candidate gains more than two Monte Carlo standard errors of the objective ({}): on these numbers no further test is worth its cost.", s.budget.total, s.decision.objective.describe());
             md.push_str(&format!("{line}\n"));
@@ -129,12 +133,38 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
             );
             md.push_str(&format!("{line}\n\n"));
             headlines.push(line);
-            md.push_str("| step | plan | cost | objective | P(correct choice) | weight of true damage model |\n|---|---|---|---|---|---|\n");
-            for (k, e) in steps.iter().enumerate() {
-                md.push_str(&format!("| {} | {} | {:.0} | {} | {} | {} |\n", k + 1, plan_phrase(s, e), e.cost, pm(e.objective.0, e.objective.1), pm(e.metrics.pcs.mean, e.metrics.pcs.se), pm(e.metrics.true_label_weight[0].mean, e.metrics.true_label_weight[0].se)));
+            let row = |k: String, e: &Evaluated| format!("| {k} | {} | {:.0} | {} | {} | {} |\n", plan_phrase(s, e), e.cost, pm(e.objective.0, e.objective.1), pm(e.metrics.pcs.mean, e.metrics.pcs.se), pm(e.metrics.true_label_weight[0].mean, e.metrics.true_label_weight[0].se));
+            let head = |k: &str| format!("| {k} | plan | cost | objective | P(correct choice) | weight of true damage model |\n|---|---|---|---|---|---|\n");
+            match allocated {
+                Allocated::Greedy(steps) => {
+                    md.push_str(&head("step"));
+                    for (k, e) in steps.iter().enumerate() {
+                        md.push_str(&row(format!("{}", k + 1), e));
+                    }
+                    let total = steps.last().map_or(0.0, |e| e.cost);
+                    md.push_str(&format!("\nThe plan spends {total:.0} of {} {cur}; the rule (largest gain per cost, stop below two standard errors) is stated in `partlife::experiments::run`.\n", s.budget.total));
+                }
+                Allocated::Exhaustive { plans, chosen } => {
+                    md.push_str(&head("rank"));
+                    for (k, e) in plans.iter().enumerate().take(10) {
+                        md.push_str(&row(format!("{}{}", k + 1, if Some(k) == *chosen { " (recommended)" } else { "" }), e));
+                    }
+                    if plans.len() > 10 {
+                        md.push_str(&format!("\n(the first 10 of {}; every plan is in `allocation.csv`)\n", plans.len()));
+                    }
+                    if let Some(c) = chosen.map(|i| &plans[i]) {
+                        let best = &plans[0];
+                        md.push_str(&format!(
+                            "\nRecommended: {} for {:.0} of {} {cur}, objective {} — {}. The rule (every affordable plan on the same simulated truths; the cheapest within two standard errors of the largest objective) is stated in `partlife::experiments::run`.\n",
+                            plan_phrase(s, c),
+                            c.cost,
+                            s.budget.total,
+                            pm(c.objective.0, c.objective.1),
+                            if std::ptr::eq(c, best) { "the largest of every plan".to_string() } else { format!("within two standard errors of the largest, {} for {:.0} {cur}", pm(best.objective.0, best.objective.1), best.cost) }
+                        ));
+                    }
+                }
             }
-            let total = steps.last().map_or(0.0, |e| e.cost);
-            md.push_str(&format!("\nThe plan spends {total:.0} of {} {cur}; the rule (largest gain per cost, stop below two standard errors) is stated in `partlife::experiments::run`.\n", s.budget.total));
         }
     }
     let max_evsi = singles.iter().map(|(_, e)| e.metrics.evsi.mean + 2.0 * e.metrics.evsi.se).fold(f64::NEG_INFINITY, f64::max);

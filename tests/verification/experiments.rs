@@ -185,7 +185,7 @@ fn an_energy_fraction_measurement_narrows_ln_eta_as_the_conjugate_model_says() {
 /// width 1/q₀.₀₅ − 1/q₀.₉₅ (q = m̂/m, simulated pivots).
 #[test]
 fn crush_tests_narrow_the_modulus_band_as_the_c1239_pivotal_interval() {
-    use partlife::experiments::CrushTest;
+    use partlife::experiments::{CrushOptions, CrushTest};
     use partlife::weibull::simulate_pivotal;
     let state = state_of(8000, true);
     for j in 0..2 {
@@ -196,7 +196,7 @@ fn crush_tests_narrow_the_modulus_band_as_the_c1239_pivotal_interval() {
             1.0 / p.q_quantile(0.05) - 1.0 / p.q_quantile(0.95)
         };
         for n in [n0, 2 * n0] {
-            let test = CrushTest::new(&state, j, n, None).unwrap();
+            let test = CrushTest::new(&state, j, n, &CrushOptions::default()).unwrap();
             let m = preposterior(&state.knowledge, &test, Settings { outer: 300, min_ess: 50.0, seed: 9, truth: None, active: Some(4000) }).unwrap();
             let got = m.width90[q].mean / m.mean[q].mean;
             let c1239 = rel(n0 + n);
@@ -220,14 +220,14 @@ fn crush_tests_narrow_the_modulus_band_as_the_c1239_pivotal_interval() {
 /// preposterior engine reweights the prior draws instead. Their expected widths must agree.
 #[test]
 fn reweighting_agrees_with_brute_force_nested_refitting() {
-    use partlife::experiments::CrushTest;
+    use partlife::experiments::{CrushOptions, CrushTest};
     use partlife::uq::setup::Mode;
     use partlife::weibull::{fit_mle, simulate_pivotal};
     use rand::SeedableRng;
     let state = state_of(8000, true);
     let (j, n) = (1, 50);
     let q = state.weibull_m_quantity(j);
-    let m = preposterior(&state.knowledge, &CrushTest::new(&state, j, n, None).unwrap(), Settings { outer: 300, min_ess: 50.0, seed: 21, truth: None, active: Some(4000) }).unwrap();
+    let m = preposterior(&state.knowledge, &CrushTest::new(&state, j, n, &CrushOptions::default()).unwrap(), Settings { outer: 300, min_ess: 50.0, seed: 21, truth: None, active: Some(4000) }).unwrap();
     let measured = &state.forms[0].setup.materials[j].sample.strength;
     let pivots = simulate_pivotal(measured.len() + n, 20000, 8).unwrap();
     let widths: Vec<f64> = m
@@ -249,4 +249,37 @@ fn reweighting_agrees_with_brute_force_nested_refitting() {
     // Both average over the same 300 truths; the Bayesian band and the pivotal interval agree
     // to O(1/N) (3 %, as against the C1239 tables above), plus 4 combined standard errors.
     assert!((m.width90[q].mean - nested.mean).abs() < 0.03 * nested.mean + 4.0 * m.width90[q].se.hypot(nested.se), "{:?} vs {nested:?}", m.width90[q]);
+}
+
+/// The shape measurement. Under the deliverable's strength model (no covariate effects) every
+/// particle has the same scale, so crush tests with and without each particle's roundness and
+/// sphericity measured carry the same information: identical metrics. Under the main study's
+/// strength models, with the truth drawn from the shape model (roundness and sphericity as
+/// contact curvature), the measured test must identify that model better than the unmeasured
+/// one (whose likelihood mixes over the population's shapes), and the unmeasured one must still
+/// narrow the modulus band.
+#[test]
+fn the_shape_measurement_is_worth_what_the_shape_effects_explain() {
+    use partlife::experiments::{CrushOptions, CrushTest};
+    use partlife::strength::Effect;
+    let options = |shape_measured| CrushOptions { shape_measured, ..Default::default() };
+    let settings = Settings { outer: 200, min_ess: 50.0, seed: 31, truth: None, active: Some(4000) };
+    let state = state_of(8000, true);
+    let run = |measured| preposterior(&state.knowledge, &CrushTest::new(&state, 0, 100, &options(measured)).unwrap(), settings).unwrap();
+    assert_eq!(run(true), run(false));
+
+    let state = main_study_state(8000);
+    let shape = state.forms.iter().position(|f| f.setup.materials[0].model.fit.linear() == [Effect::Roundness, Effect::Sphericity]).expect("the main study has the shape model") as u32;
+    let settings = Settings { truth: Some((1, shape)), ..settings };
+    let run = |measured| preposterior(&state.knowledge, &CrushTest::new(&state, 0, 100, &options(measured)).unwrap(), settings).unwrap();
+    let (with, without) = (run(true), run(false));
+    let (w, wo) = (with.true_label_weight[1], without.true_label_weight[1]);
+    let q = state.weibull_m_quantity(0);
+    eprintln!("true strength-model weight: prior {:.4}, measured {w:?}, not measured {wo:?}; width90 m: prior {:.3}, measured {:?}, not {:?}", with.prior_true_label_weight[1], with.prior.width90[q], with.width90[q], without.width90[q]);
+    assert!(w.mean - wo.mean > 3.0 * w.se.hypot(wo.se), "measured {w:?} vs not measured {wo:?}");
+    // Unmeasured, the data still carry some evidence (the shape model's mixture of scales).
+    assert!(wo.mean - with.prior_true_label_weight[1] > 3.0 * wo.se, "not measured {wo:?} vs prior {}", with.prior_true_label_weight[1]);
+    // The README's figures (0.05 → 0.96 measured, → 0.11 not measured).
+    assert!((with.prior_true_label_weight[1] - 0.05).abs() < 0.01 && (w.mean - 0.96).abs() < 0.03 && (wo.mean - 0.11).abs() < 0.03, "README figures: prior {}, {w:?}, {wo:?}", with.prior_true_label_weight[1]);
+    assert!(without.width90[q].mean < 0.9 * without.prior.width90[q], "{:?} vs prior {}", without.width90[q], without.prior.width90[q]);
 }

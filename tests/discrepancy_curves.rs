@@ -62,12 +62,21 @@ fn synth_settings(file: &str, particles: usize, edit: &dyn Fn(String) -> String)
     edit(format!("{head}[[case]]{case}"))
 }
 
+/// The three studies share one calibration and run at the same time (each is its own process
+/// writing its own report; the suite's time is what CI budgets).
 #[test]
 fn curve_loop_names_temperature_and_compliance_and_nothing_on_clean_curves() {
     let s = calibrated();
+    std::thread::scope(|scope| {
+        scope.spawn(|| mixed_temperatures_are_named(&s));
+        scope.spawn(|| clean_curves_name_nothing(&s));
+        scope.spawn(|| machine_compliance_is_named(&s));
+    });
+}
 
-    // Temperature mixed in: the RT calibration against RT and 800 °C curves.
-    let v = run_verdict(&s, "mixed", &curve_study(&[("crush_curves_gen3_rt.csv", 20.0), ("crush_curves_gen3_800c.csv", 800.0)]));
+/// Temperature mixed in: the RT calibration against RT and 800 °C curves.
+fn mixed_temperatures_are_named(s: &Scratch) {
+    let v = run_verdict(s, "mixed", &curve_study(&[("crush_curves_gen3_rt.csv", 20.0), ("crush_curves_gen3_800c.csv", 800.0)]));
     assert_eq!(named(&v), ["temperature"], "{v}");
     let (r, lo, hi) = parameter(&v, "temperature");
     // The generator softens G by 29/42 and K1 by 48/72 over 780 °C: 0.95–0.96 per 100 °C.
@@ -86,19 +95,23 @@ fn curve_loop_names_temperature_and_compliance_and_nothing_on_clean_curves() {
     assert!(w[1]["largest_relative_delta"].as_f64().unwrap() > 0.2, "{w:?}");
     // The trend along the curve is diagnosed for every file.
     assert_eq!(v["trend_along_curve"].as_array().unwrap().len(), 2, "{v}");
+}
 
-    // Nothing hidden: the calibration's own curves.
-    let v = run_verdict(&s, "clean", &curve_study(&[("crush_curves_gen3_rt.csv", 20.0)]));
+/// Nothing hidden: the calibration's own curves.
+fn clean_curves_name_nothing(s: &Scratch) {
+    let v = run_verdict(s, "clean", &curve_study(&[("crush_curves_gen3_rt.csv", 20.0)]));
     assert!(named(&v).is_empty(), "{v}");
     assert!(v["gap_before"].as_f64().unwrap() < 2.0, "{v}");
     let skipped = v["evidence"].as_array().unwrap().iter().find(|e| e["candidate"] == "temperature").unwrap();
     assert!(skipped["skipped"].as_str().unwrap().contains("one temperature"), "{skipped}");
+}
 
-    // A compliant testing machine: the same material, c = 0.03 µm/N hidden.
+/// A compliant testing machine: the same material, c = 0.03 µm/N hidden.
+fn machine_compliance_is_named(s: &Scratch) {
     s.write("datasets/compliant.toml", &synth_settings("compliant.csv", 6, &|t| common::edited(&t, &[("file = \"compliant.csv\"", "file = \"compliant.csv\"\ncompliance = 3.0e-8")])));
     let out = s.run(&["datasets", "synth-curves", "--settings", "datasets/compliant.toml"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
-    let v = run_verdict(&s, "compliant", &curve_study(&[("compliant.csv", 20.0)]));
+    let v = run_verdict(s, "compliant", &curve_study(&[("compliant.csv", 20.0)]));
     assert_eq!(named(&v).first().map(|s| s.as_str()), Some("compliance"), "{v}");
     let (c, lo, hi) = parameter(&v, "compliance");
     assert!(lo <= 0.03 && hi >= 0.03, "compliance {c} [{lo}, {hi}] µm/N misses 0.03");

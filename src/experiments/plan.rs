@@ -120,14 +120,6 @@ impl Allocated {
             Allocated::Greedy(p) | Allocated::Exhaustive { plans: p, .. } => p,
         }
     }
-
-    /// The recommended plan.
-    pub fn recommended(&self) -> Option<&Evaluated> {
-        match self {
-            Allocated::Greedy(p) => p.last(),
-            Allocated::Exhaustive { plans, chosen } => chosen.map(|i| &plans[i]),
-        }
-    }
 }
 
 /// The most informative next step: the greedy rule's first step (the affordable single

@@ -45,6 +45,7 @@ use rayon::prelude::*;
 use super::preposterior::Experiment;
 use super::state::State;
 use crate::error::{Error, Result};
+use crate::strength::regress::ln_density_of_log;
 use crate::strength::{Effect, Term};
 use crate::uq::setup::Mode;
 
@@ -88,11 +89,10 @@ impl Default for CrushOptions {
 /// Points of a mixture's log-density table.
 pub const GRID: usize = 257;
 
-/// ln f(y; m, ℓ) of y = ln s for Weibull strength s with modulus m and scale e^ℓ, up to the
-/// constant Jacobian: ln m + z − e^z with z = m (y − ℓ).
+/// ln f(y; m, ℓ) of y = ln s for Weibull strength s with modulus m and scale e^ℓ
+/// ([`ln_density_of_log`]).
 fn ln_gumbel_min(y: f64, m: f64, l: f64) -> f64 {
-    let z = m * (y - l);
-    m.ln() + z - z.exp()
+    ln_density_of_log(y, l, 1.0 / m)
 }
 
 /// ln[(1/R) Σ_r f(y; m, ℓ_r)] and its derivative in y, evaluated exactly (log-sum-exp; the
@@ -197,11 +197,6 @@ impl CrushTest {
         let r = rows.len();
         let mixture = (!options.shape_measured).then(|| (0..shape.len()).into_par_iter().map(|k| MixtureTable::new(shape[k], &ln_scale[k * r..(k + 1) * r])).collect());
         Ok(CrushTest { material, particles, diameter, rows, shape, ln_scale, mixture })
-    }
-
-    /// Whether each particle's shape is measured.
-    pub fn shape_measured(&self) -> bool {
-        self.mixture.is_none()
     }
 
     /// Number of rows new particles are drawn from.

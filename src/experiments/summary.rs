@@ -152,15 +152,15 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
                     if plans.len() > 10 {
                         md.push_str(&format!("\n(the first 10 of {}; every plan is in `allocation.csv`)\n", plans.len()));
                     }
-                    if let Some(c) = chosen.map(|i| &plans[i]) {
-                        let best = &plans[0];
+                    if let Some(i) = *chosen {
+                        let (c, best) = (&plans[i], &plans[0]);
                         md.push_str(&format!(
                             "\nRecommended: {} for {:.0} of {} {cur}, objective {} — {}. The rule (every affordable plan on the same simulated truths; the cheapest within two standard errors of the largest objective) is stated in `partlife::experiments::run`.\n",
                             plan_phrase(s, c),
                             c.cost,
                             s.budget.total,
                             pm(c.objective.0, c.objective.1),
-                            if std::ptr::eq(c, best) { "the largest of every plan".to_string() } else { format!("within two standard errors of the largest, {} for {:.0} {cur}", pm(best.objective.0, best.objective.1), best.cost) }
+                            if i == 0 { "the largest of every plan".to_string() } else { format!("within two standard errors of the largest, {} for {:.0} {cur}", pm(best.objective.0, best.objective.1), best.cost) }
                         ));
                     }
                 }

@@ -38,6 +38,14 @@ pub struct Design<'a> {
     pub offset: Option<&'a [f64]>,
 }
 
+/// Log density of y = ln x for Weibull strength x with scale e^ln_scale and modulus 1/b: y is
+/// minimum-Gumbel with location ln_scale and scale b, ln f = −ln b + w − e^w with
+/// w = (y − ln_scale)/b (the crate's one copy; the density of x subtracts y).
+pub fn ln_density_of_log(y: f64, ln_scale: f64, b: f64) -> f64 {
+    let w = (y - ln_scale) / b;
+    -b.ln() + w - w.exp()
+}
+
 /// A fitted Weibull regression.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RegFit {
@@ -74,8 +82,7 @@ impl RegFit {
     /// Log density of x under Weibull(1/b, e^ln_scale).
     pub fn ln_density_at(&self, ln_scale: f64, x: f64) -> f64 {
         let y = x.ln();
-        let w = (y - ln_scale) / self.b;
-        -self.b.ln() + w - w.exp() - y
+        ln_density_of_log(y, ln_scale, self.b) - y
     }
 
     /// The value of Weibull(1/b, e^ln_scale) at probability u (inversion).

@@ -12,7 +12,7 @@ fn scratch() -> Scratch {
     let text = s.read("studies/experiments.toml");
     s.write(
         "studies/experiments.toml",
-        &edited(&text, &[("samples = 4000", "samples = 1500"), ("reserve = 4000", "reserve = 1500"), ("outer = 300", "outer = 60"), ("sizes = [5, 20, 50]", "sizes = [5, 50]")]),
+        &edited(&text, &[("samples = 4000", "samples = 1500"), ("reserve = 4000", "reserve = 1500"), ("outer = 300", "outer = 60"), ("sizes = [5, 20, 50]", "sizes = [5, 50]"), ("naming_draws = 30", "naming_draws = 20")]),
     );
     s
 }
@@ -40,6 +40,7 @@ fn experiments_study_writes_ranked_plans_allocation_summary_and_figure() {
     assert!((0..rank.len()).all(|i| obj[i] / cost[i] <= obj[best] / cost[best]), "rank 1 is not the largest objective per cost");
     // The README's finding: repeated impacts on Gen 4 narrow the lifetime bands most per cost.
     let names = partlife::io::col_str(&df, &p, "candidate").unwrap();
+    let size = partlife::io::col_f64(&df, &p, "size").unwrap();
     assert_eq!(names[best], "repeated impacts Gen 4");
     // The summary's headline sentence states the first allocation step's numbers.
     let a = dir.join("allocation.csv");
@@ -52,6 +53,19 @@ fn experiments_study_writes_ranked_plans_allocation_summary_and_figure() {
     assert!(line.contains(&format!("{:.3}", pcs[0])) || line.contains(&format!("{:.4}", pcs[0])), "{line} vs {}", pcs[0]);
     // The README's other finding: the choice itself is already settled.
     assert!(summary.contains("No candidate's expected value of information exceeds 1 % of the loss"), "{summary}");
+    // The naming loop's verdict: on the crush candidates' first 20 campaigns, a share with its
+    // error; NaN and 0 draws elsewhere; and the summary's sentence states its numbers.
+    let (test, verdict, draws) = (partlife::io::col_str(&df, &p, "test").unwrap(), partlife::io::col_f64(&df, &p, "naming_names_truth").unwrap(), partlife::io::col_f64(&df, &p, "naming_draws").unwrap());
+    for i in 0..test.len() {
+        if test[i] == "crush" {
+            assert!(draws[i] == 20.0 && (0.0..=1.0).contains(&verdict[i]), "{}: {} over {}", names[i], verdict[i], draws[i]);
+        } else {
+            assert!(draws[i] == 0.0 && verdict[i].is_nan(), "{}: {} over {}", names[i], verdict[i], draws[i]);
+        }
+    }
+    let gen4_100 = (0..test.len()).find(|&i| names[i] == "crush Gen 4" && size[i] == 100.0).unwrap();
+    let line = summary.lines().find(|l| l.starts_with("With 100 more Gen 4 crush tests (today 45)")).unwrap_or_else(|| panic!("no naming sentence in\n{summary}"));
+    assert!(line.contains(&format!("in {:.2}", verdict[gen4_100])) || line.contains(&format!("in {:.3}", verdict[gen4_100])), "{line} vs {}", verdict[gen4_100]);
     // The allocation spends within the budget, each step more.
     let spent = partlife::io::col_f64(&alloc, &a, "cost").unwrap();
     assert!(spent.windows(2).all(|w| w[1] > w[0]) && spent.last().is_none_or(|c| *c <= 15000.0), "{spent:?}");
@@ -60,7 +74,7 @@ fn experiments_study_writes_ranked_plans_allocation_summary_and_figure() {
 #[test]
 fn bad_experiments_inputs_exit_2_naming_the_key() {
     let study = "studies/experiments.toml";
-    let cases: [(&str, &str, &[&str]); 11] = [
+    let cases: [(&str, &str, &[&str]); 14] = [
         ("sizes = [25, 50, 100]\ncost_per_unit = 40           # one crush", "sizes = [0, 50, 100]\ncost_per_unit = 40           # one crush", &["candidate[0].sizes", "≥ 1"]),
         ("cost_per_unit = 40           # one crush", "cost_per_unit = -40           # one crush", &["candidate[0].cost_per_unit", "> 0"]),
         ("velocity_m_s = 15            # fast enough", "velocity_m_s = 0            # fast enough", &["candidate[2].velocity_m_s"]),
@@ -72,6 +86,9 @@ fn bad_experiments_inputs_exit_2_naming_the_key() {
         ("counts = [1]\n", "counts = [1]\nshape_measured = false\n", &["candidate[2].shape_measured", "only crush tests"]),
         ("material = \"gen4\"\nsizes = [25, 50, 100]", "material = \"gen4\"\ntemperature_c = -300\nsizes = [25, 50, 100]", &["candidate[0].temperature_c", "absolute zero"]),
         ("total = 15000", "total = 15000\nallocation = \"exhaustive\"", &["budget.allocation", "max_plans = 200"]),
+        ("counts = [1]\n", "counts = [1]\nnaming_draws = 20\n", &["candidate[2].naming_draws", "only crush tests"]),
+        ("naming_draws = 20\n\n[[candidate]]\nname = \"crush BL", "naming_draws = 61\n\n[[candidate]]\nname = \"crush BL", &["candidate[0].naming_draws", "analysis.outer = 60"]),
+        ("naming_draws = 20\n\n[[candidate]]\nname = \"crush BL", "naming_draws = 20\nshape_measured = false\n\n[[candidate]]\nname = \"crush BL", &["candidate[0].naming_draws", "shape_measured = true"]),
     ];
     for (from, to, expect) in cases {
         let s = scratch();
@@ -84,7 +101,7 @@ fn bad_experiments_inputs_exit_2_naming_the_key() {
 fn first_crush_candidate_refused(line: &str, expect: &[&str]) {
     let s = scratch();
     let text = s.read("studies/experiments.toml");
-    let at = "fixed_cost = 500\n\n[[candidate]]\nname = \"crush BL 16/30\"";
+    let at = "naming_draws = 20\n\n[[candidate]]\nname = \"crush BL 16/30\"";
     s.write("studies/experiments.toml", &edited(&text, &[(at, &at.replacen("\n", &format!("\n{line}\n"), 1))]));
     s.expect_bad_study("studies/experiments.toml", "seed = 20261124", "seed = 20261124", expect);
 }

@@ -330,7 +330,7 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             ));
         }
         if !r.power.is_empty() {
-            md.push_str("\n**Detection power** (datasets drawn from the fitted model; rate of naming every effect found here, and the false-positive rate with no effect):\n\n| particles | power | false positives |\n|---|---|---|\n");
+            md.push_str("\n**Detection power** (new datasets of that many particles alone, drawn from the fitted model by the generator experiment design's crush tests use; rate of naming every effect found here, and the false-positive rate with no effect; an experiments study with `naming_draws` asks the same loop about today's particles plus more, with truths from the main study's state of knowledge):\n\n| particles | power | false positives |\n|---|---|---|\n");
             for n in &s.power.particles {
                 let pe = r.power.iter().find(|p| p.scenario == "effects" && p.particles == *n);
                 let pn = r.power.iter().find(|p| p.scenario == "none" && p.particles == *n);

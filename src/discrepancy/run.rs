@@ -29,15 +29,18 @@
 //!
 //! How many crush tests are needed: for each sample size n, `replicates` synthetic datasets are
 //! drawn from the **fitted final model** (covariate rows resampled from the data, effects at
-//! their estimated sizes) and the whole naming loop is run on each; the detection rate of the
+//! their estimated sizes; [`crate::strength::regress::draw_particles`], the generator of
+//! experiment design's crush tests too) and the whole naming loop is run on each; the detection rate of the
 //! effects named in the data is reported with Wilson 90 % intervals. The same number of datasets
 //! drawn from the base model (no effect) gives the false-positive rate. The generator's truth
-//! is never read.
+//! is never read. Experiment design (`naming_draws` of a crush candidate) runs the same loop on
+//! today's particles pooled with simulated ones, its truths drawn from the main study's state of
+//! knowledge: the question "after n more tests", where this one asks "in n tests alone".
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
@@ -50,6 +53,7 @@ use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir};
 use crate::lifetime::impacts_in;
 use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
+use crate::strength::regress::draw_particles;
 use crate::strength::{Effect, LifetimeModel, ModelFit, NamingSettings, Sample, StrengthFit, Term, Uncertainty, sample_of};
 use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSpec, StudyFile};
 
@@ -128,13 +132,7 @@ fn power_study(sample: &Sample, outcome: &Outcome, settings: &NamingSettings, p:
                 .map(|r| {
                     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0x9077_E400);
                     rng.set_stream(((si * 64 + ni) * 100_000 + r) as u64 + 1);
-                    let rows_drawn: Vec<usize> = (0..n).map(|_| rng.random_range(0..n0)).collect();
-                    let strength: Vec<f64> = rows_drawn
-                        .iter()
-                        .map(|&i| {
-                            model.reg.quantile_at(ln_scale[i], rng.random())
-                        })
-                        .collect();
+                    let (rows_drawn, strength): (Vec<usize>, Vec<f64>) = draw_particles(&ln_scale, 1.0 / model.reg.b, n, &mut rng).into_iter().map(|(i, ln_s)| (i, ln_s.exp())).unzip();
                     let covariates = sample.covariates.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i]).collect())).collect();
                     let synthetic = Sample { source: format!("power replicate {r}"), strength, covariates };
                     let s = NamingSettings { bootstrap: p.bootstrap, seed: settings.seed ^ (r as u64 + 1), ..settings.clone() };

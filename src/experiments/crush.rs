@@ -35,18 +35,30 @@
 //! them is refused: extrapolating in temperature needs a temperature model of the parameters
 //! (phases, softening), not a crush-test likelihood.
 //!
+//! # The naming loop's verdict
+//!
+//! Optionally (`naming_draws`), each of the first outer draws also runs the discrepancy
+//! workflow's naming loop ([`crate::discrepancy::workflow::analyse`], with the main study's
+//! naming settings) on the pooled data — the material's crush sample and the simulated
+//! particles, each with its row's diameter, roundness and sphericity — and scores 1 when it
+//! names exactly the effects of the truth's strength model (no effect for the deliverable's
+//! model, roundness and sphericity for the shape model, the diagnosed effects for the diagnosed
+//! one), else 0 (also when the loop fails on the data). This is the question "after these tests,
+//! would the workflow that chose the main study's model find the true one?", asked of the same
+//! simulated data as the Bayesian reweighting, so the two decision rules can be compared draw by
+//! draw. It needs the shape measured (the loop diagnoses roundness and sphericity per particle).
+//!
 //! Not yet: a refit of the strength model on the pooled data as the fallback when reweighting
 //! collapses (the reserve of prior samples is the fallback today).
 
-use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::preposterior::Experiment;
 use super::state::State;
 use crate::error::{Error, Result};
-use crate::strength::regress::ln_density_of_log;
-use crate::strength::{Effect, Term};
+use crate::strength::regress::{draw_particles, ln_density_of_log};
+use crate::strength::{Effect, NamingSettings, Sample, Term};
 use crate::uq::setup::Mode;
 
 /// A crush test with every sample's Weibull parameters at every eligible row.
@@ -67,10 +79,26 @@ pub struct CrushTest {
     /// Without the shape measurement: per sample, the mixture's log-density table (None when
     /// every row has the same scale). None: the shape is measured.
     mixture: Option<Vec<Option<MixtureTable>>>,
+    /// The naming loop's verdict on the pooled data (module docs), when asked for.
+    naming: Option<NamingCheck>,
+}
+
+/// What the naming loop's verdict needs: its settings, the material's crush sample, the effects
+/// of every strength model and each prior sample's strength model.
+#[derive(Debug, Clone, PartialEq)]
+struct NamingCheck {
+    settings: NamingSettings,
+    sample: Sample,
+    /// The test temperature that replaces the rows' temperatures, if any.
+    temperature_c: Option<f64>,
+    /// Per strength model, its effects for the material.
+    effects: Vec<Vec<Effect>>,
+    /// Per prior sample, its strength model.
+    forms: Vec<usize>,
 }
 
 /// How a crush test is run.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct CrushOptions {
     /// Diameter range (m) of the sieve fraction, or every diameter.
     pub diameter: Option<(f64, f64)>,
@@ -78,11 +106,14 @@ pub struct CrushOptions {
     pub shape_measured: bool,
     /// Test temperature (°C), or the temperatures of the crush data.
     pub temperature_c: Option<f64>,
+    /// Run the discrepancy naming loop on the pooled data with these settings (the main
+    /// study's), for the naming loop's verdict; None: not.
+    pub naming: Option<NamingSettings>,
 }
 
 impl Default for CrushOptions {
     fn default() -> Self {
-        CrushOptions { diameter: None, shape_measured: true, temperature_c: None }
+        CrushOptions { diameter: None, shape_measured: true, temperature_c: None, naming: None }
     }
 }
 
@@ -195,8 +226,18 @@ impl CrushTest {
             }
         }
         let r = rows.len();
+        if options.naming.is_some() && !options.shape_measured {
+            return bad("the naming loop's verdict needs each particle's roundness and sphericity: set shape_measured = true or drop naming_draws".into());
+        }
+        let naming = options.naming.as_ref().map(|settings| NamingCheck {
+            settings: settings.clone(),
+            sample: sample.clone(),
+            temperature_c: options.temperature_c,
+            effects: state.forms.iter().map(|f| f.setup.materials[material].model.fit.model.effects.clone()).collect(),
+            forms: state.samples.iter().map(|s| s.form).collect(),
+        });
         let mixture = (!options.shape_measured).then(|| (0..shape.len()).into_par_iter().map(|k| MixtureTable::new(shape[k], &ln_scale[k * r..(k + 1) * r])).collect());
-        Ok(CrushTest { material, particles, diameter, rows, shape, ln_scale, mixture })
+        Ok(CrushTest { material, particles, diameter, rows, shape, ln_scale, mixture, naming })
     }
 
     /// Number of rows new particles are drawn from.
@@ -211,15 +252,7 @@ impl Experiment for CrushTest {
 
     fn simulate(&self, truth: usize, rng: &mut ChaCha8Rng) -> Self::Data {
         let r = self.rows.len();
-        let m = self.shape[truth];
-        (0..self.particles)
-            .map(|_| {
-                let i = rng.random_range(0..r);
-                // Weibull by inversion: ln s = ln σ_θ + ln(−ln U)/m.
-                let u: f64 = rng.random::<f64>().max(f64::MIN_POSITIVE);
-                (i, self.ln_scale[truth * r + i] + (-u.ln()).ln() / m)
-            })
-            .collect()
+        draw_particles(&self.ln_scale[truth * r..(truth + 1) * r], self.shape[truth], self.particles, rng)
     }
 
     fn loglik(&self, data: &Self::Data, k: usize) -> f64 {
@@ -232,6 +265,22 @@ impl Experiment for CrushTest {
             Some(None) => data.iter().map(|&(_, ln_s)| ln_gumbel_min(ln_s, m, row[0])).sum(),
             Some(Some(table)) => data.iter().map(|&(_, ln_s)| table.ln_density(ln_s, m, row)).sum(),
         }
+    }
+
+    /// 1 when the naming loop on the pooled data names exactly the truth's effects (module docs).
+    fn score(&self, data: &Self::Data, truth: usize, draw: usize) -> Option<f64> {
+        let n = self.naming.as_ref()?;
+        let mut pooled = Sample { source: format!("{} + {} simulated particles", n.sample.source, data.len()), strength: n.sample.strength.clone(), covariates: n.sample.covariates.clone() };
+        pooled.strength.extend(data.iter().map(|&(_, ln_s)| ln_s.exp()));
+        for ((name, column), (_, base)) in pooled.covariates.iter_mut().zip(&n.sample.covariates) {
+            let at_test = (name == Effect::Temperature.covariate()).then_some(n.temperature_c).flatten();
+            column.extend(data.iter().map(|&(i, _)| at_test.or(base[self.rows[i]])));
+        }
+        let settings = NamingSettings { seed: n.settings.seed.wrapping_add(draw as u64 + 1), ..n.settings.clone() };
+        // A loop that fails on the data names nothing.
+        let named = crate::discrepancy::workflow::analyse(&pooled, &settings, false).map(|o| o.named).unwrap_or_default();
+        let truth_effects = &n.effects[n.forms[truth]];
+        Some(if named.len() == truth_effects.len() && truth_effects.iter().all(|e| named.contains(e)) { 1.0 } else { 0.0 })
     }
 }
 

@@ -20,7 +20,9 @@
 //! * [`measure`]: measurements of η or of the impact velocity with a lognormal error.
 //! * [`crush`]: crush tests of n more particles (optionally a sieve fraction), with or without
 //!   each particle's shape measured (unmeasured: a mixture over the population's shapes), at a
-//!   temperature the crush data cover.
+//!   temperature the crush data cover; optionally the discrepancy naming loop's verdict on the
+//!   pooled data (does it name the true strength model's effects?), beside the reweighting's on
+//!   the same simulated data ([`Experiment::score`]).
 //!
 //! Verified against the closed forms of the normal–normal model (preposterior variance, EVSI of a
 //! two-action decision), on a decision that is already certain (value 0), on an η measurement
@@ -28,7 +30,8 @@
 //! ASTM C1239's pivotal widths and against brute-force nested refitting, by the
 //! discrimination of Tavares–King damage by repeated impacts, and by the worth of the shape
 //! measurement (none under a model without shape effects; the shape model identified with it,
-//! barely without): `tests/verification/experiments.rs`.
+//! barely without), and the naming loop against the reweighting on the same crush data:
+//! `tests/verification/experiments.rs`.
 //!
 //! * [`study`], [`run`], [`plan`]: the `kind = "experiments"` study — candidates with costs and
 //!   sizes, the ranked plans, the allocation of a budget (greedy, or exhaustive over a small

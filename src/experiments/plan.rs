@@ -66,6 +66,13 @@ impl Experiment for Candidate {
             _ => unreachable!("data of another candidate"),
         }
     }
+
+    fn score(&self, data: &Data, truth: usize, draw: usize) -> Option<f64> {
+        match (self, data) {
+            (Candidate::Crush(c), Data::Crush(d)) => c.score(d, truth, draw),
+            _ => None,
+        }
+    }
 }
 
 /// Candidates run together.
@@ -81,6 +88,15 @@ impl Experiment for Plan<'_> {
 
     fn loglik(&self, data: &Vec<Data>, k: usize) -> f64 {
         self.0.iter().zip(data).map(|(c, d)| c.loglik(d, k)).sum()
+    }
+
+    /// A single candidate's score (a plan of several has none: the naming loop's verdict is
+    /// of one crush test).
+    fn score(&self, data: &Vec<Data>, truth: usize, draw: usize) -> Option<f64> {
+        match (self.0.as_slice(), data.as_slice()) {
+            ([c], [d]) => c.score(d, truth, draw),
+            _ => None,
+        }
     }
 }
 

@@ -33,7 +33,11 @@
 //!   (prior Bayes risk minus preposterior Bayes risk, ≥ 0);
 //! * per quantity: the expected posterior mean, variance and width of the central 90 % band
 //!   (weighted quantiles, [`crate::stats::weighted_quantiles`]);
-//! * per label: the expected posterior weight of the truth's label.
+//! * per label: the expected posterior weight of the truth's label;
+//! * optionally, the mean of a score the experiment gives each simulated dataset under its
+//!   truth ([`Experiment::score`]) on the first [`Settings::scored`] outer draws — for crush
+//!   tests, whether the discrepancy workflow's naming loop, run on the pooled data, names the
+//!   truth's effects: another decision rule on the same simulated data.
 //!
 //! Outer draw j uses its own random stream (ChaCha8, stream j + 1 of `seed`) and the draws are
 //! evaluated in parallel and collected in order, so the result does not depend on the number of
@@ -197,6 +201,11 @@ pub trait Experiment: Sync {
     fn fallback(&self, _data: &Self::Data, _truth: usize) -> Option<Result<Posterior>> {
         None
     }
+    /// A score of outer draw `draw`'s data under its truth (1 when the naming loop names the
+    /// truth's effects, say); None when the experiment has none.
+    fn score(&self, _data: &Self::Data, _truth: usize, _draw: usize) -> Option<f64> {
+        None
+    }
 }
 
 /// Settings of the preposterior analysis.
@@ -215,6 +224,9 @@ pub struct Settings {
     /// further prior samples, reweighted together with them only when the ESS falls below
     /// `min_ess` (the resampling fallback). None: no reserve.
     pub active: Option<usize>,
+    /// The experiment's score ([`Experiment::score`]) is computed on the first `scored` outer
+    /// draws (0: not at all).
+    pub scored: usize,
 }
 
 /// One outer draw's result.
@@ -228,6 +240,8 @@ pub struct Draw {
     pub ess: f64,
     /// How the posterior was obtained.
     pub route: Route,
+    /// The experiment's score of the data, when computed.
+    pub score: Option<f64>,
 }
 
 /// How an outer draw's posterior was obtained.
@@ -288,6 +302,10 @@ pub struct Metrics {
     pub fallbacks: usize,
     /// Outer draws whose reweighting collapsed without a fallback.
     pub collapsed: usize,
+    /// Mean of the experiment's score over the draws that computed it, and the expected
+    /// posterior weight of the truth's label of every kind over the same draws (a paired
+    /// comparison); None when no draw did.
+    pub score: Option<(Estimate, Vec<Estimate>)>,
     /// Every outer draw.
     pub draws: Vec<Draw>,
 }
@@ -309,6 +327,7 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
             let truth = truths.draw(rng.random());
             debug_assert!(kn.weights[truth] > 0.0);
             let data = experiment.simulate(truth, &mut rng);
+            let score = if j < settings.scored { experiment.score(&data, truth, j) } else { None };
             let reweigh = |n: usize| -> (Vec<f64>, f64, f64) {
                 let ll: Vec<f64> = (0..kn.len()).map(|k| if k >= n || k == truth || kn.weights[k] == 0.0 { f64::NEG_INFINITY } else { experiment.loglik(&data, k) }).collect();
                 let top = ll.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -324,17 +343,17 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
             };
             let (w, ess, total) = reweigh(active);
             if ess >= settings.min_ess {
-                return Ok(Draw { truth, posterior: kn.summarise(&w), ess, route: Route::Reweighted });
+                return Ok(Draw { truth, posterior: kn.summarise(&w), ess, route: Route::Reweighted, score });
             }
             if active < kn.len() {
                 let (w, ess, _) = reweigh(kn.len());
                 if ess >= settings.min_ess {
-                    return Ok(Draw { truth, posterior: kn.summarise(&w), ess, route: Route::Fallback });
+                    return Ok(Draw { truth, posterior: kn.summarise(&w), ess, route: Route::Fallback, score });
                 }
             }
             match experiment.fallback(&data, truth) {
-                Some(p) => Ok(Draw { truth, posterior: p?, ess, route: Route::Fallback }),
-                None if total > 0.0 => Ok(Draw { truth, posterior: kn.summarise(&w), ess, route: Route::Collapsed }),
+                Some(p) => Ok(Draw { truth, posterior: p?, ess, route: Route::Fallback, score }),
+                None if total > 0.0 => Ok(Draw { truth, posterior: kn.summarise(&w), ess, route: Route::Collapsed, score }),
                 None => Err(Error::numerical("preposterior analysis", format!("outer draw {j}: the simulated data have zero likelihood under every other prior sample"))),
             }
         })
@@ -351,6 +370,12 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
     let pcs = col(&|d| if kn.is_best(d.truth, d.posterior.action()) { 1.0 } else { 0.0 });
     let evsi = col(&|d| prior_risk - d.posterior.expected_loss[d.posterior.action()]);
     let label = |kind: usize, k: usize| kn.labels[k * kn.label_kinds + kind] as usize;
+    let true_weight = |kind: usize, d: &Draw| d.posterior.label_weights[kind].get(label(kind, d.truth)).copied().unwrap_or(0.0);
+    let scored: Vec<&Draw> = draws.iter().filter(|d| d.score.is_some()).collect();
+    let score = (!scored.is_empty()).then(|| {
+        let of = |f: &dyn Fn(&Draw) -> f64| Estimate::of(&scored.iter().map(|d| f(d)).collect::<Vec<_>>());
+        (of(&|d| d.score.unwrap_or(f64::NAN)), (0..kn.label_kinds).map(|kind| of(&|d| true_weight(kind, d))).collect())
+    });
     let mut ess: Vec<f64> = draws.iter().map(|d| d.ess).collect();
     ess.sort_by(f64::total_cmp);
     Ok(Metrics {
@@ -360,12 +385,13 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
         mean: (0..kn.quantities).map(|j| col(&|d| d.posterior.mean[j])).collect(),
         var: (0..kn.quantities).map(|j| col(&|d| d.posterior.var[j])).collect(),
         width90: (0..kn.quantities).map(|j| col(&|d| d.posterior.width90[j])).collect(),
-        true_label_weight: (0..kn.label_kinds).map(|kind| col(&|d| d.posterior.label_weights[kind].get(label(kind, d.truth)).copied().unwrap_or(0.0))).collect(),
+        true_label_weight: (0..kn.label_kinds).map(|kind| col(&|d| true_weight(kind, d))).collect(),
         // Over the truths' distribution (the prior, or its part with the conditioned label).
         prior_true_label_weight: (0..kn.label_kinds).map(|kind| (0..active).map(|k| eligible[k] / truths.total() * prior.label_weights[kind][label(kind, k)]).sum()).collect(),
         median_ess: crate::stats::sorted_quantile(&ess, 0.5),
         fallbacks: draws.iter().filter(|d| d.route == Route::Fallback).count(),
         collapsed: draws.iter().filter(|d| d.route == Route::Collapsed).count(),
+        score,
         prior,
         draws,
     })

@@ -107,7 +107,12 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
         // size, then resized.
         let n0 = c.sizes[0] as u64;
         let base = match c.test {
-            TestKind::Crush => CrushTest::new(&state, material, n0 as usize, &CrushOptions { diameter: c.diameter_m.map(|[lo, hi]| (lo, hi)), shape_measured: c.shape_measured.unwrap_or(true), temperature_c: c.temperature_c }).map(Candidate::Crush),
+            TestKind::Crush => {
+                // The main study's naming settings for this material (its seed as in the main study).
+                let index = u.order()[material];
+                let naming = c.naming_draws.map(|_| crate::strength::NamingSettings { seed: u.seed.wrapping_add(7919 * index as u64), ..u.strength.naming.clone() });
+                CrushTest::new(&state, material, n0 as usize, &CrushOptions { diameter: c.diameter_m.map(|[lo, hi]| (lo, hi)), shape_measured: c.shape_measured.unwrap_or(true), temperature_c: c.temperature_c, naming }).map(Candidate::Crush)
+            }
             TestKind::Impact => ImpactTest::new(&state, material, n0, c.velocity_m_s.unwrap_or(0.0), c.counts.clone().unwrap_or_default().iter().map(|&k| k as u64).collect()).map(Candidate::Impact),
             TestKind::EtaMeasurement => Measurement::new(&state, Measured::EnergyFraction, n0, c.sd_log.unwrap_or(0.0)).map(Candidate::Measure),
             TestKind::VelocityMeasurement => Measurement::new(&state, Measured::Velocity, n0, c.sd_log.unwrap_or(0.0)).map(Candidate::Measure),
@@ -117,10 +122,11 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
         .map_err(|e| Error::config(&file, format!("candidate[{i}]"), format!("\"{}\": {e}", c.name)))?;
         built.push(c.sizes.iter().map(|&n| base.sized(n as u64)).collect());
     }
-    let settings = |salt: u64| Settings { outer: a.outer, min_ess: a.min_ess, seed: s.seed ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15), truth: None, active: Some(a.samples) };
-    let evaluate = |picks: &[(usize, usize)], salt: u64| -> Result<Evaluated> {
+    let settings = |salt: u64, scored: usize| Settings { outer: a.outer, min_ess: a.min_ess, seed: s.seed ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15), truth: None, active: Some(a.samples), scored };
+    // The naming loop's verdict is asked of single candidates only (`scored`), not of plans.
+    let evaluate_scored = |picks: &[(usize, usize)], salt: u64, scored: usize| -> Result<Evaluated> {
         let plan = Plan(picks.iter().map(|&(i, j)| &built[i][j]).collect());
-        let metrics = preposterior(&state.knowledge, &plan, settings(salt))?;
+        let metrics = preposterior(&state.knowledge, &plan, settings(salt, scored))?;
         let objective = objective(s.decision.objective, &state, &metrics);
         Ok(Evaluated {
             names: picks.iter().map(|&(i, _)| s.candidate[i].name.clone()).collect(),
@@ -130,10 +136,11 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
             objective,
         })
     };
+    let evaluate = |picks: &[(usize, usize)], salt: u64| evaluate_scored(picks, salt, 0);
     let mut singles = Vec::new();
     for (i, c) in s.candidate.iter().enumerate() {
         for j in 0..c.sizes.len() {
-            singles.push(((i, j), evaluate(&[(i, j)], 1 + (i * 64 + j) as u64)?));
+            singles.push(((i, j), evaluate_scored(&[(i, j)], 1 + (i * 64 + j) as u64, c.naming_draws.unwrap_or(0))?));
             pb.inc(1);
         }
     }
@@ -246,6 +253,12 @@ fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: 
             fcol("true_damage_model_weight_se", col(&|e| e.metrics.true_label_weight[0].se, rows)),
             fcol("true_strength_model_weight", col(&|e| e.metrics.true_label_weight[1].mean, rows)),
             fcol("true_strength_model_weight_se", col(&|e| e.metrics.true_label_weight[1].se, rows)),
+            // The naming loop's verdict (crush tests with naming_draws; NaN elsewhere) and, on
+            // the same draws, the Bayesian expected weight of the true strength model.
+            fcol("naming_names_truth", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.0.mean), rows)),
+            fcol("naming_names_truth_se", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.0.se), rows)),
+            ucol("naming_draws", rows.iter().map(|e| e.metrics.draws.iter().filter(|d| d.score.is_some()).count() as u64).collect()),
+            fcol("true_strength_model_weight_naming_draws", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.1[1].mean), rows)),
             fcol("median_ess", col(&|e| e.metrics.median_ess, rows)),
             ucol("fallbacks", rows.iter().map(|e| e.metrics.fallbacks as u64).collect()),
             ucol("collapsed", rows.iter().map(|e| e.metrics.collapsed as u64).collect()),

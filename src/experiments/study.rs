@@ -32,6 +32,8 @@
 //! diameter_m = [0.0008, 0.001]       # crush tests: a sieve fraction (optional)
 //! shape_measured = true              # crush tests: roundness and sphericity measured per particle (default)
 //! temperature_c = 20                 # crush tests: test temperature, within the crush data's (optional)
+//! naming_draws = 60                  # crush tests: run the discrepancy naming loop on the pooled data of
+//!                                    # this many outer draws (its verdict on the truth's effects; optional)
 //! sd_log = 0.2                       # measurements: sd of ln of one measurement
 //! sizes = [25, 50, 100]              # particles (tests) or measurements
 //! cost_per_unit = 60                 # per particle or measurement
@@ -203,6 +205,9 @@ pub struct CandidateSpec {
     /// Crush tests: the test temperature (°C).
     #[serde(default)]
     pub temperature_c: Option<f64>,
+    /// Crush tests: outer draws on which the naming loop is run on the pooled data.
+    #[serde(default)]
+    pub naming_draws: Option<usize>,
 }
 
 impl CandidateSpec {
@@ -305,9 +310,18 @@ impl ExperimentsStudy {
                     only(c.diameter_m.is_some(), "diameter_m", "crush tests")?;
                     only(c.shape_measured.is_some(), "shape_measured", "crush tests")?;
                     only(c.temperature_c.is_some(), "temperature_c", "crush tests")?;
+                    only(c.naming_draws.is_some(), "naming_draws", "crush tests")?;
                     only(c.sd_log.is_some(), "sd_log", "measurements")?;
                 }
                 TestKind::Crush => {
+                    if let Some(n) = c.naming_draws {
+                        if !(20..=a.outer).contains(&n) {
+                            return bad(key("naming_draws"), format!("must lie between 20 and analysis.outer = {}, got {n}", a.outer));
+                        }
+                        if c.shape_measured == Some(false) {
+                            return bad(key("naming_draws"), "the naming loop diagnoses each particle's roundness and sphericity: it needs shape_measured = true".into());
+                        }
+                    }
                     if let Some(t) = c.temperature_c
                         && !(t.is_finite() && t > -273.15)
                     {
@@ -331,6 +345,7 @@ impl ExperimentsStudy {
                     only(c.diameter_m.is_some(), "diameter_m", "crush tests")?;
                     only(c.shape_measured.is_some(), "shape_measured", "crush tests")?;
                     only(c.temperature_c.is_some(), "temperature_c", "crush tests")?;
+                    only(c.naming_draws.is_some(), "naming_draws", "crush tests")?;
                 }
             }
             cheapest = cheapest.min(c.cost(c.sizes[0] as u64));

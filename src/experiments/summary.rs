@@ -30,10 +30,11 @@ fn years(y: f64) -> String {
     if y == 1.0 { "1 year".into() } else { format!("{y} years") }
 }
 
-/// Value ± error, to the error's precision.
+/// Value ± error, to the error's precision (at most 4 decimals: "1.0000 ± 0.0000" is a
+/// probability within 0.00005 of 1).
 fn pm(v: f64, se: f64) -> String {
     if se > 0.0 && se.is_finite() {
-        let d = (-(se.log10().floor()) + 1.0).clamp(0.0, 8.0) as usize;
+        let d = (-(se.log10().floor()) + 1.0).clamp(0.0, 4.0) as usize;
         format!("{v:.d$} ± {se:.d$}")
     } else {
         format!("{v:.4}")
@@ -174,6 +175,7 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
             max_evsi, prior.prior_pcs
         ));
     }
+    md.push_str(&naming_section(s, state, singles));
     let collapsed: usize = singles.iter().map(|(_, e)| e.metrics.collapsed).sum();
     let fallbacks: usize = singles.iter().map(|(_, e)| e.metrics.fallbacks).sum();
     md.push_str(&format!(
@@ -182,4 +184,45 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         s.analysis.min_ess
     ));
     Summary { text: md, headlines }
+}
+
+/// The naming loop's verdict beside the reweighting's, for the crush candidates that ran it
+/// (empty when none did).
+fn naming_section(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), Evaluated)]) -> String {
+    let scored: Vec<(usize, &Evaluated)> = singles.iter().filter(|(_, e)| e.metrics.score.is_some()).map(|((i, _), e)| (*i, e)).collect();
+    if scored.is_empty() {
+        return String::new();
+    }
+    let mut md = String::from("\n## Would the discrepancy workflow find the true strength model?\n\n");
+    md.push_str("The main study's diagnosed strength model is what the discrepancy naming loop names in each material's crush data. For the crush candidates below, the loop was also run on the pooled data — today's crushed particles and the simulated ones — of the first simulated campaigns, and scored 1 when it named exactly the effects of the strength model the campaign was simulated under. Beside it, on the same campaigns, the reweighting's expected posterior weight of that model.\n\n");
+    md.push_str("| candidate | particles | campaigns | naming loop names the true model's effects | expected weight of the true strength model |\n|---|---|---|---|---|\n");
+    for (_, e) in &scored {
+        if let Some((verdict, weights)) = &e.metrics.score {
+            let draws = e.metrics.draws.iter().filter(|d| d.score.is_some()).count();
+            md.push_str(&format!("| {} | {} | {draws} | {} | {} |\n", e.names[0], e.sizes[0], pm(verdict.mean, verdict.se), pm(weights[1].mean, weights[1].se)));
+        }
+    }
+    // Each candidate's largest size: which rule identifies the truth more often.
+    for (i, c) in s.candidate.iter().enumerate() {
+        let Some(e) = scored.iter().filter(|(ci, _)| *ci == i).map(|(_, e)| *e).max_by_key(|e| e.sizes[0]) else { continue };
+        let Some((verdict, weights)) = &e.metrics.score else { continue };
+        let Some(m) = state.forms[0].setup.materials.iter().find(|m| Some(&m.model.key) == c.material.as_ref()) else { continue };
+        let (gap, se) = (weights[1].mean - verdict.mean, weights[1].se.hypot(verdict.se));
+        let words = if gap > 2.0 * se {
+            "the reweighting identifies the true strength model more often than a rerun of the naming loop on the pooled data would"
+        } else if gap < -2.0 * se {
+            "a rerun of the naming loop on the pooled data identifies the true strength model more often than the reweighting"
+        } else {
+            "the two rules agree within two Monte Carlo standard errors"
+        };
+        md.push_str(&format!(
+            "\nWith {} more {} crush tests (today {}), the naming loop names exactly the true model's effects in {} of the simulated campaigns and the expected posterior weight of the true model is {}: {words}.\n",
+            e.sizes[0],
+            m.model.label,
+            m.sample.strength.len(),
+            pm(verdict.mean, verdict.se),
+            pm(weights[1].mean, weights[1].se)
+        ));
+    }
+    md
 }

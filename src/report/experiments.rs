@@ -2,7 +2,7 @@
 //!
 //! | file stem | content | table |
 //! |---|---|---|
-//! | `experiments_metrics` | each metric against sample size, one line per candidate: probability of choosing the better particle, expected posterior weight of the true damage model, expected 90 % band widths of log₁₀ P_break at the last horizon (both materials summed, decades), EVSI in the study's currency | `plans.csv` |
+//! | `experiments_metrics` | each metric against sample size, one line per candidate: probability of choosing the better particle, expected posterior weight of the true damage model, expected 90 % band widths of log₁₀ P_break at the last horizon (both materials summed, decades), EVSI in the study's currency; and, when crush candidates ran it (`naming_draws`), the share of simulated campaigns after which the discrepancy naming loop names the true strength model's effects | `plans.csv` |
 
 use std::path::Path;
 
@@ -34,12 +34,18 @@ fn metrics(dir: &Path, width_cm: f64) -> Result<Drawn> {
     }
     let evsi = t.f("evsi")?;
     let currency = t.s("currency")?.first().cloned().unwrap_or_default();
-    let panels_spec: [(String, Vec<f64>); 4] = [
+    let mut panels_spec: Vec<(String, Vec<f64>)> = vec![
         ("P(correct choice)".into(), t.f("pcs")?),
         ("Weight, true damage".into(), t.f("true_damage_model_weight")?),
         (format!("Σ bands, {horizon} yr (dec.)"), band),
         (format!("EVSI ({currency})"), evsi),
     ];
+    // Only the crush candidates that ran the naming loop have its verdict (NaN elsewhere).
+    let naming = t.f("naming_names_truth")?;
+    let has_naming = naming.iter().any(|v| v.is_finite());
+    if has_naming {
+        panels_spec.push(("Naming finds truth".into(), naming));
+    }
     let candidates = distinct(&cand);
     let x_range = padded(size.iter().cloned(), 0.05, 0.05);
     let n_panels = panels_spec.len();
@@ -47,7 +53,10 @@ fn metrics(dir: &Path, width_cm: f64) -> Result<Drawn> {
     for (pi, (desc, y)) in panels_spec.into_iter().enumerate() {
         let mut series = Vec::new();
         for (ci, c) in candidates.iter().enumerate() {
-            let rows: Vec<usize> = (0..cand.len()).filter(|&i| &cand[i] == c).collect();
+            let rows: Vec<usize> = (0..cand.len()).filter(|&i| &cand[i] == c && y[i].is_finite()).collect();
+            if rows.is_empty() {
+                continue;
+            }
             let pts: Vec<(f64, f64)> = rows.iter().map(|&i| (size[i], y[i])).collect();
             series.push(Series::line(None, pts.clone(), colour(ci), 1.0));
             // Colour and marker together tell up to 18 candidates apart.
@@ -65,6 +74,8 @@ fn metrics(dir: &Path, width_cm: f64) -> Result<Drawn> {
                 y_range: if pi == 0 {
                     let lo = y.iter().cloned().fold(1.0, f64::min);
                     (1.0 - 25.0 * (1.0 - lo).max(0.005), 1.0 + 0.1 * (1.0 - lo).max(0.005))
+                } else if has_naming && pi + 1 == n_panels {
+                    (0.0, 1.05)
                 } else {
                     padded(y.iter().cloned(), 0.1, 0.15)
                 },

@@ -46,6 +46,21 @@ pub fn ln_density_of_log(y: f64, ln_scale: f64, b: f64) -> f64 {
     -b.ln() + w - w.exp()
 }
 
+/// New crushed particles drawn from a population of rows: each particle's row uniformly with
+/// replacement, then its strength Weibull with modulus `m` and the row's scale e^(ln_scale[row]),
+/// by inversion, ln s = ln σ_row + ln(−ln U)/m. Returns (row, ln s) per particle, the row and U
+/// drawn in that order from `rng`. The crate's one generator of synthetic crush data (the
+/// discrepancy workflow's detection power and experiment design's crush tests).
+pub fn draw_particles<R: Rng + ?Sized>(ln_scale: &[f64], m: f64, n: usize, rng: &mut R) -> Vec<(usize, f64)> {
+    (0..n)
+        .map(|_| {
+            let i = rng.random_range(0..ln_scale.len());
+            let u: f64 = rng.random::<f64>().max(f64::MIN_POSITIVE);
+            (i, ln_scale[i] + (-u.ln()).ln() / m)
+        })
+        .collect()
+}
+
 /// A fitted Weibull regression.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RegFit {

@@ -145,7 +145,7 @@ pub fn read_text_table(path: &Path) -> Result<DataFrame> {
 }
 
 /// Text cells of one column (`None` for an empty cell); `None` if the column is absent.
-fn text_column(df: &DataFrame, name: &str) -> Result<Option<Vec<Option<String>>>> {
+pub(crate) fn text_column(df: &DataFrame, name: &str) -> Result<Option<Vec<Option<String>>>> {
     let Ok(col) = df.column(name) else { return Ok(None) };
     let ca = col.str().map_err(|e| Error::numerical("reading text column", e.to_string()))?;
     Ok(Some(
@@ -156,7 +156,7 @@ fn text_column(df: &DataFrame, name: &str) -> Result<Option<Vec<Option<String>>>
 }
 
 /// Parses a number cell; `rule` describes the admissible range for messages.
-fn parse_number(path: &Path, row: usize, column: &str, cell: &str) -> Result<f64> {
+pub(crate) fn parse_number(path: &Path, row: usize, column: &str, cell: &str) -> Result<f64> {
     let v: f64 = cell
         .parse()
         .map_err(|_| Error::data_row(path, row, column, format!("value \"{cell}\" is not a number")))?;

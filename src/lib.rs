@@ -41,7 +41,7 @@
 //! 16  bench                          speed figures (the CLI, src/main.rs, sits above)
 //! 15  runner                         loaded study → its runner (only main and bench import it)
 //! 14  study                          kind → schema + validation
-//! 13  experiments                    experiment design on the main study's state of knowledge
+//! 13  experiments · temperature      experiment design on the main study's state of knowledge; temperature across the chain
 //! 12  lifetime_study · uq            the lifetime study; the main study
 //! 11  discrepancy                    the naming loop, KOH, the curve level
 //! 10  strength                       the one lifetime model (its Bayesian draws use calibrate::mcmc)
@@ -49,7 +49,7 @@
 //!  8  dem · fem                      the solvers with their studies
 //!  7  runkit · synth                 run helpers; the crush-data generator
 //!  6  schema                         study files, TOML errors, shared options
-//!  5  dist · report                  declared distributions; figures from tables
+//!  5  dist · phases · report         declared distributions; phase-fraction tables; figures from tables
 //!  4  data · testfns                 datasets with plausibility ranges; analytic simulators
 //!  3  lifetime · model · weibull     P_N and damage laws; the Simulator seam; ASTM C1239
 //!  2  contact · design · io · params · stats
@@ -82,9 +82,11 @@
 //! | [`calibrate`] | noise models; multi-start Levenberg–Marquardt (or argmin Nelder–Mead / L-BFGS) with covariance and identifiability; ensemble and adaptive-Metropolis MCMC with R̂/ESS; GP emulator; evaluation cache; the `calibrate` study (crush FE and tube-bank DEM); synthetic curve and rig generators |
 //! | [`discrepancy`] | the discrepancy workflow: diagnosis (quantile residuals, bootstrap AD/KS, residual trends), the name → add → diagnose loop over the strength model's effects with a max-T bootstrap guard (also behind `effects = "diagnosed"` and its cross-validated scores), lifetime before/after, detection power; `partlife discrepancy`; Kennedy–O'Hagan GP discrepancy with BIC comparison of model terms, on crush curves too |
 //! | [`experiments`] | decision-driven experiment design: preposterior analysis by importance reweighting (probability of correct selection, EVSI, expected posterior bands and model weights, reserve-sample fallback); the main study's state of knowledge as weighted samples; candidates: crush tests (sieve fraction, shape measured or not, temperature; optionally the discrepancy naming loop's verdict on the pooled data), single- and repeated-impact breakage tests, η and impact-velocity measurements; the `experiments` study: ranked plans, greedy or exhaustive budget allocation, report |
+//! | [`temperature`] | the `temperature` study: the phase-fraction table as table, figure (Fig. 2 style) and summary (the temperature model of the parameters and the lifetime at temperature are to come) |
 //! | [`uq`] | the main study (`kind = "uq"`): strength models as a model-form choice with stacking weights, Monte Carlo propagation through each material's `LifetimeModel`, damage models and averaging domains side by side, Sobol' indices with bootstrap intervals |
 //! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation; the plausibility range of every numeric input column |
 //! | [`synth`] | the documented generator of the synthetic crush datasets |
+//! | [`phases`] | phase-fraction tables against temperature (Thermo-Calc/pycalphad exports): format, validation, linear interpolation, the amorphous fraction; the rule of the shipped illustrative table |
 //! | [`stats`] | median, Pearson correlation with p-value, line fit, the one sample-quantile definition (Hyndman–Fan type 7) and the weighted inverse CDF, the one linear interpolation (`locate` + `lerp`), the one ranking |
 //! | [`schema`] | the study-file layer under every study module: `StudyFile` (read, kind, parse), TOML errors with line and key, relative paths, shared options (contact, impact, figures, materials) |
 //! | [`runkit`] | what every run shares: options, summary, clock, progress bars, figures' records, the report commit with `manifest.json` |
@@ -118,6 +120,7 @@ pub mod io;
 pub mod lifetime;
 pub mod lifetime_study;
 pub mod model;
+pub mod phases;
 pub mod params;
 pub mod report;
 pub mod runner;
@@ -127,6 +130,7 @@ pub mod stats;
 pub mod strength;
 pub mod study;
 pub mod synth;
+pub mod temperature;
 pub mod testfns;
 pub mod uq;
 pub mod weibull;

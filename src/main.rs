@@ -138,7 +138,14 @@ enum DatasetsCommand {
         #[arg(long)]
         out_dir: Option<PathBuf>,
     },
-    /// Validate dataset files (crush CSV or Table 1) and summarise them.
+    /// Write the illustrative phase-fraction table (not computed: the rule is in
+    /// `partlife::phases::illustrative`).
+    SynthPhases {
+        /// Output directory.
+        #[arg(long, default_value = "datasets")]
+        out_dir: PathBuf,
+    },
+    /// Validate dataset files (crush CSV, Table 1 or a phase-fraction table) and summarise them.
     Check {
         /// Files to check.
         #[arg(required = true)]
@@ -249,8 +256,30 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 out!("  {} = {:.4e} {} (noise-free {:.4e}, sd {:.2e})", o.output, o.value, o.unit, o.exact, o.sd);
             }
         }
+        Command::Datasets { command: DatasetsCommand::SynthPhases { out_dir } } => {
+            let path = out_dir.join(partlife::phases::ILLUSTRATIVE_FILE);
+            let t = partlife::phases::illustrative();
+            partlife::io::write_atomic(&path, t.to_csv().as_bytes())?;
+            out!("{}: {} phases at {} temperatures ({}–{} °C), amorphous from {} °C", path.display(), t.phases.len(), t.temperatures_c.len(), t.range().0, t.range().1, t.amorphous_onset(0.0).map_or("—".into(), |v| v.to_string()));
+        }
         Command::Datasets { command: DatasetsCommand::Check { files } } => {
             for f in files {
+                if partlife::data::read_text_table(&f)?.column("phase").is_ok() {
+                    let t = partlife::phases::read_phases(&f)?;
+                    let fa = t.amorphous_fractions();
+                    out!(
+                        "{}: phase fractions ({}), {} phases at {} temperatures ({}–{} °C), amorphous fraction {:.3}–{:.3}: ok",
+                        f.display(),
+                        t.basis.column(),
+                        t.phases.len(),
+                        t.temperatures_c.len(),
+                        t.range().0,
+                        t.range().1,
+                        fa.iter().cloned().fold(f64::INFINITY, f64::min),
+                        fa.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+                    );
+                    continue;
+                }
                 match partlife::data::check_file(&f)? {
                     partlife::data::CheckedFile::Crush(d) => {
                         let dd = d.diameters();

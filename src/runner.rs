@@ -20,6 +20,7 @@ pub fn run(study: &LoadedStudy, opts: &RunOptions) -> Result<RunSummary> {
         Study::Discrepancy(s) => crate::discrepancy::run::run_discrepancy(&study.file, s, opts),
         Study::DiscrepancyCurves(s) => crate::discrepancy::curves::run_curves(&study.file, s, opts),
         Study::Experiments(s) => crate::experiments::run_experiments(&study.file, s, opts),
+        Study::Temperature(s) => crate::temperature::run_temperature(&study.file, s, opts),
     }
 }
 

@@ -143,6 +143,17 @@ impl Default for FigureOptions {
     }
 }
 
+impl FigureOptions {
+    /// The width must lie in [4, 40] cm (`figures.width_cm` of study file `file`).
+    pub fn validate(&self, file: &str) -> crate::error::Result<()> {
+        if (4.0..=40.0).contains(&self.width_cm) {
+            Ok(())
+        } else {
+            Err(crate::error::Error::config(file, "figures.width_cm", format!("must lie in [4, 40] cm, got {}", self.width_cm)))
+        }
+    }
+}
+
 
 /// One particle type.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

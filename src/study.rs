@@ -24,7 +24,7 @@ pub use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSp
 pub use crate::lifetime_study::{LifetimeStudy, ShapeEstimate, WeibullOptions, validate_lifetime};
 
 /// The kinds of study this version can run.
-pub const KINDS: [&str; 8] = ["lifetime", "dem", "crush", "calibrate", "uq", "discrepancy", "discrepancy_curves", "experiments"];
+pub const KINDS: [&str; 9] = ["lifetime", "dem", "crush", "calibrate", "uq", "discrepancy", "discrepancy_curves", "experiments", "temperature"];
 
 /// A parsed, validated study.
 #[derive(Debug, Clone, PartialEq)]
@@ -47,6 +47,9 @@ pub enum Study {
     DiscrepancyCurves(Box<crate::discrepancy::curves::CurveStudy>),
     /// kind = "experiments": which crush or impact tests next, decided by their value.
     Experiments(Box<crate::experiments::ExperimentsStudy>),
+    /// kind = "temperature": phases against temperature (the temperature model of the
+    /// parameters and the lifetime at temperature to come).
+    Temperature(Box<crate::temperature::TemperatureStudy>),
 }
 
 /// A study file loaded from disk and validated.
@@ -102,6 +105,11 @@ pub fn load(path: &Path) -> Result<LoadedStudy> {
             let s: crate::experiments::ExperimentsStudy = file.parse()?;
             s.validate(&name, None)?;
             Study::Experiments(Box::new(s))
+        }
+        "temperature" => {
+            let s: crate::temperature::TemperatureStudy = file.parse()?;
+            s.validate(&name)?;
+            Study::Temperature(Box::new(s))
         }
         other => {
             return Err(Error::config(&name, "kind", format!("unknown kind \"{other}\"; known: {}", KINDS.join(", "))));

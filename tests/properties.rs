@@ -9,7 +9,7 @@
 //!   dropped or added, a header name repeated, the text truncated or spliced with odd bytes.
 //!
 //! Parsers: crush CSV, force–displacement curve CSV, observation CSV, impact spectrum CSV,
-//! Table 1 CSV, and one shipped study of every kind (`study::load`, which also reads the files a
+//! Table 1 CSV, phase-fraction CSV, and one shipped study of every kind (`study::load`, which also reads the files a
 //! study names). The CI tests run a fixed-seed sample (about 4 000 cases); the ignored test runs
 //! twenty times more from a random seed. `PARTLIFE_PROPERTY_TRACE=1` prints every case a parser
 //! took more than 0.5 s over (a parser must not hang on any input).
@@ -72,6 +72,11 @@ fn table1(p: &Path) -> partlife::Result<Vec<f64>> {
     Ok(rows.iter().flat_map(|r| r.cells.iter().flat_map(|c| [c.min, c.max].into_iter().flatten())).collect())
 }
 
+fn phases(p: &Path) -> partlife::Result<Vec<f64>> {
+    let t = partlife::phases::read_phases(p)?;
+    Ok(t.temperatures_c.iter().copied().chain(t.fractions.iter().flatten().copied()).collect())
+}
+
 /// A study: loads (and validates) it; a non-finite number in an accepted study is a failure.
 fn study(p: &Path) -> partlife::Result<Vec<f64>> {
     partlife::study::load(p)?;
@@ -92,16 +97,17 @@ fn collect_floats(v: &toml::Value, out: &mut Vec<f64>) {
     }
 }
 
-const CSV_PARSERS: [Parser; 5] = [
+const CSV_PARSERS: [Parser; 6] = [
     Parser { name: "crush CSV", base: "datasets/crush_gen4.csv", parse: crush },
     Parser { name: "curve CSV", base: "datasets/crush_curves_gen3_rt.csv", parse: curves },
     Parser { name: "observation CSV", base: "datasets/dem_rig_profile.csv", parse: observations },
     Parser { name: "spectrum CSV", base: "datasets/dem_cold_test_impact_spectrum.csv", parse: spectrum },
     Parser { name: "Table 1 CSV", base: "datasets/table1_particle_properties.csv", parse: table1 },
+    Parser { name: "phase-fraction CSV", base: "datasets/phases_granulated_illustrative.csv", parse: phases },
 ];
 
 /// One shipped study of every kind.
-const STUDY_PARSERS: [Parser; 8] = [
+const STUDY_PARSERS: [Parser; 9] = [
     Parser { name: "lifetime study", base: "studies/lifetime.toml", parse: study },
     Parser { name: "dem study", base: "studies/dem_cold_test.toml", parse: study },
     Parser { name: "crush study", base: "studies/crush_gen3_rt.toml", parse: study },
@@ -110,6 +116,7 @@ const STUDY_PARSERS: [Parser; 8] = [
     Parser { name: "discrepancy study", base: "studies/discrepancy_crush.toml", parse: study },
     Parser { name: "discrepancy_curves study", base: "studies/discrepancy_curves.toml", parse: study },
     Parser { name: "experiments study", base: "studies/experiments.toml", parse: study },
+    Parser { name: "temperature study", base: "studies/temperature.toml", parse: study },
 ];
 
 /// A scratch copy of the repository's studies/ and datasets/.

@@ -250,9 +250,7 @@ impl CalibrateStudy {
             return Err(Error::config(&file, "data", format!("{} observations cannot determine {dim} parameters", observations.len())));
         }
         self.calibration.validate(&file, "calibration", dim)?;
-        if !(self.figures.width_cm >= 4.0 && self.figures.width_cm <= 40.0) {
-            return Err(Error::config(&file, "figures.width_cm", format!("must lie in [4, 40], got {}", self.figures.width_cm)));
-        }
+        crate::schema::FigureOptions { width_cm: self.figures.width_cm }.validate(&file)?;
         // [compare]'s reference report may not exist yet at load: it is read when the tables are
         // written, and a missing one is reported in summary.md.
         Ok(Prepared { built, observations, inputs, config })

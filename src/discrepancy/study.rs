@@ -89,7 +89,7 @@ impl DiscrepancyStudy {
             check(file, "power.particles", !p.particles.is_empty() && p.particles.iter().all(|n| *n >= MIN_PARTICLES && *n <= 100_000), format!("sizes must lie in [{MIN_PARTICLES}, 100000] (got {:?})", p.particles))?;
             check(file, "power.bootstrap", p.bootstrap >= 99, format!("must be ≥ 99 (got {})", p.bootstrap))?;
         }
-        check(file, "figures.width_cm", self.figures.width_cm >= 4.0 && self.figures.width_cm <= 40.0, format!("must lie in [4, 40] cm (got {})", self.figures.width_cm))?;
+        self.figures.validate(file)?;
         check(file, "material", !self.material.is_empty(), "at least one [[material]] is required".into())?;
         let mut keys = Vec::new();
         for (k, m) in self.material.iter().enumerate() {

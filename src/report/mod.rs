@@ -22,6 +22,7 @@ pub mod panel;
 pub mod uq;
 pub mod discrepancy;
 pub mod experiments;
+pub mod temperature;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -192,6 +193,7 @@ pub fn redraw(report_dir: &Path) -> Result<Rendered> {
         Some("discrepancy") => return discrepancy::render(report_dir, width),
         Some("discrepancy_curves") => return discrepancy::render_curves(report_dir, width),
         Some("experiments") => return experiments::render(report_dir, width),
+        Some("temperature") => return temperature::render(report_dir, width),
         _ => {}
     }
     render(report_dir, width)

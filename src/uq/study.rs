@@ -262,9 +262,6 @@ impl UqStudy {
                 return bad(&key("impact_diameter_m"), format!("must lie in {}, got {d}", crate::data::DIAMETER.shown));
             }
         }
-        if !(4.0..=40.0).contains(&self.figures.width_cm) {
-            return bad("figures.width_cm", format!("must lie in [4, 40], got {}", self.figures.width_cm));
-        }
-        Ok(())
+        self.figures.validate(file)
     }
 }

@@ -1,0 +1,327 @@
+//! Phase-fraction tables: the equilibrium phases of a particle's composition against
+//! temperature, from computational thermodynamics (Thermo-Calc, pycalphad), and the amorphous
+//! fraction that the temperature model of the material parameters takes as its argument.
+//!
+//! The deliverable (§2, Fig. 2) computes the stable phases of a granulated composition with
+//! Thermo-Calc and TCOXID: a corundum-type M₂O₃ phase (mostly Al₂O₃), a mullite-type
+//! 2M₂O₃·SiO₂ phase, a pseudo-brookite phase, and a disordered (amorphous) fraction that starts to
+//! rise around 900 °C and softens quickly.
+//!
+//! # File format
+//!
+//! CSV, one row per temperature and phase (the long form both tools export):
+//!
+//! | column | meaning |
+//! |---|---|
+//! | `temperature_c` or `temperature_k` | temperature, °C or K (exactly one of the two columns) |
+//! | `phase` | the phase's name as the database spells it (`CORUNDUM`, `MULLITE`, …) |
+//! | `mole_fraction` or `mass_fraction` | the phase's fraction; the column's name states the basis (exactly one) |
+//! | `amorphous` | optional: `true` for a disordered or glassy phase, `false` or empty otherwise |
+//!
+//! Rules, each refused with the file, row and rule (exit 2):
+//! * temperatures lie above absolute zero; the rows of one temperature are contiguous and the
+//!   temperatures increase down the file; at least two temperatures;
+//! * each phase appears at most once per temperature; a phase not listed at a temperature has
+//!   fraction 0 there;
+//! * fractions are finite and ≥ 0 (values down to −10⁻⁹, solver round-off, are read as 0);
+//! * at every temperature the fractions sum to 1 within [`SUM_TOLERANCE`]; they are then
+//!   rescaled to sum to 1 exactly;
+//! * a phase is spelled the same way in every row: two names that differ only in case, spaces,
+//!   `_` or `-` are refused, and so is a phase whose `amorphous` flag changes between rows.
+//!
+//! # From Thermo-Calc and pycalphad
+//!
+//! * **Thermo-Calc** (Console mode, POLY: a stepped calculation in T, then `tabulate` of `NP(*)`,
+//!   or Graphical mode's table of "amount of all phases" against temperature): `T` (K) →
+//!   `temperature_k`, the phase name → `phase`, `NP(phase)` (moles of the phase per mole of
+//!   system) → `mole_fraction`; `BPW(phase)` → `mass_fraction` instead. The liquid/glass phase
+//!   of TCOXID (`IONIC_LIQ`) gets `amorphous = true`. Drop phases whose amount is 0 everywhere,
+//!   or keep them with 0.
+//! * **pycalphad**: `eq = equilibrium(db, comps, phases, {v.T: (…), v.P: 101325, v.N: 1, …})`,
+//!   then `eq[["NP", "Phase"]].to_dataframe()` gives one row per T, vertex and phase; drop the
+//!   rows whose `Phase` is empty, sum `NP` over the vertices of the same phase at each T
+//!   (a miscibility gap gives two vertices of one phase), and rename `T` → `temperature_k`,
+//!   `Phase` → `phase`, `NP` → `mole_fraction`.
+//!
+//! Between the tabulated temperatures the fractions are interpolated linearly; outside them
+//! nothing is extrapolated ([`PhaseTable::at`] refuses).
+
+use std::path::{Path, PathBuf};
+
+use crate::data::{parse_number, read_text_table, text_column};
+use crate::error::{Error, Result};
+
+/// The shipped illustrative table's file name in `datasets/`.
+pub const ILLUSTRATIVE_FILE: &str = "phases_granulated_illustrative.csv";
+
+/// How far the fractions at one temperature may sum from 1.
+pub const SUM_TOLERANCE: f64 = 1e-3;
+
+/// Negative fractions down to this are solver round-off and read as 0.
+const ROUND_OFF: f64 = 1e-9;
+
+/// 0 °C in kelvin.
+const KELVIN: f64 = 273.15;
+
+/// The basis of the fractions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Basis {
+    /// Mole fractions of phase.
+    Mole,
+    /// Mass fractions of phase.
+    Mass,
+}
+
+impl Basis {
+    /// The column that holds fractions of this basis.
+    pub fn column(self) -> &'static str {
+        match self {
+            Basis::Mole => "mole_fraction",
+            Basis::Mass => "mass_fraction",
+        }
+    }
+}
+
+/// A validated phase-fraction table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PhaseTable {
+    /// The file it was read from (empty for a generated table).
+    pub path: PathBuf,
+    /// The basis of the fractions.
+    pub basis: Basis,
+    /// Temperatures (°C), increasing.
+    pub temperatures_c: Vec<f64>,
+    /// Phase names, in order of first appearance.
+    pub phases: Vec<String>,
+    /// Whether each phase is amorphous.
+    pub amorphous: Vec<bool>,
+    /// Fractions, per temperature and phase (each row sums to 1).
+    pub fractions: Vec<Vec<f64>>,
+}
+
+/// A phase name reduced to what tells phases apart: lower case without spaces, `_` and `-`.
+fn folded(name: &str) -> String {
+    name.chars().filter(|c| !matches!(c, ' ' | '_' | '-')).flat_map(char::to_lowercase).collect()
+}
+
+/// Reads and validates a phase-fraction table (module docs: format and rules).
+pub fn read_phases(path: &Path) -> Result<PhaseTable> {
+    let df = read_text_table(path)?;
+    let present = |c: &str| df.column(c).is_ok();
+    let header = |rule: String| Err(Error::data_file(path, "header", rule));
+    let t_col = match (present("temperature_c"), present("temperature_k")) {
+        (true, false) => "temperature_c",
+        (false, true) => "temperature_k",
+        (true, true) => return header("both `temperature_c` and `temperature_k`: give the temperature once".into()),
+        (false, false) => return header("missing column `temperature_c` or `temperature_k` (required: a temperature, `phase`, and `mole_fraction` or `mass_fraction`; optional: `amorphous`)".into()),
+    };
+    let basis = match (present("mole_fraction"), present("mass_fraction")) {
+        (true, false) => Basis::Mole,
+        (false, true) => Basis::Mass,
+        (true, true) => return header("both `mole_fraction` and `mass_fraction`: one file holds one basis".into()),
+        (false, false) => return header("missing column `mole_fraction` or `mass_fraction` (the column's name states the basis)".into()),
+    };
+    if !present("phase") {
+        return header("missing column `phase`".into());
+    }
+    if df.height() == 0 {
+        return Err(Error::data_file(path, "file", "no data rows"));
+    }
+    let get = |name: &str| text_column(&df, name).map(|c| c.unwrap_or_default());
+    let (temps, names, values) = (get(t_col)?, get("phase")?, get(basis.column())?);
+    let flags = text_column(&df, "amorphous")?;
+
+    let mut table = PhaseTable { path: path.to_path_buf(), basis, temperatures_c: Vec::new(), phases: Vec::new(), amorphous: Vec::new(), fractions: Vec::new() };
+    // The row each temperature starts at, and each phase's first row.
+    let (mut starts, mut first_row): (Vec<usize>, Vec<usize>) = (Vec::new(), Vec::new());
+    for row in 0..df.height() {
+        let need = |col: &[Option<String>], name: &str| col[row].clone().ok_or_else(|| Error::data_row(path, row, name, "cell is empty; a value is required"));
+        let raw = parse_number(path, row, t_col, &need(&temps, t_col)?)?;
+        let t = if t_col == "temperature_k" { raw - KELVIN } else { raw };
+        if !(t.is_finite() && t > -KELVIN) {
+            return Err(Error::data_row(path, row, t_col, format!("{raw} lies at or below absolute zero (−273.15 °C, 0 K)")));
+        }
+        let name = need(&names, "phase")?;
+        let value = parse_number(path, row, basis.column(), &need(&values, basis.column())?)?;
+        if !value.is_finite() || value < -ROUND_OFF {
+            return Err(Error::data_row(path, row, basis.column(), format!("a fraction must be finite and ≥ 0, got {value}")));
+        }
+        let amorphous = match flags.as_ref().and_then(|f| f[row].as_deref()) {
+            None => false,
+            Some(v) => match v.to_ascii_lowercase().as_str() {
+                "true" | "1" | "yes" => true,
+                "false" | "0" | "no" => false,
+                _ => return Err(Error::data_row(path, row, "amorphous", format!("must be true or false, got \"{v}\""))),
+            },
+        };
+        // A new temperature starts a new block; it must be above the previous one.
+        if table.temperatures_c.last() != Some(&t) {
+            if let Some(&prev) = table.temperatures_c.last()
+                && t <= prev
+            {
+                return Err(Error::data_row(path, row, t_col, format!("temperatures must increase down the file, with the rows of one temperature together: {raw} after {}", if t_col == "temperature_k" { prev + KELVIN } else { prev })));
+            }
+            table.temperatures_c.push(t);
+            table.fractions.push(vec![0.0; table.phases.len()]);
+            starts.push(row);
+        }
+        let p = match table.phases.iter().position(|n| *n == name) {
+            Some(p) => {
+                if table.amorphous[p] != amorphous {
+                    return Err(Error::data_row(path, row, "amorphous", format!("phase \"{name}\" is {} here but {} on row {}: a phase is amorphous or not at every temperature", if amorphous { "amorphous" } else { "not amorphous" }, if amorphous { "not amorphous" } else { "amorphous" }, first_row[p] + 1)));
+                }
+                p
+            }
+            None => {
+                if let Some(q) = table.phases.iter().position(|n| folded(n) == folded(&name)) {
+                    return Err(Error::data_row(path, row, "phase", format!("\"{name}\" differs from \"{}\" (row {}) only in case, spaces, '_' or '-': spell each phase the same way at every temperature", table.phases[q], first_row[q] + 1)));
+                }
+                table.phases.push(name.clone());
+                table.amorphous.push(amorphous);
+                first_row.push(row);
+                table.fractions.iter_mut().for_each(|f| f.push(0.0));
+                table.phases.len() - 1
+            }
+        };
+        let block = table.fractions.last_mut().expect("a block was started");
+        if (starts[starts.len() - 1]..row).any(|r| names[r].as_deref() == Some(name.as_str())) {
+            return Err(Error::data_row(path, row, "phase", format!("phase \"{name}\" appears twice at {raw} {}", if t_col == "temperature_k" { "K" } else { "°C" })));
+        }
+        block[p] = value.max(0.0);
+    }
+    if table.temperatures_c.len() < 2 {
+        return Err(Error::data_file(path, "file", "needs at least two temperatures"));
+    }
+    for (b, f) in table.fractions.iter_mut().enumerate() {
+        let sum: f64 = f.iter().sum();
+        if (sum - 1.0).abs() > SUM_TOLERANCE {
+            let (row, t) = (starts[b], table.temperatures_c[b]);
+            return Err(Error::data_row(path, row, basis.column(), format!("the fractions at {t} °C sum to {sum:.6}, not 1 within {SUM_TOLERANCE} (rows {}–{})", row + 1, starts.get(b + 1).map_or(df.height(), |&s| s))));
+        }
+        f.iter_mut().for_each(|x| *x /= sum);
+    }
+    Ok(table)
+}
+
+impl PhaseTable {
+    /// The tabulated temperature range (°C).
+    pub fn range(&self) -> (f64, f64) {
+        (self.temperatures_c[0], self.temperatures_c[self.temperatures_c.len() - 1])
+    }
+
+    /// The amorphous fraction at every tabulated temperature.
+    pub fn amorphous_fractions(&self) -> Vec<f64> {
+        self.fractions.iter().map(|f| f.iter().zip(&self.amorphous).filter(|(_, a)| **a).map(|(x, _)| x).sum()).collect()
+    }
+
+    /// Every phase's fraction at `t_c` °C, interpolated linearly; a temperature outside the
+    /// table is refused (nothing is extrapolated).
+    pub fn at(&self, t_c: f64) -> Result<Vec<f64>> {
+        let (lo, hi) = self.range();
+        if !(t_c >= lo && t_c <= hi) {
+            return Err(Error::numerical("phase fractions", format!("{t_c} °C lies outside the phase table {} ({lo}–{hi} °C)", self.path.display())));
+        }
+        let j = self.temperatures_c.partition_point(|&t| t <= t_c).clamp(1, self.temperatures_c.len() - 1);
+        let (t0, t1) = (self.temperatures_c[j - 1], self.temperatures_c[j]);
+        let w = (t_c - t0) / (t1 - t0);
+        Ok(self.fractions[j - 1].iter().zip(&self.fractions[j]).map(|(a, b)| a + w * (b - a)).collect())
+    }
+
+    /// The amorphous fraction at `t_c` °C ([`PhaseTable::at`]).
+    pub fn amorphous_at(&self, t_c: f64) -> Result<f64> {
+        Ok(self.at(t_c)?.iter().zip(&self.amorphous).filter(|(_, a)| **a).map(|(x, _)| x).sum())
+    }
+
+    /// The lowest tabulated temperature at which the amorphous fraction exceeds `level`, if any.
+    pub fn amorphous_onset(&self, level: f64) -> Option<f64> {
+        self.amorphous_fractions().iter().position(|&f| f > level).map(|i| self.temperatures_c[i])
+    }
+
+    /// The table as CSV (`temperature_c`, `phase`, the basis column, `amorphous`), every phase at
+    /// every temperature, fractions to 6 decimals.
+    pub fn to_csv(&self) -> String {
+        let mut s = format!("temperature_c,phase,{},amorphous\n", self.basis.column());
+        for (t, f) in self.temperatures_c.iter().zip(&self.fractions) {
+            for ((name, x), a) in self.phases.iter().zip(f).zip(&self.amorphous) {
+                s.push_str(&format!("{t},{name},{x:.6},{a}\n"));
+            }
+        }
+        s
+    }
+}
+
+/// The shipped illustrative table (`datasets/phases_granulated_illustrative.csv`): **not
+/// computed** — a shape that follows the deliverable's text, made by this rule:
+///
+/// * temperatures 20 °C, then 50–1400 °C in steps of 50 °C; mole fractions;
+/// * amorphous phase `IONIC_LIQ`: f_a = 0 up to 880 °C, then f_a = 0.30 · s((T − 880)/300) with
+///   the smoothstep s(x) = 3x² − 2x³ (x clipped to [0, 1]), so it starts to rise around 900 °C
+///   and reaches 0.30 at 1180 °C;
+/// * crystalline phases at low temperature: `CORUNDUM` 0.55, `MULLITE` 0.30,
+///   `PSEUDO_BROOKITE` 0.15; the amorphous phase takes half of its fraction from pseudo-brookite
+///   and half from corundum and mullite in proportion to their low-temperature fractions
+///   (pseudo-brookite is used up exactly at f_a = 0.30).
+pub fn illustrative() -> PhaseTable {
+    let temperatures_c: Vec<f64> = std::iter::once(20.0).chain((1..=28).map(|k| 50.0 * k as f64)).collect();
+    let fractions = temperatures_c
+        .iter()
+        .map(|&t| {
+            let x: f64 = ((t - 880.0) / 300.0).clamp(0.0, 1.0);
+            let fa = 0.30 * x * x * (3.0 - 2.0 * x);
+            let half = 0.5 * fa;
+            vec![0.55 - half * 0.55 / 0.85, 0.30 - half * 0.30 / 0.85, 0.15 - half, fa]
+        })
+        .collect();
+    PhaseTable {
+        path: PathBuf::new(),
+        basis: Basis::Mole,
+        temperatures_c,
+        phases: ["CORUNDUM", "MULLITE", "PSEUDO_BROOKITE", "IONIC_LIQ"].map(String::from).to_vec(),
+        amorphous: vec![false, false, false, true],
+        fractions,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(body: &str) -> (crate::io::TempDir, PathBuf) {
+        let dir = crate::io::TempDir::new("phases").unwrap();
+        let p = dir.path().join("phases.csv");
+        std::fs::write(&p, body).unwrap();
+        (dir, p)
+    }
+
+    #[test]
+    fn reads_kelvin_mass_fractions_and_interpolates() {
+        let (_d, p) = write("temperature_k,phase,mass_fraction,amorphous\n1073.15,A,0.7,\n1073.15,GLASS,0.3,true\n1273.15,A,0.5,false\n1273.15,GLASS,0.5,true\n1373.15,GLASS,1.0,true\n");
+        let t = read_phases(&p).unwrap();
+        assert_eq!(t.basis, Basis::Mass);
+        assert_eq!(t.phases, ["A", "GLASS"]);
+        assert!((t.temperatures_c[0] - 800.0).abs() < 1e-9 && (t.temperatures_c[2] - 1100.0).abs() < 1e-9);
+        // Not listed at 1100 °C: 0.
+        assert_eq!(t.fractions[2], [0.0, 1.0]);
+        assert!((t.amorphous_at(900.0).unwrap() - 0.4).abs() < 1e-12);
+        assert!((t.at(1050.0).unwrap()[0] - 0.25).abs() < 1e-12);
+        assert!(t.at(799.0).is_err() && t.at(1100.1).is_err());
+        assert_eq!(t.amorphous_onset(0.45), Some(t.temperatures_c[1]));
+    }
+
+    #[test]
+    fn the_illustrative_table_reads_back_and_rises_from_900_c() {
+        let dir = crate::io::TempDir::new("phases").unwrap();
+        let p = dir.path().join("t.csv");
+        let t = illustrative();
+        std::fs::write(&p, t.to_csv()).unwrap();
+        let back = read_phases(&p).unwrap();
+        assert_eq!(back.phases, t.phases);
+        for (a, b) in back.fractions.iter().zip(&t.fractions) {
+            assert!(a.iter().zip(b).all(|(x, y)| (x - y).abs() < 2e-6), "{a:?} vs {b:?}");
+        }
+        let fa = t.amorphous_fractions();
+        assert!(fa.windows(2).all(|w| w[1] >= w[0]) && fa.iter().all(|&f| (0.0..=0.30 + 1e-12).contains(&f)));
+        assert_eq!(t.amorphous_onset(0.0), Some(900.0));
+        assert!(t.fractions.iter().all(|f| f.iter().all(|&x| x >= -1e-12) && (f.iter().sum::<f64>() - 1.0).abs() < 1e-12));
+    }
+}

@@ -47,7 +47,7 @@ pub fn ln_density_of_log(y: f64, ln_scale: f64, b: f64) -> f64 {
 }
 
 /// New crushed particles drawn from a population of rows: each particle's row uniformly with
-/// replacement, then its strength Weibull with modulus `m` and the row's scale e^(ln_scale[row]),
+/// replacement, then its strength Weibull with modulus `m` and the row's scale e^(ln σ_row),
 /// by inversion, ln s = ln σ_row + ln(−ln U)/m. Returns (row, ln s) per particle, the row and U
 /// drawn in that order from `rng`. The crate's one generator of synthetic crush data (the
 /// discrepancy workflow's detection power and experiment design's crush tests).

@@ -24,7 +24,7 @@ fn describe(s: &TemperatureStudy, t: &PhaseTable, shown_path: &str) -> (String, 
     };
     let crystalline: Vec<String> = t.phases.iter().zip(&t.amorphous).enumerate().filter(|(_, (_, a))| !**a).map(|(p, (n, _))| format!("{n} {:.3}", t.fractions[0][p])).collect();
     let mut md = format!(
-        "The phase table `{shown_path}` ({}) gives {} phases at {} temperatures from {lo} to {hi} °C as {basis} fractions. At {lo} °C: {}.",
+        "The phase table `{shown_path}` — {} — gives {} phases at {} temperatures from {lo} to {hi} °C as {basis} fractions. At {lo} °C: {}.",
         s.phases.composition,
         t.phases.len(),
         t.temperatures_c.len(),

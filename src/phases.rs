@@ -209,9 +209,14 @@ impl PhaseTable {
         (self.temperatures_c[0], self.temperatures_c[self.temperatures_c.len() - 1])
     }
 
+    /// The sum of the amorphous phases' fractions in `fractions` (one per phase).
+    fn amorphous_of(&self, fractions: &[f64]) -> f64 {
+        fractions.iter().zip(&self.amorphous).filter(|(_, a)| **a).map(|(x, _)| x).sum()
+    }
+
     /// The amorphous fraction at every tabulated temperature.
     pub fn amorphous_fractions(&self) -> Vec<f64> {
-        self.fractions.iter().map(|f| f.iter().zip(&self.amorphous).filter(|(_, a)| **a).map(|(x, _)| x).sum()).collect()
+        self.fractions.iter().map(|f| self.amorphous_of(f)).collect()
     }
 
     /// Every phase's fraction at `t_c` °C, interpolated linearly; a temperature outside the
@@ -229,7 +234,7 @@ impl PhaseTable {
 
     /// The amorphous fraction at `t_c` °C ([`PhaseTable::at`]).
     pub fn amorphous_at(&self, t_c: f64) -> Result<f64> {
-        Ok(self.at(t_c)?.iter().zip(&self.amorphous).filter(|(_, a)| **a).map(|(x, _)| x).sum())
+        Ok(self.amorphous_of(&self.at(t_c)?))
     }
 
     /// The lowest tabulated temperature at which the amorphous fraction exceeds `level`, if any.

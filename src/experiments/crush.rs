@@ -186,6 +186,9 @@ impl CrushTest {
         if material > 1 || particles == 0 {
             return bad(format!("material {material}, {particles} particles: needs at least one particle"));
         }
+        if options.naming.is_some() && !options.shape_measured {
+            return bad("the naming loop's verdict needs each particle's roundness and sphericity: set shape_measured = true or drop naming_draws".into());
+        }
         let diameter = options.diameter;
         let sample = &state.forms[0].setup.materials[material].sample;
         let n_rows = sample.strength.len();
@@ -226,9 +229,6 @@ impl CrushTest {
             }
         }
         let r = rows.len();
-        if options.naming.is_some() && !options.shape_measured {
-            return bad("the naming loop's verdict needs each particle's roundness and sphericity: set shape_measured = true or drop naming_draws".into());
-        }
         let naming = options.naming.as_ref().map(|settings| NamingCheck {
             settings: settings.clone(),
             sample: sample.clone(),
@@ -270,7 +270,8 @@ impl Experiment for CrushTest {
     /// 1 when the naming loop on the pooled data names exactly the truth's effects (module docs).
     fn score(&self, data: &Self::Data, truth: usize, draw: usize) -> Option<f64> {
         let n = self.naming.as_ref()?;
-        let mut pooled = Sample { source: format!("{} + {} simulated particles", n.sample.source, data.len()), strength: n.sample.strength.clone(), covariates: n.sample.covariates.clone() };
+        let mut pooled = n.sample.clone();
+        pooled.source = format!("{} + {} simulated particles", n.sample.source, data.len());
         pooled.strength.extend(data.iter().map(|&(_, ln_s)| ln_s.exp()));
         for ((name, column), (_, base)) in pooled.covariates.iter_mut().zip(&n.sample.covariates) {
             let at_test = (name == Effect::Temperature.covariate()).then_some(n.temperature_c).flatten();

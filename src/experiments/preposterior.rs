@@ -302,12 +302,23 @@ pub struct Metrics {
     pub fallbacks: usize,
     /// Outer draws whose reweighting collapsed without a fallback.
     pub collapsed: usize,
-    /// Mean of the experiment's score over the draws that computed it, and the expected
-    /// posterior weight of the truth's label of every kind over the same draws (a paired
-    /// comparison); None when no draw did.
-    pub score: Option<(Estimate, Vec<Estimate>)>,
+    /// The experiment's score over the draws that computed it; None when no draw did.
+    pub score: Option<Scored>,
     /// Every outer draw.
     pub draws: Vec<Draw>,
+}
+
+/// The experiment's score ([`Experiment::score`]) over the outer draws that computed it, with
+/// the reweighting's expected posterior weight of the truth's label on the same draws (a paired
+/// comparison of the two decision rules).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scored {
+    /// Outer draws that computed the score.
+    pub draws: usize,
+    /// Mean score.
+    pub mean: Estimate,
+    /// Expected posterior weight of the truth's label, per label kind, on the same draws.
+    pub true_label_weight: Vec<Estimate>,
 }
 
 /// The preposterior analysis of `experiment` on `knowledge`.
@@ -374,7 +385,7 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
     let scored: Vec<&Draw> = draws.iter().filter(|d| d.score.is_some()).collect();
     let score = (!scored.is_empty()).then(|| {
         let of = |f: &dyn Fn(&Draw) -> f64| Estimate::of(&scored.iter().map(|d| f(d)).collect::<Vec<_>>());
-        (of(&|d| d.score.unwrap_or(f64::NAN)), (0..kn.label_kinds).map(|kind| of(&|d| true_weight(kind, d))).collect())
+        Scored { draws: scored.len(), mean: of(&|d| d.score.unwrap_or(f64::NAN)), true_label_weight: (0..kn.label_kinds).map(|kind| of(&|d| true_weight(kind, d))).collect() }
     });
     let mut ess: Vec<f64> = draws.iter().map(|d| d.ess).collect();
     ess.sort_by(f64::total_cmp);

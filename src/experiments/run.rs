@@ -255,10 +255,10 @@ fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: 
             fcol("true_strength_model_weight_se", col(&|e| e.metrics.true_label_weight[1].se, rows)),
             // The naming loop's verdict (crush tests with naming_draws; NaN elsewhere) and, on
             // the same draws, the Bayesian expected weight of the true strength model.
-            fcol("naming_names_truth", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.0.mean), rows)),
-            fcol("naming_names_truth_se", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.0.se), rows)),
-            ucol("naming_draws", rows.iter().map(|e| e.metrics.draws.iter().filter(|d| d.score.is_some()).count() as u64).collect()),
-            fcol("true_strength_model_weight_naming_draws", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.1[1].mean), rows)),
+            fcol("naming_names_truth", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.mean.mean), rows)),
+            fcol("naming_names_truth_se", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.mean.se), rows)),
+            ucol("naming_draws", rows.iter().map(|e| e.metrics.score.as_ref().map_or(0, |s| s.draws as u64)).collect()),
+            fcol("true_strength_model_weight_naming_draws", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.true_label_weight[1].mean), rows)),
             fcol("median_ess", col(&|e| e.metrics.median_ess, rows)),
             ucol("fallbacks", rows.iter().map(|e| e.metrics.fallbacks as u64).collect()),
             ucol("collapsed", rows.iter().map(|e| e.metrics.collapsed as u64).collect()),

@@ -1,6 +1,7 @@
 //! `summary.md` of an experiments study: every sentence generated from the numbers it states.
 
 use super::plan::{Allocated, Evaluated, first_step};
+use super::preposterior::Scored;
 use super::state::State;
 use super::study::ExperimentsStudy;
 
@@ -189,25 +190,23 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
 /// The naming loop's verdict beside the reweighting's, for the crush candidates that ran it
 /// (empty when none did).
 fn naming_section(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), Evaluated)]) -> String {
-    let scored: Vec<(usize, &Evaluated)> = singles.iter().filter(|(_, e)| e.metrics.score.is_some()).map(|((i, _), e)| (*i, e)).collect();
+    let scored: Vec<(usize, &Evaluated, &Scored)> = singles.iter().filter_map(|((i, _), e)| e.metrics.score.as_ref().map(|sc| (*i, e, sc))).collect();
     if scored.is_empty() {
         return String::new();
     }
     let mut md = String::from("\n## Would the discrepancy workflow find the true strength model?\n\n");
     md.push_str("The main study's diagnosed strength model is what the discrepancy naming loop names in each material's crush data. For the crush candidates below, the loop was also run on the pooled data — today's crushed particles and the simulated ones — of the first simulated campaigns, and scored 1 when it named exactly the effects of the strength model the campaign was simulated under. Beside it, on the same campaigns, the reweighting's expected posterior weight of that model.\n\n");
     md.push_str("| candidate | particles | campaigns | naming loop names the true model's effects | expected weight of the true strength model |\n|---|---|---|---|---|\n");
-    for (_, e) in &scored {
-        if let Some((verdict, weights)) = &e.metrics.score {
-            let draws = e.metrics.draws.iter().filter(|d| d.score.is_some()).count();
-            md.push_str(&format!("| {} | {} | {draws} | {} | {} |\n", e.names[0], e.sizes[0], pm(verdict.mean, verdict.se), pm(weights[1].mean, weights[1].se)));
-        }
+    for (_, e, sc) in &scored {
+        let (verdict, weight) = (sc.mean, sc.true_label_weight[1]);
+        md.push_str(&format!("| {} | {} | {} | {} | {} |\n", e.names[0], e.sizes[0], sc.draws, pm(verdict.mean, verdict.se), pm(weight.mean, weight.se)));
     }
     // Each candidate's largest size: which rule identifies the truth more often.
     for (i, c) in s.candidate.iter().enumerate() {
-        let Some(e) = scored.iter().filter(|(ci, _)| *ci == i).map(|(_, e)| *e).max_by_key(|e| e.sizes[0]) else { continue };
-        let Some((verdict, weights)) = &e.metrics.score else { continue };
+        let Some(&(_, e, sc)) = scored.iter().filter(|(ci, _, _)| *ci == i).max_by_key(|(_, e, _)| e.sizes[0]) else { continue };
         let Some(m) = state.forms[0].setup.materials.iter().find(|m| Some(&m.model.key) == c.material.as_ref()) else { continue };
-        let (gap, se) = (weights[1].mean - verdict.mean, weights[1].se.hypot(verdict.se));
+        let (verdict, weight) = (sc.mean, sc.true_label_weight[1]);
+        let (gap, se) = (weight.mean - verdict.mean, weight.se.hypot(verdict.se));
         let words = if gap > 2.0 * se {
             "the reweighting identifies the true strength model more often than a rerun of the naming loop on the pooled data would"
         } else if gap < -2.0 * se {
@@ -221,7 +220,7 @@ fn naming_section(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize
             m.model.label,
             m.sample.strength.len(),
             pm(verdict.mean, verdict.se),
-            pm(weights[1].mean, weights[1].se)
+            pm(weight.mean, weight.se)
         ));
     }
     md

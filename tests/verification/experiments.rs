@@ -309,9 +309,11 @@ fn the_naming_loop_and_the_reweighting_judge_the_same_crush_data() {
     let run = |effects: &[Effect], n: usize| -> (Estimate, Estimate) {
         let settings = Settings { outer: 60, min_ess: 50.0, seed: 41, truth: Some((1, form(effects))), active: Some(4000), scored: 60 };
         let m = preposterior(&state.knowledge, &CrushTest::new(&state, 0, n, &options).unwrap(), settings).unwrap();
-        let (verdict, weights) = m.score.unwrap();
-        eprintln!("{effects:?}, {n} more: naming loop names the truth's effects {verdict:?}; expected weight of the true model {:?}", weights[1]);
-        (verdict, weights[1])
+        let sc = m.score.unwrap();
+        assert_eq!(sc.draws, 60);
+        let (verdict, weight) = (sc.mean, sc.true_label_weight[1]);
+        eprintln!("{effects:?}, {n} more: naming loop names the truth's effects {verdict:?}; expected weight of the true model {weight:?}");
+        (verdict, weight)
     };
     for n in [25, 100] {
         let (verdict, weight) = run(&[Effect::Size], n);

@@ -47,7 +47,7 @@
 //! 10  strength                       the one lifetime model (its Bayesian draws use calibrate::mcmc)
 //!  9  calibrate                      LSQ, MCMC, emulator, calibration studies, curve generator
 //!  8  dem · fem                      the solvers with their studies
-//!  7  runkit · synth                 run helpers; the crush-data generator
+//!  7  runkit · synth · thermal       run helpers; the crush-data generator; parameters against temperature
 //!  6  schema                         study files, TOML errors, shared options
 //!  5  dist · phases · report         declared distributions; phase-fraction tables; figures from tables
 //!  4  data · testfns                 datasets with plausibility ranges; analytic simulators
@@ -86,6 +86,7 @@
 //! | [`uq`] | the main study (`kind = "uq"`): strength models as a model-form choice with stacking weights, Monte Carlo propagation through each material's `LifetimeModel`, damage models and averaging domains side by side, Sobol' indices with bootstrap intervals |
 //! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation; the plausibility range of every numeric input column |
 //! | [`synth`] | the documented generator of the synthetic crush datasets |
+//! | [`thermal`] | the temperature law of each calibrated parameter (thermal term × crystalline/glassy mixture in the amorphous fraction), fitted draw by draw to calibration posteriors at two temperatures; the factors of the Weibull scale and Young's modulus between the crush data's and the operating temperature |
 //! | [`phases`] | phase-fraction tables against temperature (Thermo-Calc/pycalphad exports): format, validation, linear interpolation, the amorphous fraction; the rule of the shipped illustrative table |
 //! | [`stats`] | median, Pearson correlation with p-value, line fit, the one sample-quantile definition (Hyndman–Fan type 7) and the weighted inverse CDF, the one linear interpolation (`locate` + `lerp`), the one ranking |
 //! | [`schema`] | the study-file layer under every study module: `StudyFile` (read, kind, parse), TOML errors with line and key, relative paths, shared options (contact, impact, figures, materials) |
@@ -132,6 +133,7 @@ pub mod study;
 pub mod synth;
 pub mod temperature;
 pub mod testfns;
+pub mod thermal;
 pub mod uq;
 pub mod weibull;
 

@@ -159,6 +159,28 @@ impl LifetimeModel {
         }
     }
 
+    /// ln σ̄ (Pa) of a spherical particle's impact at (η, V) when the particle's Young's modulus is
+    /// `factor` times the model's (Poisson's ratio kept): σ̄ ∝ E*^(4/5) when σ̄ ∝ p0 (the Hertz
+    /// impact's p0 at fixed mass, radius and velocity), else the impact recomputed with the
+    /// scaled particle. `factor = 1` is [`LifetimeModel::ln_impact_stress`].
+    pub fn ln_impact_stress_with_modulus(&self, eta: f64, v: f64, factor: f64) -> Result<f64> {
+        if factor == 1.0 || v <= 0.0 {
+            return self.ln_impact_stress(eta, v);
+        }
+        if !(factor.is_finite() && factor > 0.0) {
+            return Err(Error::numerical("lifetime model", format!("material `{}`: Young's modulus factor {factor} is not positive", self.key)));
+        }
+        let mut sphere = self.sphere;
+        sphere.elastic.youngs_modulus_pa *= factor;
+        match self.ln_sigma_unit {
+            Some(c) => {
+                let star = |s: &Sphere| crate::contact::effective_modulus(&s.elastic, &self.wall).ln();
+                Ok(c + 0.8 * (star(&sphere) - star(&self.sphere)) + 0.2 * eta.ln() + 0.4 * v.ln())
+            }
+            None => Ok(ImpactLoad::on_wall(&sphere, &self.wall, eta, self.domain).at_velocity(v)?.mean_tensile.ln()),
+        }
+    }
+
     /// The population's breaking probability under each law of `laws` (built for `p.shape`),
     /// added into `out` (which the caller zeroes), at the reference sphere's impact stress
     /// ln σ̄ = `ln_sigma`. `weights` (one per particle, summing to 1) default to equal.
@@ -374,6 +396,31 @@ mod tests {
             let domain = AveragingDomain { outer, ..AveragingDomain::default() };
             let sig = |d: f64| ImpactLoad::on_wall(&Sphere { diameter: d, density: 3600.0, elastic: e() }, &steel(), 0.1, domain).at_velocity(5.0).unwrap().mean_tensile;
             assert!((sig(0.6e-3) / sig(1.2e-3) - 1.0).abs() < 1e-12, "{outer:?}");
+        }
+    }
+
+    #[test]
+    fn a_scaled_modulus_moves_the_impact_stress_as_the_direct_hertz_impact() {
+        let sphere = Sphere { diameter: 0.9e-3, density: 3060.0, elastic: e() };
+        let fit = crate::strength::fit::StrengthFit::new(
+            &crate::strength::fit::Sample { source: "x".into(), strength: (1..=20).map(|i| 7e8 + 1e7 * i as f64).collect(), covariates: vec![] },
+            &[],
+            5.0,
+            "x",
+        )
+        .unwrap();
+        let pop = Population { source: "declared".into(), particles: vec![crate::strength::population::Particle { diameter_m: 0.9e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false };
+        for outer in [OuterLimit::ContactMultiple, OuterLimit::ParticleRadius] {
+            let domain = AveragingDomain { outer, ..AveragingDomain::default() };
+            let m = LifetimeModel::new("x", "X", sphere, steel(), domain, fit.clone(), pop.clone()).unwrap();
+            for f in [0.4, 0.75, 1.3] {
+                let soft = Sphere { elastic: Elastic::new(112e9 * f, 0.25).unwrap(), ..sphere };
+                let direct = ImpactLoad::on_wall(&soft, &steel(), 0.1, domain).at_velocity(5.0).unwrap().mean_tensile.ln();
+                let got = m.ln_impact_stress_with_modulus(0.1, 5.0, f).unwrap();
+                assert!((got - direct).abs() < 1e-12, "{outer:?} f = {f}: {got} vs {direct}");
+            }
+            // A softer particle meets a lower stress.
+            assert!(m.ln_impact_stress_with_modulus(0.1, 5.0, 0.5).unwrap() < m.ln_impact_stress(0.1, 5.0).unwrap());
         }
     }
 

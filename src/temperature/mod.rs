@@ -5,9 +5,6 @@
 //! about 900 °C and softens quickly — and shows a Gen 3 particle breaking much earlier at 800 °C
 //! than at room temperature. This module connects the two.
 //!
-//! * [`law`]: the temperature law of a positive parameter — a thermal term and a mixture between
-//!   crystalline and glassy behaviour in the amorphous fraction — fitted draw by draw to two
-//!   calibrated states, with bands that widen where it extrapolates.
 //! * [`study`]: the study file.
 //! * [`run`]: the run — today the phase-fraction table ([`crate::phases`]): validated,
 //!   written as `phases.csv`, drawn as `phase_fractions` in the style of the deliverable's
@@ -18,7 +15,6 @@
 //! a declared prior on each glassy ratio), its figure, and the lifetime at the operating
 //! temperature.
 
-pub mod law;
 pub mod run;
 pub mod study;
 

@@ -9,32 +9,72 @@
 //! composition = "granulated (illustrative)"                 # what the table is of, for the report
 //! onset_level = 0.01                 # amorphous fraction above which it counts as risen
 //!
+//! temperatures_c = [20, 1000, 20]    # from, to, step of the tables and figures against temperature
+//! level = 0.9                        # probability of the central bands
+//!
+//! [law]                              # crate::thermal: calibrated states, glassy-ratio priors
+//! calibrations = [{ temperature_c = 20, chains = "…/chains.csv" }, { temperature_c = 800, chains = "…" }]
+//! [law.glassy_ratio]
+//! g = { distribution = "uniform", min = 0.01, max = 0.2 }
+//!
+//! [softening]                        # optional: the discrepancy workflow's temperature term
+//! evidence = "../reports/discrepancy_curves/curve_evidence.csv"
+//!
+//! [lifetime]                         # optional: breakage against temperature (needs [law])
+//! main = "gen4_vs_bl.toml"           # the main study (kind = "uq"): its primary strength model
+//! samples = 4096
+//! table1 = "../datasets/table1_particle_properties.csv"
+//! softening = { bl1630 = "BauxLite BL 16/30", gen4 = "Granulated Gen 4" }   # Table 1 rows
+//!
 //! [figures]
 //! width_cm = 8.5
 //! ```
 
+
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::schema::FigureOptions;
+use crate::thermal::{LawOptions, PhasesOptions};
 
-/// `[phases]`.
+/// `[softening]`: the discrepancy workflow's estimate of the softening between the calibrated
+/// temperatures.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct PhasesOptions {
-    /// The phase-fraction table ([`crate::phases`]), relative to the study file.
-    pub file: PathBuf,
-    /// What the table is of, in words (for the report).
-    pub composition: String,
-    /// Amorphous fraction above which the amorphous phase counts as risen.
-    #[serde(default = "onset_level")]
-    pub onset_level: f64,
+pub struct SofteningOptions {
+    /// `curve_evidence.csv` of a `discrepancy_curves` report, relative to the study file.
+    pub evidence: PathBuf,
 }
 
-fn onset_level() -> f64 {
-    0.01
+/// `[lifetime]`: the main study's breakage against temperature.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LifetimeOptions {
+    /// The main study (`kind = "uq"`), relative to this file: materials, impacts and its primary
+    /// strength model.
+    pub main: PathBuf,
+    /// Monte Carlo samples per temperature (the same samples at every temperature).
+    #[serde(default = "samples")]
+    pub samples: usize,
+    /// Temperatures (°C) whose breakage the summary tabulates (`lifetime_at.csv`).
+    #[serde(default)]
+    pub at: Vec<f64>,
+    /// Table 1 (`datasets/table1_particle_properties.csv`), for the softening temperatures.
+    pub table1: Option<PathBuf>,
+    /// The Table 1 row of each material key whose softening temperature is marked.
+    #[serde(default)]
+    pub softening: BTreeMap<String, String>,
+}
+
+fn samples() -> usize {
+    4096
+}
+
+fn level() -> f64 {
+    0.9
 }
 
 /// A `kind = "temperature"` study.
@@ -47,6 +87,18 @@ pub struct TemperatureStudy {
     pub seed: u64,
     /// The phase table.
     pub phases: PhasesOptions,
+    /// From, to and step (°C) of the tables against temperature (default: the phase table's
+    /// range up to 1000 °C in steps of 20 °C).
+    pub temperatures_c: Option<[f64; 3]>,
+    /// Probability of the central bands.
+    #[serde(default = "level")]
+    pub level: f64,
+    /// The temperature laws of the calibrated parameters.
+    pub law: Option<LawOptions>,
+    /// The discrepancy workflow's softening estimate, reported next to the laws.
+    pub softening: Option<SofteningOptions>,
+    /// Breakage against temperature.
+    pub lifetime: Option<LifetimeOptions>,
     /// Figures.
     #[serde(default)]
     pub figures: FigureOptions,
@@ -62,6 +114,43 @@ impl TemperatureStudy {
         if self.phases.composition.trim().is_empty() {
             return Err(Error::config(file, "phases.composition", "say what the table is of (a composition or particle)"));
         }
+        if let Some([a, b, step]) = self.temperatures_c
+            && !(a.is_finite() && b.is_finite() && a > -273.15 && a < b && step > 0.0 && (b - a) / step <= 500.0)
+        {
+            return Err(Error::config(file, "temperatures_c", format!("needs [from, to, step] with −273.15 < from < to and at most 500 steps, got [{a}, {b}, {step}]")));
+        }
+        if !(self.level > 0.0 && self.level < 1.0) {
+            return Err(Error::config(file, "level", format!("must lie in (0, 1), got {}", self.level)));
+        }
+        if let Some(l) = &self.law {
+            l.validate(file)?;
+        }
+        if self.law.is_none() {
+            for (present, key) in [(self.softening.is_some(), "softening"), (self.lifetime.is_some(), "lifetime")] {
+                if present {
+                    return Err(Error::config(file, key, "needs [law]: the temperature laws it is compared with or runs on"));
+                }
+            }
+        }
+        if let Some(l) = &self.lifetime {
+            if !(256..=1 << 20).contains(&l.samples) {
+                return Err(Error::config(file, "lifetime.samples", format!("must lie in 256…1048576, got {}", l.samples)));
+            }
+            if l.table1.is_none() && !l.softening.is_empty() {
+                return Err(Error::config(file, "lifetime.softening", "names Table 1 rows: give lifetime.table1 too"));
+            }
+        }
         self.figures.validate(file)
+    }
+
+    /// The temperatures of the tables against temperature, within the phase table's range `lo`–`hi`.
+    pub fn grid(&self, (lo, hi): (f64, f64)) -> Vec<f64> {
+        let [a, b, step] = self.temperatures_c.unwrap_or([lo, hi.min(1000.0), 20.0]);
+        let n = ((b - a) / step + 1e-9).floor() as usize;
+        let mut t: Vec<f64> = (0..=n).map(|k| a + step * k as f64).collect();
+        if t.last().is_some_and(|&x| x < b - 1e-9) {
+            t.push(b);
+        }
+        t
     }
 }

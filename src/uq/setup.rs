@@ -7,7 +7,17 @@
 //! In order: `strength_<a>` (one of K joint draws of material a's strength model: m, μ, the
 //! effects' β and the population weights), one input per effect parameter of material a
 //! (`size_alpha_<a>`, `roundness_q_<a>`, …), the same for material b, then `energy_fraction`,
-//! `velocity`, `impacts_per_year` and `tk_gamma` (a = candidate, b = reference).
+//! `velocity`, `impacts_per_year` and `tk_gamma` (a = candidate, b = reference); with operating
+//! temperatures (`[operating]`), then `temperature_law` (one of the joint draws of the temperature
+//! laws, [`crate::thermal::ParameterLaws`]) and `operating_temperature_<a>`, `…_<b>` (°C).
+//!
+//! # Operating temperature
+//!
+//! The crush data fix the strength law at their temperature T₀ (every row's `temperature_c`, or
+//! 20 °C when the column is empty). At an operating temperature T the sample's draw j of the laws
+//! multiplies the Weibull scale by s_j(T)/s_j(T₀) and the particle's Young's modulus by
+//! E_j(T)/E_j(T₀) ([`crate::thermal::Factors`]); the impact stress follows the modulus
+//! ([`LifetimeModel::ln_impact_stress_with_modulus`]).
 //!
 //! # Joint and split sampling
 //!
@@ -21,6 +31,7 @@
 //! correlation of the draws so the approximation can be judged.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use super::study::UqStudy;
 use crate::contact::{AveragingDomain, ContactOptions};
@@ -29,6 +40,7 @@ use crate::dist::Marginal;
 use crate::error::{Error, Result};
 use crate::lifetime::damage::{CriticalRatioTable, DamageModel, Law};
 use crate::strength::{LifetimeModel, MAX_LINEAR, NamingSettings, Params, Sample, StrengthFit, StrengthSpec, sample_of};
+use crate::thermal::ParameterLaws;
 
 /// One uncertain input.
 #[derive(Debug, Clone)]
@@ -69,6 +81,55 @@ pub struct Material {
     effect_inputs: Vec<usize>,
 }
 
+/// The temperature of the crush data assumed when the `temperature_c` column is empty (°C).
+pub const ROOM_TEMPERATURE_C: f64 = 20.0;
+
+impl Material {
+    /// The temperature of its crush data T₀ (°C): every row's `temperature_c`, or
+    /// [`ROOM_TEMPERATURE_C`] when none is given; data at several temperatures are refused (the
+    /// temperature laws scale a strength measured at one temperature).
+    pub fn data_temperature_c(&self) -> Result<f64> {
+        let t: Vec<Option<f64>> = self.sample.covariates.iter().find(|(n, _)| n == "temperature_c").map(|(_, v)| v.clone()).unwrap_or_default();
+        let given: Vec<(usize, f64)> = t.iter().enumerate().filter_map(|(i, v)| v.map(|v| (i, v))).collect();
+        match given.first() {
+            None => Ok(ROOM_TEMPERATURE_C),
+            Some(&(_, t0)) => {
+                if given.len() < t.len() || given.iter().any(|(_, v)| *v != t0) {
+                    let i = given.iter().find(|(_, v)| *v != t0).map_or_else(|| t.iter().position(|v| v.is_none()).unwrap_or(0), |(i, _)| *i);
+                    return Err(Error::Data {
+                        file: self.path.display().to_string(),
+                        location: format!("row {} (line {}), column temperature_c", i + 1, i + 2),
+                        rule: format!("material `{}`: an operating temperature needs crush data at one temperature (row 1 has {t0} °C); the temperature laws scale a strength measured at one temperature", self.model.key),
+                    });
+                }
+                Ok(t0)
+            }
+        }
+    }
+}
+
+/// The operating temperatures of a study: the laws and each material's temperature marginal.
+#[derive(Debug, Clone)]
+pub struct SharedThermal {
+    /// The temperature laws.
+    pub laws: Arc<ParameterLaws>,
+    /// Operating temperature (°C) per material of the study file (its `material` order).
+    pub temperatures: Vec<Marginal>,
+}
+
+/// The operating temperatures as inputs of one comparison.
+#[derive(Debug, Clone)]
+pub struct Thermal {
+    /// The temperature laws.
+    pub laws: Arc<ParameterLaws>,
+    /// Index of `temperature_law` in the inputs.
+    pub law_input: usize,
+    /// Indices of the operating temperatures (candidate, reference).
+    pub temperature_inputs: [usize; 2],
+    /// Temperatures of the crush data (candidate, reference), °C.
+    pub data_c: [f64; 2],
+}
+
 /// The inputs shared by every strength model.
 #[derive(Debug, Clone)]
 pub struct Shared {
@@ -78,6 +139,8 @@ pub struct Shared {
     pub tk: Vec<Option<CriticalRatioTable>>,
     /// Damage models (primary first).
     pub models: Vec<DamageModel>,
+    /// Operating temperatures (`[operating]`), if any.
+    pub thermal: Option<SharedThermal>,
 }
 
 impl Shared {
@@ -106,11 +169,33 @@ impl Shared {
         } else {
             vec![None; s.impact.years.len()]
         };
+        let thermal = match &s.operating {
+            None => None,
+            Some(op) => {
+                let law_path = crate::schema::resolve_relative(path, &op.law);
+                if !law_path.is_file() {
+                    return Err(Error::config(&file, "operating.law", format!("{} does not exist (a `kind = \"temperature\"` study with [phases] and [law])", law_path.display())));
+                }
+                let laws = Arc::new(crate::thermal::load_from_study(&law_path)?);
+                let temperatures = s
+                    .material
+                    .iter()
+                    .map(|m| {
+                        let (d, key) = op.of(&m.key).ok_or_else(|| Error::config(&file, "operating.temperature_c", format!("material `{}` has no operating temperature", m.key)))?;
+                        let mg = d.marginal(&file, &key, "°C", &resolve)?;
+                        laws.check_range(&file, &key, mg.quantile(0.0), mg.quantile(1.0))?;
+                        Ok(mg)
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                Some(SharedThermal { laws, temperatures })
+            }
+        };
         let input = |name: &str, unit: &str, marginal: Marginal| Input { name: name.into(), unit: unit.into(), marginal };
         Ok(Shared {
             inputs: [input("energy_fraction", "-", eta), input("velocity", "m/s", v), input("impacts_per_year", "1/yr", per_year), input("tk_gamma", "-", gamma)],
             tk,
             models,
+            thermal,
         })
     }
 }
@@ -130,6 +215,8 @@ pub struct Setup {
     pub models: Vec<DamageModel>,
     /// Averaging domain of σ̄.
     pub domain: AveragingDomain,
+    /// Operating temperatures, if any.
+    pub thermal: Option<Thermal>,
     tk: Vec<Option<CriticalRatioTable>>,
     shared_at: usize,
 }
@@ -173,7 +260,30 @@ impl Setup {
         let shared_at = inputs.len();
         inputs.extend(shared.inputs.iter().cloned());
         let [a, b]: [Material; 2] = materials.try_into().map_err(|_| Error::config(&file, "material", "two materials"))?;
-        Ok(Setup { spec: spec.clone(), inputs, materials: [a, b], years: s.impact.years.clone(), models: shared.models.clone(), domain: *domain, tk: shared.tk.clone(), shared_at })
+        let mut setup = Setup { spec: spec.clone(), inputs, materials: [a, b], years: s.impact.years.clone(), models: shared.models.clone(), domain: *domain, thermal: None, tk: shared.tk.clone(), shared_at };
+        if let Some(th) = &shared.thermal {
+            let [ia, ib] = s.order();
+            setup.attach_thermal(th.laws.clone(), [th.temperatures[ia].clone(), th.temperatures[ib].clone()])?;
+        }
+        Ok(setup)
+    }
+
+    /// Runs the comparison at operating temperatures: appends the inputs `temperature_law` and
+    /// `operating_temperature_<key>` (marginals `temperatures`, candidate then reference).
+    pub fn attach_thermal(&mut self, laws: Arc<ParameterLaws>, temperatures: [Marginal; 2]) -> Result<()> {
+        let data_c = [self.materials[0].data_temperature_c()?, self.materials[1].data_temperature_c()?];
+        for (m, t0) in self.materials.iter().zip(data_c) {
+            laws.check_range(&m.path.display().to_string(), "temperature_c", t0, t0)?;
+        }
+        let law_input = self.inputs.len();
+        self.inputs.push(Input { name: "temperature_law".into(), unit: "joint draw".into(), marginal: Marginal::Index(laws.len()) });
+        let mut temperature_inputs = [0; 2];
+        for (j, t) in temperatures.into_iter().enumerate() {
+            temperature_inputs[j] = self.inputs.len();
+            self.inputs.push(Input { name: format!("operating_temperature_{}", self.materials[j].model.key), unit: "°C".into(), marginal: t });
+        }
+        self.thermal = Some(Thermal { laws, law_input, temperature_inputs, data_c });
+        Ok(())
     }
 
     /// Index into a sample's P of material j (0 candidate, 1 reference), horizon h, model k.
@@ -261,13 +371,32 @@ impl Setup {
     /// P per material, horizon and damage model of the sample with inputs x, into `out`
     /// (length [`Setup::outputs`]).
     pub fn evaluate_into(&self, x: &[f64], mode: Mode, out: &mut [f64]) -> Result<()> {
-        let strength = [self.params(0, x, mode), self.params(1, x, mode)];
-        self.evaluate_at(strength, [x[self.shared(0)], x[self.shared(1)], x[self.shared(2)], x[self.shared(3)]], out)
+        let temperatures = self.thermal.as_ref().map(|th| [x[th.temperature_inputs[0]], x[th.temperature_inputs[1]]]);
+        self.evaluate_at_temperatures(x, mode, temperatures, out)
+    }
+
+    /// [`Setup::evaluate_into`] with the operating temperatures (candidate, reference; °C) given
+    /// instead of read from x (`None`: at the crush data's temperature). Needs
+    /// [`Setup::attach_thermal`] for `Some`.
+    pub fn evaluate_at_temperatures(&self, x: &[f64], mode: Mode, temperatures: Option<[f64; 2]>, out: &mut [f64]) -> Result<()> {
+        let mut strength = [self.params(0, x, mode), self.params(1, x, mode)];
+        let mut moduli = [1.0; 2];
+        if let Some(t) = temperatures {
+            let th = self.thermal.as_ref().ok_or_else(|| Error::numerical("comparison", "operating temperatures without temperature laws"))?;
+            let j = x[th.law_input] as usize;
+            for k in 0..2 {
+                let f = th.laws.factors(j, t[k], th.data_c[k])?;
+                strength[k].0.mu += f.strength.ln();
+                moduli[k] = f.modulus;
+            }
+        }
+        self.evaluate_at(strength, moduli, [x[self.shared(0)], x[self.shared(1)], x[self.shared(2)], x[self.shared(3)]], out)
     }
 
     /// P per material, horizon and damage model at explicit strength parameters and population
-    /// weights (candidate, reference) and shared inputs (η, V, impacts per year, γ), into `out`.
-    pub fn evaluate_at(&self, strength: [(Params, Option<&[f64]>); 2], [eta, v, per_year, gamma]: [f64; 4], out: &mut [f64]) -> Result<()> {
+    /// weights (candidate, reference), Young's modulus factors (candidate, reference; 1 at the
+    /// crush data's temperature) and shared inputs (η, V, impacts per year, γ), into `out`.
+    pub fn evaluate_at(&self, strength: [(Params, Option<&[f64]>); 2], moduli: [f64; 2], [eta, v, per_year, gamma]: [f64; 4], out: &mut [f64]) -> Result<()> {
         out.fill(0.0);
         let per = self.years.len() * self.models.len();
         let mut laws = [Law::Scaled { c: 0.0 }; 32];
@@ -281,7 +410,7 @@ impl Setup {
                 }
             }
             let model = &self.materials[j].model;
-            let ln_sigma = model.ln_impact_stress(eta, v)?;
+            let ln_sigma = model.ln_impact_stress_with_modulus(eta, v, moduli[j])?;
             model.breakage_into(&p, w, ln_sigma, &laws[..per], &mut out[j * per..(j + 1) * per]);
         }
         Ok(())

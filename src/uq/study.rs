@@ -11,8 +11,15 @@
 //! [propagation]    # method = "plain" | "lhs" | "sobol", samples, replicates
 //! [sensitivity]    # n (Saltelli base size), bootstrap, level
 //! [model_form]     # strength = [...] (strength models compared and averaged), averaging = [...]
+//! [operating]      # optional: law = "temperature.toml", temperature_c = {…}, material = { key = {…} }
 //! [[material]]     # key, label, data, elastic, density_kg_m3, impact_diameter_m, population
 //! ```
+//!
+//! Without `[operating]` the chain runs at the crush data's temperature (room temperature for the
+//! shipped data). With it, each material runs at its operating temperature (a declared
+//! distribution, in °C): the Weibull scale and the particle's Young's modulus move by the
+//! temperature laws of the named temperature study ([`crate::thermal`]), one joint draw of the
+//! laws per sample (input `temperature_law`).
 
 use serde::{Deserialize, Serialize};
 
@@ -131,6 +138,30 @@ pub struct ModelForm {
     pub averaging: Vec<AveragingDomain>,
 }
 
+/// `[operating]`: the operating temperature of each material and the temperature study whose
+/// laws carry the strength model there.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Operating {
+    /// A `kind = "temperature"` study with `[phases]` and `[law]`, relative to this study.
+    pub law: std::path::PathBuf,
+    /// Operating temperature (°C) of every material not listed in `material`.
+    pub temperature_c: Option<Dist>,
+    /// Operating temperature (°C) per material key.
+    #[serde(default)]
+    pub material: std::collections::BTreeMap<String, Dist>,
+}
+
+impl Operating {
+    /// The operating temperature of material `key` and the study key it is declared at.
+    pub fn of(&self, key: &str) -> Option<(&Dist, String)> {
+        match self.material.get(key) {
+            Some(d) => Some((d, format!("operating.material.{key}"))),
+            None => self.temperature_c.as_ref().map(|d| (d, "operating.temperature_c".to_string())),
+        }
+    }
+}
+
 /// Which material is compared with which.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -171,6 +202,9 @@ pub struct UqStudy {
     /// Model-form alternatives run besides the main chain.
     #[serde(default)]
     pub model_form: ModelForm,
+    /// Operating temperatures (absent: the crush data's temperature).
+    #[serde(default)]
+    pub operating: Option<Operating>,
     /// Figures.
     #[serde(default)]
     pub figures: FigureOptions,
@@ -260,6 +294,20 @@ impl UqStudy {
                 && !crate::data::DIAMETER.contains(d)
             {
                 return bad(&key("impact_diameter_m"), format!("must lie in {}, got {d}", crate::data::DIAMETER.shown));
+            }
+        }
+        if let Some(op) = &self.operating {
+            for k in op.material.keys() {
+                if !self.material.iter().any(|m| &m.key == k) {
+                    return bad(&format!("operating.material.{k}"), format!("`{k}` is not a material key ({}, {})", self.material[0].key, self.material[1].key));
+                }
+            }
+            for m in &self.material {
+                match op.of(&m.key) {
+                    None => return bad("operating.temperature_c", format!("material `{}` has no operating temperature: give operating.temperature_c or operating.material.{}", m.key, m.key)),
+                    Some((Dist::Spectrum { .. }, key)) => return bad(&key, "a spectrum is a velocity distribution only".into()),
+                    Some(_) => {}
+                }
             }
         }
         self.figures.validate(file)

@@ -14,12 +14,40 @@ fn the_illustrative_phase_table_is_regenerated_byte_for_byte() {
     assert_eq!(read.amorphous_onset(0.01), Some(950.0));
 }
 
-/// A scratch project with the temperature study and the shipped phase table.
+/// Synthetic posterior draws in the calibration's `chains.csv` format: log-normal around the
+/// medians `(g, k1, a, t)` with sd of ln 0.06.
+fn chains(medians: [f64; 4], rows: usize, seed: u64) -> String {
+    use rand::SeedableRng;
+    use rand_distr::Distribution;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let z = rand_distr::Normal::new(0.0, 0.06).unwrap();
+    let mut out = String::from("step,walker,g,k1,a,t,log_posterior\n");
+    for i in 0..rows {
+        let v: Vec<String> = medians.iter().map(|m| format!("{}", m * Distribution::<f64>::sample(&z, &mut rng).exp())).collect();
+        out.push_str(&format!("{},{},{},-1.0\n", i / 32, i % 32, v.join(",")));
+    }
+    out
+}
+
+/// A scratch project with the temperature study, the shipped phase table, the main study with its
+/// data and Table 1, synthetic calibration chains at 20 and 800 °C (the generator's truths of
+/// datasets/synth_curves.toml as medians) and a discrepancy evidence table; the study reads them
+/// from datasets/ (a failed run must leave reports/ empty).
 fn scratch() -> Scratch {
     let s = Scratch::new();
-    std::fs::copy(root().join("studies/temperature.toml"), s.path("studies/temperature.toml")).unwrap();
+    let study = std::fs::read_to_string(root().join("studies/temperature.toml")).unwrap();
+    s.write(
+        "studies/temperature.toml",
+        &common::edited(&study, &[("../reports/calibrate_gen3_rt/chains.csv", "../datasets/chains_rt.csv"), ("../reports/calibrate_gen3_800c/chains.csv", "../datasets/chains_800c.csv"), ("../reports/discrepancy_curves/curve_evidence.csv", "../datasets/curve_evidence.csv")]),
+    );
+    for f in ["studies/gen4_vs_bl.toml", "datasets/table1_particle_properties.csv"] {
+        std::fs::copy(root().join(f), s.path(f)).unwrap();
+    }
     let f = partlife::phases::ILLUSTRATIVE_FILE;
     std::fs::copy(root().join("datasets").join(f), s.path("datasets").join(f)).unwrap();
+    s.write("datasets/chains_rt.csv", &chains([42e9, 72e9, 0.90, 0.42e9], 4800, 1));
+    s.write("datasets/chains_800c.csv", &chains([29e9, 48e9, 0.82, 0.31e9], 4800, 2));
+    s.write("datasets/curve_evidence.csv", "round,candidate,median,q05,q95,named\n1,temperature,0.9489,0.9450,0.9510,yes\n");
     s
 }
 
@@ -93,4 +121,160 @@ fn bad_phase_tables_exit_2_naming_file_row_and_rule() {
     s.expect_bad_study("studies/temperature.toml", "file = \"../datasets/phases_granulated_illustrative.csv\"", "file = \"../datasets/none.csv\"", &["phases.file", "does not exist"]);
     let s = scratch();
     s.expect_bad_study("studies/temperature.toml", "onset_level = 0.01", "onset_level = 1.5", &["phases.onset_level", "(0, 1)"]);
+}
+
+/// A column of a report table.
+fn column(path: &std::path::Path, name: &str) -> Vec<f64> {
+    partlife::io::col_f64(&partlife::io::read_table(path).unwrap(), path, name).unwrap()
+}
+
+/// A text column of a report table.
+fn text(path: &std::path::Path, name: &str) -> Vec<String> {
+    partlife::io::col_str(&partlife::io::read_table(path).unwrap(), path, name).unwrap()
+}
+
+#[test]
+fn temperature_study_writes_the_laws_the_softening_comparison_and_breakage_against_temperature() {
+    let s = scratch();
+    let out = s.run(&["run", "studies/temperature.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let dir = s.path("reports/temperature");
+    for f in ["parameters_vs_temperature.csv", "calibrated_states.csv", "softening.csv", "lifetime_vs_temperature.csv", "lifetime_at.csv", "softening_marks.csv", "parameters_vs_temperature.pdf", "breakage_vs_temperature.pdf", "breakage_vs_temperature.png"] {
+        assert!(dir.join(f).is_file(), "missing {f}");
+    }
+    // The laws pass through the calibrated states.
+    let c = dir.join("calibrated_states.csv");
+    for (a, b) in [("calibration_q50", "law_q50"), ("calibration_lo", "law_lo"), ("calibration_hi", "law_hi")] {
+        for (x, y) in column(&c, a).iter().zip(column(&c, b)) {
+            assert!((x / y - 1.0).abs() < 1e-12, "{a} {x} vs {b} {y}");
+        }
+    }
+    // Softening where the amorphous fraction rises: every median falls from 900 to 1000 °C.
+    let p = dir.join("parameters_vs_temperature.csv");
+    let (name, t, q50) = (text(&p, "parameter"), column(&p, "temperature_c"), column(&p, "q50"));
+    for n in ["g", "k1", "a", "t", "youngs_modulus"] {
+        let rows: Vec<usize> = (0..name.len()).filter(|&i| name[i] == n && t[i] >= 900.0).collect();
+        assert!(rows.windows(2).all(|w| q50[w[1]] < q50[w[0]]), "{n} does not soften above 900 °C");
+    }
+    // The softening ratio of the laws: the truths' plane-strain modulus ratio (0.684) in the band,
+    // and the summary states the table's numbers.
+    let so = dir.join("softening.csv");
+    let (m, lo, hi) = (column(&so, "q50"), column(&so, "lo"), column(&so, "hi"));
+    assert!(lo[0] < 0.684 && 0.684 < hi[0], "[{}, {}]", lo[0], hi[0]);
+    let summary = s.read("reports/temperature/summary.md");
+    assert!(summary.contains(&format!("by the factor {:.3} [{:.3}, {:.3}]", m[0], lo[0], hi[0])), "{summary}");
+    assert!(summary.contains(&format!("gives {:.3} [{:.3}, {:.3}]", m[1], lo[1], hi[1])), "{summary}");
+    // Table 1's softening temperatures are read from Table 1.
+    let mk = dir.join("softening_marks.csv");
+    let mut marks: Vec<(String, f64)> = text(&mk, "material_key").into_iter().zip(column(&mk, "softening_temperature_c")).collect();
+    marks.sort_by(|a, b| a.0.cmp(&b.0));
+    assert_eq!(marks, vec![("bl1630".to_string(), 857.0), ("gen4".to_string(), 940.0)]);
+    // Breakage: every temperature of the grid for both materials and both horizons, bands
+    // ordered, and the summary's table from lifetime_at.csv.
+    let l = dir.join("lifetime_vs_temperature.csv");
+    assert_eq!(column(&l, "temperature_c").len(), 50 * 2 * 2);
+    let (pl, pm, ph) = (column(&l, "p_lo"), column(&l, "p_q50"), column(&l, "p_hi"));
+    assert!((0..pl.len()).all(|i| pl[i] <= pm[i] && pm[i] <= ph[i]));
+    let a = dir.join("lifetime_at.csv");
+    let (am, at) = (column(&a, "p_mean"), column(&a, "temperature_c"));
+    assert_eq!(at.len(), 3 * 2 * 2);
+    assert!(summary.contains(&format!("{:.3e}", am[0])), "{summary}");
+    // The tables do not depend on the thread count.
+    let one = scratch();
+    let out = one.run(&["run", "studies/temperature.toml", "--quiet", "--threads", "1"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    for f in ["parameters_vs_temperature.csv", "softening.csv", "lifetime_vs_temperature.csv", "lifetime_at.csv"] {
+        assert!(std::fs::read(dir.join(f)).unwrap() == std::fs::read(one.path("reports/temperature").join(f)).unwrap(), "{f} differs on one thread");
+    }
+}
+
+#[test]
+fn at_the_crush_data_temperature_the_operating_chain_is_the_room_temperature_chain() {
+    use partlife::uq::setup::{Mode, Setup, Shared};
+    let s = scratch();
+    let main = s.path("studies/gen4_vs_bl.toml");
+    let file = partlife::schema::StudyFile::read(&main).unwrap();
+    let u: partlife::uq::study::UqStudy = file.parse().unwrap();
+    let shared = Shared::new(&u, &main).unwrap();
+    let plain = Setup::new(&u, &main, &u.strength.effects, &u.contact.averaging, &shared).unwrap();
+    let mut hot = plain.clone();
+    let laws = std::sync::Arc::new(partlife::thermal::load_from_study(&s.path("studies/temperature.toml")).unwrap());
+    hot.attach_thermal(laws.clone(), [partlife::dist::Marginal::Fixed(20.0), partlife::dist::Marginal::Fixed(20.0)]).unwrap();
+    let d = plain.varying(Mode::Joint).len();
+    let (mut a, mut b) = (vec![0.0; plain.outputs()], vec![0.0; plain.outputs()]);
+    let mut softer = 0;
+    for (i, u) in partlife::uq::propagate::block_points(partlife::uq::study::Method::Plain, d + 1, 300, 7, 0).unwrap().iter().enumerate() {
+        let x = plain.values(&u[..d], Mode::Joint);
+        let mut xh = x.clone();
+        xh.extend([(u[d] * laws.len() as f64).floor(), 20.0, 20.0]);
+        plain.evaluate_into(&x, Mode::Joint, &mut a).unwrap();
+        hot.evaluate_into(&xh, Mode::Joint, &mut b).unwrap();
+        assert_eq!(a, b, "sample {i}");
+        // At 1000 °C the same sample breaks differently (the laws move it).
+        hot.evaluate_at_temperatures(&xh, Mode::Joint, Some([1000.0, 1000.0]), &mut b).unwrap();
+        softer += usize::from(a != b);
+    }
+    assert_eq!(softer, 300);
+}
+
+#[test]
+fn bad_temperature_laws_and_operating_temperatures_exit_2() {
+    // The calibrations' chains: missing, non-positive, too few.
+    let s = scratch();
+    s.expect_bad_study("studies/temperature.toml", "../datasets/chains_800c.csv", "../datasets/none.csv", &["law.calibrations[1].chains", "does not exist"]);
+    let s = scratch();
+    let bad = s.read("datasets/chains_rt.csv").replacen("\n0,3,", "\n0,3,-", 1);
+    s.write("datasets/chains_rt.csv", &bad);
+    let out = s.run(&["run", "studies/temperature.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("chains_rt.csv") && out.stderr.contains("row 4 (line 5), column g") && out.stderr.contains("not positive"), "{}", out.stderr);
+    let s = scratch();
+    s.expect_bad_study("studies/temperature.toml", "draws = 4000", "draws = 9000", &["chains_rt.csv", "fewer than law.draws"]);
+    // Keys: a calibrated state above the table, a law parameter without a prior, [lifetime]
+    // without [law], a grid beyond the table.
+    let s = scratch();
+    s.expect_bad_study("studies/temperature.toml", "temperature_c = 800,", "temperature_c = 1500,", &["law.calibrations[1].temperature_c", "outside the phase table"]);
+    let s = scratch();
+    s.expect_bad_study("studies/temperature.toml", "strength = \"t\"", "strength = \"hel\"", &["law.strength", "no prior"]);
+    let s = scratch();
+    s.expect_bad_study("studies/temperature.toml", "temperatures_c = [20, 1000, 20]", "temperatures_c = [20, 1500, 20]", &["temperatures_c", "outside the phase table"]);
+    // The main study at an operating temperature outside the phase table.
+    let s = scratch();
+    let main = s.read("studies/gen4_vs_bl.toml").replacen("[figures]", "[operating]\nlaw = \"temperature.toml\"\ntemperature_c = { distribution = \"uniform\", min = 800, max = 1500 }\n\n[figures]", 1);
+    s.write("studies/gen4_vs_bl.toml", &main);
+    let out = s.run(&["run", "studies/gen4_vs_bl.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("gen4_vs_bl.toml") && out.stderr.contains("operating.temperature_c") && out.stderr.contains("outside the phase table"), "{}", out.stderr);
+    assert!(s.report_files().is_empty());
+    let s = scratch();
+    let main = s.read("studies/gen4_vs_bl.toml").replacen("[figures]", "[operating]\nlaw = \"temperature.toml\"\nmaterial = { gen4 = { distribution = \"fixed\", value = 800 } }\n\n[figures]", 1);
+    s.write("studies/gen4_vs_bl.toml", &main);
+    let out = s.run(&["run", "studies/gen4_vs_bl.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("material `bl1630` has no operating temperature"), "{}", out.stderr);
+}
+
+#[test]
+fn the_main_study_runs_at_operating_temperatures() {
+    let s = scratch();
+    let main = common::edited(
+        &s.read("studies/gen4_vs_bl.toml"),
+        &[
+            ("samples = 262144", "samples = 4096"),
+            ("n = 8192", "n = 256"),
+            ("bootstrap = 500", "bootstrap = 50"),
+            ("[figures]", "[operating]\nlaw = \"temperature.toml\"\nmaterial = { gen4 = { distribution = \"uniform\", min = 750, max = 850 }, bl1630 = { distribution = \"fixed\", value = 800 } }\n\n[figures]"),
+        ],
+    );
+    s.write("studies/gen4_vs_bl.toml", &main);
+    let out = s.run(&["run", "studies/gen4_vs_bl.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let summary = s.read("reports/gen4_vs_bl/summary.md");
+    assert!(summary.contains("**At operating temperatures**: Gen 4 at 750–850 °C, BL 16/30 at 800 °C (crush data at 20 and 20 °C)"), "{summary}");
+    let inputs = text(&s.path("reports/gen4_vs_bl/inputs.csv"), "input");
+    for n in ["temperature_law", "operating_temperature_gen4", "operating_temperature_bl1630"] {
+        assert!(inputs.iter().any(|i| i == n), "{n} not among the inputs {inputs:?}");
+    }
+    let manifest = s.read("reports/gen4_vs_bl/manifest.json");
+    assert!(manifest.contains("chains_800c.csv") && manifest.contains("temperature.toml"), "the manifest lacks the law's inputs");
 }

@@ -6,14 +6,15 @@
 //! than at room temperature. This module connects the two.
 //!
 //! * [`study`]: the study file.
-//! * [`run`]: the run — today the phase-fraction table ([`crate::phases`]): validated,
-//!   written as `phases.csv`, drawn as `phase_fractions` in the style of the deliverable's
-//!   Fig. 2, and described in a generated `summary.md`.
+//! * [`run`]: the run — the phase-fraction table ([`crate::phases`]) as table, figure (the
+//!   deliverable's Fig. 2 style) and summary; with `[law]`, every calibrated parameter's
+//!   temperature law ([`crate::thermal`]) against temperature with bands next to the calibrated
+//!   states; with `[softening]`, the discrepancy workflow's temperature term beside the laws'
+//!   softening; with `[lifetime]`, the main study's breaking probability against the operating
+//!   temperature for both materials, Table 1's softening temperatures marked.
 //!
-//! Not yet here: the law applied to the calibrated parameters in the study (JH-2 constants and
-//! the Weibull scale, fitted to the calibration posteriors at room temperature and 800 °C, with
-//! a declared prior on each glassy ratio), its figure, and the lifetime at the operating
-//! temperature.
+//! The main study itself runs at an operating temperature through its `[operating]` table,
+//! which names a temperature study for its laws ([`crate::uq::setup`]).
 
 pub mod run;
 pub mod study;

@@ -65,6 +65,13 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     if let crate::dist::Dist::Spectrum { file, .. } = &s.impact.velocity {
         inputs.push(InputFile::hash(&loaded.resolve(std::path::Path::new(file)))?);
     }
+    if let (Some(op), Some(th)) = (&s.operating, &shared.thermal) {
+        inputs.push(InputFile::hash(&loaded.resolve(&op.law))?);
+        inputs.push(InputFile::hash(&th.laws.phases.path)?);
+        for p in &th.laws.inputs {
+            inputs.push(InputFile::hash(p)?);
+        }
+    }
 
     let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
     let headline = write_headline(&mut dir, &forms)?;

@@ -56,6 +56,22 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
         if forms.len() == 1 { "" } else { "s" },
         primary_damage.label()
     ));
+    if let (Some(th), Some(op)) = (&st.thermal, &s.operating) {
+        let range = |i: usize| {
+            let m = &st.inputs[i].marginal;
+            let (lo, hi) = (m.quantile(0.0), m.quantile(1.0));
+            if lo == hi { format!("{lo} °C") } else { format!("{lo}–{hi} °C") }
+        };
+        md.push_str(&format!(
+            "**At operating temperatures**: {a} at {}, {b} at {} (crush data at {} and {} °C). The Weibull scale and the particle's Young's modulus move by the temperature laws of `{}` ({} joint draws; input `temperature_law`).\n\n",
+            range(th.temperature_inputs[0]),
+            range(th.temperature_inputs[1]),
+            th.data_c[0],
+            th.data_c[1],
+            op.law.display(),
+            th.laws.len()
+        ));
+    }
     md.push_str("## Headline\n\n");
     for l in &headline.lines {
         md.push_str(&format!("* {}\n", l.trim()));

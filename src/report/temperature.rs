@@ -28,7 +28,7 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
 }
 
 /// A parameter's name and unit as an axis label, with the value scale (Pa shown in GPa).
-fn axis(name: &str, unit: &str, level: &str) -> (String, f64) {
+fn axis(name: &str, unit: &str) -> (String, f64) {
     let what = match name {
         "g" => "Shear modulus G".to_string(),
         "k1" => "Bulk modulus K₁".to_string(),
@@ -37,7 +37,6 @@ fn axis(name: &str, unit: &str, level: &str) -> (String, f64) {
         "youngs_modulus" => "Young's modulus E".to_string(),
         other => other.to_string(),
     };
-    let _ = level;
     match unit {
         "Pa" => (format!("{what} (GPa)"), 1e-9),
         "" | "-" => (format!("{what} (–)"), 1.0),
@@ -54,7 +53,7 @@ fn parameters(dir: &Path, width_cm: f64) -> Result<(Encoded, usize)> {
     let mut panels = Vec::new();
     for (k, n) in names.iter().enumerate() {
         let rows: Vec<usize> = (0..name.len()).filter(|&i| &name[i] == n).collect();
-        let (y_desc, f) = axis(n, &unit[rows[0]], "");
+        let (y_desc, f) = axis(n, &unit[rows[0]]);
         let first = k == 0;
         let mut series = vec![
             Series { label: first.then(|| "law: band".to_string()), points: rows.iter().map(|&i| (temp[i], f * lo[i])).collect(), colour: colour(0), kind: Kind::Band(rows.iter().map(|&i| f * hi[i]).collect(), 0.25) },

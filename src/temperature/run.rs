@@ -98,8 +98,7 @@ fn write_laws(dir: &mut ReportDir, laws: &ParameterLaws, grid: &[f64], level: f6
     // Per temperature: every draw's parameters and Young's modulus.
     let at = |t: f64| -> Result<Vec<Vec<f64>>> {
         let per: Vec<Vec<f64>> = (0..n).map(|j| laws.values_at(j, t)).collect::<Result<_>>()?;
-        let mut cols: Vec<Vec<f64>> = (0..names.len()).map(|k| if k < laws.names.len() { per.iter().map(|d| d[k]).collect() } else { per.iter().map(|d| youngs_modulus(d[gi], d[ki])).collect() }).collect();
-        cols.truncate(names.len());
+        let cols: Vec<Vec<f64>> = (0..names.len()).map(|k| if k < laws.names.len() { per.iter().map(|d| d[k]).collect() } else { per.iter().map(|d| youngs_modulus(d[gi], d[ki])).collect() }).collect();
         Ok(cols)
     };
     let fa: Vec<f64> = grid.iter().map(|&t| laws.phases.amorphous_at(t)).collect::<Result<_>>()?;
@@ -150,14 +149,12 @@ fn write_laws(dir: &mut ReportDir, laws: &ParameterLaws, grid: &[f64], level: f6
     ));
     let mut lines = vec![format!("| parameter | {t1} °C | {t2} °C | {last} °C | band width at {last} °C / at {t2} °C |"), "|---|---|---|---|---|".into()];
     let i_last = grid.len() - 1;
-    let i_t2 = grid.iter().position(|&t| (t - t2).abs() < 1e-9);
     for (k, name) in names.iter().enumerate() {
         let b = |cols: &[Vec<f64>]| band(cols[k].clone(), level);
         let (b1, b2, bl) = (b(&at(t1)?), b(&at(t2)?), b(&per_t[i_last]));
         let widen = (bl.2 - bl.1) / bl.0 / ((b2.2 - b2.1) / b2.0);
         lines.push(format!("| {name} | {} | {} | {} | {widen:.2} |", shown(&units_all[k], b1), shown(&units_all[k], b2), shown(&units_all[k], bl)));
     }
-    let _ = i_t2;
     para.push(lines.join("\n"));
     let e1 = band(at(t1)?[names.len() - 1].clone(), level).0;
     let e_last = band(per_t[i_last][names.len() - 1].clone(), level).0;

@@ -99,6 +99,12 @@ impl Elastic {
         Ok(())
     }
 
+    /// The constants of shear modulus `g` and bulk modulus `k` (Pa): E = 9KG/(3K + G),
+    /// ν = (3K − 2G)/(2(3K + G)); not validated.
+    pub fn from_shear_and_bulk(g: f64, k: f64) -> Self {
+        Elastic { youngs_modulus_pa: 9.0 * k * g / (3.0 * k + g), poisson_ratio: (3.0 * k - 2.0 * g) / (2.0 * (3.0 * k + g)) }
+    }
+
     /// Compliance term (1 − ν²)/E (1/Pa).
     pub fn compliance(&self) -> f64 {
         (1.0 - self.poisson_ratio * self.poisson_ratio) / self.youngs_modulus_pa

@@ -223,8 +223,8 @@ impl MaterialParams {
         match self {
             MaterialParams::LinearElastic(e) => (e.youngs_modulus, e.poisson_ratio),
             MaterialParams::Jh2(j) => {
-                let (k, g) = (j.k1, j.g);
-                (9.0 * k * g / (3.0 * k + g), (3.0 * k - 2.0 * g) / (2.0 * (3.0 * k + g)))
+                let e = crate::contact::Elastic::from_shear_and_bulk(j.g, j.k1);
+                (e.youngs_modulus_pa, e.poisson_ratio)
             }
         }
     }

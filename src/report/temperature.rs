@@ -65,13 +65,13 @@ fn parameters(dir: &Path, width_cm: f64) -> Result<(Encoded, usize)> {
             series.push(Series { label: (first && m == 0).then(|| "calibration: median, band".to_string()), points: vec![(ctemp[i], f * c50[i])], colour: colour(1), kind: Kind::Markers(Marker::Circle, 2.5) });
         }
         let ys = rows.iter().flat_map(|&i| [f * lo[i], f * hi[i]]).chain(crow.iter().flat_map(|&i| [f * clo[i], f * chi[i]]));
-        let (ymin, ymax) = padded(ys, 0.05, 0.05);
+        let (_, ymax) = padded(ys, 0.05, 0.05);
         panels.push(Some(Panel {
             x_categories: vec![],
             x_desc: "Temperature (°C)".into(),
             y_desc,
             x_range: padded(temp.iter().cloned(), 0.0, 0.0),
-            y_range: (ymin.min(0.0).max(0.0), ymax),
+            y_range: (0.0, ymax),
             y_log: false,
             series,
             legend: first.then_some(SeriesLabelPosition::LowerLeft),

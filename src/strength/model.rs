@@ -399,9 +399,13 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_scaled_modulus_moves_the_impact_stress_as_the_direct_hertz_impact() {
-        let sphere = Sphere { diameter: 0.9e-3, density: 3060.0, elastic: e() };
+    /// The reference sphere of the one-particle model.
+    fn sphere() -> Sphere {
+        Sphere { diameter: 0.9e-3, density: 3060.0, elastic: e() }
+    }
+
+    /// A model without effects fitted to 20 strengths, predicting for one particle.
+    fn one_particle_model(domain: AveragingDomain) -> LifetimeModel {
         let fit = crate::strength::fit::StrengthFit::new(
             &crate::strength::fit::Sample { source: "x".into(), strength: (1..=20).map(|i| 7e8 + 1e7 * i as f64).collect(), covariates: vec![] },
             &[],
@@ -410,9 +414,15 @@ mod tests {
         )
         .unwrap();
         let pop = Population { source: "declared".into(), particles: vec![crate::strength::population::Particle { diameter_m: 0.9e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false };
+        LifetimeModel::new("x", "X", sphere(), steel(), domain, fit, pop).unwrap()
+    }
+
+    #[test]
+    fn a_scaled_modulus_moves_the_impact_stress_as_the_direct_hertz_impact() {
+        let sphere = sphere();
         for outer in [OuterLimit::ContactMultiple, OuterLimit::ParticleRadius] {
             let domain = AveragingDomain { outer, ..AveragingDomain::default() };
-            let m = LifetimeModel::new("x", "X", sphere, steel(), domain, fit.clone(), pop.clone()).unwrap();
+            let m = one_particle_model(domain);
             for f in [0.4, 0.75, 1.3] {
                 let soft = Sphere { elastic: Elastic::new(112e9 * f, 0.25).unwrap(), ..sphere };
                 let direct = ImpactLoad::on_wall(&soft, &steel(), 0.1, domain).at_velocity(5.0).unwrap().mean_tensile.ln();
@@ -426,16 +436,8 @@ mod tests {
 
     #[test]
     fn fast_path_is_the_contact_chain() {
-        let sphere = Sphere { diameter: 0.9e-3, density: 3060.0, elastic: e() };
-        let fit = crate::strength::fit::StrengthFit::new(
-            &crate::strength::fit::Sample { source: "x".into(), strength: (1..=20).map(|i| 7e8 + 1e7 * i as f64).collect(), covariates: vec![] },
-            &[],
-            5.0,
-            "x",
-        )
-        .unwrap();
-        let pop = Population { source: "declared".into(), particles: vec![crate::strength::population::Particle { diameter_m: 0.9e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false };
-        let m = LifetimeModel::new("x", "X", sphere, steel(), AveragingDomain::default(), fit, pop).unwrap();
+        let sphere = sphere();
+        let m = one_particle_model(AveragingDomain::default());
         for (eta, v) in [(0.1, 5.0), (0.37, 0.3), (1.0, 45.0)] {
             let direct = ImpactLoad::on_wall(&sphere, &steel(), eta, AveragingDomain::default()).at_velocity(v).unwrap().mean_tensile.ln();
             assert!((m.ln_impact_stress(eta, v).unwrap() - direct).abs() < 1e-12);

@@ -22,7 +22,7 @@ use crate::io::{InputFile, ReportDir, fcol, scol, table};
 use crate::phases::PhaseTable;
 use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
 use crate::schema::StudyFile;
-use crate::thermal::{ParameterLaws, poisson_ratio, read_phases_of, youngs_modulus};
+use crate::thermal::{ParameterLaws, read_phases_of, youngs_modulus};
 use crate::uq::setup::{Mode, Setup, Shared};
 
 /// The summary's sentences about the phase table.
@@ -149,14 +149,15 @@ fn write_laws(dir: &mut ReportDir, laws: &ParameterLaws, grid: &[f64], level: f6
     ));
     let mut lines = vec![format!("| parameter | {t1} °C | {t2} °C | {last} °C | band width at {last} °C / at {t2} °C |"), "|---|---|---|---|---|".into()];
     let i_last = grid.len() - 1;
+    let (at1, at2) = (at(t1)?, at(t2)?);
     for (k, name) in names.iter().enumerate() {
         let b = |cols: &[Vec<f64>]| band(cols[k].clone(), level);
-        let (b1, b2, bl) = (b(&at(t1)?), b(&at(t2)?), b(&per_t[i_last]));
+        let (b1, b2, bl) = (b(&at1), b(&at2), b(&per_t[i_last]));
         let widen = (bl.2 - bl.1) / bl.0 / ((b2.2 - b2.1) / b2.0);
         lines.push(format!("| {name} | {} | {} | {} | {widen:.2} |", shown(&units_all[k], b1), shown(&units_all[k], b2), shown(&units_all[k], bl)));
     }
     para.push(lines.join("\n"));
-    let e1 = band(at(t1)?[names.len() - 1].clone(), level).0;
+    let e1 = band(at1[names.len() - 1].clone(), level).0;
     let e_last = band(per_t[i_last][names.len() - 1].clone(), level).0;
     para.push(format!("Young's modulus from the shear and bulk laws falls from {:.1} GPa at {t1} °C to {:.1} GPa at {last} °C (medians); where the amorphous fraction is 0 at both calibrated temperatures, the glassy ratio comes from its prior alone, and the bands widen beyond {t2} °C as the amorphous fraction rises.", e1 / 1e9, e_last / 1e9));
     Ok(para.join("\n\n"))
@@ -166,7 +167,7 @@ fn write_laws(dir: &mut ReportDir, laws: &ParameterLaws, grid: &[f64], level: f6
 /// discrepancy workflow's temperature term. Returns the summary's paragraph.
 fn write_softening(dir: &mut ReportDir, laws: &ParameterLaws, evidence: &Path, level: f64) -> Result<String> {
     let (t1, t2) = (laws.calibrated[0].0, laws.calibrated[1].0);
-    let plane = |(g, k): (f64, f64)| youngs_modulus(g, k) / (1.0 - poisson_ratio(g, k).powi(2));
+    let plane = |(g, k): (f64, f64)| 1.0 / crate::contact::Elastic::from_shear_and_bulk(g, k).compliance();
     let ratio: Vec<f64> = (0..laws.len()).map(|j| Ok(plane(laws.shear_bulk_at(j, t2)?) / plane(laws.shear_bulk_at(j, t1)?))).collect::<Result<_>>()?;
     let law = band(ratio, level);
     let t = crate::report::Table::load_file(evidence)?;

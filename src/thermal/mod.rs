@@ -56,6 +56,7 @@ use serde::{Deserialize, Serialize};
 
 pub use law::{LawDraw, TemperatureLaw};
 
+use crate::contact::Elastic;
 use crate::dist::Dist;
 use crate::error::{Error, Result};
 use crate::phases::{PhaseTable, read_phases};
@@ -162,14 +163,9 @@ pub struct Factors {
     pub modulus: f64,
 }
 
-/// Young's modulus of shear modulus `g` and bulk modulus `k`.
+/// Young's modulus of shear modulus `g` and bulk modulus `k` ([`Elastic::from_shear_and_bulk`]).
 pub fn youngs_modulus(g: f64, k: f64) -> f64 {
-    9.0 * k * g / (3.0 * k + g)
-}
-
-/// Poisson's ratio of shear modulus `g` and bulk modulus `k`.
-pub fn poisson_ratio(g: f64, k: f64) -> f64 {
-    (3.0 * k - 2.0 * g) / (2.0 * (3.0 * k + g))
+    Elastic::from_shear_and_bulk(g, k).youngs_modulus_pa
 }
 
 /// The laws of every parameter with a glassy-ratio prior, as joint draws (draw j of every law
@@ -204,8 +200,7 @@ struct LawSource {
 pub fn load_from_study(path: &Path) -> Result<ParameterLaws> {
     let loaded = crate::schema::StudyFile::read(path)?;
     let file = path.display().to_string();
-    let kind = loaded.kind(&["temperature"])?;
-    debug_assert_eq!(kind, "temperature");
+    loaded.kind(&["temperature"])?;
     let src: LawSource = loaded.parse()?;
     let Some(law) = &src.law else {
         return Err(Error::config(&file, "law", "this temperature study declares no [law] (calibrated states and glassy-ratio priors)"));
@@ -343,7 +338,9 @@ mod tests {
         // Steel: E = 210 GPa, ν = 0.3 ⇒ G = E/(2(1+ν)), K = E/(3(1−2ν)).
         let (e, nu) = (210e9, 0.3);
         let (g, k) = (e / (2.0 * (1.0 + nu)), e / (3.0 * (1.0 - 2.0 * nu)));
+        let el = Elastic::from_shear_and_bulk(g, k);
         assert!((youngs_modulus(g, k) / e - 1.0).abs() < 1e-14);
-        assert!((poisson_ratio(g, k) - nu).abs() < 1e-14);
+        assert!((el.youngs_modulus_pa / e - 1.0).abs() < 1e-14);
+        assert!((el.poisson_ratio - nu).abs() < 1e-14);
     }
 }

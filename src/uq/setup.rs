@@ -89,22 +89,18 @@ impl Material {
     /// [`ROOM_TEMPERATURE_C`] when none is given; data at several temperatures are refused (the
     /// temperature laws scale a strength measured at one temperature).
     pub fn data_temperature_c(&self) -> Result<f64> {
-        let t: Vec<Option<f64>> = self.sample.covariates.iter().find(|(n, _)| n == "temperature_c").map(|(_, v)| v.clone()).unwrap_or_default();
-        let given: Vec<(usize, f64)> = t.iter().enumerate().filter_map(|(i, v)| v.map(|v| (i, v))).collect();
-        match given.first() {
-            None => Ok(ROOM_TEMPERATURE_C),
-            Some(&(_, t0)) => {
-                if given.len() < t.len() || given.iter().any(|(_, v)| *v != t0) {
-                    let i = given.iter().find(|(_, v)| *v != t0).map_or_else(|| t.iter().position(|v| v.is_none()).unwrap_or(0), |(i, _)| *i);
-                    return Err(Error::Data {
-                        file: self.path.display().to_string(),
-                        location: format!("row {} (line {}), column temperature_c", i + 1, i + 2),
-                        rule: format!("material `{}`: an operating temperature needs crush data at one temperature (row 1 has {t0} °C); the temperature laws scale a strength measured at one temperature", self.model.key),
-                    });
-                }
-                Ok(t0)
-            }
+        let t: &[Option<f64>] = self.sample.covariates.iter().find(|(n, _)| n == "temperature_c").map_or(&[], |(_, v)| v);
+        let Some(t0) = t.iter().flatten().next().copied() else {
+            return Ok(ROOM_TEMPERATURE_C);
+        };
+        if let Some(i) = t.iter().position(|v| *v != Some(t0)) {
+            return Err(Error::Data {
+                file: self.path.display().to_string(),
+                location: format!("row {} (line {}), column temperature_c", i + 1, i + 2),
+                rule: format!("material `{}`: an operating temperature needs crush data at one temperature (the first given is {t0} °C); the temperature laws scale a strength measured at one temperature", self.model.key),
+            });
         }
+        Ok(t0)
     }
 }
 

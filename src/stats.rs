@@ -276,6 +276,14 @@ mod tests {
     }
 }
 
+/// The median and the central band at probability `level` of `v` (0.9: the 5 % and 95 %
+/// quantiles; [`interpolated_quantiles`]).
+pub fn median_and_band(v: Vec<f64>, level: f64) -> (f64, f64, f64) {
+    let a = 0.5 * (1.0 - level);
+    let q = interpolated_quantiles(v, &[0.5, a, 1.0 - a]);
+    (q[0], q[1], q[2])
+}
+
 /// Quantiles `ps` of `v` ([`sorted_quantile`], type 7).
 pub fn interpolated_quantiles(mut v: Vec<f64>, ps: &[f64]) -> Vec<f64> {
     v.sort_by(f64::total_cmp);

@@ -159,7 +159,7 @@ pub struct Check {
     /// Per output: RMS of (simulator − emulator)/σ_o over the successful check runs.
     pub emulator_error: Vec<f64>,
     /// Fraction of the observations inside the 90 % posterior-predictive interval of the
-    /// simulator runs (± 1.645 √(var_runs + σ²)).
+    /// simulator runs ([`predictive_interval`] with z = [`Z90`]).
     pub coverage90: f64,
 }
 
@@ -190,6 +190,20 @@ pub struct Calibration {
     pub failures: Vec<(Vec<f64>, String)>,
     /// Emulator-posterior evaluations (MCMC, all rounds).
     pub emulator_evaluations: u64,
+}
+
+/// The standard normal quantile of 0.95: the half-width of a central 90 % interval in sd.
+pub const Z90: f64 = 1.6448536269514722;
+
+/// The predictive interval of one observation from simulator runs at parameter draws (`runs`,
+/// one output each): centre the runs' mean, half-width `z·√(var_runs + σ² + (model_error·mean)²)`
+/// — the spread of the runs, the scatter σ of a new observation about the model and the relative
+/// model error. Returns (centre, half-width).
+pub fn predictive_interval(runs: &[f64], sigma: f64, model_error: f64, z: f64) -> (f64, f64) {
+    let n = runs.len();
+    let mean = runs.iter().sum::<f64>() / n.max(1) as f64;
+    let var = if n > 1 { runs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64 } else { 0.0 };
+    (mean, z * (var + sigma.powi(2) + (model_error * mean).powi(2)).sqrt())
 }
 
 /// Progress callback: a stage message.
@@ -459,9 +473,8 @@ fn finish<S: Simulator>(
     for i in 0..obs.len() {
         let o = obs.output[i];
         let v: Vec<f64> = ok.iter().map(|(_, y)| y[o]).collect();
-        let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
-        let var = if v.len() > 1 { v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (v.len() - 1) as f64 } else { 0.0 };
-        if (obs.values[i] - mean).abs() <= 1.645 * (var + obs.sigma[i].powi(2) + (opts.model_error * mean).powi(2)).sqrt() {
+        let (mean, half) = predictive_interval(&v, obs.sigma[i], opts.model_error, Z90);
+        if (obs.values[i] - mean).abs() <= half {
             inside += 1;
         }
     }

@@ -12,12 +12,16 @@
 //!   states; with `[softening]`, the discrepancy workflow's temperature term beside the laws'
 //!   softening; with `[lifetime]`, the main study's breaking probability against the operating
 //!   temperature for both materials, Table 1's softening temperatures marked.
+//! * [`validate`]: with `[[validation]]`, crush curves at a temperature the laws were not fitted
+//!   to, predicted through the crush FE from the laws and, for comparison, from each calibrated
+//!   state as it is.
 //!
 //! The main study itself runs at an operating temperature through its `[operating]` table,
 //! which names a temperature study for its laws ([`crate::uq::setup`]).
 
 pub mod run;
 pub mod study;
+pub mod validate;
 
 pub use run::run_temperature;
 pub use study::TemperatureStudy;

@@ -7,6 +7,7 @@
 //! | `parameters_vs_temperature.csv` | with `[law]`: median and central band of every calibrated parameter's law and of Young's modulus E = 9KG/(3K + G) per temperature; figure `parameters_vs_temperature` |
 //! | `calibrated_states.csv` | the calibration posteriors at their temperatures next to the laws there (the laws pass through every calibrated draw) |
 //! | `softening.csv` | with `[softening]`: the plane-strain modulus ratio E/(1 − ν²) between the calibrated temperatures from the laws, next to the discrepancy workflow's force ratio over the same interval (F ∝ E/(1 − ν²) on a Hertzian curve against a rigid platen) |
+//! | `validation.csv`, `validation_parameters.csv` | with `[[validation]]`: held-out crush curves predicted from the laws and from each calibrated state as it is ([`super::validate`]) |
 //! | `lifetime_vs_temperature.csv` | with `[lifetime]`: each material's breaking probability after each horizon against the operating temperature (mean, median, band; the main study's primary strength and damage models; the same samples at every temperature); figure `breakage_vs_temperature` with Table 1's softening temperatures (`softening_marks.csv`) |
 
 use std::collections::BTreeMap;
@@ -22,6 +23,7 @@ use crate::io::{InputFile, ReportDir, fcol, scol, table};
 use crate::phases::PhaseTable;
 use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
 use crate::schema::StudyFile;
+use crate::stats::median_and_band as band;
 use crate::thermal::{ParameterLaws, read_phases_of, youngs_modulus};
 use crate::uq::setup::{Mode, Setup, Shared};
 
@@ -60,13 +62,6 @@ fn describe(s: &TemperatureStudy, t: &PhaseTable, shown_path: &str) -> (String, 
         }
     };
     (md, headline)
-}
-
-/// Median and central band at `level` of `v`.
-fn band(v: Vec<f64>, level: f64) -> (f64, f64, f64) {
-    let a = 0.5 * (1.0 - level);
-    let q = crate::stats::interpolated_quantiles(v, &[0.5, a, 1.0 - a]);
-    (q[0], q[1], q[2])
 }
 
 /// A number with its band, in `unit` scaled for reading.
@@ -347,7 +342,7 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
     if let Some(&t) = at.iter().find(|&&t| !(t >= lo && t <= hi)) {
         return Err(Error::config(&file, "lifetime.at", format!("{t} °C lies outside the phase table {} ({lo}–{hi} °C)", path.display())));
     }
-    let steps = 3 + s.lifetime.as_ref().map_or(0, |_| grid.len()) as u64;
+    let steps = 3 + s.lifetime.as_ref().map_or(0, |_| grid.len()) as u64 + (s.validation.len() * super::validate::SOURCES) as u64;
     let pb = progress_bar(steps, opts.progress, crate::runkit::PROGRESS_COUNT);
     pb.set_message("phase table and laws");
     let mut inputs = vec![InputFile::hash(&loaded.path)?, InputFile::hash(&path)?];
@@ -383,6 +378,16 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
         }
     }
     pb.inc(1);
+    if let (Some(laws), false) = (&laws, s.validation.is_empty()) {
+        pb.set_message("held-out data");
+        let tick = || pb.inc(1);
+        let (text, read, runs) = super::validate::write_validation(&mut dir, &file, &s.validation, laws, s.level, &resolve, &tick)?;
+        md.push_str(&format!("\n## Held-out data\n\n{text}\n"));
+        for p in read {
+            inputs.push(InputFile::hash(&p)?);
+        }
+        evaluations.insert("validation_fe_runs".to_string(), runs);
+    }
     if let (Some(laws), Some(l)) = (&laws, &s.lifetime) {
         pb.set_message("breakage against temperature");
         let tick = || pb.inc(1);

@@ -20,6 +20,11 @@
 //! [softening]                        # optional: the discrepancy workflow's temperature term
 //! evidence = "../reports/discrepancy_curves/curve_evidence.csv"
 //!
+//! [[validation]]                     # optional: held-out crush curves predicted from the laws
+//! temperature_c = 950
+//! study = "calibrate_gen3_950c.toml" # a crush calibration study of them (read, not run)
+//! draws = 24                         # joint draws through the crush FE per source
+//!
 //! [lifetime]                         # optional: breakage against temperature (needs [law])
 //! main = "gen4_vs_bl.toml"           # the main study (kind = "uq"): its primary strength model
 //! samples = 4096
@@ -69,6 +74,25 @@ pub struct LifetimeOptions {
     pub softening: BTreeMap<String, String>,
 }
 
+/// `[[validation]]`: crush data at a temperature the laws were not fitted to
+/// ([`super::validate`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ValidationOptions {
+    /// The temperature of the held-out data (°C).
+    pub temperature_c: f64,
+    /// A crush calibration study (`kind = "calibrate"`) of the held-out curves, relative to this
+    /// file: its data reduction, crush model and model error (read, not run).
+    pub study: PathBuf,
+    /// Joint parameter draws run through the crush FE per source.
+    #[serde(default = "validation_draws")]
+    pub draws: usize,
+}
+
+fn validation_draws() -> usize {
+    24
+}
+
 fn samples() -> usize {
     4096
 }
@@ -99,6 +123,9 @@ pub struct TemperatureStudy {
     pub softening: Option<SofteningOptions>,
     /// Breakage against temperature.
     pub lifetime: Option<LifetimeOptions>,
+    /// Held-out crush data predicted from the laws.
+    #[serde(default)]
+    pub validation: Vec<ValidationOptions>,
     /// Figures.
     #[serde(default)]
     pub figures: FigureOptions,
@@ -126,10 +153,18 @@ impl TemperatureStudy {
             l.validate(file)?;
         }
         if self.law.is_none() {
-            for (present, key) in [(self.softening.is_some(), "softening"), (self.lifetime.is_some(), "lifetime")] {
+            for (present, key) in [(self.softening.is_some(), "softening"), (self.lifetime.is_some(), "lifetime"), (!self.validation.is_empty(), "validation")] {
                 if present {
                     return Err(Error::config(file, key, "needs [law]: the temperature laws it is compared with or runs on"));
                 }
+            }
+        }
+        for (i, v) in self.validation.iter().enumerate() {
+            if !(v.temperature_c.is_finite() && v.temperature_c > -273.15) {
+                return Err(Error::config(file, format!("validation[{i}].temperature_c"), format!("must be a temperature above absolute zero (°C), got {}", v.temperature_c)));
+            }
+            if !(8..=1000).contains(&v.draws) {
+                return Err(Error::config(file, format!("validation[{i}].draws"), format!("must lie in 8…1000, got {}", v.draws)));
             }
         }
         if let Some(l) = &self.lifetime {

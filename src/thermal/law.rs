@@ -104,10 +104,7 @@ impl TemperatureLaw {
     /// Median and central band of θ at `t_c` at probability `level` (0.9: the 5 % and 95 %
     /// quantiles).
     pub fn band_at(&self, phases: &PhaseTable, t_c: f64, level: f64) -> Result<(f64, f64, f64)> {
-        let mut v = self.values_at(phases, t_c)?;
-        v.sort_by(f64::total_cmp);
-        let q = |p: f64| crate::stats::sorted_quantile(&v, p);
-        Ok((q(0.5), q(0.5 - level / 2.0), q(0.5 + level / 2.0)))
+        Ok(crate::stats::median_and_band(self.values_at(phases, t_c)?, level))
     }
 }
 

@@ -1,0 +1,236 @@
+//! `[[validation]]` of a temperature study: crush data measured at a temperature the laws were not
+//! fitted to, predicted from the laws.
+//!
+//! ```toml
+//! [[validation]]
+//! temperature_c = 950                   # the temperature of the held-out data (°C)
+//! study = "calibrate_gen3_950c.toml"    # a crush calibration study of that data (read, not run)
+//! draws = 24                            # joint draws run through the crush FE per source
+//! ```
+//!
+//! The calibration study supplies what a prediction of its data needs besides the calibrated
+//! constants: the data and their reduction (forces at grid displacements, peak force, fracture
+//! displacement, normalised to the mean diameter D₀; σ the scatter between particles), the crush
+//! model (mesh, platen, the constants without a law) and the relative model error. Each of its
+//! `[[param]]` must have a temperature law.
+//!
+//! Three sources predict the data, each through the crush FE (the [`crate::model::Simulator`]
+//! of the study) at `draws` joint parameter draws:
+//!
+//! * the laws at the data's temperature;
+//! * each calibrated state as it is — its posterior draws, as if temperature did not matter
+//!   between it and the data. The nearer state shows how much the laws add over it.
+//!
+//! An observation lies inside its predictive interval at probability `level` when it is within
+//! z·√(var_runs + σ² + (model_error·mean)²) of the runs' mean
+//! ([`crate::calibrate::pipeline::predictive_interval`], the calibration's own check). Writes
+//! `validation.csv` (per source and output: the grid displacement of a grid force, the level, observed mean,
+//! predicted centre and interval, observations inside), `validation_observations.csv` (every
+//! observation, normalised to D₀) and `validation_parameters.csv` (the laws' median and band of
+//! every parameter at the data's temperature); figure `held_out`.
+
+use std::path::{Path, PathBuf};
+
+use statrs::distribution::{ContinuousCDF, Normal};
+
+use super::study::ValidationOptions;
+use crate::calibrate::Runner;
+use crate::calibrate::pipeline::predictive_interval;
+use crate::calibrate::study::{Built, CalibrateStudy};
+use crate::error::{Error, Result};
+use crate::io::{ReportDir, fcol, scol, table, ucol};
+use crate::model::Simulator;
+use crate::schema::StudyFile;
+use crate::stats::median_and_band as band;
+use crate::thermal::ParameterLaws;
+
+/// The sources that predict held-out data.
+pub const SOURCES: usize = 3;
+
+/// One row of `validation.csv`.
+struct Row {
+    study: String,
+    temperature_c: f64,
+    source: String,
+    source_kind: &'static str,
+    source_temperature_c: f64,
+    output: String,
+    grid_displacement_m: f64,
+    unit: String,
+    observations: u64,
+    observed_mean: f64,
+    predicted: f64,
+    lo: f64,
+    hi: f64,
+    inside: u64,
+}
+
+/// Predicts every `[[validation]]` data set; `tick` after each source. Returns the summary's
+/// section, the files read and the FE runs made.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[ValidationOptions], laws: &ParameterLaws, level: f64, resolve: &dyn Fn(&Path) -> PathBuf, tick: &(dyn Fn() + Sync)) -> Result<(String, Vec<PathBuf>, u64)> {
+    let z = Normal::new(0.0, 1.0).map_err(|e| Error::numerical("validation", e.to_string()))?.inverse_cdf(0.5 + 0.5 * level);
+    let pct = (100.0 * level).round();
+    let (mut rows, mut prows, mut orows) = (Vec::<Row>::new(), Vec::new(), Vec::new());
+    let (mut inputs, mut fe_runs, mut md) = (Vec::new(), 0u64, Vec::new());
+    for (i, v) in vs.iter().enumerate() {
+        let key = format!("validation[{i}]");
+        let t = v.temperature_c;
+        laws.check_range(file, &format!("{key}.temperature_c"), t, t)?;
+        let path = resolve(&v.study);
+        if !path.is_file() {
+            return Err(Error::config(file, format!("{key}.study"), format!("{} does not exist", path.display())));
+        }
+        let loaded = StudyFile::read(&path)?;
+        if loaded.kind(&["calibrate"])? != "calibrate" {
+            return Err(Error::config(file, format!("{key}.study"), format!("{} must be a calibration study (kind = \"calibrate\") of the held-out crush curves", path.display())));
+        }
+        let cs: CalibrateStudy = loaded.parse()?;
+        let prep = cs.prepare(&path, &|p: &str| loaded.resolve(Path::new(p)))?;
+        let Built::Crush(model, red) = &prep.built else {
+            return Err(Error::config(file, format!("{key}.study"), format!("{} is not a crush calibration (model kind = \"crush\" on crush curves): the laws are of crush constants", path.display())));
+        };
+        inputs.push(path.clone());
+        inputs.extend(prep.inputs.iter().cloned());
+        // The law of each of the study's parameters.
+        let map: Vec<usize> = cs
+            .param
+            .iter()
+            .map(|p| {
+                laws.names.iter().position(|n| *n == p.name).ok_or_else(|| {
+                    Error::config(file, format!("{key}.study"), format!("the parameter `{}` of {} has no temperature law (the laws are of {})", p.name, path.display(), laws.names.join(", ")))
+                })
+            })
+            .collect::<Result<_>>()?;
+        let n = laws.len();
+        let draws = v.draws.min(n);
+        let picks: Vec<usize> = (0..draws).map(|k| k * n / draws).collect();
+        let mut sources: Vec<(String, &'static str, f64, Vec<Vec<f64>>)> = Vec::new();
+        let law_thetas: Vec<Vec<f64>> = picks.iter().map(|&j| laws.values_at(j, t).map(|all| map.iter().map(|&k| all[k]).collect())).collect::<Result<_>>()?;
+        sources.push((format!("laws at {t} °C"), "laws", t, law_thetas));
+        for (tc, cols) in &laws.calibrated {
+            sources.push((format!("calibrated state at {tc} °C, as is"), "calibrated state", *tc, picks.iter().map(|&j| map.iter().map(|&k| cols[k][j]).collect()).collect()));
+        }
+        // The laws' parameters at the data's temperature.
+        let params = model.space().params();
+        let mut shown = Vec::new();
+        for (k, p) in params.iter().enumerate() {
+            let all: Vec<f64> = (0..n).map(|j| laws.values_at(j, t).map(|v| v[map[k]])).collect::<Result<_>>()?;
+            let b = band(all, level);
+            shown.push(if p.unit == "Pa" { format!("{} {:.3} GPa [{:.3}, {:.3}]", p.name, b.0 / 1e9, b.1 / 1e9, b.2 / 1e9) } else { format!("{} {:.3} [{:.3}, {:.3}]", p.name, b.0, b.1, b.2) });
+            prows.push((v.study.display().to_string(), t, p.name.clone(), p.unit.clone(), b));
+        }
+        let obs = &prep.observations;
+        let outputs = model.outputs();
+        for i in 0..obs.len() {
+            orows.push((v.study.display().to_string(), outputs[obs.output[i]].name.clone(), red.curves[obs.group[i]].particle.clone(), obs.values[i]));
+        }
+        let model_error = cs.calibration.model_error;
+        let mut lines = vec![format!("| source | inside its {pct} % interval | peak force: observed mean; predicted [{pct} % interval] (N) |"), "|---|---|---|".into()];
+        let mut coverage = Vec::new();
+        for (label, kind, ts, thetas) in &sources {
+            let mut runner = Runner::new(model);
+            let runs = runner.run(thetas)?;
+            fe_runs += runner.evaluations;
+            tick();
+            let ok: Vec<&Vec<f64>> = runs.iter().flatten().collect();
+            if ok.len() < 2 {
+                let why = runner.failures.first().map_or(String::new(), |f| f.1.clone());
+                return Err(Error::numerical("validation", format!("{key} ({label}): {} of {} crush runs failed ({why}): widen the parameter bounds of {}", thetas.len() - ok.len(), thetas.len(), path.display())));
+            }
+            let (mut inside_all, mut peak) = (0u64, String::from("(no fracture observed)"));
+            for (o, spec) in outputs.iter().enumerate() {
+                let idx: Vec<usize> = (0..obs.len()).filter(|&i| obs.output[i] == o).collect();
+                if idx.is_empty() {
+                    continue;
+                }
+                let y: Vec<f64> = ok.iter().map(|r| r[o]).collect();
+                let (centre, half) = predictive_interval(&y, obs.sigma[idx[0]], model_error, z);
+                let inside = idx
+                    .iter()
+                    .filter(|&&i| {
+                        let (c, h) = predictive_interval(&y, obs.sigma[i], model_error, z);
+                        (obs.values[i] - c).abs() <= h
+                    })
+                    .count() as u64;
+                inside_all += inside;
+                let observed_mean = idx.iter().map(|&i| obs.values[i]).sum::<f64>() / idx.len() as f64;
+                if spec.name == "peak_force" {
+                    peak = format!("{observed_mean:.1}; {centre:.1} [{:.1}, {:.1}]", centre - half, centre + half);
+                }
+                rows.push(Row {
+                    study: v.study.display().to_string(),
+                    temperature_c: t,
+                    source: label.clone(),
+                    source_kind: kind,
+                    source_temperature_c: *ts,
+                    output: spec.name.clone(),
+                    grid_displacement_m: red.grid.get(o).copied().unwrap_or(f64::NAN),
+                    unit: spec.unit.clone(),
+                    observations: idx.len() as u64,
+                    observed_mean,
+                    predicted: centre,
+                    lo: centre - half,
+                    hi: centre + half,
+                    inside,
+                });
+            }
+            let failed = thetas.len() - ok.len();
+            let runs_failed = if failed > 0 { format!("; {failed} of {} runs failed", thetas.len()) } else { String::new() };
+            lines.push(format!("| {label} | {inside_all} of {} ({:.0} %){runs_failed} | {peak} |", obs.len(), 100.0 * inside_all as f64 / obs.len() as f64));
+            coverage.push((label.clone(), inside_all as f64 / obs.len() as f64));
+        }
+        let particles = red.curves.len();
+        let k = red.grid.len();
+        let verdict = {
+            let (law, states) = (coverage[0].1, &coverage[1..]);
+            let best = states.iter().map(|c| c.1).fold(f64::NEG_INFINITY, f64::max);
+            if law > best { "the laws predict these data better than either calibrated state as it is" } else if law < best { "a calibrated state as it is predicts these data better than the laws" } else { "the laws and the better calibrated state predict these data equally well" }
+        };
+        md.push(format!(
+            "The crush curves of `{}` at {t} °C ({particles} particles; {} observations: the force at {k} displacements, the peak force and the fracture displacement, normalised to D₀ = {:.3} mm) are held out: no law was fitted to them. They are predicted through the crush FE of that study (its mesh, its constants without a law, its model error {model_error}) at {draws} joint draws of each source; an observation is inside when it lies within the runs' mean ± {z:.3}·√(var of the runs + σ² + (model error·mean)²), σ the scatter between particles (`validation.csv`). The laws at {t} °C give {} ({pct} % bands; `validation_parameters.csv`). Observations inside their {pct} % interval: {}; {verdict}.\n\n{}",
+            v.study.display(),
+            obs.len(),
+            red.reference_diameter * 1e3,
+            shown.join(", "),
+            coverage.iter().map(|(l, c)| format!("{l}: {:.0} %", 100.0 * c)).collect::<Vec<_>>().join("; "),
+            lines.join("\n"),
+        ));
+    }
+    let mut t = table(vec![
+        scol("study", rows.iter().map(|r| r.study.clone()).collect()),
+        fcol("temperature_c", rows.iter().map(|r| r.temperature_c).collect()),
+        scol("source", rows.iter().map(|r| r.source.clone()).collect()),
+        scol("source_kind", rows.iter().map(|r| r.source_kind.to_string()).collect()),
+        fcol("source_temperature_c", rows.iter().map(|r| r.source_temperature_c).collect()),
+        scol("output", rows.iter().map(|r| r.output.clone()).collect()),
+        fcol("grid_displacement_m", rows.iter().map(|r| r.grid_displacement_m).collect()),
+        scol("unit", rows.iter().map(|r| r.unit.clone()).collect()),
+        ucol("observations", rows.iter().map(|r| r.observations).collect()),
+        fcol("observed_mean", rows.iter().map(|r| r.observed_mean).collect()),
+        fcol("predicted", rows.iter().map(|r| r.predicted).collect()),
+        fcol("lo", rows.iter().map(|r| r.lo).collect()),
+        fcol("hi", rows.iter().map(|r| r.hi).collect()),
+        fcol("level", vec![level; rows.len()]),
+        ucol("inside", rows.iter().map(|r| r.inside).collect()),
+    ])?;
+    dir.write_table("validation", &mut t)?;
+    let mut t = table(vec![
+        scol("study", prows.iter().map(|r| r.0.clone()).collect()),
+        fcol("temperature_c", prows.iter().map(|r| r.1).collect()),
+        scol("parameter", prows.iter().map(|r| r.2.clone()).collect()),
+        scol("unit", prows.iter().map(|r| r.3.clone()).collect()),
+        fcol("q50", prows.iter().map(|r| r.4.0).collect()),
+        fcol("lo", prows.iter().map(|r| r.4.1).collect()),
+        fcol("hi", prows.iter().map(|r| r.4.2).collect()),
+    ])?;
+    dir.write_table("validation_parameters", &mut t)?;
+    let mut t = table(vec![
+        scol("study", orows.iter().map(|r| r.0.clone()).collect()),
+        scol("output", orows.iter().map(|r| r.1.clone()).collect()),
+        scol("particle", orows.iter().map(|r| r.2.clone()).collect()),
+        fcol("value", orows.iter().map(|r| r.3).collect()),
+    ])?;
+    dir.write_table("validation_observations", &mut t)?;
+    Ok((md.join("\n\n"), inputs, fe_runs))
+}

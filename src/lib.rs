@@ -46,7 +46,7 @@
 //! 11  discrepancy                    the naming loop, KOH, the curve level
 //! 10  strength                       the one lifetime model (its Bayesian draws use calibrate::mcmc)
 //!  9  calibrate                      LSQ, MCMC, emulator, calibration studies, curve generator
-//!  8  dem · fem                      the solvers with their studies
+//!  8  dem · fem · micro              the solvers with their studies (micro: microstructure micromechanics)
 //!  7  runkit · synth · thermal       run helpers; the crush-data generator; parameters against temperature
 //!  6  schema                         study files, TOML errors, shared options
 //!  5  dist · phases · report         declared distributions; phase-fraction tables; figures from tables
@@ -77,6 +77,7 @@
 //! | [`dist`] | distributions declared in study files and the DEM velocity spectrum, as inverse-CDF marginals |
 //! | [`dem`] | native DEM of the tube bank: Hertz–Mindlin, cell lists, impacts, profiles, VTK; `TubeBankModel` |
 //! | [`fem`] | native crush FE: axisymmetric/plane-strain explicit quads, JH-2, platens, fields, VTU; `CrushModel` (also the runs with other contact tips) |
+//! | [`micro`] | microstructure micromechanics: segmented images (PNG) or synthetic two-phase microstructures (soft matrix or soft pockets) with their phases' connectivity; periodic homogenisation on pixel quads (faer sparse Cholesky) with Voigt, Reuss and Hashin–Shtrikman bounds; virtual tension and compression, hot spots per phase, first-failure stress; the `microstructure` study with the §6.1 comparison, maps and `.vtu` |
 //! | [`fracture`] | the first sustained force drop on a force–displacement curve, for simulated and measured curves alike |
 //! | [`design`] | Sobol' sequences (Joe–Kuo, 64 dimensions), Latin hypercubes |
 //! | [`calibrate`] | noise models; multi-start Levenberg–Marquardt (or argmin Nelder–Mead / L-BFGS) with covariance and identifiability; ensemble and adaptive-Metropolis MCMC with R̂/ESS; GP emulator; evaluation cache; the `calibrate` study (crush FE and tube-bank DEM); synthetic curve and rig generators |
@@ -120,6 +121,7 @@ pub mod experiments;
 pub mod io;
 pub mod lifetime;
 pub mod lifetime_study;
+pub mod micro;
 pub mod model;
 pub mod phases;
 pub mod params;

@@ -68,7 +68,7 @@ enum Command {
         command: DatasetsCommand,
     },
     /// Measure the speed figures (evaluations per second, fit time, study wall time).
-    #[command(group(clap::ArgGroup::new("benchmark").args(["study", "dem", "fem", "mcmc", "uq", "discrepancy", "experiments"]).multiple(false)))]
+    #[command(group(clap::ArgGroup::new("benchmark").args(["study", "dem", "fem", "mcmc", "uq", "discrepancy", "experiments", "micro"]).multiple(false)))]
     Bench {
         /// Time the core figures and this study end to end.
         #[arg(long)]
@@ -99,6 +99,14 @@ enum Command {
         /// into a scratch reports directory, on all threads and on one (same results).
         #[arg(long)]
         experiments: bool,
+        /// Run the microstructure benchmark instead: homogenisation of a segmented
+        /// `--pixels`² image (PNG read, sparse Cholesky, three load cases, fields; goal < 10 s
+        /// at 512²), fastest of three.
+        #[arg(long)]
+        micro: bool,
+        /// Pixels a side of the microstructure benchmark.
+        #[arg(long, default_value_t = 512, requires = "micro")]
+        pixels: usize,
     },
 }
 
@@ -144,6 +152,15 @@ enum DatasetsCommand {
         /// Output directory.
         #[arg(long, default_value = "datasets")]
         out_dir: PathBuf,
+    },
+    /// Regenerate the synthetic segmented micrograph (PNG) from its generator settings.
+    SynthMicro {
+        /// Generator settings.
+        #[arg(long, default_value = "datasets/synth_micro.toml")]
+        settings: PathBuf,
+        /// Output directory (default: the settings file's directory).
+        #[arg(long)]
+        out_dir: Option<PathBuf>,
     },
     /// Validate dataset files (crush CSV, Table 1 or a phase-fraction table) and summarise them.
     Check {
@@ -262,6 +279,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             partlife::io::write_atomic(&path, t.to_csv().as_bytes())?;
             out!("{}: {} phases at {} temperatures ({}–{} °C), amorphous from {} °C", path.display(), t.phases.len(), t.temperatures_c.len(), t.range().0, t.range().1, t.amorphous_onset(0.0).map_or("—".into(), |v| v.to_string()));
         }
+        Command::Datasets { command: DatasetsCommand::SynthMicro { settings, out_dir } } => {
+            let text = partlife::io::read_input_text(&settings)?;
+            let s: partlife::micro::synth::MicroSettings = partlife::schema::parse_toml(&settings, &text)?;
+            let (m, png) = partlife::micro::synth::generate(&settings.display().to_string(), &s)?;
+            let dir = out_dir.unwrap_or_else(|| settings.parent().map(PathBuf::from).unwrap_or_default());
+            let path = dir.join(&s.file);
+            partlife::io::write_atomic(&path, &png)?;
+            out!("{}: {} × {} pixels, soft fraction {:.4}", path.display(), m.nx, m.ny, m.fraction(1));
+        }
         Command::Datasets { command: DatasetsCommand::Check { files } } => {
             for f in files {
                 if partlife::data::read_text_table(&f)?.column("phase").is_ok() {
@@ -372,6 +398,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 u.samples as f64 / u.propagation_s
             );
             out!("Sobol' indices of Ishigami, N = 2¹⁴ (81 920 runs) + 1000 bootstrap resamples: {:.3} s, largest |Ŝ − S| = {:.4}", u.ishigami_s, u.ishigami_error);
+        }
+        Command::Bench { micro: true, pixels, .. } => {
+            if !(8..=4096).contains(&pixels) {
+                return Err(partlife::Error::config("partlife bench", "--pixels", format!("must lie in 8…4096, got {pixels}")).into());
+            }
+            out!("machine: {} threads available to rayon (the factorisation is sequential)", rayon::current_num_threads());
+            let m = partlife::bench::micro_speed(pixels, 3)?;
+            out!(
+                "microstructure homogenisation, {0} × {0} pixels ({1} unknowns), fastest of 3: total {2:.3} s (goal < 10 s at 512²) = PNG read {3:.3} s + symbolic factorisation {4:.3} s + assembly, numeric factorisation, 3 load cases and fields {5:.3} s; C11 = {6:.6e} Pa",
+                m.pixels, m.unknowns, m.total_s, m.read_s, m.symbolic_s, m.numeric_s, m.c11
+            );
         }
         Command::Bench { fem: true, .. } => {
             out!("machine: {} threads available to rayon", rayon::current_num_threads());

@@ -21,6 +21,7 @@ pub fn run(study: &LoadedStudy, opts: &RunOptions) -> Result<RunSummary> {
         Study::DiscrepancyCurves(s) => crate::discrepancy::curves::run_curves(&study.file, s, opts),
         Study::Experiments(s) => crate::experiments::run_experiments(&study.file, s, opts),
         Study::Temperature(s) => crate::temperature::run_temperature(&study.file, s, opts),
+        Study::Microstructure(s) => crate::micro::run_microstructure(&study.file, s, opts),
     }
 }
 

@@ -24,7 +24,7 @@ pub use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSp
 pub use crate::lifetime_study::{LifetimeStudy, ShapeEstimate, WeibullOptions, validate_lifetime};
 
 /// The kinds of study this version can run.
-pub const KINDS: [&str; 9] = ["lifetime", "dem", "crush", "calibrate", "uq", "discrepancy", "discrepancy_curves", "experiments", "temperature"];
+pub const KINDS: [&str; 10] = ["lifetime", "dem", "crush", "calibrate", "uq", "discrepancy", "discrepancy_curves", "experiments", "temperature", "microstructure"];
 
 /// A parsed, validated study.
 #[derive(Debug, Clone, PartialEq)]
@@ -50,6 +50,9 @@ pub enum Study {
     /// kind = "temperature": phases against temperature (the temperature model of the
     /// parameters and the lifetime at temperature to come).
     Temperature(Box<crate::temperature::TemperatureStudy>),
+    /// kind = "microstructure": effective moduli and stress hot spots of two-phase
+    /// microstructures (synthetic or segmented images).
+    Microstructure(Box<crate::micro::MicroStudy>),
 }
 
 /// A study file loaded from disk and validated.
@@ -110,6 +113,11 @@ pub fn load(path: &Path) -> Result<LoadedStudy> {
             let s: crate::temperature::TemperatureStudy = file.parse()?;
             s.validate(&name)?;
             Study::Temperature(Box::new(s))
+        }
+        "microstructure" => {
+            let s: crate::micro::MicroStudy = file.parse()?;
+            s.validate(&name)?;
+            Study::Microstructure(Box::new(s))
         }
         other => {
             return Err(Error::config(&name, "kind", format!("unknown kind \"{other}\"; known: {}", KINDS.join(", "))));

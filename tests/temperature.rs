@@ -3,7 +3,7 @@
 //! table is refused with the file, row and rule (exit 2).
 
 mod common;
-use common::{Scratch, root};
+use common::{Scratch, root, table_f64, table_text};
 
 #[test]
 fn the_illustrative_phase_table_is_regenerated_byte_for_byte() {
@@ -127,15 +127,6 @@ fn bad_phase_tables_exit_2_naming_file_row_and_rule() {
     s.expect_bad_study("studies/temperature.toml", "onset_level = 0.01", "onset_level = 1.5", &["phases.onset_level", "(0, 1)"]);
 }
 
-/// A column of a report table.
-fn column(path: &std::path::Path, name: &str) -> Vec<f64> {
-    partlife::io::col_f64(&partlife::io::read_table(path).unwrap(), path, name).unwrap()
-}
-
-/// A text column of a report table.
-fn text(path: &std::path::Path, name: &str) -> Vec<String> {
-    partlife::io::col_str(&partlife::io::read_table(path).unwrap(), path, name).unwrap()
-}
 
 #[test]
 fn temperature_study_writes_the_laws_the_softening_comparison_and_breakage_against_temperature() {
@@ -149,13 +140,13 @@ fn temperature_study_writes_the_laws_the_softening_comparison_and_breakage_again
     // The laws pass through the calibrated states.
     let c = dir.join("calibrated_states.csv");
     for (a, b) in [("calibration_q50", "law_q50"), ("calibration_lo", "law_lo"), ("calibration_hi", "law_hi")] {
-        for (x, y) in column(&c, a).iter().zip(column(&c, b)) {
+        for (x, y) in table_f64(&c, a).iter().zip(table_f64(&c, b)) {
             assert!((x / y - 1.0).abs() < 1e-12, "{a} {x} vs {b} {y}");
         }
     }
     // Softening where the amorphous fraction rises: every median falls from 900 to 1000 °C.
     let p = dir.join("parameters_vs_temperature.csv");
-    let (name, t, q50) = (text(&p, "parameter"), column(&p, "temperature_c"), column(&p, "q50"));
+    let (name, t, q50) = (table_text(&p, "parameter"), table_f64(&p, "temperature_c"), table_f64(&p, "q50"));
     for n in ["g", "k1", "a", "t", "youngs_modulus"] {
         let rows: Vec<usize> = (0..name.len()).filter(|&i| name[i] == n && t[i] >= 900.0).collect();
         assert!(rows.windows(2).all(|w| q50[w[1]] < q50[w[0]]), "{n} does not soften above 900 °C");
@@ -163,24 +154,24 @@ fn temperature_study_writes_the_laws_the_softening_comparison_and_breakage_again
     // The softening ratio of the laws: the truths' plane-strain modulus ratio (0.684) in the band,
     // and the summary states the table's numbers.
     let so = dir.join("softening.csv");
-    let (m, lo, hi) = (column(&so, "q50"), column(&so, "lo"), column(&so, "hi"));
+    let (m, lo, hi) = (table_f64(&so, "q50"), table_f64(&so, "lo"), table_f64(&so, "hi"));
     assert!(lo[0] < 0.684 && 0.684 < hi[0], "[{}, {}]", lo[0], hi[0]);
     let summary = s.read("reports/temperature/summary.md");
     assert!(summary.contains(&format!("by the factor {:.3} [{:.3}, {:.3}]", m[0], lo[0], hi[0])), "{summary}");
     assert!(summary.contains(&format!("gives {:.3} [{:.3}, {:.3}]", m[1], lo[1], hi[1])), "{summary}");
     // Table 1's softening temperatures are read from Table 1.
     let mk = dir.join("softening_marks.csv");
-    let mut marks: Vec<(String, f64)> = text(&mk, "material_key").into_iter().zip(column(&mk, "softening_temperature_c")).collect();
+    let mut marks: Vec<(String, f64)> = table_text(&mk, "material_key").into_iter().zip(table_f64(&mk, "softening_temperature_c")).collect();
     marks.sort_by(|a, b| a.0.cmp(&b.0));
     assert_eq!(marks, vec![("bl1630".to_string(), 857.0), ("gen4".to_string(), 940.0)]);
     // Breakage: every temperature of the grid for both materials and both horizons, bands
     // ordered, and the summary's table from lifetime_at.csv.
     let l = dir.join("lifetime_vs_temperature.csv");
-    assert_eq!(column(&l, "temperature_c").len(), 50 * 2 * 2);
-    let (pl, pm, ph) = (column(&l, "p_lo"), column(&l, "p_q50"), column(&l, "p_hi"));
+    assert_eq!(table_f64(&l, "temperature_c").len(), 50 * 2 * 2);
+    let (pl, pm, ph) = (table_f64(&l, "p_lo"), table_f64(&l, "p_q50"), table_f64(&l, "p_hi"));
     assert!((0..pl.len()).all(|i| pl[i] <= pm[i] && pm[i] <= ph[i]));
     let a = dir.join("lifetime_at.csv");
-    let (am, at) = (column(&a, "p_mean"), column(&a, "temperature_c"));
+    let (am, at) = (table_f64(&a, "p_mean"), table_f64(&a, "temperature_c"));
     assert_eq!(at.len(), 3 * 2 * 2);
     assert!(summary.contains(&format!("{:.3e}", am[0])), "{summary}");
     // The tables do not depend on the thread count.
@@ -304,7 +295,7 @@ fn the_main_study_runs_at_operating_temperatures() {
     assert_eq!(out.code, 0, "{}", out.stderr);
     let summary = s.read("reports/gen4_vs_bl/summary.md");
     assert!(summary.contains("**At operating temperatures**: Gen 4 at 750–850 °C, BL 16/30 at 800 °C (crush data at 20 and 20 °C)"), "{summary}");
-    let inputs = text(&s.path("reports/gen4_vs_bl/inputs.csv"), "input");
+    let inputs = table_text(&s.path("reports/gen4_vs_bl/inputs.csv"), "input");
     for n in ["temperature_law", "operating_temperature_gen4", "operating_temperature_bl1630"] {
         assert!(inputs.iter().any(|i| i == n), "{n} not among the inputs {inputs:?}");
     }
@@ -344,13 +335,13 @@ fn scratch_held_out(draws: usize) -> Scratch {
 fn judge_held_out(s: &Scratch) -> Vec<(String, f64)> {
     let dir = s.path("reports/temperature");
     let p = dir.join("validation_parameters.csv");
-    let (name, lo, hi) = (text(&p, "parameter"), column(&p, "lo"), column(&p, "hi"));
+    let (name, lo, hi) = (table_text(&p, "parameter"), table_f64(&p, "lo"), table_f64(&p, "hi"));
     for (n, v) in truth_at_950() {
         let i = name.iter().position(|x| *x == n).unwrap();
         assert!(lo[i] <= v && v <= hi[i], "{n}: truth {v} outside the laws' band [{}, {}] at 950 °C", lo[i], hi[i]);
     }
     let v = dir.join("validation.csv");
-    let (source, inside, count) = (text(&v, "source"), column(&v, "inside"), column(&v, "observations"));
+    let (source, inside, count) = (table_text(&v, "source"), table_f64(&v, "inside"), table_f64(&v, "observations"));
     let mut coverage = Vec::new();
     for src in ["laws at 950 °C", "calibrated state at 20 °C, as is", "calibrated state at 800 °C, as is"] {
         let rows: Vec<usize> = (0..source.len()).filter(|&i| source[i] == src).collect();

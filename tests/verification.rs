@@ -13,6 +13,7 @@ mod verification {
     mod koh;
     mod lsq;
     mod mcmc;
+    mod micro;
     mod lifetime;
     mod sobol;
     mod strength;

@@ -105,6 +105,12 @@ impl Elastic {
         Elastic { youngs_modulus_pa: 9.0 * k * g / (3.0 * k + g), poisson_ratio: (3.0 * k - 2.0 * g) / (2.0 * (3.0 * k + g)) }
     }
 
+    /// The Lamé constants (λ, μ) (Pa): μ = E/(2(1 + ν)), λ = Eν/((1 + ν)(1 − 2ν)).
+    pub fn lame(&self) -> (f64, f64) {
+        let (e, nu) = (self.youngs_modulus_pa, self.poisson_ratio);
+        (e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), e / (2.0 * (1.0 + nu)))
+    }
+
     /// Compliance term (1 − ν²)/E (1/Pa).
     pub fn compliance(&self) -> f64 {
         (1.0 - self.poisson_ratio * self.poisson_ratio) / self.youngs_modulus_pa

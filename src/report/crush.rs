@@ -76,7 +76,7 @@ fn force_displacement(dir: &Path, width_cm: f64) -> Result<Drawn> {
 }
 
 /// Diverging blue–white–red map for t ∈ [−1, 1] (compression blue, tension red).
-fn diverging(t: f64) -> RGBColor {
+pub(crate) fn diverging(t: f64) -> RGBColor {
     let t = if t.is_finite() { t.clamp(-1.0, 1.0) } else { 0.0 };
     let (a, b) = if t < 0.0 { ((59.0, 76.0, 192.0), (247.0, 247.0, 247.0)) } else { ((247.0, 247.0, 247.0), (180.0, 4.0, 38.0)) };
     let f = if t < 0.0 { t + 1.0 } else { t };
@@ -133,6 +133,7 @@ fn strain_map(name: &str, t: &Table, width_cm: f64, zoom: f64) -> Result<Drawn> 
         labels: (5, 5),
         bar: (-vmax, vmax, &bar_desc),
         colour: &colour,
+        categories: None,
     };
     map_figure(&spec, |chart| {
         for sign in if mirror { vec![1.0, -1.0] } else { vec![1.0] } {

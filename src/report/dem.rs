@@ -112,6 +112,7 @@ fn speed_map(dir: &Path, width_cm: f64) -> Result<Drawn> {
         labels: (4, 8),
         bar: (0.0, vmax, "mean speed (m/s)"),
         colour: &colour,
+        categories: None,
     };
     map_figure(&spec, |chart| {
         let err = fig_err(name);

@@ -3,6 +3,7 @@
 
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::canvas::{Encoded, canvas_size, check_glyphs, encode, fig_err, register_fonts, text, tick_format};
 use super::panel::pt;
@@ -27,6 +28,9 @@ pub struct MapSpec<'a> {
     pub bar: (f64, f64, &'a str),
     /// Colour of a data value.
     pub colour: &'a dyn Fn(f64) -> RGBColor,
+    /// Categories instead of a continuous bar (a phase map): each gets an equal block of the bar
+    /// in its colour with its name written along it; `bar` and `colour` are then not drawn.
+    pub categories: Option<&'a [(String, RGBColor)]>,
 }
 
 /// Draws the map: `cells` fills the plot area, then the colour bar is added.
@@ -73,33 +77,57 @@ pub fn map_figure(m: &MapSpec, cells: impl FnOnce(&mut MapChart) -> Result<()>) 
             .draw()
             .map_err(&err)?;
         cells(&mut chart)?;
-        let mut bar = ChartBuilder::on(&right)
-            .margin_top(pt(6.0))
-            .margin_right(pt(2.0))
-            .margin_left(pt(4.0))
-            .margin_bottom(pt(2.0))
-            .x_label_area_size(pt(19.0))
-            .y_label_area_size(pt(0.0))
-            .right_y_label_area_size(pt(31.0))
-            .build_cartesian_2d(0.0..1.0, b0..b1)
-            .map_err(&err)?
-            .set_secondary_coord(0.0..1.0, b0..b1);
-        bar.draw_series((0..100).map(|k| {
-            let (a, b) = (b0 + (b1 - b0) * k as f64 / 100.0, b0 + (b1 - b0) * (k + 1) as f64 / 100.0);
-            Rectangle::new([(0.0, a), (1.0, b)], (m.colour)(0.5 * (a + b)).filled())
-        }))
-        .map_err(&err)?;
-        let bf = tick_format(b0, b1);
-        bar.configure_secondary_axes()
-            .y_desc(bar_desc)
-            .label_style(text(7.0))
-            .axis_desc_style(text(7.0))
-            .y_labels(5)
-            .y_label_formatter(&bf)
-            .x_labels(0)
-            .axis_style(BLACK.stroke_width(pt(0.5)))
-            .draw()
+        if let Some(cats) = m.categories {
+            for (c, _) in cats {
+                check_glyphs(m.name, c)?;
+            }
+            let n = cats.len().max(1) as f64;
+            let bar = ChartBuilder::on(&right)
+                .margin_top(pt(6.0))
+                .margin_right(pt(2.0))
+                .margin_left(pt(4.0))
+                .margin_bottom(pt(2.0))
+                .x_label_area_size(pt(19.0))
+                .build_cartesian_2d(0.0..1.0, 0.0..n)
+                .map_err(&err)?;
+            // Each name reads bottom to top along its block.
+            let style = text(7.0).transform(FontTransform::Rotate270).pos(Pos::new(HPos::Center, VPos::Center));
+            for (k, (name, c)) in cats.iter().enumerate() {
+                let (a, b) = (k as f64, k as f64 + 1.0);
+                bar.plotting_area().draw(&Rectangle::new([(0.0, a), (1.0, b)], c.filled())).map_err(&err)?;
+                bar.plotting_area().draw(&Rectangle::new([(0.0, a), (1.0, b)], BLACK.stroke_width(pt(0.5)))).map_err(&err)?;
+                let ink = if (c.0 as f64 * 0.299 + c.1 as f64 * 0.587 + c.2 as f64 * 0.114) < 140.0 { WHITE } else { BLACK };
+                bar.plotting_area().draw(&Text::new(name.clone(), (0.5, 0.5 * (a + b)), style.color(&ink))).map_err(&err)?;
+            }
+        } else {
+            let mut bar = ChartBuilder::on(&right)
+                .margin_top(pt(6.0))
+                .margin_right(pt(2.0))
+                .margin_left(pt(4.0))
+                .margin_bottom(pt(2.0))
+                .x_label_area_size(pt(19.0))
+                .y_label_area_size(pt(0.0))
+                .right_y_label_area_size(pt(31.0))
+                .build_cartesian_2d(0.0..1.0, b0..b1)
+                .map_err(&err)?
+                .set_secondary_coord(0.0..1.0, b0..b1);
+            bar.draw_series((0..100).map(|k| {
+                let (a, b) = (b0 + (b1 - b0) * k as f64 / 100.0, b0 + (b1 - b0) * (k + 1) as f64 / 100.0);
+                Rectangle::new([(0.0, a), (1.0, b)], (m.colour)(0.5 * (a + b)).filled())
+            }))
             .map_err(&err)?;
+            let bf = tick_format(b0, b1);
+            bar.configure_secondary_axes()
+                .y_desc(bar_desc)
+                .label_style(text(7.0))
+                .axis_desc_style(text(7.0))
+                .y_labels(5)
+                .y_label_formatter(&bf)
+                .x_labels(0)
+                .axis_style(BLACK.stroke_width(pt(0.5)))
+                .draw()
+                .map_err(&err)?;
+        }
         root.present().map_err(&err)?;
     }
     Ok((encode(m.name, &svg, size, m.width_cm)?, 0))

@@ -18,6 +18,7 @@ pub mod calibrate;
 pub mod crush;
 pub mod dem;
 pub mod map;
+pub mod micro;
 pub mod panel;
 pub mod uq;
 pub mod discrepancy;
@@ -194,6 +195,7 @@ pub fn redraw(report_dir: &Path) -> Result<Rendered> {
         Some("discrepancy_curves") => return discrepancy::render_curves(report_dir, width),
         Some("experiments") => return experiments::render(report_dir, width),
         Some("temperature") => return temperature::render(report_dir, width),
+        Some("microstructure") => return micro::render(report_dir, width),
         _ => {}
     }
     render(report_dir, width)

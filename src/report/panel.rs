@@ -361,3 +361,64 @@ pub fn figure_grid(name: &str, width_cm: f64, aspect: f64, cols: usize, panels: 
     }
     Ok((encode(name, &svg, size, width_cm)?, hidden))
 }
+
+/// Draws stacked panels (heights as fractions of the panel part, as [`figure`]) above a legend
+/// strip that lists `entries` (their labels, colours and kinds; points unused) in `cols`
+/// columns, so that a legend with many entries hides no data. Returns the hidden-sample count of
+/// the panels' own legends.
+pub fn figure_legend_below(name: &str, width_cm: f64, aspect: f64, panels: &[(Panel, f64)], entries: &[Series], cols: usize) -> Result<(Encoded, usize)> {
+    register_fonts()?;
+    let size = canvas_size(width_cm, aspect);
+    let cols = cols.max(1);
+    let rows = entries.len().div_ceil(cols);
+    let line_px = (1.35 * font_size(LEGEND_PT)).round() as i32;
+    let strip = (rows as i32 * line_px + 2 * pt(LEGEND_MARGIN_PT) as i32) as u32;
+    let mut svg = String::new();
+    let mut hidden = 0;
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        let err = fig_err(name);
+        root.fill(&WHITE).map_err(&err)?;
+        let (top, bottom) = root.split_vertically(size.1.saturating_sub(strip));
+        let mut rest = top.clone();
+        let h = size.1.saturating_sub(strip) as f64;
+        for (i, (panel, frac)) in panels.iter().enumerate() {
+            let area = if i + 1 == panels.len() {
+                rest.clone()
+            } else {
+                let (a, b) = rest.split_vertically((h * frac).round() as u32);
+                rest = b;
+                a
+            };
+            hidden += draw_panel(&area, panel, name)?;
+        }
+        let font = (FONT, font_size(LEGEND_PT)).into_font().color(&BLACK);
+        let (w, _) = bottom.dim_in_pixel();
+        let col_w = (w as i32 - pt(8.0) as i32) / cols as i32;
+        let sample = pt(12.0) as i32;
+        for (k, e) in entries.iter().enumerate() {
+            let label = e.label.clone().unwrap_or_default();
+            check_glyphs(name, &label)?;
+            let (c, r) = ((k % cols) as i32, (k / cols) as i32);
+            let x = pt(8.0) as i32 + c * col_w;
+            let y = pt(LEGEND_MARGIN_PT) as i32 + r * line_px + line_px / 2;
+            let colour = e.colour;
+            match &e.kind {
+                Kind::Line(wd) => bottom.draw(&PathElement::new(vec![(x, y), (x + sample, y)], colour.stroke_width(pt(*wd)))).map_err(&err)?,
+                Kind::Dashed(wd, dash, gap) => {
+                    let (dash, gap) = (pt(*dash) as i32, pt(*gap) as i32);
+                    let mut x0 = x;
+                    while x0 < x + sample {
+                        bottom.draw(&PathElement::new(vec![(x0, y), ((x0 + dash).min(x + sample), y)], colour.stroke_width(pt(*wd)))).map_err(&err)?;
+                        x0 += dash + gap;
+                    }
+                }
+                Kind::Markers(m, s) => bottom.draw(&marker((x + sample / 2, y), *m, pt(*s) as i32, colour.filled(), colour.stroke_width(pt(0.6)))).map_err(&err)?,
+                Kind::Band(_, opacity) => bottom.draw(&Rectangle::new([(x, y - pt(3.0) as i32), (x + sample, y + pt(3.0) as i32)], colour.mix(*opacity).filled())).map_err(&err)?,
+            }
+            bottom.draw(&Text::new(label, (x + sample + pt(3.0) as i32, y - line_px / 3), font.clone())).map_err(&err)?;
+        }
+        root.present().map_err(&err)?;
+    }
+    Ok((encode(name, &svg, size, width_cm)?, hidden))
+}

@@ -92,6 +92,16 @@ fn walk(base: &Path, dir: &Path, out: &mut Vec<String>) {
     }
 }
 
+/// A numeric column of a report table (integers converted).
+pub fn table_f64(path: &Path, name: &str) -> Vec<f64> {
+    partlife::io::col_f64(&partlife::io::read_table(path).unwrap(), path, name).unwrap()
+}
+
+/// A column of a report table as text.
+pub fn table_text(path: &Path, name: &str) -> Vec<String> {
+    partlife::io::col_str(&partlife::io::read_table(path).unwrap(), path, name).unwrap()
+}
+
 /// Output of one CLI call.
 pub struct Out {
     pub code: i32,

@@ -145,6 +145,26 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
         headlines.push(format!("{}: E = {} GPa, area above strength in tension at {} MPa {} %, first failure in tension at {} MPa", st.name, pm(&e, gpa), mpa(sv), pm(&ht, pct), pm(&ff, mpa)));
     }
 
+    md.push_str("\n### Connectivity of each phase\n\nClusters are 4-connected pixel sets of a phase (the box not wrapped); a phase percolates when one cluster touches two opposite edges (`connectivity.csv`). Means over the realisations:\n\n| structure | phase | area fraction | clusters | largest cluster's share of the phase | percolating in x / in y |\n|---|---|---|---|---|---|\n");
+    for (i, st) in s.structure.iter().enumerate() {
+        let v = &by[i];
+        for (l, &p) in built[i].phase_of_label.iter().enumerate() {
+            let mean = |f: &dyn Fn(&Solved) -> f64| spread(&v.iter().map(|r| f(r)).collect::<Vec<_>>()).0;
+            md.push_str(&format!(
+                "| {} | {} | {:.3} | {:.1} | {:.3} | {}/{} / {}/{} |\n",
+                st.label,
+                phases[p].name,
+                mean(&|r| r.connectivity[l].fraction),
+                mean(&|r| r.connectivity[l].clusters as f64),
+                mean(&|r| r.connectivity[l].largest_fraction),
+                v.iter().filter(|r| r.connectivity[l].percolates_x).count(),
+                v.len(),
+                v.iter().filter(|r| r.connectivity[l].percolates_y).count(),
+                v.len()
+            ));
+        }
+    }
+
     md.push_str(&format!(
         "\n## Hot spots at s = {} MPa\n\nThe area above strength is the share of the cell whose maximum principal stress σ₁ exceeds its phase's tensile strength σ_t at the applied stress; the first-failure stress is the applied stress at which the first pixel reaches σ_t (the lowest over the phases; which phase that is, in how many realisations); the stress-concentration factor (SCF) is the 99.9 % quantile of σ₁ in a phase over s (`hot_spots.csv`). Pixel-level maxima, and with them the first-failure stress, depend on the pixel size near the corners of a pixelated interface; the quantiles and areas converge with refinement.\n\n| structure | test | area above strength (%) | first failure (MPa) | first to fail | SCF q99.9 per phase |\n|---|---|---|---|---|---|\n",
         mpa(sv)

@@ -58,7 +58,7 @@ pub fn curve_discrepancy_speed() -> Result<Option<(std::path::PathBuf, Vec<Strin
     let root = TempDir::new("bench-curves")?;
     copy_tree(&calibration, &root.path().join("calibrate_gen3_rt"))?;
     let loaded = crate::study::load(&study)?;
-    let summary = crate::runner::run(&loaded, &crate::runner::RunOptions { reports_root: root.path().to_path_buf(), progress: false })?;
+    let summary = crate::runner::run(&loaded, &crate::runner::RunOptions::new(root.path().to_path_buf(), false))?;
     Ok(Some((study, summary.headlines, summary.wall_time_s)))
 }
 
@@ -81,7 +81,7 @@ pub fn experiments_speed() -> Result<ExperimentsSpeed> {
     let loaded = crate::study::load(&repo_path("studies/experiments.toml"))?;
     let run = |threads: Option<usize>| -> Result<(TempDir, crate::runner::RunSummary)> {
         let root = TempDir::new("bench-experiments")?;
-        let opts = crate::runner::RunOptions { reports_root: root.path().to_path_buf(), progress: false };
+        let opts = crate::runner::RunOptions::new(root.path().to_path_buf(), false);
         let s = match threads {
             None => crate::runner::run(&loaded, &opts)?,
             Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| Error::numerical("thread pool", e.to_string()))?.install(|| crate::runner::run(&loaded, &opts))?,
@@ -221,7 +221,7 @@ pub fn run_all(study: Option<&Path>) -> Result<Vec<Figure>> {
         };
         let root = TempDir::new("bench")?;
         let start = Instant::now();
-        crate::runner::run_file(path, &crate::runner::RunOptions { reports_root: root.path().to_path_buf(), progress: false })?;
+        crate::runner::run_file(path, &crate::runner::RunOptions::new(root.path().to_path_buf(), false))?;
         let secs = start.elapsed().as_secs_f64();
         out.push(Figure {
             what: format!("study {} end to end (in process)", path.display()),
@@ -520,7 +520,7 @@ pub fn discrepancy_speed(settings: &Path) -> Result<DiscrepancySpeed> {
     let outcome = crate::discrepancy::workflow::analyse(&sample, &settings, true)?;
     let loop_s = start.elapsed().as_secs_f64();
     let start = Instant::now();
-    let opts = crate::runner::RunOptions { reports_root: dir.join("reports"), progress: false };
+    let opts = crate::runner::RunOptions::new(dir.join("reports"), false);
     crate::discrepancy::run::run_discrepancy(&file, &s, &opts)?;
     let report_s = start.elapsed().as_secs_f64();
     Ok(DiscrepancySpeed { particles: sample.strength.len(), named: outcome.named.iter().map(|c| c.name()).collect(), loop_s, report_s })

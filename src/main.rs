@@ -32,6 +32,19 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Where a calibration's simulator runs go: this process (local) or Slurm array jobs
+        /// (slurm; options in the study's [executor] table). Default: the study's choice, local.
+        #[arg(long, value_enum)]
+        executor: Option<Executor>,
+    },
+    /// Evaluate one Slurm array task of a batch file written by `run --executor slurm`
+    /// (the task index from --task or SLURM_ARRAY_TASK_ID); results go to the batch's cache.
+    Eval {
+        /// The batch file (batch.json).
+        batch: PathBuf,
+        /// Array task index (default: $SLURM_ARRAY_TASK_ID).
+        #[arg(long)]
+        task: Option<usize>,
     },
     /// Redraw the figures of a report from its tables (no simulation).
     Report {
@@ -108,6 +121,15 @@ enum Command {
         #[arg(long, default_value_t = 512, requires = "micro")]
         pixels: usize,
     },
+}
+
+/// Executors of `partlife run --executor`.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum Executor {
+    /// In this process, on all its threads.
+    Local,
+    /// As Slurm array jobs running `partlife eval`.
+    Slurm,
 }
 
 /// Models `partlife discrepancy --data` can diagnose.
@@ -196,8 +218,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         rayon::ThreadPoolBuilder::new().num_threads(n.into()).build_global().context("setting the thread count")?;
     }
     match cli.command {
-        Command::Run { study, reports_dir, quiet } => {
-            let opts = partlife::runner::RunOptions { reports_root: reports_dir, progress: !quiet };
+        Command::Run { study, reports_dir, quiet, executor } => {
+            let mut opts = partlife::runner::RunOptions::new(reports_dir, !quiet);
+            opts.executor = executor.map(|e| match e {
+                Executor::Local => partlife::runkit::ExecutorKind::Local,
+                Executor::Slurm => partlife::runkit::ExecutorKind::Slurm,
+            });
             let summary = partlife::runner::run_file(&study, &opts)?;
             for line in &summary.headlines {
                 out!("{line}");
@@ -216,12 +242,26 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if study.is_some() && !matches!(loaded.study, partlife::study::Study::Discrepancy(_) | partlife::study::Study::DiscrepancyCurves(_)) {
                 return Err(partlife::Error::config(loaded.file.path.display().to_string(), "kind", "`partlife discrepancy` runs studies of kind \"discrepancy\" or \"discrepancy_curves\"").into());
             }
-            let opts = partlife::runner::RunOptions { reports_root: reports_dir, progress: !quiet };
+            let opts = partlife::runner::RunOptions::new(reports_dir, !quiet);
             let summary = partlife::runner::run(&loaded, &opts)?;
             for line in &summary.headlines {
                 out!("{line}");
             }
             out!("wrote {} in {:.2} s", summary.report_dir.display(), summary.wall_time_s);
+        }
+        Command::Eval { batch, task } => {
+            let task = match task {
+                Some(t) => t,
+                None => std::env::var("SLURM_ARRAY_TASK_ID")
+                    .ok()
+                    .and_then(|v| v.trim().parse().ok())
+                    .ok_or_else(|| partlife::Error::config("partlife eval", "--task", "give --task N or run as a Slurm array task (SLURM_ARRAY_TASK_ID)"))?,
+            };
+            let r = partlife::calibrate::executor::eval_task(&batch, task)?;
+            out!(
+                "task {}: {} evaluations ({} failed in the model): set-up {:.3} s, compute {:.3} s, cache writes {:.4} s",
+                r.task, r.evaluations, r.model_failures, r.setup_s, r.compute_s, r.write_s
+            );
         }
         Command::Report { name, reports_dir } => {
             let dir = reports_dir.join(&name);

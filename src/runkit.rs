@@ -31,6 +31,37 @@ pub struct RunOptions {
     pub reports_root: PathBuf,
     /// Show a progress bar on stderr when it is a terminal.
     pub progress: bool,
+    /// Where simulator ensembles run (`partlife run --executor`), overriding the study's
+    /// `[executor] kind`; None: the study's choice, local by default.
+    pub executor: Option<ExecutorKind>,
+}
+
+impl RunOptions {
+    /// Reports under `reports_root`, the study's executor.
+    pub fn new(reports_root: impl Into<PathBuf>, progress: bool) -> Self {
+        RunOptions { reports_root: reports_root.into(), progress, executor: None }
+    }
+}
+
+/// Where a batch of simulator evaluations runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ExecutorKind {
+    /// In this process, in parallel over the rayon threads.
+    #[default]
+    Local,
+    /// As Slurm array jobs whose tasks run `partlife eval` (`crate::calibrate::executor`).
+    Slurm,
+}
+
+impl ExecutorKind {
+    /// "local" or "slurm".
+    pub fn name(self) -> &'static str {
+        match self {
+            ExecutorKind::Local => "local",
+            ExecutorKind::Slurm => "slurm",
+        }
+    }
 }
 
 /// Default progress template: elapsed time, bar, count and message.

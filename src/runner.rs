@@ -11,6 +11,18 @@ use crate::study::{LoadedStudy, Study};
 
 /// Runs a loaded study.
 pub fn run(study: &LoadedStudy, opts: &RunOptions) -> Result<RunSummary> {
+    let ensembles = match &study.study {
+        Study::Calibrate(_) => true,
+        Study::Temperature(t) => !t.validation.is_empty(),
+        _ => false,
+    };
+    if opts.executor == Some(crate::runkit::ExecutorKind::Slurm) && !ensembles {
+        return Err(crate::error::Error::config(
+            study.file.path.display().to_string(),
+            "--executor slurm",
+            "only calibration studies (kind = \"calibrate\") and temperature studies with [[validation]] send simulator ensembles to an executor; run this study without --executor",
+        ));
+    }
     match &study.study {
         Study::Lifetime(s) => crate::lifetime_study::run_lifetime(&study.file, s, opts),
         Study::Dem(s) => crate::dem::run::run_dem(&study.file, s, opts),

@@ -60,6 +60,38 @@ impl<S: Simulator> Cached<S> {
         }
         sha256_hex(&bytes)
     }
+
+    /// The entry file of θ.
+    fn path(&self, theta: &[f64]) -> PathBuf {
+        self.dir.join(format!("{}.json", self.key(theta)))
+    }
+
+    /// The cached result of θ, if a whole entry of this configuration and exactly this θ is on
+    /// disk (a corrupt, foreign or mismatched file counts as none); counts nothing.
+    pub fn lookup(&self, theta: &[f64]) -> Option<Result<Vec<f64>>> {
+        let text = std::fs::read_to_string(self.path(theta)).ok()?;
+        let e = serde_json::from_str::<Entry>(&text).ok()?;
+        if !e.theta.iter().map(|v| v.to_bits()).eq(theta.iter().map(|v| v.to_bits())) {
+            return None;
+        }
+        match (e.outputs, e.error) {
+            (Some(y), _) if y.len() == self.outputs().len() => Some(Ok(y)),
+            (_, Some(msg)) => Some(Err(Error::numerical("cached evaluation", msg))),
+            _ => None,
+        }
+    }
+
+    /// Stores the result of θ (atomically: a whole entry or none). A bad θ (wrong length, not
+    /// finite: [`Error::Param`]) is not a property of the model and is not stored.
+    pub fn store(&self, theta: &[f64], r: &Result<Vec<f64>>) -> Result<()> {
+        let entry = match r {
+            Ok(y) => Entry { theta: theta.to_vec(), outputs: Some(y.clone()), error: None },
+            Err(Error::Param { .. }) => return Ok(()),
+            Err(e) => Entry { theta: theta.to_vec(), outputs: None, error: Some(e.to_string()) },
+        };
+        let json = serde_json::to_vec(&entry).map_err(|e| Error::numerical("cache", e.to_string()))?;
+        write_atomic(&self.path(theta), &json)
+    }
 }
 
 impl<S: Simulator> Simulator for Cached<S> {
@@ -70,30 +102,13 @@ impl<S: Simulator> Simulator for Cached<S> {
         self.inner.outputs()
     }
     fn simulate(&self, theta: &[f64]) -> Result<Vec<f64>> {
-        let path = self.dir.join(format!("{}.json", self.key(theta)));
-        if let Ok(text) = std::fs::read_to_string(&path)
-            && let Ok(e) = serde_json::from_str::<Entry>(&text)
-            && e.theta.iter().map(|v| v.to_bits()).eq(theta.iter().map(|v| v.to_bits()))
-        {
+        if let Some(r) = self.lookup(theta) {
             self.hits.fetch_add(1, Ordering::Relaxed);
-            return match (e.outputs, e.error) {
-                (Some(y), _) if y.len() == self.outputs().len() => Ok(y),
-                (_, Some(msg)) => Err(Error::numerical("cached evaluation", msg)),
-                _ => self.inner.simulate(theta),
-            };
+            return r;
         }
         self.misses.fetch_add(1, Ordering::Relaxed);
         let r = self.inner.simulate(theta);
-        // Bad θ (wrong length, not finite) is not a property of the model: not cached.
-        let cacheable = !matches!(r, Err(Error::Param { .. }));
-        if cacheable {
-            let entry = match &r {
-                Ok(y) => Entry { theta: theta.to_vec(), outputs: Some(y.clone()), error: None },
-                Err(e) => Entry { theta: theta.to_vec(), outputs: None, error: Some(e.to_string()) },
-            };
-            let json = serde_json::to_vec(&entry).map_err(|e| Error::numerical("cache", e.to_string()))?;
-            write_atomic(&path, &json)?;
-        }
+        self.store(theta, &r)?;
         r
     }
 }

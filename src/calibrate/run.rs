@@ -13,6 +13,7 @@
 //! [calibration]     # PipelineOptions: design, rounds, points, tolerance, sampler, walkers, steps, …
 //! [compare]         # optional: reference = "<parameters.csv of another calibration>", label
 //! [figures]         # width_cm
+//! [executor]        # optional: kind = "local" | "slurm", partition, time_limit, … (super::executor)
 //! ```
 //!
 //! Everything is checked at load: the data file is read and reduced, the model built, the
@@ -21,7 +22,9 @@
 //!
 //! Simulator runs are cached in `<reports root>/.cache/<study>/` (keyed by the model's
 //! configuration and θ) together with the MCMC checkpoints, so a killed or repeated study
-//! reuses its finished runs.
+//! reuses its finished runs. With `[executor] kind = "slurm"` (or `partlife run --executor
+//! slurm`) the runs not in the cache are made by Slurm array tasks writing that cache
+//! ([`super::executor`]); the report then also has `executor.csv` (one row per array job).
 //!
 //! Report files (`reports/<study>/`): `parameters.csv`, `correlation.csv`, `chains.csv`,
 //! `observations.csv`, `runs.csv`, `rounds.csv`, `failures.csv`, (crush) `curves.csv`,
@@ -38,6 +41,7 @@ use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 
 use super::cache::Cached;
+use super::executor::{Dispatched, Slurm, SlurmLog};
 use super::pipeline::{Calibration, calibrate, thinned};
 use crate::error::{Error, Result};
 use crate::fem::model::CrushModel;
@@ -45,7 +49,7 @@ use crate::io::{InputFile, ReportDir, fcol, scol, table, ucol};
 use crate::model::Simulator;
 use crate::params::{Param, Prior};
 use crate::stats::interpolated_quantiles;
-use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
+use crate::runkit::{ExecutorKind, RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, record_figures};
 use crate::schema::StudyFile;
 pub use super::study::*;
 
@@ -63,18 +67,24 @@ pub fn run_calibrate(loaded: &StudyFile, s: &CalibrateStudy, opts: &RunOptions) 
     pb.enable_steady_tick(std::time::Duration::from_millis(200));
     let progress = |m: &str| pb.set_message(m.to_string());
     let obs = &prep.observations;
+    // Slurm (`--executor slurm` or `[executor] kind = "slurm"`): batches of uncached θ's become
+    // array jobs whose tasks fill the same cache.
+    let slurm = match opts.executor.unwrap_or(s.executor.kind) {
+        ExecutorKind::Local => None,
+        ExecutorKind::Slurm => Some(Slurm::new(&s.executor, &loaded.path, &cache_dir, &prep.config)?),
+    };
     let (cal, counts, curves) = match &prep.built {
         Built::Crush(model, _) => {
             let recording = Recording { model, curves: Mutex::new(HashMap::new()) };
             let cached = Cached::new(&recording, &cache_dir, prep.config.clone())?;
-            let cal = calibrate(&cached, obs, &s.calibration, s.seed, Some(&cache_dir), &progress)?;
+            let cal = calibrate_on(&cached, slurm.as_ref(), s, obs, &cache_dir, &progress)?;
             progress("curves at posterior draws");
             let curves = recording.curves_at(&cal);
             (cal, cached.counts(), Some(curves))
         }
         Built::Dem(model) => {
             let cached = Cached::new(model.as_ref(), &cache_dir, prep.config.clone())?;
-            let cal = calibrate(&cached, obs, &s.calibration, s.seed, Some(&cache_dir), &progress)?;
+            let cal = calibrate_on(&cached, slurm.as_ref(), s, obs, &cache_dir, &progress)?;
             (cal, cached.counts(), None)
         }
     };
@@ -85,6 +95,11 @@ pub fn run_calibrate(loaded: &StudyFile, s: &CalibrateStudy, opts: &RunOptions) 
     progress("figures");
     let mut failures: Vec<String> = cal.warnings.clone();
     failures.extend(cal.failures.iter().map(|(t, e)| format!("simulator failed at θ = {t:?}: {e}")));
+    let slurm_log = slurm.as_ref().map(Slurm::log);
+    if let Some(log) = &slurm_log {
+        failures.extend(log.events.iter().map(|e| format!("slurm: {e}")));
+        write_executor(&mut dir, log)?;
+    }
     let rendered = crate::report::calibrate::render(dir.path(), s.figures.width_cm)?;
     record_figures(&mut dir, rendered, &mut failures);
     let mut evaluations = BTreeMap::new();
@@ -96,11 +111,46 @@ pub fn run_calibrate(loaded: &StudyFile, s: &CalibrateStudy, opts: &RunOptions) 
     evaluations.insert("least_squares_emulator_evaluations".to_string(), cal.lsq.evaluations);
     evaluations.insert("emulator_training_runs".to_string(), cal.emulator.len() as u64);
     evaluations.insert("parameters".to_string(), space.len() as u64);
+    if let Some(log) = &slurm_log {
+        evaluations.insert("slurm_array_jobs".to_string(), log.arrays.len() as u64);
+        evaluations.insert("slurm_tasks".to_string(), log.arrays.iter().map(|a| a.tasks as u64).sum());
+        evaluations.insert("slurm_evaluations_submitted".to_string(), log.submitted);
+        evaluations.insert("slurm_evaluations_failed".to_string(), log.failed);
+    }
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
     let run = RunRecord { inputs, seed: s.seed, clock, evaluations, failures };
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, run)?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })
+}
+
+/// The calibration loop on the cached simulator, its batches run here or by `slurm`.
+fn calibrate_on<S: Simulator>(cached: &Cached<S>, slurm: Option<&Slurm>, s: &CalibrateStudy, obs: &super::data::Observations, cache_dir: &PathBuf, progress: &(dyn Fn(&str) + Sync)) -> Result<Calibration> {
+    match slurm {
+        None => calibrate(cached, obs, &s.calibration, s.seed, Some(cache_dir), progress),
+        Some(sl) => calibrate(&Dispatched::new(cached, sl, progress), obs, &s.calibration, s.seed, Some(cache_dir), progress),
+    }
+}
+
+/// `executor.csv`: every array job of a Slurm run — tasks, evaluations, final task states and
+/// the time spent submitting, queueing, setting up, computing, writing and collecting.
+fn write_executor(dir: &mut ReportDir, log: &SlurmLog) -> Result<()> {
+    let a = &log.arrays;
+    let mut t = table(vec![
+        scol("job_id", a.iter().map(|r| r.job_id.clone()).collect()),
+        ucol("attempt", a.iter().map(|r| r.attempt as u64).collect()),
+        ucol("tasks", a.iter().map(|r| r.tasks as u64).collect()),
+        ucol("evaluations", a.iter().map(|r| r.evaluations as u64).collect()),
+        scol("task_states", a.iter().map(|r| r.states.clone()).collect()),
+        fcol("submit_s", a.iter().map(|r| r.submit_s).collect()),
+        fcol("queue_s", a.iter().map(|r| r.queue_s).collect()),
+        fcol("wall_s", a.iter().map(|r| r.wall_s).collect()),
+        fcol("task_setup_mean_s", a.iter().map(|r| r.setup_s).collect()),
+        fcol("task_compute_sum_s", a.iter().map(|r| r.compute_s).collect()),
+        fcol("task_write_mean_s", a.iter().map(|r| r.write_s).collect()),
+        fcol("collect_s", a.iter().map(|r| r.collect_s).collect()),
+    ])?;
+    dir.write_table("executor", &mut t)
 }
 
 /// Full FE curves (normalised to D₀), by label.

@@ -142,6 +142,9 @@ pub struct CalibrateStudy {
     /// Figures.
     #[serde(default)]
     pub figures: CalibrateFigures,
+    /// Where the simulator's evaluations run (local by default; [`super::executor`]).
+    #[serde(default)]
+    pub executor: super::executor::ExecutorOptions,
 }
 
 /// The model of a study, built.
@@ -168,6 +171,7 @@ impl CalibrateStudy {
     /// Loads the data and builds the model; every mismatch is an error naming the file and key.
     pub fn prepare(&self, loaded_path: &std::path::Path, resolve: &dyn Fn(&str) -> PathBuf) -> Result<Prepared> {
         let file = loaded_path.display().to_string();
+        self.executor.validate(&file)?;
         if self.param.is_empty() {
             return Err(Error::config(&file, "param", "at least one [[param]] is required"));
         }

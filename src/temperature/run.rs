@@ -363,6 +363,7 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
     let (text, headline) = describe(s, &phases, &s.phases.file.display().to_string());
     let mut md = format!("# Temperature: {}\n\n## Phases\n\n{text}\n\nThe figure `phase_fractions` draws every phase against temperature (amorphous phases dashed), in the style of the deliverable's Fig. 2. Between the tabulated temperatures the fractions are interpolated linearly; nothing is extrapolated beyond them. What each dataset is (measured, computed, synthetic or illustrative) is stated in datasets/README.md.\n", s.phases.composition);
     let mut headlines = vec![headline];
+    let mut executor_events = Vec::new();
     let mut evaluations = BTreeMap::new();
     evaluations.insert("phase_table_rows".to_string(), (phases.temperatures_c.len() * phases.phases.len()) as u64);
     if let Some(laws) = &laws {
@@ -381,7 +382,8 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
     if let (Some(laws), false) = (&laws, s.validation.is_empty()) {
         pb.set_message("held-out data");
         let tick = || pb.inc(1);
-        let (text, read, runs) = super::validate::write_validation(&mut dir, &file, &s.validation, laws, s.level, &resolve, &tick)?;
+        let slurm = (opts.executor == Some(crate::runkit::ExecutorKind::Slurm)).then_some(opts.reports_root.as_path());
+        let (text, read, runs) = super::validate::write_validation(&mut dir, &file, &s.validation, laws, s.level, &resolve, &tick, slurm, &mut executor_events)?;
         md.push_str(&format!("\n## Held-out data\n\n{text}\n"));
         for p in read {
             inputs.push(InputFile::hash(&p)?);
@@ -401,7 +403,7 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
     }
     dir.write_bytes("summary.md", md.as_bytes())?;
     pb.set_message("figures");
-    let mut failures = Vec::new();
+    let mut failures = executor_events;
     let rendered = crate::report::temperature::render(dir.path(), s.figures.width_cm)?;
     record_figures(&mut dir, rendered, &mut failures);
     pb.inc(1);

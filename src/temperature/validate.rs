@@ -23,7 +23,9 @@
 //!
 //! An observation lies inside its predictive interval at probability `level` when it is within
 //! z·√(var_runs + σ² + (model_error·mean)²) of the runs' mean
-//! ([`crate::calibrate::pipeline::predictive_interval`], the calibration's own check). Writes
+//! ([`crate::calibrate::pipeline::predictive_interval`], the calibration's own check). With
+//! `partlife run --executor slurm` the FE runs are Slurm array tasks
+//! ([`crate::calibrate::executor`]; the calibration study's `[executor]` options). Writes
 //! `validation.csv` (per source and output: the grid displacement of a grid force, the level, observed mean,
 //! predicted centre and interval, observations inside), `validation_observations.csv` (every
 //! observation, normalised to D₀) and `validation_parameters.csv` (the laws' median and band of
@@ -35,6 +37,8 @@ use statrs::distribution::{ContinuousCDF, Normal};
 
 use super::study::ValidationOptions;
 use crate::calibrate::Runner;
+use crate::calibrate::cache::Cached;
+use crate::calibrate::executor::{Dispatched, Slurm};
 use crate::calibrate::pipeline::predictive_interval;
 use crate::calibrate::study::{Built, CalibrateStudy};
 use crate::error::{Error, Result};
@@ -65,10 +69,13 @@ struct Row {
     inside: u64,
 }
 
-/// Predicts every `[[validation]]` data set; `tick` after each source. Returns the summary's
-/// section, the files read and the FE runs made.
+/// Predicts every `[[validation]]` data set; `tick` after each source. With `slurm` (the reports
+/// root) the FE runs go to Slurm array jobs ([`crate::calibrate::executor`], the held-out
+/// calibration study's `[executor]` options) through the evaluation cache that study's own
+/// calibration uses (`<root>/.cache/<its name>/`); their events are appended to `events`.
+/// Returns the summary's section, the files read and the FE runs made.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[ValidationOptions], laws: &ParameterLaws, level: f64, resolve: &dyn Fn(&Path) -> PathBuf, tick: &(dyn Fn() + Sync)) -> Result<(String, Vec<PathBuf>, u64)> {
+pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[ValidationOptions], laws: &ParameterLaws, level: f64, resolve: &dyn Fn(&Path) -> PathBuf, tick: &(dyn Fn() + Sync), slurm: Option<&Path>, events: &mut Vec<String>) -> Result<(String, Vec<PathBuf>, u64)> {
     let z = Normal::new(0.0, 1.0).map_err(|e| Error::numerical("validation", e.to_string()))?.inverse_cdf(0.5 + 0.5 * level);
     let pct = (100.0 * level).round();
     let (mut rows, mut prows, mut orows) = (Vec::<Row>::new(), Vec::new(), Vec::new());
@@ -126,16 +133,37 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
             orows.push((v.study.display().to_string(), outputs[obs.output[i]].name.clone(), red.curves[obs.group[i]].particle.clone(), obs.values[i]));
         }
         let model_error = cs.calibration.model_error;
+        // Slurm: one driver for this data set's runs, on its calibration's cache.
+        let slurm = match slurm {
+            Some(root) => {
+                let cache_dir = root.join(".cache").join(loaded.name.as_str());
+                let driver = Slurm::new(&cs.executor, &path, &cache_dir, &prep.config)?;
+                Some((Cached::new(model, &cache_dir, prep.config.clone())?, driver))
+            }
+            None => None,
+        };
         let mut lines = vec![format!("| source | inside its {pct} % interval | peak force: observed mean; predicted [{pct} % interval] (N) |"), "|---|---|---|".into()];
         let mut coverage = Vec::new();
         for (label, kind, ts, thetas) in &sources {
-            let mut runner = Runner::new(model);
-            let runs = runner.run(thetas)?;
-            fe_runs += runner.evaluations;
+            let (runs, runner_failures) = match &slurm {
+                None => {
+                    let mut runner = Runner::new(model);
+                    let runs = runner.run(thetas)?;
+                    fe_runs += runner.evaluations;
+                    (runs, runner.failures)
+                }
+                Some((cached, driver)) => {
+                    let dispatched = Dispatched::new(cached, driver, &|_: &str| {});
+                    let mut runner = Runner::new(&dispatched);
+                    let runs = runner.run(thetas)?;
+                    fe_runs += runner.evaluations;
+                    (runs, runner.failures)
+                }
+            };
             tick();
             let ok: Vec<&Vec<f64>> = runs.iter().flatten().collect();
             if ok.len() < 2 {
-                let why = runner.failures.first().map_or(String::new(), |f| f.1.clone());
+                let why = runner_failures.first().map_or(String::new(), |f| f.1.clone());
                 return Err(Error::numerical("validation", format!("{key} ({label}): {} of {} crush runs failed ({why}): widen the parameter bounds of {}", thetas.len() - ok.len(), thetas.len(), path.display())));
             }
             let (mut inside_all, mut peak) = (0u64, String::from("(no fracture observed)"));
@@ -179,6 +207,9 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
             let runs_failed = if failed > 0 { format!("; {failed} of {} runs failed", thetas.len()) } else { String::new() };
             lines.push(format!("| {label} | {inside_all} of {} ({:.0} %){runs_failed} | {peak} |", obs.len(), 100.0 * inside_all as f64 / obs.len() as f64));
             coverage.push((label.clone(), inside_all as f64 / obs.len() as f64));
+        }
+        if let Some((_, driver)) = &slurm {
+            events.extend(driver.log().events.iter().map(|e| format!("slurm ({}): {e}", v.study.display())));
         }
         let particles = red.curves.len();
         let k = red.grid.len();

@@ -54,6 +54,16 @@ impl Scratch {
     pub fn run(&self, args: &[&str]) -> Out {
         run_in(self.dir.path(), args)
     }
+    /// Runs `partlife <args>` in the scratch directory with extra environment variables.
+    pub fn run_env(&self, args: &[&str], env: &[(&str, &str)]) -> Out {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_partlife"));
+        cmd.args(args).current_dir(self.dir.path());
+        for (k, v) in env {
+            cmd.env(k, v);
+        }
+        let o = cmd.output().unwrap();
+        Out { code: o.status.code().unwrap_or(-1), stdout: String::from_utf8_lossy(&o.stdout).into_owned(), stderr: String::from_utf8_lossy(&o.stderr).into_owned() }
+    }
     /// Edits `study` (a path under studies/) by replacing `from` with `to`, runs it, and checks
     /// the bad-input contract: exit code 2, no panic, one message naming the study file and
     /// every `expect` string, and nothing written under reports/.
@@ -116,6 +126,16 @@ pub fn run_in(dir: &Path, args: &[&str]) -> Out {
         stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
         stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
     }
+}
+
+/// A crush calibration small enough to run twice in a test (12 design runs on a coarse mesh,
+/// no refinement, 3 check runs; a few seconds), written to `studies/cal.toml` of `s` with its
+/// curves, and an `[executor]` table with `executor` lines.
+pub fn tiny_calibration(s: &Scratch, executor: &str) {
+    let study = std::fs::read_to_string(root().join("studies/calibrate_gen3_rt.toml")).unwrap();
+    let tiny = edited(&study, &[("design = 32", "design = 12"), ("rounds = 4", "rounds = 0"), ("points = 8\n", "points = 6\n"), ("steps = 20000", "steps = 2000"), ("burn_in = 5000", "burn_in = 800"), ("check = 12", "check = 3"), ("refinement = 8.0", "refinement = 4.0")]);
+    s.write("studies/cal.toml", &format!("{tiny}\n[executor]\n{executor}\n"));
+    std::fs::copy(root().join("datasets/crush_curves_gen3_rt.csv"), s.path("datasets/crush_curves_gen3_rt.csv")).unwrap();
 }
 
 /// Generator settings of one BL-16/30-like material with the chosen hidden physics

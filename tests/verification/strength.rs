@@ -62,7 +62,7 @@ fn close(a: f64, b: f64, what: &str) {
 fn three_studies_give_the_same_breakage_at_fixed_inputs() {
     let dir = scratch();
     let studies = dir.path().join("studies");
-    let opts = RunOptions { reports_root: dir.path().join("reports"), progress: false };
+    let opts = RunOptions::new(dir.path().join("reports"), false);
     // The discrepancy workflow names size then roundness for BL 16/30 in the shipped file; its
     // "before" model is the deliverable's.
     let disc = studies.join("discrepancy_crush.toml");

@@ -1,0 +1,100 @@
+//! The executor without a cluster: `--executor slurm` where Slurm's commands are missing, on a
+//! study without a simulator ensemble, or with bad `[executor]` options is bad input (exit 2);
+//! `partlife eval` evaluates a batch task into the cache, and a task killed at any moment leaves
+//! only whole cache entries. The real-cluster test is `tests/slurm.rs`.
+
+mod common;
+
+use common::{Scratch, tiny_calibration};
+use partlife::calibrate::executor::{Batch, config_digest};
+
+#[test]
+fn the_slurm_executor_without_slurm_or_on_the_wrong_study_is_bad_input() {
+    let s = Scratch::new();
+    tiny_calibration(&s, "");
+    let empty = partlife::io::TempDir::new("no-slurm").unwrap();
+    let out = s.run_env(&["run", "studies/cal.toml", "--quiet", "--executor", "slurm"], &[("PATH", &empty.path().display().to_string())]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    for e in ["--executor slurm", "sbatch", "not there"] {
+        assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
+    }
+    assert!(s.report_files().iter().all(|f| f.starts_with(".cache")), "a refused run wrote {:?}", s.report_files());
+    // A study kind without an ensemble.
+    let out = s.run(&["run", "studies/lifetime.toml", "--quiet", "--executor", "slurm"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("lifetime.toml") && out.stderr.contains("only calibration studies"), "{}", out.stderr);
+    // Bad [executor] options, named by key.
+    for (line, key) in [("time_limit = \"one hour\"", "executor.time_limit"), ("evaluations_per_task = 0", "executor.evaluations_per_task"), ("partition = \"a b\"", "executor.partition"), ("poll_seconds = 0.0", "executor.poll_seconds"), ("kind = \"cloud\"", "unknown variant `cloud`")] {
+        let s = Scratch::new();
+        tiny_calibration(&s, line);
+        let out = s.run(&["run", "studies/cal.toml", "--quiet"]);
+        assert_eq!(out.code, 2, "{line}: {}", out.stderr);
+        assert!(out.stderr.contains("cal.toml") && out.stderr.contains(key), "{line}: {}", out.stderr);
+    }
+}
+
+/// A batch of `n` θ's of the tiny calibration, one task, its cache under `cache/`.
+fn batch(s: &Scratch, n: usize) -> std::path::PathBuf {
+    let path = s.path("studies/cal.toml");
+    let file = partlife::schema::StudyFile::read(&path).unwrap();
+    let study: partlife::calibrate::study::CalibrateStudy = file.parse().unwrap();
+    let prep = study.prepare(&path, &|p: &str| file.resolve(std::path::Path::new(p))).unwrap();
+    let space = partlife::model::Simulator::space(match &prep.built {
+        partlife::calibrate::study::Built::Crush(m, _) => m,
+        _ => unreachable!(),
+    })
+    .clone();
+    let thetas = partlife::design::Sobol::points(space.len(), n, 7).unwrap().iter().map(|u| space.from_unit(u)).collect();
+    let b = Batch { study: std::path::absolute(&path).unwrap(), cache_dir: std::path::absolute(s.path("cache")).unwrap(), config_sha256: config_digest(&prep.config), evaluations_per_task: n, thetas };
+    let out = s.path("work/batch.json");
+    std::fs::create_dir_all(out.parent().unwrap()).unwrap();
+    std::fs::write(&out, serde_json::to_vec(&b).unwrap()).unwrap();
+    out
+}
+
+/// Every `*.json` under the cache is a whole entry (temporary files are dot-files).
+fn whole_entries(s: &Scratch) -> usize {
+    let Ok(rd) = std::fs::read_dir(s.path("cache")) else { return 0 };
+    let mut n = 0;
+    for e in rd.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if name.starts_with('.') {
+            continue;
+        }
+        assert!(name.ends_with(".json"), "unexpected file {name}");
+        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(e.path()).unwrap()).unwrap_or_else(|err| panic!("{name} is not a whole entry: {err}"));
+        assert!(v["theta"].as_array().is_some_and(|t| t.len() == 4) && (v["outputs"].is_array() || v["error"].is_string()), "{name}: {v}");
+        n += 1;
+    }
+    n
+}
+
+#[test]
+fn a_task_killed_at_any_moment_leaves_only_whole_cache_entries() {
+    let s = Scratch::new();
+    tiny_calibration(&s, "");
+    let b = batch(&s, 8);
+    let bs = b.display().to_string();
+    // Killed at several moments of its work: never a partial entry under an entry's name.
+    for delay_ms in [30u64, 250, 600, 900, 1300, 1700] {
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_partlife")).args(["--threads", "1", "eval", &bs, "--task", "0"]).current_dir(s.dir.path()).stdout(std::process::Stdio::null()).stderr(std::process::Stdio::null()).spawn().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+        let _ = child.kill();
+        let _ = child.wait();
+        whole_entries(&s);
+    }
+    // Run to the end: every θ has its entry and the task its record.
+    let out = s.run(&["eval", &bs, "--task", "0"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains("task 0: 8 evaluations"), "{}", out.stdout);
+    assert_eq!(whole_entries(&s), 8);
+    assert!(s.path("work/task-0.json").is_file());
+    // A task index beyond the batch, and a study changed since submission, are refused.
+    let out = s.run(&["eval", &bs, "--task", "1"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("batch.json") && out.stderr.contains("task"), "{}", out.stderr);
+    s.write("studies/cal.toml", &s.read("studies/cal.toml").replace("refinement = 4.0", "refinement = 5.0"));
+    let out = s.run(&["eval", &bs, "--task", "0"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("cal.toml") && out.stderr.contains("changed since"), "{}", out.stderr);
+}

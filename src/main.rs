@@ -257,7 +257,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     .and_then(|v| v.trim().parse().ok())
                     .ok_or_else(|| partlife::Error::config("partlife eval", "--task", "give --task N or run as a Slurm array task (SLURM_ARRAY_TASK_ID)"))?,
             };
-            let r = partlife::calibrate::executor::eval_task(&batch, task)?;
+            let r = partlife::calibrate::eval::eval_task(&batch, task)?;
             out!(
                 "task {}: {} evaluations ({} failed in the model): set-up {:.3} s, compute {:.3} s, cache writes {:.4} s",
                 r.task, r.evaluations, r.model_failures, r.setup_s, r.compute_s, r.write_s

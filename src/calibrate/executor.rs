@@ -24,7 +24,7 @@
 //! 1. it writes a batch file (`<work>/<tag>/batch.json`: the study file, the cache directory, the
 //!    SHA-256 of the model's configuration, `evaluations_per_task`, the θ's with their exact bits)
 //!    and submits one `sbatch --array=0-(n−1)` job per at most `max_array_size` tasks, each task
-//!    running `partlife eval <batch.json>` ([`eval_task`]) on its slice of θ's;
+//!    running `partlife eval <batch.json>` ([`super::eval::eval_task`]) on its slice of θ's;
 //! 2. a task rebuilds the model from the study file (refusing a study whose model configuration
 //!    changed since submission), evaluates its θ's, stores each result in the shared cache by
 //!    temporary file and rename — a task killed mid-write leaves a whole entry or none — and
@@ -197,7 +197,8 @@ pub struct TaskRecord {
     pub finished_unix_s: f64,
 }
 
-fn unix_now() -> f64 {
+/// Now, as Unix time (s).
+pub fn unix_now() -> f64 {
     std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs_f64()).unwrap_or(0.0)
 }
 
@@ -206,54 +207,8 @@ pub fn config_digest(config: &str) -> String {
     sha256_hex(config.as_bytes())
 }
 
-/// Runs task `task` of the batch file `batch_path` (`partlife eval`): rebuilds the model from
-/// the study, evaluates the task's θ's in parallel, stores each in the cache and writes the
-/// task's record. A θ the model fails at is stored as a failed entry (a property of θ); an
-/// unreadable batch, a changed study or an unwritable cache is an error.
-pub fn eval_task(batch_path: &Path, task: usize) -> Result<TaskRecord> {
-    let started = unix_now();
-    let clock = Instant::now();
-    let text = crate::io::read_input_text(batch_path)?;
-    let batch: Batch = serde_json::from_str(&text).map_err(|e| Error::data_file(batch_path, "file", format!("not a partlife batch file: {e}")))?;
-    if task >= batch.tasks() {
-        return Err(Error::config(batch_path.display().to_string(), "task", format!("the batch has {} tasks (0…{}), got task {task}", batch.tasks(), batch.tasks().saturating_sub(1))));
-    }
-    let loaded = crate::schema::StudyFile::read(&batch.study)?;
-    let study: super::study::CalibrateStudy = loaded.parse()?;
-    let prep = study.prepare(&batch.study, &|p: &str| loaded.resolve(Path::new(p)))?;
-    if config_digest(&prep.config) != batch.config_sha256 {
-        return Err(Error::config(batch.study.display().to_string(), "model", format!("the model's configuration changed since {} was written: resubmit from the driver", batch_path.display())));
-    }
-    let sim: &dyn Simulator = match &prep.built {
-        super::study::Built::Crush(model, _) => model,
-        super::study::Built::Dem(model) => model.as_ref(),
-    };
-    let cached = Cached::new(sim, &batch.cache_dir, prep.config.clone())?;
-    let setup_s = clock.elapsed().as_secs_f64();
-    let thetas = &batch.thetas[batch.slice(task)];
-    let t1 = Instant::now();
-    let results = sim.simulate_batch(thetas);
-    let compute_s = t1.elapsed().as_secs_f64();
-    let t2 = Instant::now();
-    for (t, r) in thetas.iter().zip(&results) {
-        cached.store(t, r)?;
-    }
-    let record = TaskRecord {
-        task,
-        evaluations: thetas.len(),
-        model_failures: results.iter().filter(|r| r.is_err()).count(),
-        setup_s,
-        compute_s,
-        write_s: t2.elapsed().as_secs_f64(),
-        started_unix_s: started,
-        finished_unix_s: unix_now(),
-    };
-    let json = serde_json::to_vec(&record).map_err(|e| Error::numerical("task record", e.to_string()))?;
-    write_atomic(&task_record_path(batch_path, task), &json)?;
-    Ok(record)
-}
-
-fn task_record_path(batch_path: &Path, task: usize) -> PathBuf {
+/// The record file of task `task` of a batch.
+pub fn task_record_path(batch_path: &Path, task: usize) -> PathBuf {
     batch_path.with_file_name(format!("task-{task}.json"))
 }
 

@@ -2,7 +2,7 @@
 //!
 //! * [`cache`]: evaluations stored on disk by a hash of the configuration and θ.
 //! * [`executor`]: where a batch of evaluations runs — this process or Slurm array jobs whose
-//!   tasks (`partlife eval`) fill the shared cache.
+//!   tasks (`partlife eval`, [`eval`]) fill the shared cache.
 //! * [`mcmc`]: the affine-invariant ensemble sampler and convergence diagnostics (R̂, ESS).
 //! * [`gp`]: Gaussian-process emulator (Matérn-5/2, ML hyperparameters by argmin Nelder–Mead, LOO).
 //! * [`synth`]: the generator of the synthetic crush curves (`partlife datasets synth-curves`).
@@ -16,6 +16,7 @@
 pub mod cache;
 pub mod data;
 pub mod emulator;
+pub mod eval;
 pub mod executor;
 pub mod gp;
 pub mod lsq;

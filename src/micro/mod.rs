@@ -15,6 +15,8 @@
 //!   Hashin–Shtrikman bounds;
 //! * [`fields`]: virtual uniaxial tension and compression, the local maximum principal and von
 //!   Mises stresses and strains, and hot-spot statistics per phase;
+//! * [`failure`]: progressive failure, pixel by pixel (sequentially linear analysis): the crack
+//!   path, the saw-tooth stress–strain path and the cell's strength;
 //! * [`study`], [`solve`], [`run`], [`summary`], [`output`]: the study file, each structure's
 //!   realisations built and solved, the run and its tables, the generated summary with the §6.1
 //!   comparison, the maps and `.vtu` files;
@@ -27,6 +29,7 @@
 //! every effective modulus lies within the Hashin–Shtrikman bounds; the effective modulus of an
 //! inclusion lattice converges under refinement.
 
+pub mod failure;
 pub mod fields;
 pub mod homogenise;
 pub mod image;

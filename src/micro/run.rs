@@ -9,20 +9,23 @@
 //! | `structures.csv` | per structure and realisation: size, seed, the effective stiffness C, κ̄, μ̄, E, ν and their Voigt, Reuss and Hashin–Shtrikman bounds, whether κ̄ and μ̄ lie within the HS bounds |
 //! | `connectivity.csv` | per structure, realisation and phase: area fraction, clusters, largest cluster's share, percolation in x and y |
 //! | `hot_spots.csv` | per structure, realisation, test and phase: σ₁, σ_vM, ε₁ and γ_max quantiles, stress-concentration factors, the area above σ_t at the applied stress, the first-failure stress |
-//! | `structure_summary.csv` | per structure: mean, standard deviation, minimum and maximum over the realisations of E, κ̄, μ̄, the hot-spot area and the first-failure stress of each test |
+//! | `structure_summary.csv` | per structure: mean, standard deviation, minimum and maximum over the realisations of E, κ̄, μ̄, the hot-spot area and the first-failure stress of each test; with `[failure]` the strength of each test (`strength_<test>`, or `strength_<test>_lower_bound` when a run used up `max_events`) |
 //! | `distributions.csv` | per structure, test, phase and measure, quantiles over every pixel of every realisation (figure `exceedance`) |
 //! | `first_failure_weibull.csv` | per structure with at least 5 realisations and test: the Weibull fit of the first-failure stress over the realisations (ASTM C1239 MLE, pivotal bounds) |
 //! | `map_<structure>.csv` | the first realisation's phase, σ₁ (both tests) and γ_max (tension) per pixel, in blocks of b × b pixels (b = ⌈side/256⌉) when larger (phase: the most frequent; σ₁, γ_max: the largest) — figures `phases_…`, `sigma1_tension_…`, `sigma1_compression_…`, `shear_strain_…` |
 //! | `<structure>.vtu` | the first realisation at full resolution, every measure of both tests as cell data, for ParaView |
+//! | `failure_summary.csv` | with `[failure]`: per structure, realisation and test, the cell's strength (the largest applied stress of the progressive-failure run), the event it was reached at, the first crack's stress and phase, the cracked pixels' shares by phase at the peak, the stiffness along the load left at the end, why the run stopped |
+//! | `failure_events.csv` | with `[failure]`: every crack in order — applied stress, macroscopic strain, pixel, phase (figures `failure_curves`, `cracks_<test>_<structure>`) |
 
 use std::collections::BTreeMap;
 
 use rayon::prelude::*;
 
+use super::failure::progressive;
 use super::fields::{Local, PhaseHotSpots, QUANTILES, Test};
-use super::homogenise::{Periodic, Plane, plane_lame};
+use super::homogenise::{Periodic, Plane, element_lame, plane_lame};
 use super::material::Phase;
-use super::solve::{Built, FirstFailureWeibull, Solved, WEIBULL_MIN, build, quantities, solve, spread};
+use super::solve::{Built, Cracked, FirstFailureWeibull, Solved, WEIBULL_MIN, build, quantities, solve, spread};
 use super::structure::Connectivity;
 use super::study::MicroStudy;
 use crate::error::{Error, Result};
@@ -52,7 +55,14 @@ pub fn run_microstructure(loaded: &StudyFile, s: &MicroStudy, opts: &RunOptions)
     sizes.dedup();
     let periodic: Vec<((usize, usize), Periodic)> = sizes.iter().map(|&(nx, ny)| Ok(((nx, ny), Periodic::new(nx, ny)?))).collect::<Result<_>>()?;
     let jobs: Vec<(usize, usize)> = built.iter().enumerate().flat_map(|(i, b)| (0..b.realisations.len()).map(move |r| (i, r))).collect();
-    let pb = progress_bar(jobs.len() as u64 + 1, opts.progress, crate::runkit::PROGRESS_COUNT);
+    let crack_jobs: Vec<(usize, usize, Test)> = match &s.failure {
+        Some(f) => (0..built.len())
+            .filter(|&i| s.cracked(&s.structure[i].name))
+            .flat_map(|i| (0..f.realisations.min(built[i].realisations.len())).flat_map(move |r| Test::BOTH.map(|t| (i, r, t))))
+            .collect(),
+        None => Vec::new(),
+    };
+    let pb = progress_bar((jobs.len() + crack_jobs.len()) as u64 + 1, opts.progress, crate::runkit::PROGRESS_COUNT);
     pb.set_message("homogenisation and virtual tests");
     let solved: Vec<Solved> = jobs
         .par_iter()
@@ -62,6 +72,20 @@ pub fn run_microstructure(loaded: &StudyFile, s: &MicroStudy, opts: &RunOptions)
             let out = solve(p, m, seed, &built[i].phase_of_label, &phases, s.plane, s.applied_stress_pa);
             pb.inc(1);
             out
+        })
+        .collect::<Result<_>>()?;
+    pb.set_message("progressive failure");
+    let cracked: Vec<Cracked> = crack_jobs
+        .par_iter()
+        .map(|&(i, r, test)| {
+            let m = &built[i].realisations[r].0;
+            let p = &periodic.iter().find(|(sz, _)| *sz == (m.nx, m.ny)).ok_or_else(|| Error::numerical("microstructure", "no factorisation for a grid size"))?.1;
+            let elastic: Vec<_> = built[i].phase_of_label.iter().map(|&q| phases[q].elastic).collect();
+            let strength: Vec<f64> = m.labels.iter().map(|&l| phases[built[i].phase_of_label[l as usize]].tensile_strength_pa).collect();
+            let f = s.failure.as_ref().ok_or_else(|| Error::numerical("microstructure", "no [failure] options"))?;
+            let run = progressive(p, &element_lame(m, &elastic, s.plane)?, &strength, s.plane, test, f)?;
+            pb.inc(1);
+            Ok(Cracked { structure: i, realisation: r, run })
         })
         .collect::<Result<_>>()?;
     drop(periodic);
@@ -75,15 +99,18 @@ pub fn run_microstructure(loaded: &StudyFile, s: &MicroStudy, opts: &RunOptions)
     write_phases(&mut dir, &phases, s.plane)?;
     write_structures(&mut dir, s, &built, &by_structure, &phases)?;
     write_hot_spots(&mut dir, s, &built, &by_structure, &phases)?;
-    write_summary_table(&mut dir, s, &by_structure)?;
+    write_summary_table(&mut dir, s, &by_structure, &cracked)?;
     write_distributions(&mut dir, s, &built, &by_structure, &phases)?;
     let weibull = write_weibull(&mut dir, s, &by_structure)?;
+    if s.failure.is_some() {
+        write_failure(&mut dir, s, &built, &cracked, &phases)?;
+    }
     for (i, st) in s.structure.iter().enumerate() {
         let first = by_structure[i][0];
         super::output::write_map(&mut dir, &st.name, first, &built[i].phase_of_label, &phases)?;
         super::output::write_vtu(&mut dir, &st.name, first, &built[i].phase_of_label)?;
     }
-    let (md, headlines) = super::summary::summary(loaded, s, &phases, &built, &by_structure, &weibull);
+    let (md, headlines) = super::summary::summary(loaded, s, &phases, &built, &by_structure, &weibull, &cracked);
     dir.write_bytes("summary.md", md.as_bytes())?;
     let mut failures = Vec::new();
     for (i, st) in s.structure.iter().enumerate() {
@@ -97,7 +124,8 @@ pub fn run_microstructure(loaded: &StudyFile, s: &MicroStudy, opts: &RunOptions)
     record_figures(&mut dir, rendered, &mut failures);
     pb.inc(1);
     let mut evaluations = BTreeMap::new();
-    evaluations.insert("fe_solves".to_string(), solved.len() as u64);
+    evaluations.insert("fe_solves".to_string(), (solved.len() + cracked.iter().map(|c| c.run.events.len() + 1).sum::<usize>()) as u64);
+    evaluations.insert("cracked_pixels".to_string(), cracked.iter().map(|c| c.run.events.len() as u64).sum());
     evaluations.insert("pixels".to_string(), solved.iter().map(|r| r.micro.labels.len() as u64).sum());
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
@@ -214,17 +242,25 @@ fn write_hot_spots(dir: &mut ReportDir, s: &MicroStudy, built: &[Built], by: &[V
     dir.write_table("hot_spots", &mut table(cols)?)
 }
 
-fn write_summary_table(dir: &mut ReportDir, s: &MicroStudy, by: &[Vec<&Solved>]) -> Result<()> {
+fn write_summary_table(dir: &mut ReportDir, s: &MicroStudy, by: &[Vec<&Solved>], cracked: &[Cracked]) -> Result<()> {
     let q = quantities();
     let (mut name, mut label, mut qn, mut unit, mut n) = (vec![], vec![], vec![], vec![], vec![]);
     let (mut mean, mut sd, mut lo, mut hi) = (vec![], vec![], vec![], vec![]);
     for (i, st) in s.structure.iter().enumerate() {
-        for (qname, u, f) in &q {
-            let v: Vec<f64> = by[i].iter().map(|r| f(r)).collect();
+        let mut rows: Vec<(String, &str, Vec<f64>)> = q.iter().map(|(qname, u, f)| (qname.to_string(), *u, by[i].iter().map(|r| f(r)).collect())).collect();
+        for test in Test::BOTH {
+            let runs: Vec<&Cracked> = cracked.iter().filter(|c| c.structure == i && c.run.test == test).collect();
+            if !runs.is_empty() {
+                // A run that used up max_events gives a lower bound, named as such.
+                let bound = if runs.iter().any(|c| c.run.stopped == super::failure::MAX_EVENTS) { "_lower_bound" } else { "" };
+                rows.push((format!("strength_{}{bound}", test.name()), "Pa", runs.iter().map(|c| c.run.strength_pa).collect()));
+            }
+        }
+        for (qname, u, v) in rows {
             let (m, d, a, b) = spread(&v);
             name.push(st.name.clone());
             label.push(st.label.clone());
-            qn.push(qname.to_string());
+            qn.push(qname);
             unit.push(u.to_string());
             n.push(v.len() as u64);
             mean.push(m);
@@ -296,4 +332,59 @@ fn write_weibull(dir: &mut ReportDir, s: &MicroStudy, by: &[Vec<&Solved>]) -> Re
     ])?;
     dir.write_table("first_failure_weibull", &mut t)?;
     Ok(out)
+}
+
+/// `failure_summary.csv` and `failure_events.csv`.
+fn write_failure(dir: &mut ReportDir, s: &MicroStudy, built: &[Built], cracked: &[Cracked], phases: &[Phase]) -> Result<()> {
+    let phase_at = |c: &Cracked, e: usize| -> String {
+        let m = &built[c.structure].realisations[c.realisation].0;
+        phases[built[c.structure].phase_of_label[m.labels[e] as usize]].name.clone()
+    };
+    let (mut st, mut re, mut te, mut strength, mut peak, mut events, mut first, mut first_phase, mut shares, mut stopped) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
+    for c in cracked {
+        st.push(s.structure[c.structure].name.clone());
+        re.push(c.realisation as u64);
+        te.push(c.run.test.name().to_string());
+        strength.push(c.run.strength_pa);
+        peak.push(c.run.peak_event as u64);
+        events.push(c.run.events.len() as u64);
+        first.push(c.run.events.first().map_or(f64::NAN, |e| e.applied_pa));
+        first_phase.push(c.run.events.first().map_or(String::new(), |e| phase_at(c, e.element)));
+        let upto = &c.run.events[..(c.run.peak_event + 1).min(c.run.events.len())];
+        let names: Vec<String> = built[c.structure].phase_of_label.iter().map(|&p| phases[p].name.clone()).collect();
+        shares.push(names.iter().map(|n| format!("{n} {:.3}", upto.iter().filter(|e| &phase_at(c, e.element) == n).count() as f64 / upto.len().max(1) as f64)).collect::<Vec<_>>().join(" "));
+        stopped.push(c.run.stopped.to_string());
+    }
+    let mut t = table(vec![
+        scol("structure", st),
+        ucol("realisation", re),
+        scol("test", te),
+        fcol("strength_pa", strength),
+        ucol("peak_event", peak),
+        ucol("events", events),
+        fcol("first_crack_pa", first),
+        scol("first_crack_phase", first_phase),
+        scol("cracked_share_at_peak", shares),
+        fcol("stiffness_left", cracked.iter().map(|c| c.run.stiffness_left).collect()),
+        scol("stopped", stopped),
+    ])?;
+    dir.write_table("failure_summary", &mut t)?;
+    let rows: Vec<(&Cracked, usize)> = cracked.iter().flat_map(|c| (0..c.run.events.len()).map(move |k| (c, k))).collect();
+    let geo = |c: &Cracked, e: usize| {
+        let m = &built[c.structure].realisations[c.realisation].0;
+        (e % m.nx, e / m.nx, m.pixel_m)
+    };
+    let mut t = table(vec![
+        scol("structure", rows.iter().map(|(c, _)| s.structure[c.structure].name.clone()).collect()),
+        ucol("realisation", rows.iter().map(|(c, _)| c.realisation as u64).collect()),
+        scol("test", rows.iter().map(|(c, _)| c.run.test.name().to_string()).collect()),
+        ucol("event", rows.iter().map(|(_, k)| *k as u64).collect()),
+        fcol("applied_stress_pa", rows.iter().map(|(c, k)| c.run.events[*k].applied_pa).collect()),
+        fcol("macro_strain", rows.iter().map(|(c, k)| c.run.events[*k].macro_strain).collect()),
+        ucol("i", rows.iter().map(|(c, k)| geo(c, c.run.events[*k].element).0 as u64).collect()),
+        ucol("j", rows.iter().map(|(c, k)| geo(c, c.run.events[*k].element).1 as u64).collect()),
+        fcol("pixel_m", rows.iter().map(|(c, k)| geo(c, c.run.events[*k].element).2).collect()),
+        scol("phase", rows.iter().map(|(c, k)| phase_at(c, c.run.events[*k].element)).collect()),
+    ])?;
+    dir.write_table("failure_events", &mut t)
 }

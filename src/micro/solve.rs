@@ -14,6 +14,16 @@ use super::structure::{Connectivity, HARD, Microstructure, SOFT, voronoi_two_pha
 use super::study::StructureSpec;
 use crate::error::{Error, Result};
 
+/// A progressive-failure run of one realisation of a structure.
+pub struct Cracked {
+    /// Structure index.
+    pub structure: usize,
+    /// Realisation index.
+    pub realisation: usize,
+    /// The run.
+    pub run: super::failure::Progressive,
+}
+
 /// Realisations needed for a Weibull fit of the first-failure stress.
 pub const WEIBULL_MIN: usize = 5;
 

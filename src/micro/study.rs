@@ -30,6 +30,14 @@
 //! continuous = "soft_matrix"         # the structure whose soft phase forms a continuous matrix
 //! discontinuous = "soft_pockets"     # the one whose soft phase sits in isolated pockets
 //!
+//! [failure]                          # optional: progressive failure (micro::failure)
+//! structures = ["soft_matrix", "soft_pockets"]   # default: all
+//! realisations = 4                   # the first realisations of each
+//! max_events = 300                   # cracked pixels at most
+//! stop_fraction = 0.3                # stop when the load falls below this share of the peak
+//! stiffness_fraction = 0.5           # … or the stiffness along the load below this share
+//! residual = 1e-3                    # stiffness left in a cracked pixel
+//!
 //! [figures]
 //! width_cm = 8.5
 //! ```
@@ -135,6 +143,8 @@ pub struct MicroStudy {
     pub structure: Vec<StructureSpec>,
     /// The §6.1 comparison.
     pub comparison: Option<ComparisonSpec>,
+    /// Progressive failure.
+    pub failure: Option<super::failure::FailureOptions>,
     /// Figures.
     #[serde(default)]
     pub figures: FigureOptions,
@@ -145,6 +155,11 @@ fn is_key(s: &str) -> bool {
 }
 
 impl MicroStudy {
+    /// Whether structure `name` gets a progressive-failure run.
+    pub fn cracked(&self, name: &str) -> bool {
+        self.failure.as_ref().is_some_and(|f| f.structures.is_empty() || f.structures.iter().any(|s| s == name))
+    }
+
     /// Checks every option that needs no file; returns the resolved phase table.
     pub fn validate(&self, file: &str) -> Result<Vec<super::material::Phase>> {
         if !(self.applied_stress_pa.is_finite() && self.applied_stress_pa > 0.0 && self.applied_stress_pa <= 1e10) {
@@ -227,6 +242,20 @@ impl MicroStudy {
             }
             if c.continuous == c.discontinuous {
                 return Err(Error::config(file, "comparison", "compares two different structures"));
+            }
+        }
+        if let Some(f) = &self.failure {
+            f.validate(file)?;
+            for (i, name) in f.structures.iter().enumerate() {
+                if !self.structure.iter().any(|s| &s.name == name) {
+                    return Err(Error::config(file, format!("failure.structures[{i}]"), format!("\"{name}\" is not a structure of the study")));
+                }
+            }
+            for st in self.structure.iter().filter(|s| self.cracked(&s.name)) {
+                let name = &st.name;
+                if f.realisations > st.realisations {
+                    return Err(Error::config(file, "failure.realisations", format!("{} realisations asked, but `{name}` has {}", f.realisations, st.realisations)));
+                }
             }
         }
         self.figures.validate(file)?;

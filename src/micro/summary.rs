@@ -6,9 +6,10 @@
 //! The deliverable argues (§6.1) that a soft phase forming a continuous matrix around the hard
 //! grains (Gen 4) makes a better composite than soft pockets between touching hard grains
 //! (BL 16/30), whose deformation bands "develop stress hot spots easily, promoting early
-//! fracture". With `[comparison]` the summary tests the two consequences the argument predicts
-//! for the continuous structure, in each virtual test: a smaller area above strength at the
-//! applied stress, and a higher first-failure stress. A difference is *clear* when it exceeds
+//! fracture". With `[comparison]` the summary tests the consequences the argument predicts for
+//! the continuous structure, in each virtual test: a smaller area above strength at the applied
+//! stress, a higher first-failure stress and, when both structures were cracked progressively
+//! (`[failure]`), a higher strength. A difference is *clear* when it exceeds
 //! twice its standard error — over paired realisations (the same grain seeds) when both
 //! structures are synthetic with the same seeds, else Welch's √(s₁²/n₁ + s₂²/n₂). In each test
 //! the numbers *support* the argument when at least one difference is clear in its favour and
@@ -18,7 +19,7 @@
 
 use super::fields::Test;
 use super::material::Phase;
-use super::solve::{Built, FirstFailureWeibull, Solved, spread};
+use super::solve::{Built, Cracked, FirstFailureWeibull, Solved, spread};
 use super::structure::SOFT;
 use super::study::MicroStudy;
 use crate::schema::StudyFile;
@@ -77,7 +78,7 @@ fn matrix_label(s: &MicroStudy, i: usize, b: &Built, phases: &[Phase]) -> usize 
 }
 
 /// The summary and the CLI's headlines.
-pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Built], by: &[Vec<&Solved>], weibull: &[FirstFailureWeibull]) -> (String, Vec<String>) {
+pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Built], by: &[Vec<&Solved>], weibull: &[FirstFailureWeibull], cracked: &[Cracked]) -> (String, Vec<String>) {
     let sv = s.applied_stress_pa;
     let mut md = format!(
         "# Microstructure: {}\n\n{} structure{}, {} realisation{} in all, solved by periodic homogenisation on pixel-conforming bilinear quads in {} and loaded in two virtual uniaxial tests along x at the applied stress s = {} MPa: tension and compression (module `partlife::micro`).\n\n## Phases\n\n| phase | E (GPa) | ν | σ_t (MPa) | source |\n|---|---|---|---|---|\n",
@@ -196,7 +197,7 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
         let perc = |v: &Vec<&Solved>, l: usize| v.iter().filter(|r| r.connectivity[l].percolates()).count();
         let (lab_c, lab_d) = (&s.structure[ic].label, &s.structure[id].label);
         md.push_str(&format!(
-            "\n## The deliverable's §6.1 argument\n\n§6.1 attributes Gen 4's advantage to its soft phase forming a continuous matrix around the hard grains, and BL 16/30's weakness to soft pockets between touching hard grains. Here {lab_c} (`{}`) is the continuous structure and {lab_d} (`{}`) the discontinuous one. {} {} percolates in {}/{} realisations of the continuous structure and {}/{} of the discontinuous one. The argument predicts, for the continuous structure, a smaller area above strength and a higher first-failure stress; a difference is clear when it exceeds twice its standard error ({}).\n\n| test | area above strength (%): continuous; discontinuous; difference ± se | first failure (MPa): continuous; discontinuous; difference ± se | verdict |\n|---|---|---|---|\n",
+            "\n## The deliverable's §6.1 argument\n\n§6.1 attributes Gen 4's advantage to its soft phase forming a continuous matrix around the hard grains, and BL 16/30's weakness to soft pockets between touching hard grains. Here {lab_c} (`{}`) is the continuous structure and {lab_d} (`{}`) the discontinuous one. {} {} percolates in {}/{} realisations of the continuous structure and {}/{} of the discontinuous one. The argument predicts, for the continuous structure, a smaller area above strength and a higher first-failure stress; a difference is clear when it exceeds twice its standard error ({}).\n",
             c.continuous,
             c.discontinuous,
             if same_fractions {
@@ -216,42 +217,113 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
             vd.len(),
             if paired { format!("paired over the {} realisations that share their grain seeds", vc.len()) } else { "Welch".to_string() }
         ));
+        // The cells' strengths from progressive failure, when both structures were cracked (the
+        // first realisations of each: paired like the rest when the seeds are).
+        let strengths = |i: usize, t: Test| -> Vec<f64> { cracked.iter().filter(|c| c.structure == i && c.run.test == t).map(|c| c.run.strength_pa).collect() };
+        let with_strength = !strengths(ic, Test::Tension).is_empty() && !strengths(id, Test::Tension).is_empty();
+        if with_strength {
+            md.push_str("\nWith `[failure]` the cell's strength — the largest applied stress of its progressive failure — is a third measure, which the argument predicts higher for the continuous structure.\n");
+        }
+        md.push_str(&format!(
+            "\n| test | area above strength (%): continuous; discontinuous; difference ± se | first failure (MPa): continuous; discontinuous; difference ± se |{} verdict |\n|---|---|---|{}---|\n",
+            if with_strength { " strength (MPa): continuous; discontinuous; difference ± se |" } else { "" },
+            if with_strength { "---|" } else { "" }
+        ));
         let mut verdicts = Vec::new();
+        let se = |x: Option<f64>, f: fn(f64) -> String| x.map_or("(no spread)".to_string(), f);
         for (t, test) in Test::BOTH.iter().enumerate() {
             let a = |v: &Vec<&Solved>| v.iter().map(|r| r.above_strength(t)).collect::<Vec<f64>>();
             let f = |v: &Vec<&Solved>| v.iter().map(|r| r.first_failure(t)).collect::<Vec<f64>>();
             let (da, sa) = difference(&a(vc), &a(vd), paired);
             let finite = f(vc).iter().chain(&f(vd)).all(|x| x.is_finite());
             let (df, sf) = if finite { difference(&f(vc), &f(vd), paired) } else { (f64::NAN, None) };
-            let ja = judge(da, sa, false);
-            let jf = if finite { judge(df, sf, true) } else { 0 };
-            let verdict = match (ja.max(jf), ja.min(jf)) {
-                (1, -1) => "mixed: one measure for, one against",
+            let mut judged = vec![judge(da, sa, false), if finite { judge(df, sf, true) } else { 0 }];
+            let mut cells = vec![
+                format!("{}; {}; {} ± {}", pm(&a(vc), pct), pm(&a(vd), pct), pct(da), se(sa, pct)),
+                format!("{}; {}; {} ± {}", if finite { pm(&f(vc), mpa) } else { "–".into() }, if finite { pm(&f(vd), mpa) } else { "–".into() }, mpa(df), se(sf, mpa)),
+            ];
+            if with_strength {
+                let (sc, sd) = (strengths(ic, *test), strengths(id, *test));
+                // A run that ended at max_events has a lower bound for a strength: not compared.
+                let bounded = cracked.iter().filter(|c| (c.structure == ic || c.structure == id) && c.run.test == *test).all(|c| c.run.stopped != super::failure::MAX_EVENTS);
+                let ok = bounded && !sc.is_empty() && !sd.is_empty() && sc.iter().chain(&sd).all(|x| *x > 0.0);
+                let (ds, ss) = if ok { difference(&sc, &sd, paired && sc.len() == sd.len()) } else { (f64::NAN, None) };
+                judged.push(if ok { judge(ds, ss, true) } else { 0 });
+                cells.push(if ok {
+                    format!("{}; {}; {} ± {}", pm(&sc, mpa), pm(&sd, mpa), mpa(ds), se(ss, mpa))
+                } else if !bounded {
+                    "– (runs ended at max_events: lower bounds)".into()
+                } else {
+                    "–".into()
+                });
+            }
+            let (best, worst) = (judged.iter().copied().max().unwrap_or(0), judged.iter().copied().min().unwrap_or(0));
+            let verdict = match (best, worst) {
+                (1, -1) => "mixed: measures for and against",
                 (1, _) => "support the argument",
                 (_, -1) => "contradict the argument",
                 _ => "do not decide",
             };
             verdicts.push((test.name(), verdict));
-            let se = |x: Option<f64>, f: fn(f64) -> String| x.map_or("(no spread)".to_string(), f);
-            md.push_str(&format!(
-                "| {} | {}; {}; {} ± {} | {}; {}; {} ± {} | {verdict} |\n",
-                test.name(),
-                pm(&a(vc), pct),
-                pm(&a(vd), pct),
-                pct(da),
-                se(sa, pct),
-                if finite { pm(&f(vc), mpa) } else { "–".into() },
-                if finite { pm(&f(vd), mpa) } else { "–".into() },
-                mpa(df),
-                se(sf, mpa),
-            ));
+            md.push_str(&format!("| {} | {} | {verdict} |\n", test.name(), cells.join(" | ")));
         }
-        let sentence = |v: &str| if v.starts_with("mixed") { "are mixed (one measure for the argument, one against it)".to_string() } else { v.to_string() };
+        let sentence = |v: &str| if v.starts_with("mixed") { "are mixed (measures for the argument and against it)".to_string() } else { v.to_string() };
         md.push_str(&format!(
-            "\nIn tension the numbers {}; in compression they {}. These are elastic fields with deterministic phase strengths: they test where stress concentrates, not how a crack then runs.\n",
+            "\nIn tension the numbers {}; in compression they {}. {}\n",
             sentence(verdicts[0].1),
-            sentence(verdicts[1].1)
+            sentence(verdicts[1].1),
+            if with_strength { "The strengths come from brittle, pixel-by-pixel cracking without a fracture energy: they rank the arrangements, their absolute values depend on the pixel size." } else { "These are elastic fields with deterministic phase strengths: they test where stress concentrates, not how a crack then runs (add `[failure]` for that)." }
         ));
+    }
+
+    if !cracked.is_empty() {
+        md.push_str("\n## Progressive failure\n\nEach cell is cracked pixel by pixel (sequentially linear analysis: the pixel that reaches its tensile strength at the lowest applied stress cracks, its stiffness drops to a residual, the cell is solved again; `failure_summary.csv`, `failure_events.csv`). The strength is the largest applied stress on the way; a run that ended at `max_events` gives a lower bound (cracks across the largest tension split a compressed cell along the load and hardly soften it, so compression runs tend to end there).\n\n| structure | test | runs | strength (MPa) | first crack (MPa) | cracks to the peak | first cracks in | cracked pixels at the peak, by phase | runs ended by |\n|---|---|---|---|---|---|---|---|---|\n");
+        for (i, st) in s.structure.iter().enumerate() {
+            for test in Test::BOTH {
+                let runs: Vec<&Cracked> = cracked.iter().filter(|c| c.structure == i && c.run.test == test).collect();
+                if runs.is_empty() {
+                    continue;
+                }
+                let m_of = |c: &Cracked| &built[i].realisations[c.realisation].0;
+                let phase_of = |c: &Cracked, e: usize| built[i].phase_of_label[m_of(c).labels[e] as usize];
+                let strength: Vec<f64> = runs.iter().map(|c| c.run.strength_pa).collect();
+                let first: Vec<f64> = runs.iter().filter_map(|c| c.run.events.first().map(|e| e.applied_pa)).collect();
+                let to_peak: Vec<f64> = runs.iter().map(|c| (c.run.peak_event + 1) as f64).collect();
+                let firsts: Vec<usize> = runs.iter().filter_map(|c| c.run.events.first().map(|e| phase_of(c, e.element))).collect();
+                let first_in: Vec<String> = built[i].phase_of_label.iter().filter(|p| firsts.contains(p)).map(|&p| format!("{} {}/{}", phases[p].name, firsts.iter().filter(|&&q| q == p).count(), runs.len())).collect();
+                let shares: Vec<String> = built[i]
+                    .phase_of_label
+                    .iter()
+                    .map(|&p| {
+                        let v: Vec<f64> = runs.iter().map(|c| {
+                            let upto = &c.run.events[..(c.run.peak_event + 1).min(c.run.events.len())];
+                            upto.iter().filter(|e| phase_of(c, e.element) == p).count() as f64 / upto.len().max(1) as f64
+                        }).collect();
+                        format!("{} {:.2}", phases[p].name, spread(&v).0)
+                    })
+                    .collect();
+                let none = runs.iter().all(|c| c.run.events.is_empty());
+                let mut ended: Vec<(&str, usize)> = Vec::new();
+                for c in &runs {
+                    match ended.iter_mut().find(|e| e.0 == c.run.stopped) {
+                        Some(e) => e.1 += 1,
+                        None => ended.push((c.run.stopped, 1)),
+                    }
+                }
+                md.push_str(&format!(
+                    "| {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                    st.label,
+                    test.name(),
+                    runs.len(),
+                    if none { "no pixel in tension".to_string() } else { pm(&strength, mpa) },
+                    if first.is_empty() { "–".to_string() } else { pm(&first, mpa) },
+                    if none { "–".to_string() } else { pm(&to_peak, |x| format!("{x:.0}")) },
+                    first_in.join(", "),
+                    shares.join(", "),
+                    ended.iter().map(|(why, n)| format!("{why} {n}/{}", runs.len())).collect::<Vec<_>>().join("; ")
+                ));
+            }
+        }
     }
 
     if !weibull.is_empty() {
@@ -262,7 +334,7 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
         md.push_str("\nThis modulus measures how much the stress concentration of the microstructure alone varies between cells of the same statistics, with the same strength in every pixel of a phase. A crush test's modulus also contains the scatter of flaw sizes and of the stressed volume between particles, so the two are comparable only in kind: a microstructure modulus well above a crush modulus says that the arrangement of the phases explains little of the particles' scatter.\n");
     }
     md.push_str(&format!(
-        "\n## Figures\n\nPer structure (first realisation): `phases_<structure>` (the phase map), `sigma1_tension_<structure>` and `sigma1_compression_<structure>` (σ₁ at s = {} MPa), `shear_strain_<structure>` (γ_max in tension, the deformation bands of the deliverable's Fig. 11a); `exceedance` (the share of each phase's area whose σ₁ exceeds a multiple of the phase's tensile strength, both tests; at 1, the share above strength); `comparison` (E with its HS bounds, the area above strength and the first-failure stress of every structure). Each realisation's fields are in `<structure>.vtu` for ParaView (first realisation).\n",
+        "\n## Figures\n\nPer structure (first realisation): `phases_<structure>` (the phase map), `sigma1_tension_<structure>` and `sigma1_compression_<structure>` (σ₁ at s = {} MPa), `shear_strain_<structure>` (γ_max in tension, the deformation bands of the deliverable's Fig. 11a); `exceedance` (the share of each phase's area whose σ₁ exceeds a multiple of the phase's tensile strength, both tests; at 1, the share above strength); `comparison` (E with its HS bounds, the area above strength, the first-failure stress and, with `[failure]`, the strength of every structure); with `[failure]`, `failure_curves` (the applied stress at each crack against the pixels cracked so far) and `cracks_<test>_<structure>` (the cracked pixels of the first realisation in their order). The first realisation's fields are in `<structure>.vtu` for ParaView.\n",
         mpa(sv)
     ));
     (md, headlines)

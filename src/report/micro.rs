@@ -7,6 +7,8 @@
 //! | `shear_strain_<structure>` | Fig. 11a (deformation bands) | `map_<structure>.csv` |
 //! | `exceedance` | — (the hot-spot tail per phase, σ₁ over the phase's own strength; at 1 the share above strength) | `distributions.csv`, `phases.csv` |
 //! | `comparison` | §6.1 with numbers | `structure_summary.csv`, `structures.csv` |
+//! | `failure_curves` | — (with `[failure]`: the applied stress at each crack against the cracks so far, first realisation, both tests) | `failure_events.csv`, `structure_summary.csv` |
+//! | `cracks_<test>_<structure>` | Fig. 11a (where the microstructure gives way) | `failure_events.csv`, `map_<structure>.csv`, `phases.csv` |
 //!
 //! Maps show the first realisation (in blocks when it is larger than 256 pixels a side, each
 //! block with its largest value), with the phase boundaries drawn over the fields. σ₁ maps are
@@ -47,7 +49,28 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
     }
     figures.push(("exceedance".into(), exceedance(dir, &phases, width_cm)?));
     figures.push(("comparison".into(), comparison(dir, width_cm)?));
+    if dir.join("failure_events.csv").is_file() {
+        let ev = Table::load(dir, "failure_events")?;
+        figures.push(("failure_curves".into(), failure_curves(&ev, dir, width_cm)?));
+        let (st, te) = (ev.s("structure")?, ev.s("test")?);
+        for name in distinct(&st) {
+            for test in ["tension", "compression"] {
+                if (0..st.len()).any(|k| st[k] == name && te[k] == test) {
+                    let fig = format!("cracks_{test}_{name}");
+                    let map = Table::load(dir, &format!("map_{name}"))?;
+                    figures.push((fig.clone(), crack_map(&fig, &map, &ev, &name, test, &phases, width_cm)?));
+                }
+            }
+        }
+    }
     super::write_figures(dir, figures.iter().map(|(n, d)| (n.as_str(), d.clone())).collect())
+}
+
+/// Each structure's label (from `structure_summary.csv`), or its key.
+fn structure_labels(dir: &Path) -> Result<impl Fn(&str) -> String> {
+    let t = Table::load(dir, "structure_summary")?;
+    let (n, l) = (t.s("structure")?, t.s("label")?);
+    Ok(move |k: &str| n.iter().position(|x| x == k).map_or(k.to_string(), |i| l[i].clone()))
 }
 
 /// A map table's geometry: extent and block side (µm), each row's block column and row.
@@ -170,11 +193,7 @@ fn exceedance(dir: &Path, phases: &[String], width_cm: f64) -> Result<Drawn> {
     let (st, te, ph, p, v, s) = (d.s("structure")?, d.s("test")?, d.s("phase")?, d.f("p")?, d.f("value")?, d.f("applied_stress_pa")?);
     let strength = Table::load(dir, "phases")?.f("tensile_strength_pa")?;
     let strength_of = |phase: &str| phases.iter().position(|q| q == phase).map_or(f64::NAN, |k| strength[k]);
-    let labels_of = {
-        let t = Table::load(dir, "structure_summary")?;
-        let (n, l) = (t.s("structure")?, t.s("label")?);
-        move |k: &str| n.iter().position(|x| x == k).map_or(k.to_string(), |i| l[i].clone())
-    };
+    let labels_of = structure_labels(dir)?;
     let structures = distinct(&st);
     let sv = s.first().copied().unwrap_or(f64::NAN);
     let (y_lo, y_hi) = (-4.2, 0.1);
@@ -255,7 +274,15 @@ fn comparison(dir: &Path, width_cm: f64) -> Result<Drawn> {
         let mut ys = if log { vec![] } else { vec![0.0] };
         for (k, s) in structures.iter().enumerate() {
             for (t, (test, marker)) in [("tension", Marker::Circle), ("compression", Marker::Triangle)].iter().enumerate() {
-                let (m, d) = get(s, &format!("{quantity}_{test}"));
+                let (mut m, mut d) = get(s, &format!("{quantity}_{test}"));
+                // A strength whose runs ended at max_events is a lower bound: a cross.
+                let mut marker = *marker;
+                let mut label = test.to_string();
+                if !m.is_finite() {
+                    (m, d) = get(s, &format!("{quantity}_{test}_lower_bound"));
+                    marker = Marker::Cross;
+                    label = format!("{test}, lower bound");
+                }
                 if !m.is_finite() {
                     continue;
                 }
@@ -263,7 +290,8 @@ fn comparison(dir: &Path, width_cm: f64) -> Result<Drawn> {
                 let (lo, hi) = (tr(((m - d) * scale).max(m * scale * 1e-3)), tr((m + d) * scale));
                 ys.extend([lo, hi]);
                 series.push(Series { label: None, points: vec![(x, lo), (x, hi)], colour: colour(t + 1), kind: Kind::Line(0.8) });
-                series.push(Series { label: (k == 0).then(|| test.to_string()), points: vec![(x, tr(m * scale))], colour: colour(t + 1), kind: Kind::Markers(*marker, 2.2) });
+                let shown = series.iter().any(|x: &Series| x.label.as_deref() == Some(label.as_str()));
+                series.push(Series { label: (!shown).then_some(label), points: vec![(x, tr(m * scale))], colour: colour(t + 1), kind: Kind::Markers(marker, 2.2) });
             }
         }
         let y_range = if log { let (a, b) = padded(ys, 0.1, 0.6); (a.floor(), b.ceil()) } else { padded(ys, 0.0, 0.35) };
@@ -271,5 +299,72 @@ fn comparison(dir: &Path, width_cm: f64) -> Result<Drawn> {
     };
     let a_panel = two("above_strength", 100.0, "area above strength (%)", false);
     let f_panel = two("first_failure", 1e-6, "first-failure stress (MPa)", true);
+    if q.iter().any(|x| x.starts_with("strength_")) {
+        let s_panel = two("strength", 1e-6, "strength, progressive (MPa)", true);
+        return figure("comparison", width_cm, 1.9, &[(e_panel, 0.25), (a_panel, 0.25), (f_panel, 0.25), (s_panel, 0.25)]);
+    }
     figure("comparison", width_cm, 1.5, &[(e_panel, 0.34), (a_panel, 0.33), (f_panel, 0.33)])
+}
+
+/// The applied stress at which each pixel cracks, against the number of pixels cracked so far,
+/// for the first realisation of each structure, one panel per test: rising where the cell
+/// carries more load after a crack, falling where a crack runs on by itself; the highest point is
+/// the cell's strength.
+fn failure_curves(ev: &Table, dir: &Path, width_cm: f64) -> Result<Drawn> {
+    let (st, re, te, s, n) = (ev.s("structure")?, ev.f("realisation")?, ev.s("test")?, ev.f("applied_stress_pa")?, ev.f("event")?);
+    let labels_of = structure_labels(dir)?;
+    let structures = distinct(&st);
+    let mut panels = Vec::new();
+    for (ti, test) in ["tension", "compression"].iter().enumerate() {
+        let mut series = Vec::new();
+        let (mut xs, mut ys) = (vec![0.0], vec![0.0]);
+        for (si, name) in structures.iter().enumerate() {
+            let pts: Vec<(f64, f64)> = (0..st.len()).filter(|&k| &st[k] == name && te[k] == *test && re[k] == 0.0).map(|k| (n[k] + 1.0, 1e-6 * s[k])).collect();
+            if pts.is_empty() {
+                continue;
+            }
+            xs.extend(pts.iter().map(|p| p.0));
+            ys.extend(pts.iter().map(|p| p.1));
+            series.push(Series::line((ti == 0).then(|| labels_of(name)), pts, colour(si), 0.8));
+        }
+        panels.push(Panel {
+            x_categories: vec![],
+            x_desc: format!("cracked pixels, {test}"),
+            y_desc: "|Σxx| at the crack (MPa)".into(),
+            x_range: padded(xs, 0.0, 0.03),
+            y_range: padded(ys, 0.0, 0.25),
+            y_log: false,
+            series,
+            legend: (ti == 0).then_some(SeriesLabelPosition::UpperRight),
+        });
+    }
+    let panels: Vec<(Panel, f64)> = panels.into_iter().map(|p| (p, 0.5)).collect();
+    figure("failure_curves", width_cm, 1.3, &panels)
+}
+
+/// The cracked pixels of the first realisation in one test, coloured by the order they cracked
+/// in, over the phases in pale tones with their boundaries.
+fn crack_map(name: &str, map: &Table, ev: &Table, structure: &str, test: &str, phases: &[String], width_cm: f64) -> Result<Drawn> {
+    let MapCells { w, h, block, i, j } = cells(map)?;
+    let ph = map.s("phase")?;
+    let index = |p: &str| phases.iter().position(|q| q == p).unwrap_or(0);
+    let pale = |c: RGBColor| RGBColor(((c.0 as u16 + 3 * 255) / 4) as u8, ((c.1 as u16 + 3 * 255) / 4) as u8, ((c.2 as u16 + 3 * 255) / 4) as u8);
+    let background: Vec<RGBColor> = ph.iter().map(|p| pale(colour(index(p)))).collect();
+    let edges = boundaries(&i, &j, &ph, block, (w, h));
+    let (st, re, te, ci, cj, px, order) = (ev.s("structure")?, ev.f("realisation")?, ev.s("test")?, ev.f("i")?, ev.f("j")?, ev.f("pixel_m")?, ev.f("event")?);
+    let cracks: Vec<(f64, f64, f64, f64)> = (0..st.len()).filter(|&k| st[k] == structure && te[k] == test && re[k] == 0.0).map(|k| (ci[k] * px[k] * 1e6, cj[k] * px[k] * 1e6, px[k] * 1e6, order[k])).collect();
+    let last = cracks.iter().map(|c| c.3).fold(1.0, f64::max);
+    let colour_of = |v: f64| viridis(v / last);
+    let spec = MapSpec { name, width_cm, x: (0.0, w, "x (µm)"), y: (0.0, h, "y (µm)"), labels: (5, 5), bar: (0.0, last, &format!("crack order in {test}")), colour: &colour_of, categories: None };
+    map_figure(&spec, |chart| {
+        draw_runs(chart, name, (w, h), &i, &j, block, &background)?;
+        let style = RGBColor(90, 90, 90).stroke_width(super::panel::pt(0.3));
+        chart.draw_series(edges.into_iter().map(|e| PathElement::new(e, style))).map_err(fig_err(name))?;
+        // Each cracked pixel, at least a block wide so that it shows on a coarsened map.
+        let side = |p: f64| p.max(block);
+        chart
+            .draw_series(cracks.iter().map(|&(x, y, p, k)| Rectangle::new([(x, y), ((x + side(p)).min(w), (y + side(p)).min(h))], colour_of(k).filled())))
+            .map_err(fig_err(name))?;
+        Ok(())
+    })
 }

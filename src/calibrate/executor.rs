@@ -89,10 +89,10 @@ pub struct ExecutorOptions {
     /// Seconds between `squeue` polls.
     #[serde(default = "poll")]
     pub poll_seconds: f64,
-    /// The binary the tasks run (default: the driver's own).
+    /// The binary the tasks run (default: the driver's own; relative to the study file).
     #[serde(default)]
     pub program: Option<PathBuf>,
-    /// Batches and task logs (default: `<cache directory>/slurm`).
+    /// Batches and task logs (default: `<cache directory>/slurm`; relative to the study file).
     #[serde(default)]
     pub work_dir: Option<PathBuf>,
 }
@@ -325,13 +325,15 @@ impl Slurm {
         if let Some(c) = missing_command(&SLURM_COMMANDS) {
             return Err(Error::config("--executor slurm", c.clone(), format!("the Slurm executor needs {} on PATH; `{c}` is not there (install Slurm's client commands, or run with --executor local)", SLURM_COMMANDS.join(", "))));
         }
+        // Relative paths of the study are relative to the study file.
+        let of_study = |p: &Path| absolute(&study.parent().map_or(p.to_path_buf(), |d| d.join(p)));
         let program = match &opts.program {
-            Some(p) => absolute(p)?,
+            Some(p) => of_study(p)?,
             None => std::env::current_exe().map_err(|e| Error::numerical("slurm executor", format!("the running binary's path: {e}")))?,
         };
         let cache_dir = absolute(cache_dir)?;
         let work = match &opts.work_dir {
-            Some(w) => absolute(w)?,
+            Some(w) => of_study(w)?,
             None => cache_dir.join("slurm"),
         };
         std::fs::create_dir_all(&work).map_err(|e| Error::write(&work, e))?;

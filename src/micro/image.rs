@@ -88,6 +88,9 @@ pub fn read_segmented(path: &Path, pixel_m: f64, map: &BTreeMap<String, String>)
                 names.len() - 1
             }
         };
+        if idx > u8::MAX as usize {
+            return Err(Error::data_file(path, "phases", "the map names more than 256 phases"));
+        }
         lookup.insert(key, idx as u8);
     }
     let mut labels = vec![0u8; w * h];

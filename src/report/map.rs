@@ -1,5 +1,6 @@
-//! A colour-map figure shared by the DEM speed map and the crush strain maps: an equal-aspect
-//! plot area (left 80 % of the canvas) whose content the caller draws, and a colour bar.
+//! A colour-map figure shared by the DEM speed map, the crush strain maps and the microstructure
+//! maps: an equal-aspect plot area (left 80 % of the canvas) whose content the caller draws, and
+//! a colour bar — continuous, or one block per category (a phase map).
 
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;

@@ -16,15 +16,16 @@ use sha2::{Digest, Sha256};
 use crate::error::{Error, Result};
 
 /// Writes a file atomically: a temporary sibling, then rename. The temporary name is unique per
-/// process and call, so threads writing the same file concurrently do not share it (the last
-/// rename wins, each reader sees a whole file).
+/// process, call and random draw, so threads — or processes on other machines sharing the
+/// directory, which may have the same process id — writing the same file concurrently do not
+/// share it (the last rename wins, each reader sees a whole file).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     static SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))?;
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let serial = SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let tmp = dir.join(format!(".{name}.tmp-{}-{serial}", std::process::id()));
+    let tmp = dir.join(format!(".{name}.tmp-{}-{serial}-{:016x}", std::process::id(), rand::random::<u64>()));
     std::fs::write(&tmp, bytes).map_err(|e| Error::write(&tmp, e))?;
     std::fs::rename(&tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);

@@ -4,9 +4,10 @@
 //! root; `.ci/run` installs the packages.
 //!
 //! One test, in order: a small crush calibration run locally and through Slurm gives
-//! bit-identical tables; a rerun after losing cache entries resubmits exactly those; a θ whose
-//! task fails on every retry is recorded with its θ and error while the study completes; a
-//! cancelled array job is detected, reported and not resubmitted. It prints the measured per-task
+//! bit-identical tables; a driver killed while its array runs, restarted, submits exactly the runs
+//! its tasks had not delivered; a θ whose task fails on every retry is recorded with its θ and
+//! error while the study completes; a cancelled array job is detected, reported and not
+//! resubmitted. It prints the measured per-task
 //! overheads (`executor.csv`).
 
 mod common;
@@ -112,13 +113,43 @@ fn slurm_runs_match_local_runs_bit_for_bit_and_survive_failed_and_cancelled_task
     let manifest = s.read("slurm/cal/manifest.json");
     assert!(manifest.contains("\"slurm_array_jobs\""), "{manifest}");
 
-    // A driver that lost (or never saw) some results resubmits exactly those.
-    let lost = forget(&s, "slurm", 4);
-    let out = s.run_env(&["run", "studies/cal.toml", "--quiet", "--reports-dir", "slurm", "--executor", "slurm"], &env);
+    // A driver killed while its array runs, then restarted, reuses every finished result: the
+    // killed driver's tasks finish on their own, and the new driver submits exactly the rest.
+    let mut driver = std::process::Command::new(env!("CARGO_BIN_EXE_partlife"))
+        .args(["run", "studies/cal.toml", "--quiet", "--reports-dir", "killed", "--executor", "slurm"])
+        .env("SLURM_CONF", &cluster.conf)
+        .current_dir(s.dir.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let entries = || -> usize {
+        std::fs::read_dir(s.path("killed/.cache/cal")).map_or(0, |rd| rd.flatten().filter(|e| {
+            let n = e.file_name().to_string_lossy().into_owned();
+            n.ends_with(".json") && !n.starts_with('.')
+        }).count())
+    };
+    let t0 = std::time::Instant::now();
+    while entries() == 0 && t0.elapsed().as_secs() < 120 {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    driver.kill().unwrap();
+    driver.wait().unwrap();
+    let queue_empty = || {
+        let o = std::process::Command::new("squeue").args(["-h", "-o", "%i"]).env("SLURM_CONF", &cluster.conf).output().unwrap();
+        String::from_utf8_lossy(&o.stdout).trim().is_empty()
+    };
+    while !queue_empty() && t0.elapsed().as_secs() < 180 {
+        std::thread::sleep(std::time::Duration::from_millis(200));
+    }
+    let finished = entries();
+    assert!(finished > 0, "the killed driver's tasks wrote nothing");
+    let out = s.run_env(&["run", "studies/cal.toml", "--quiet", "--reports-dir", "killed", "--executor", "slurm"], &env);
     assert_eq!(out.code, 0, "{}", out.stderr);
-    assert_eq!(column(&s.path("slurm/cal/executor.csv"), "evaluations").iter().sum::<f64>(), lost.len() as f64);
-    for (a, b) in local.iter().zip(&tables(&s.path("slurm/cal"))) {
-        assert!(a.1 == b.1, "{} differs after the resumed run", a.0);
+    let resubmitted = column(&s.path("killed/cal/executor.csv"), "evaluations").iter().sum::<f64>();
+    assert_eq!(resubmitted, runs - finished as f64, "the restarted driver submits exactly the {} runs it did not find ({finished} found)", runs - finished as f64);
+    for (a, b) in local.iter().zip(&tables(&s.path("killed/cal"))) {
+        assert!(a.1 == b.1, "{} differs after the restarted run", a.0);
     }
 
     // A θ whose task fails on every retry: recorded with its θ and error; the study completes.

@@ -84,6 +84,14 @@ pub fn median(v: &[f64]) -> f64 {
     sorted_quantile(&s, 0.5)
 }
 
+/// Mean and sample standard deviation (divisor n − 1; 0 for a single value) of `v`.
+pub fn mean_and_sd(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+    (mean, var.sqrt())
+}
+
 /// The quantile p ∈ [0, 1] of a sorted sample: partlife's one definition of a sample quantile,
 /// Hyndman & Fan (1996) type 7 (linear interpolation between order statistics at
 /// h = (n − 1)p; the default of R and NumPy, and the interpolation of ASTM C1239's tables).

@@ -25,7 +25,8 @@ use super::failure::progressive;
 use super::fields::{Local, PhaseHotSpots, QUANTILES, Test};
 use super::homogenise::{Periodic, Plane, element_lame, plane_lame};
 use super::material::Phase;
-use super::solve::{Built, Cracked, FirstFailureWeibull, Solved, WEIBULL_MIN, build, quantities, solve, spread};
+use super::solve::{Built, Cracked, FirstFailureWeibull, Solved, WEIBULL_MIN, build, quantities, solve};
+use crate::stats::mean_and_sd;
 use super::structure::Connectivity;
 use super::study::MicroStudy;
 use crate::error::{Error, Result};
@@ -257,7 +258,8 @@ fn write_summary_table(dir: &mut ReportDir, s: &MicroStudy, by: &[Vec<&Solved>],
             }
         }
         for (qname, u, v) in rows {
-            let (m, d, a, b) = spread(&v);
+            let (m, d) = mean_and_sd(&v);
+            let (a, b) = (v.iter().cloned().fold(f64::INFINITY, f64::min), v.iter().cloned().fold(f64::NEG_INFINITY, f64::max));
             name.push(st.name.clone());
             label.push(st.label.clone());
             qn.push(qname);

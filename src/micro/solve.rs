@@ -128,14 +128,6 @@ pub fn solve(periodic: &Periodic, m: Microstructure, seed: Option<u64>, phase_of
     Ok(Solved { c: eff.c, bulk_shear: (eff.bulk, eff.shear), youngs_poisson: plane.youngs_and_poisson(eff.bulk, eff.shear), fractions, bounds: b, connectivity, locals, hot, micro: m, seed })
 }
 
-/// Mean, sample standard deviation, minimum and maximum (sd 0 for one value).
-pub fn spread(v: &[f64]) -> (f64, f64, f64, f64) {
-    let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    let sd = if v.len() > 1 { (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() } else { 0.0 };
-    (mean, sd, v.iter().cloned().fold(f64::INFINITY, f64::min), v.iter().cloned().fold(f64::NEG_INFINITY, f64::max))
-}
-
 /// A per-structure quantity: name, unit, its value in a realisation.
 pub type Quantity = (&'static str, &'static str, fn(&Solved) -> f64);
 

@@ -19,7 +19,8 @@
 
 use super::fields::Test;
 use super::material::Phase;
-use super::solve::{Built, Cracked, FirstFailureWeibull, Solved, spread};
+use super::solve::{Built, Cracked, FirstFailureWeibull, Solved};
+use crate::stats::mean_and_sd;
 use super::structure::SOFT;
 use super::study::MicroStudy;
 use crate::schema::StudyFile;
@@ -38,17 +39,17 @@ fn pct(v: f64) -> String {
 
 /// "mean ± sd" of a quantity over the realisations, shown by `f`.
 fn pm(v: &[f64], f: fn(f64) -> String) -> String {
-    let (m, sd, _, _) = spread(v);
+    let (m, sd) = mean_and_sd(v);
     if v.len() > 1 { format!("{} ± {}", f(m), f(sd)) } else { f(m) }
 }
 
 /// The difference continuous − discontinuous of a quantity and its standard error.
 fn difference(c: &[f64], d: &[f64], paired: bool) -> (f64, Option<f64>) {
-    let (mc, sc, _, _) = spread(c);
-    let (md, sd, _, _) = spread(d);
+    let (mc, sc) = mean_and_sd(c);
+    let (md, sd) = mean_and_sd(d);
     if paired && c.len() == d.len() && c.len() > 1 {
         let diff: Vec<f64> = c.iter().zip(d).map(|(a, b)| a - b).collect();
-        let (m, s, _, _) = spread(&diff);
+        let (m, s) = mean_and_sd(&diff);
         return (m, Some(s / (diff.len() as f64).sqrt()));
     }
     let se = (c.len() > 1 && d.len() > 1).then(|| (sc * sc / c.len() as f64 + sd * sd / d.len() as f64).sqrt());
@@ -114,7 +115,7 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
     for (i, st) in s.structure.iter().enumerate() {
         let v = &by[i];
         let names: Vec<&str> = built[i].phase_of_label.iter().map(|&p| phases[p].name.as_str()).collect();
-        let fr: Vec<String> = (0..names.len()).map(|l| format!("{} {:.3}", names[l], spread(&v.iter().map(|r| r.fractions[l]).collect::<Vec<_>>()).0)).collect();
+        let fr: Vec<String> = (0..names.len()).map(|l| format!("{} {:.3}", names[l], mean_and_sd(&v.iter().map(|r| r.fractions[l]).collect::<Vec<_>>()).0)).collect();
         let perc: Vec<String> = (0..names.len()).map(|l| format!("{} {}/{}", names[l], v.iter().filter(|r| r.connectivity[l].percolates()).count(), v.len())).collect();
         let e: Vec<f64> = v.iter().map(|r| r.youngs_poisson.0).collect();
         let ehs = |r: &Solved, lo: bool| {
@@ -150,7 +151,7 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
     for (i, st) in s.structure.iter().enumerate() {
         let v = &by[i];
         for (l, &p) in built[i].phase_of_label.iter().enumerate() {
-            let mean = |f: &dyn Fn(&Solved) -> f64| spread(&v.iter().map(|r| f(r)).collect::<Vec<_>>()).0;
+            let mean = |f: &dyn Fn(&Solved) -> f64| mean_and_sd(&v.iter().map(|r| f(r)).collect::<Vec<_>>()).0;
             md.push_str(&format!(
                 "| {} | {} | {:.3} | {:.1} | {:.3} | {}/{} / {}/{} |\n",
                 st.label,
@@ -178,7 +179,7 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
             let ff: Vec<f64> = v.iter().map(|r| r.first_failure(t)).collect();
             let first: Vec<usize> = v.iter().map(|r| (0..names.len()).fold(0, |b, l| if r.hot[t][l].first_failure_pa < r.hot[t][b].first_failure_pa { l } else { b })).collect();
             let counts: Vec<String> = (0..names.len()).filter(|&l| first.contains(&l)).map(|l| format!("{} {}/{}", names[l], first.iter().filter(|&&f| f == l).count(), v.len())).collect();
-            let scf: Vec<String> = (0..names.len()).map(|l| format!("{} {:.2}", names[l], spread(&v.iter().map(|r| r.hot[t][l].sigma1_q[3] / sv).collect::<Vec<_>>()).0)).collect();
+            let scf: Vec<String> = (0..names.len()).map(|l| format!("{} {:.2}", names[l], mean_and_sd(&v.iter().map(|r| r.hot[t][l].sigma1_q[3] / sv).collect::<Vec<_>>()).0)).collect();
             let ff_shown = if ff.iter().all(|f| f.is_finite()) { pm(&ff, mpa) } else { "no pixel in tension".into() };
             md.push_str(&format!("| {} | {} | {} | {ff_shown} | {} | {} |\n", st.label, test.name(), pm(&above, pct), counts.join(", "), scf.join(", ")));
         }
@@ -190,7 +191,7 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
         let seeds = |v: &Vec<&Solved>| v.iter().map(|r| r.seed).collect::<Vec<_>>();
         let paired = seeds(vc) == seeds(vd) && vc.iter().all(|r| r.seed.is_some());
         let names = |i: usize| built[i].phase_of_label.iter().map(|&p| phases[p].name.clone()).collect::<Vec<_>>();
-        let mean_fr = |v: &Vec<&Solved>, l: usize| spread(&v.iter().map(|r| r.fractions[l]).collect::<Vec<_>>()).0;
+        let mean_fr = |v: &Vec<&Solved>, l: usize| mean_and_sd(&v.iter().map(|r| r.fractions[l]).collect::<Vec<_>>()).0;
         let same_phases = names(ic) == names(id);
         let same_fractions = same_phases && (0..names(ic).len()).all(|l| (mean_fr(vc, l) - mean_fr(vd, l)).abs() < 0.01);
         let (lc, ld) = (matrix_label(s, ic, &built[ic], phases), matrix_label(s, id, &built[id], phases));
@@ -299,7 +300,7 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
                             let upto = &c.run.events[..(c.run.peak_event + 1).min(c.run.events.len())];
                             upto.iter().filter(|e| phase_of(c, e.element) == p).count() as f64 / upto.len().max(1) as f64
                         }).collect();
-                        format!("{} {:.2}", phases[p].name, spread(&v).0)
+                        format!("{} {:.2}", phases[p].name, mean_and_sd(&v).0)
                     })
                     .collect();
                 let none = runs.iter().all(|c| c.run.events.is_empty());

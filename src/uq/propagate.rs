@@ -29,10 +29,8 @@ pub fn block_points(method: Method, d: usize, n: usize, seed: u64, r: usize) -> 
 
 /// Mean and standard error over blocks.
 pub fn mean_se(v: &[f64]) -> (f64, f64) {
-    let n = v.len() as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
-    (m, (var / n).sqrt())
+    let (m, sd) = crate::stats::mean_and_sd(v);
+    (m, sd / (v.len() as f64).sqrt())
 }
 
 /// One block of evaluated samples, flat: sample i has inputs `x[i·ni..]` and P `p[i·np..]`.

@@ -259,8 +259,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             };
             let r = partlife::calibrate::eval::eval_task(&batch, task)?;
             out!(
-                "task {}: {} evaluations ({} failed in the model): set-up {:.3} s, compute {:.3} s, cache writes {:.4} s",
-                r.task, r.evaluations, r.model_failures, r.setup_s, r.compute_s, r.write_s
+                "task {}: {} evaluations ({} failed in the model; {} already in the cache): set-up {:.3} s, compute {:.3} s, cache writes {:.4} s",
+                r.task, r.evaluations, r.model_failures, r.already_cached, r.setup_s, r.compute_s, r.write_s
             );
         }
         Command::Report { name, reports_dir } => {

@@ -75,18 +75,25 @@ fn a_task_killed_at_any_moment_leaves_only_whole_cache_entries() {
     tiny_calibration(&s, "");
     let b = batch(&s, 8);
     let bs = b.display().to_string();
-    // Killed at several moments of its work: never a partial entry under an entry's name.
-    for delay_ms in [30u64, 250, 600, 900, 1300, 1700] {
+    // Killed at several moments of its work: never a partial entry under an entry's name. The
+    // task stores each result as it finishes and a rerun skips what is stored, so the kills fall
+    // before, between and during writes; at least one must leave the work half done (some
+    // entries, not all), or the test did not kill a task at work.
+    let mut mid_work = 0;
+    for delay_ms in [30u64, 300, 500, 700, 900, 1100] {
         let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_partlife")).args(["--threads", "1", "eval", &bs, "--task", "0"]).current_dir(s.dir.path()).stdout(std::process::Stdio::null()).stderr(std::process::Stdio::null()).spawn().unwrap();
         std::thread::sleep(std::time::Duration::from_millis(delay_ms));
         let _ = child.kill();
         let _ = child.wait();
-        whole_entries(&s);
+        let n = whole_entries(&s);
+        mid_work += usize::from(n > 0 && n < 8);
     }
-    // Run to the end: every θ has its entry and the task its record.
+    assert!(mid_work > 0, "no kill fell while the task was working");
+    // Run to the end: the rest is evaluated, every θ has its entry and the task its record.
+    let before = whole_entries(&s);
     let out = s.run(&["eval", &bs, "--task", "0"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
-    assert!(out.stdout.contains("task 0: 8 evaluations"), "{}", out.stdout);
+    assert!(out.stdout.contains(&format!("task 0: {} evaluations", 8 - before)) && out.stdout.contains(&format!("{before} already in the cache")), "{}", out.stdout);
     assert_eq!(whole_entries(&s), 8);
     assert!(s.path("work/task-0.json").is_file());
     // A task index beyond the batch, and a study changed since submission, are refused.

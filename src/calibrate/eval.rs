@@ -3,7 +3,10 @@
 //! the task's θ's, store each result in the shared cache, write the task's timing record.
 
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
+
+use rayon::prelude::*;
 
 use super::cache::Cached;
 use super::executor::{Batch, TaskRecord, config_digest, task_record_path, unix_now};
@@ -12,9 +15,11 @@ use crate::io::write_atomic;
 use crate::model::Simulator;
 
 /// Runs task `task` of the batch file `batch_path` (`partlife eval`): rebuilds the model from
-/// the study, evaluates the task's θ's in parallel, stores each in the cache and writes the
-/// task's record. A θ the model fails at is stored as a failed entry (a property of θ); an
-/// unreadable batch, a changed study or an unwritable cache is an error.
+/// the study, evaluates in parallel those of the task's θ's that the cache does not hold yet,
+/// stores each result as soon as it is computed — a task killed halfway keeps what it finished,
+/// and its rerun does only the rest — and writes the task's record. A θ the model fails at is
+/// stored as a failed entry (a property of θ); an unreadable batch, a changed study or an
+/// unwritable cache is an error.
 pub fn eval_task(batch_path: &Path, task: usize) -> Result<TaskRecord> {
     let started = unix_now();
     let clock = Instant::now();
@@ -36,20 +41,28 @@ pub fn eval_task(batch_path: &Path, task: usize) -> Result<TaskRecord> {
     let cached = Cached::new(sim, &batch.cache_dir, prep.config.clone())?;
     let setup_s = clock.elapsed().as_secs_f64();
     let thetas = &batch.thetas[batch.slice(task)];
-    let t1 = Instant::now();
-    let results = sim.simulate_batch(thetas);
-    let compute_s = t1.elapsed().as_secs_f64();
-    let t2 = Instant::now();
-    for (t, r) in thetas.iter().zip(&results) {
-        cached.store(t, r)?;
-    }
+    let todo: Vec<&Vec<f64>> = thetas.iter().filter(|t| cached.lookup(t).is_none()).collect();
+    let (compute_ns, write_ns) = (AtomicU64::new(0), AtomicU64::new(0));
+    let failed: Vec<bool> = todo
+        .par_iter()
+        .map(|t| {
+            let t0 = Instant::now();
+            let r = sim.simulate(t);
+            let t1 = Instant::now();
+            cached.store(t, &r)?;
+            compute_ns.fetch_add((t1 - t0).as_nanos() as u64, Ordering::Relaxed);
+            write_ns.fetch_add(t1.elapsed().as_nanos() as u64, Ordering::Relaxed);
+            Ok(r.is_err())
+        })
+        .collect::<Result<_>>()?;
     let record = TaskRecord {
         task,
-        evaluations: thetas.len(),
-        model_failures: results.iter().filter(|r| r.is_err()).count(),
+        evaluations: todo.len(),
+        already_cached: thetas.len() - todo.len(),
+        model_failures: failed.iter().filter(|&&f| f).count(),
         setup_s,
-        compute_s,
-        write_s: t2.elapsed().as_secs_f64(),
+        compute_s: compute_ns.load(Ordering::Relaxed) as f64 * 1e-9,
+        write_s: write_ns.load(Ordering::Relaxed) as f64 * 1e-9,
         started_unix_s: started,
         finished_unix_s: unix_now(),
     };

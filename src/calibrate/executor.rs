@@ -26,8 +26,9 @@
 //!    and submits one `sbatch --array=0-(n−1)` job per at most `max_array_size` tasks, each task
 //!    running `partlife eval <batch.json>` ([`super::eval::eval_task`]) on its slice of θ's;
 //! 2. a task rebuilds the model from the study file (refusing a study whose model configuration
-//!    changed since submission), evaluates its θ's, stores each result in the shared cache by
-//!    temporary file and rename — a task killed mid-write leaves a whole entry or none — and
+//!    changed since submission), evaluates those of its θ's not yet in the cache, stores each
+//!    result in the shared cache as soon as it is computed, by temporary file and rename — a
+//!    task killed mid-write leaves a whole entry or none, and keeps what it finished — and
 //!    writes a small timing record;
 //! 3. the driver polls `squeue` until the array has left the queue, reads every task's final
 //!    state from `scontrol show job` (`COMPLETED`, `FAILED`, `TIMEOUT`, `CANCELLED`, …), and looks
@@ -183,13 +184,15 @@ pub struct TaskRecord {
     pub task: usize,
     /// θ's evaluated.
     pub evaluations: usize,
-    /// Of which the model failed at (stored as failed entries).
+    /// θ's of the task already in the cache (a rerun of a killed task), not evaluated again.
+    pub already_cached: usize,
+    /// Of the evaluated, those the model failed at (stored as failed entries).
     pub model_failures: usize,
     /// Reading the study and building the model (s).
     pub setup_s: f64,
-    /// The evaluations (s).
+    /// The evaluations, summed over them (s of worker time).
     pub compute_s: f64,
-    /// Writing the cache entries (s).
+    /// Writing the cache entries, summed over them (s).
     pub write_s: f64,
     /// Start (Unix time, s).
     pub started_unix_s: f64,
@@ -235,7 +238,7 @@ pub struct ArrayRecord {
     pub setup_s: f64,
     /// Sum over tasks of the evaluations' time (s).
     pub compute_s: f64,
-    /// Mean per task: writing the cache entries (s).
+    /// Mean per task: writing its cache entries (s).
     pub write_s: f64,
     /// Reading the batch's results from the cache (s).
     pub collect_s: f64,

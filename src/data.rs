@@ -4,41 +4,47 @@
 //! checked here, so a bad cell produces one message naming the file, the data row (with its
 //! physical line: the header is line 1) and the column, and the rule that was broken.
 //!
-//! # Crush CSV (one row per particle)
+//! # Crush data (one row per particle)
 //!
-//! | column | unit | rule |
-//! |---|---|---|
-//! | `id` | – | required, non-empty, unique |
-//! | `material` | – | required, the same on every row |
-//! | `diameter_m` | m | required, in [10⁻⁶, 0.1] ([`DIAMETER`]) |
-//! | `crush_force_n` | N | required, in [10⁻⁶, 10⁵] ([`CRUSH_FORCE`]) |
-//! | `roundness` | – | optional column; empty cell = unknown; else in [0.01, 1] ([`ROUNDNESS`]) |
-//! | `sphericity` | – | optional column; empty cell = unknown; else in [0.01, 1] ([`SPHERICITY`]) |
-//! | `temperature_c` | °C | optional column; empty cell = unknown; else in [−273.15, 2100] ([`TEMPERATURE`]) |
-//! | `impacts` | – | optional column: impacts before the crush test; empty = unknown; else a whole number in [0, 10⁶] ([`IMPACTS`]) |
+//! Read through [`crate::intake`]: delimited text in any delimiter, decimal mark and common
+//! encoding, or one sheet of a spreadsheet; columns found by name with the unit the header
+//! states (`diameter_m`, `D [mm]`, `Fmax (kN)`) or mapped by the study, converted to SI. The
+//! fields ([`CRUSH_FIELDS`]; synonyms compared without case, blanks, `_`, `-` and `.`):
+//!
+//! | field | SI column | also found as | unit | rule |
+//! |---|---|---|---|---|
+//! | `id` | `id` | particle, particle_id, probe, sample, sample_id, specimen, nr | – | required, non-empty, unique |
+//! | `material` | `material` | – | – | optional; a file with several materials needs the study's `material` filter |
+//! | `diameter` | `diameter_m` | d, dp, particle_diameter | length | required, in [10⁻⁶, 0.1] m ([`DIAMETER`]) |
+//! | `crush_force` | `crush_force_n` | f, fmax, force, load, breaking_force, peak_force, crushing_force | force | required, in [10⁻⁶, 10⁵] N ([`CRUSH_FORCE`]) |
+//! | `roundness` | `roundness` | wadell_roundness | – or % | optional; empty cell = unknown; else in [0.01, 1] ([`ROUNDNESS`]) |
+//! | `sphericity` | `sphericity` | b/l | – or % | optional; empty cell = unknown; else in [0.01, 1] ([`SPHERICITY`]) |
+//! | `temperature` | `temperature_c` | t, temp, test_temperature | temperature | optional; empty cell = unknown; else in [−273.15, 2100] °C ([`TEMPERATURE`]) |
+//! | `impacts` | `impacts` | prior_impacts, n_impacts | count | optional: impacts before the crush test; empty = unknown; else a whole number in [0, 10⁶] ([`IMPACTS`]) |
+//!
+//! A second file joined by id (a shape analyser's export) may supply the optional fields
+//! ([`read_crush_source`]); a field in both files is refused.
 //!
 //! Every numeric column of every input file has a plausibility range ([`Plausible`], listed
-//! with the reasons in `datasets/README.md`): a value outside it is a unit slip or a corrupt
-//! cell, and would otherwise travel on as an infinite contact radius or an underflowed strength.
-//! The file's shape is checked before any cell ([`crate::io::read_input_text`]): a directory or
-//! unreadable path is named as such, a duplicated column name and a row with fewer or more
-//! fields than the header are errors naming the line.
+//! with the reasons in `datasets/README.md`), in SI, applied after conversion: a value outside it
+//! is a unit slip or a corrupt cell, and would otherwise travel on as an infinite contact radius
+//! or an underflowed strength.
 //!
 //! Verified by the unit tests below and `tests/bad_input.rs`.
 
-use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
-use polars::prelude::*;
-
 use crate::error::{Error, Result};
+pub use crate::intake::Plausible;
+use crate::intake::columns::shown;
+use crate::intake::{Field, JoinMode, Kind, MapOrigin, Provenance, Quantity, Source, join, read_raw, resolve, select};
 
 /// One crushed particle.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CrushRecord {
     /// Particle identifier.
     pub id: String,
-    /// Material label (`BL 16/30`).
+    /// Material label (`BL 16/30`); empty when the file has no material column.
     pub material: String,
     /// Diameter d (m).
     pub diameter_m: f64,
@@ -55,17 +61,37 @@ pub struct CrushRecord {
     pub impacts: Option<u64>,
 }
 
-/// A crush dataset read from one file.
+/// A crush dataset read from one file (and its shape file, if any).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CrushData {
     /// Where it was read from.
     pub path: PathBuf,
     /// The particles, in file order.
     pub records: Vec<CrushRecord>,
+    /// How it was read: format, columns, units and conversions, filter, join.
+    pub provenance: Provenance,
+    /// Where each record is in the file (`row 3 (line 4)`, `sheet "BL", row 3 (sheet row 5)`),
+    /// for messages about it.
+    pub places: Vec<String>,
 }
 
 impl CrushData {
-    /// Material label (the same on every row).
+    /// Data made in code (a generator, a test): places as if written to `path` in partlife's own
+    /// form, header on line 1.
+    pub fn new(path: impl Into<PathBuf>, records: Vec<CrushRecord>) -> CrushData {
+        let places = (0..records.len()).map(|k| format!("row {} (line {})", k + 1, k + 2)).collect();
+        CrushData { path: path.into(), records, provenance: Provenance::default(), places }
+    }
+
+    /// An error about record `k` and a column.
+    pub fn error(&self, k: usize, column: &str, rule: impl Into<String>) -> Error {
+        let place = self.places.get(k).cloned().unwrap_or_else(|| format!("particle {}", k + 1));
+        // The column as the file names it (`Fmax [N]` for crush_force_n).
+        let named = self.provenance.columns.iter().find(|c| c.field == column).map_or(column, |c| c.source.as_str());
+        Error::data_file(&self.path, format!("{place}, column {named}"), rule)
+    }
+
+    /// Material label (the same on every row; empty when the file has no material column).
     pub fn material(&self) -> &str {
         self.records.first().map(|r| r.material.as_str()).unwrap_or("")
     }
@@ -83,44 +109,28 @@ impl CrushData {
 /// workflow's residual trends can use.
 pub const COVARIATE_COLUMNS: [&str; 5] = ["diameter_m", "roundness", "sphericity", "temperature_c", "impacts"];
 
-/// Column names of a crush file, in canonical order.
+/// Column names of a crush file in partlife's own SI form, in canonical order.
 pub const CRUSH_COLUMNS: [&str; 7] =
     ["id", "material", "diameter_m", "crush_force_n", "roundness", "sphericity", "temperature_c"];
-const CRUSH_REQUIRED: [&str; 4] = ["id", "material", "diameter_m", "crush_force_n"];
 
-/// The plausibility range of a numeric input column (closed), with the reason for it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Plausible {
-    /// What the value is (`diameter`).
-    pub what: &'static str,
-    /// Lowest plausible value.
-    pub lo: f64,
-    /// Highest plausible value.
-    pub hi: f64,
-    /// The range as written in messages, with its unit (`[1e-6, 0.1] m`).
-    pub shown: &'static str,
-    /// Why.
-    pub why: &'static str,
-}
+/// The fields of a crush file (module docs).
+pub const CRUSH_FIELDS: [Field; 8] = [
+    Field { key: "id", column: "id", kind: Kind::Text, synonyms: &["particle", "particle_id", "probe", "sample", "sample_id", "specimen", "nr"], required: true, plausible: None },
+    Field { key: "material", column: "material", kind: Kind::Text, synonyms: &[], required: false, plausible: None },
+    Field { key: "diameter", column: "diameter_m", kind: Kind::Number(Quantity::Length), synonyms: &["d", "dp", "particle_diameter"], required: true, plausible: Some(DIAMETER) },
+    Field { key: "crush_force", column: "crush_force_n", kind: Kind::Number(Quantity::Force), synonyms: &["f", "fmax", "force", "load", "breaking_force", "peak_force", "crushing_force"], required: true, plausible: Some(CRUSH_FORCE) },
+    Field { key: "roundness", column: "roundness", kind: Kind::Number(Quantity::Ratio), synonyms: &["wadell_roundness"], required: false, plausible: Some(ROUNDNESS) },
+    Field { key: "sphericity", column: "sphericity", kind: Kind::Number(Quantity::Ratio), synonyms: &["b/l"], required: false, plausible: Some(SPHERICITY) },
+    Field { key: "temperature", column: "temperature_c", kind: Kind::Number(Quantity::Temperature), synonyms: &["t", "temp", "test_temperature"], required: false, plausible: Some(TEMPERATURE) },
+    Field { key: "impacts", column: "impacts", kind: Kind::Number(Quantity::Count), synonyms: &["prior_impacts", "n_impacts"], required: false, plausible: Some(IMPACTS) },
+];
 
-impl Plausible {
-    /// Whether v lies in the range.
-    pub fn contains(&self, v: f64) -> bool {
-        v >= self.lo && v <= self.hi
-    }
+/// The fields a shape file may supply (joined by id): the optional measurements.
+const JOINABLE: [&str; 4] = ["roundness", "sphericity", "temperature", "impacts"];
 
-    /// v if it lies in the range, else an error naming file, row and column.
-    pub fn check(&self, path: &Path, row: usize, column: &str, v: f64) -> Result<f64> {
-        let finite = if v.is_finite() { "" } else { "a finite number " };
-        if self.contains(v) { Ok(v) } else { Err(Error::data_row(path, row, column, format!("{} must be {finite}in {} ({}); got {}", self.what, self.shown, self.why, shown(v)))) }
-    }
-}
-
-/// A number as a message shows it: plain in [10⁻⁴, 10⁶), else in scientific notation (1e308,
-/// not 309 digits).
-fn shown(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&v.abs()) { format!("{v}") } else { format!("{v:e}") }
-}
+/// The fields of a shape file: an id, a material (for a filter), and the optional measurements
+/// of a crush file.
+pub const SHAPE_FIELDS: [Field; 6] = [CRUSH_FIELDS[0], CRUSH_FIELDS[1], CRUSH_FIELDS[4], CRUSH_FIELDS[5], CRUSH_FIELDS[6], CRUSH_FIELDS[7]];
 
 /// Particle diameter.
 pub const DIAMETER: Plausible = Plausible { what: "diameter", lo: 1e-6, hi: 0.1, shown: "[1e-6, 0.1] m", why: "a particle from 1 µm to 10 cm; outside it the value is in µm or mm, not metres" };
@@ -139,111 +149,136 @@ pub const CURVE_FORCE: Plausible = Plausible { what: "force", lo: -1e3, hi: 1e5,
 /// Impact (normal) speed of a particle on a tube.
 pub const VELOCITY: Plausible = Plausible { what: "speed", lo: 0.0, hi: crate::lifetime::MAX_VELOCITY, shown: "[0, 100] m/s", why: "gravity-driven particle flows hit tubes at a few m/s; beyond 100 m/s the Hertz impact model is out of its range" };
 
-/// Reads a CSV file with every column as text.
-pub fn read_text_table(path: &Path) -> Result<DataFrame> {
-    crate::io::read_csv(path, Some(0))
+/// The nominal tensile strength of a crushed particle, Hiramatsu & Oka (1966):
+/// σ = 2.8 F / (π d²) (Pa; F in N, d in m) — the classic strength of an irregular particle
+/// between platens, used here only to catch unit slips.
+pub fn nominal_strength(force_n: f64, diameter_m: f64) -> f64 {
+    2.8 * force_n / (std::f64::consts::PI * diameter_m * diameter_m)
 }
 
-/// Text cells of one column (`None` for an empty cell); `None` if the column is absent.
-pub(crate) fn text_column(df: &DataFrame, name: &str) -> Result<Option<Vec<Option<String>>>> {
-    let Ok(col) = df.column(name) else { return Ok(None) };
-    let ca = col.str().map_err(|e| Error::numerical("reading text column", e.to_string()))?;
-    Ok(Some(
-        ca.iter()
-            .map(|v| v.map(str::trim).filter(|s| !s.is_empty()).map(str::to_owned))
-            .collect(),
-    ))
-}
+/// The plausible nominal strength of a crushed ceramic particle ([`nominal_strength`]).
+/// The Hertz σ̄ at break is checked too ([`SIGMA_BAR`]), but it grows only as F^(1/3): forces
+/// entered in kN into a newton column lower σ̄ tenfold and stay plausible, while the nominal
+/// strength falls a thousandfold, below any ceramic.
+pub const NOMINAL_STRENGTH: Plausible = Plausible { what: "nominal strength 2.8F/(πd²) (Hiramatsu–Oka)", lo: 1e6, hi: 1e10, shown: "[1 MPa, 10 GPa]", why: "from the weakest porous granulate to beyond the strongest engineering ceramic" };
 
-/// Parses a number cell; `rule` describes the admissible range for messages.
-pub(crate) fn parse_number(path: &Path, row: usize, column: &str, cell: &str) -> Result<f64> {
-    let v: f64 = cell
-        .parse()
-        .map_err(|_| Error::data_row(path, row, column, format!("value \"{cell}\" is not a number")))?;
-    if !v.is_finite() {
-        return Err(Error::data_row(path, row, column, format!("value \"{cell}\" is not a finite number")));
-    }
-    Ok(v)
-}
+/// The plausible Hertz average tensile stress at break of a ceramic particle.
+pub const SIGMA_BAR: Plausible = Plausible { what: "σ̄ at break", lo: 1e6, hi: 5e10, shown: "[1 MPa, 50 GPa]", why: "the Hertz average tensile stress at break of a ceramic, from a weak porous granulate to beyond diamond's tensile strength" };
 
-/// Reads and validates a crush CSV (see the module docs for the rules).
+/// Reads and validates a crush file with every default (module docs).
 pub fn read_crush(path: &Path) -> Result<CrushData> {
-    let df = read_text_table(path)?;
-    for c in CRUSH_REQUIRED {
-        if df.column(c).is_err() {
-            return Err(Error::data_file(
-                path,
-                "header",
-                format!(
-                    "missing column `{c}` (required: {}; optional: roundness, sphericity, temperature_c, impacts)",
-                    CRUSH_REQUIRED.join(", ")
-                ),
-            ));
-        }
-    }
-    if df.height() == 0 {
-        return Err(Error::data_file(path, "file", "no data rows"));
-    }
-    let get = |name: &str| text_column(&df, name);
-    let ids = get("id")?.unwrap_or_default();
-    let materials = get("material")?.unwrap_or_default();
-    let diam = get("diameter_m")?.unwrap_or_default();
-    let force = get("crush_force_n")?.unwrap_or_default();
-    let round = get("roundness")?;
-    let spher = get("sphericity")?;
-    let temp = get("temperature_c")?;
-    let imp = get("impacts")?;
+    read_crush_source(&Source::file(path), &MapOrigin::default())
+}
 
-    let mut seen = HashSet::new();
-    let mut records = Vec::with_capacity(df.height());
-    for row in 0..df.height() {
-        let need = |col: &[Option<String>], name: &str| -> Result<String> {
-            col[row].clone().ok_or_else(|| Error::data_row(path, row, name, "cell is empty; a value is required"))
-        };
-        let id = need(&ids, "id")?;
-        if !seen.insert(id.clone()) {
-            return Err(Error::data_row(path, row, "id", format!("duplicate id \"{id}\"")));
+/// Reads and validates a crush file as a study describes it: sheet, header row, column map,
+/// units, material filter and shape file ([`Source`]); `origin` names the study table for
+/// errors in the map. Every data error names file, sheet, row and column.
+pub fn read_crush_source(src: &Source, origin: &MapOrigin) -> Result<CrushData> {
+    let path = src.file.as_path();
+    let table = read_raw(src)?;
+    let r = resolve(&table, &CRUSH_FIELDS, &src.columns, &src.units, origin)?;
+    if table.rows.is_empty() {
+        return Err(Error::data_file(path, table.origin.sheet.as_ref().map(|s| format!("sheet \"{s}\"")).unwrap_or_else(|| "file".into()), "no data rows"));
+    }
+    // The material filter applies to each file that has a material column; a main file
+    // without one takes the filter's value as its particles' material.
+    let wanted = src.material.as_deref();
+    if wanted.is_some() && !r.has("material") && src.shape.is_none() {
+        select(&r, "material", wanted, origin, "material")?;
+    }
+    let (rows, filter) = select(&r, "material", wanted.filter(|_| r.has("material")), origin, "material")?;
+    let mut provenance = r.provenance.clone();
+    provenance.rows = rows.len();
+    provenance.filter = filter;
+
+    let mut seen: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
+    let mut records = Vec::with_capacity(rows.len());
+    let mut places = Vec::with_capacity(rows.len());
+    for &row in &rows {
+        let id = r.need_text("id", row)?;
+        if let Some(&first) = seen.get(&id) {
+            return Err(r.error(row, "id", format!("duplicate id \"{id}\" (also on {})", table.place(first, None))));
         }
-        let material = need(&materials, "material")?;
-        if let Some(first) = records.first().map(|r: &CrushRecord| r.material.clone())
-            && first != material
-        {
-            return Err(Error::data_row(
-                path,
-                row,
-                "material",
-                format!("one file holds one material: \"{material}\" differs from \"{first}\" on row 1"),
-            ));
-        }
-        let d = DIAMETER.check(path, row, "diameter_m", parse_number(path, row, "diameter_m", &need(&diam, "diameter_m")?)?)?;
-        let f = CRUSH_FORCE.check(path, row, "crush_force_n", parse_number(path, row, "crush_force_n", &need(&force, "crush_force_n")?)?)?;
-        let optional = |col: &Option<Vec<Option<String>>>, name: &str, range: &Plausible| -> Result<Option<f64>> {
-            match col.as_ref().and_then(|c| c[row].as_deref()) {
-                None => Ok(None),
-                Some(cell) => range.check(path, row, name, parse_number(path, row, name, cell)?).map(Some),
-            }
-        };
-        let roundness = optional(&round, "roundness", &ROUNDNESS)?;
-        let sphericity = optional(&spher, "sphericity", &SPHERICITY)?;
-        let temperature_c = optional(&temp, "temperature_c", &TEMPERATURE)?;
-        let impacts = optional(&imp, "impacts", &IMPACTS)?;
+        seen.insert(id.clone(), row);
+        let impacts = r.number("impacts", row)?;
         if let Some(k) = impacts
             && k.fract() != 0.0
         {
-            return Err(Error::data_row(path, row, "impacts", format!("impacts must be a whole number (got {k})")));
+            return Err(r.error(row, "impacts", format!("impacts must be a whole number (got {k})")));
         }
         records.push(CrushRecord {
             id,
-            material,
-            diameter_m: d,
-            crush_force_n: f,
-            roundness,
-            sphericity,
-            temperature_c,
+            material: r.text("material", row).or_else(|| wanted.map(str::to_string)).unwrap_or_default(),
+            diameter_m: r.need_number("diameter", row)?,
+            crush_force_n: r.need_number("crush_force", row)?,
+            roundness: r.number("roundness", row)?,
+            sphericity: r.number("sphericity", row)?,
+            temperature_c: r.number("temperature", row)?,
             impacts: impacts.map(|k| k as u64),
         });
+        places.push(table.place(row, None));
+        let rec = &records[records.len() - 1];
+        if let Some(rule) = NOMINAL_STRENGTH.broken(nominal_strength(rec.crush_force_n, rec.diameter_m)) {
+            return Err(r.error(row, "crush_force", format!("{rule}, from F = {} N and d = {} m: check the force and diameter units", shown(rec.crush_force_n), shown(rec.diameter_m))));
+        }
     }
-    Ok(CrushData { path: path.to_path_buf(), records })
+    if let Some(shape) = &src.shape {
+        let rows_of_ids: Vec<(usize, String)> = records.iter().enumerate().map(|(k, rec)| (k, rec.id.clone())).collect();
+        let main_name = table.origin.sheet.as_ref().map(|s| format!("{} sheet \"{s}\"", path.display())).unwrap_or_else(|| path.display().to_string());
+        let shape_origin = MapOrigin { file: origin.file.clone(), key: if origin.key.is_empty() { "shape".into() } else { format!("{}.shape", origin.key) } };
+        let st = read_raw(shape)?;
+        let sr = resolve(&st, &SHAPE_FIELDS, &shape.columns, &shape.units, &shape_origin)?;
+        let supplied: Vec<&str> = JOINABLE.iter().copied().filter(|k| sr.has(k)).collect();
+        if supplied.is_empty() {
+            return Err(st.header_error(None, format!("the shape file supplies none of {}: nothing to join", JOINABLE.join(", "))));
+        }
+        if let Some(k) = supplied.iter().find(|k| r.has(k)) {
+            return Err(st.header_error(sr.column(k), format!("{k} is in both {main_name} and this file: keep it in one, or map the other away")));
+        }
+        if wanted.is_some() && !r.has("material") && !sr.has("material") {
+            select(&r, "material", wanted, origin, "material")?;
+        }
+        let (srows, sfilter) = select(&sr, "material", wanted.filter(|_| sr.has("material")), &shape_origin, "material")?;
+        let (pairs, dropped) = join(&rows_of_ids, &sr, "id", &srows, shape.join.unwrap_or(JoinMode::Exact), &main_name)?;
+        let mut joined = Vec::with_capacity(pairs.len());
+        let mut joined_places = Vec::with_capacity(pairs.len());
+        for (k, srow) in pairs {
+            joined_places.push(places[k].clone());
+            let mut rec = records[k].clone();
+            for key in &supplied {
+                let v = sr.number(key, srow)?;
+                match *key {
+                    "roundness" => rec.roundness = v,
+                    "sphericity" => rec.sphericity = v,
+                    "temperature" => rec.temperature_c = v,
+                    _ => {
+                        if let Some(x) = v
+                            && x.fract() != 0.0
+                        {
+                            return Err(sr.error(srow, key, format!("impacts must be a whole number (got {x})")));
+                        }
+                        rec.impacts = v.map(|x| x as u64);
+                    }
+                }
+            }
+            joined.push(rec);
+        }
+        records = joined;
+        places = joined_places;
+        let mut sp = sr.provenance.clone();
+        sp.rows = srows.len();
+        sp.filter = sfilter;
+        provenance.joined.push(sp);
+        provenance.dropped_ids = dropped;
+        provenance.rows = records.len();
+        if records.is_empty() {
+            return Err(Error::data_file(path, "file", "no particle is in both files: the join by id keeps nothing"));
+        }
+    }
+    for w in provenance.warnings.iter().chain(provenance.joined.iter().flat_map(|j| &j.warnings)) {
+        crate::intake::warn(w);
+    }
+    Ok(CrushData { path: path.to_path_buf(), records, provenance, places })
 }
 
 /// Numeric properties of Table 1, each stored as `<name>_min`, `<name>_max`, `<name>_qualifier`.
@@ -289,89 +324,47 @@ pub struct Table1Row {
     pub notes: Option<String>,
 }
 
-/// Reads and validates `table1_particle_properties.csv`: numbers parse, min ≤ max, qualifiers
-/// are one of `<`, `>`, `~`.
+/// Reads and validates `table1_particle_properties.csv` (through [`crate::intake`]: any
+/// delimiter, decimal mark or encoding, or a sheet): numbers parse, min ≤ max, qualifiers are
+/// one of `<`, `>`, `~`.
 pub fn read_table1(path: &Path) -> Result<Vec<Table1Row>> {
-    let df = read_text_table(path)?;
+    let t = read_raw(&Source::file(path))?;
     let mut required = vec!["material".to_string(), "group".to_string(), "notes".to_string()];
     for p in TABLE1_PROPERTIES {
         for s in ["min", "max", "qualifier"] {
             required.push(format!("{p}_{s}"));
         }
     }
-    for c in &required {
-        if df.column(c).is_err() {
-            return Err(Error::data_file(path, "header", format!("missing column `{c}`")));
-        }
-    }
-    let col = |name: &str| -> Result<Vec<Option<String>>> { Ok(text_column(&df, name)?.unwrap_or_default()) };
-    let materials = col("material")?;
-    let groups = col("group")?;
-    let notes = col("notes")?;
+    let names: Vec<&str> = required.iter().map(String::as_str).collect();
+    let cols = t.require(&names)?;
+    let (c_material, c_group, c_notes) = (cols[0], cols[1], cols[2]);
     let mut rows = Vec::new();
-    for row in 0..df.height() {
-        let material = materials[row]
-            .clone()
-            .ok_or_else(|| Error::data_row(path, row, "material", "cell is empty; a value is required"))?;
-        let group = groups[row].clone().unwrap_or_default();
+    for row in 0..t.rows.len() {
+        let material = t.need_text(row, c_material)?;
+        let group = t.text(row, c_group).unwrap_or_default();
         if !["target", "state_of_the_art", "new_development"].contains(&group.as_str()) {
-            return Err(Error::data_row(
-                path,
-                row,
-                "group",
-                format!("must be target, state_of_the_art or new_development (got \"{group}\")"),
-            ));
+            return Err(t.error(row, Some(c_group), format!("must be target, state_of_the_art or new_development (got \"{group}\")")));
         }
         let mut cells = Vec::new();
-        for p in TABLE1_PROPERTIES {
-            let num = |s: &str| -> Result<Option<f64>> {
-                let name = format!("{p}_{s}");
-                match col(&name)?[row].as_deref() {
-                    None => Ok(None),
-                    Some(c) => parse_number(path, row, &name, c).map(Some),
-                }
-            };
-            let (min, max) = (num("min")?, num("max")?);
+        for (k, _) in TABLE1_PROPERTIES.iter().enumerate() {
+            let (c_min, c_max, c_q) = (cols[3 + 3 * k], cols[4 + 3 * k], cols[5 + 3 * k]);
+            let (min, max) = (t.number(row, c_min)?, t.number(row, c_max)?);
             if let (Some(a), Some(b)) = (min, max)
                 && a > b
             {
-                return Err(Error::data_row(path, row, &format!("{p}_min"), format!("min {a} exceeds max {b}")));
+                return Err(t.error(row, Some(c_min), format!("min {a} exceeds max {b}")));
             }
-            let qualifier = col(&format!("{p}_qualifier"))?[row].clone();
+            let qualifier = t.text(row, c_q);
             if let Some(q) = &qualifier
                 && !["<", ">", "~"].contains(&q.as_str())
             {
-                return Err(Error::data_row(
-                    path,
-                    row,
-                    &format!("{p}_qualifier"),
-                    format!("must be <, > or ~ (got \"{q}\")"),
-                ));
+                return Err(t.error(row, Some(c_q), format!("must be <, > or ~ (got \"{q}\")")));
             }
             cells.push(TableCell { min, max, qualifier });
         }
-        rows.push(Table1Row { material, group, cells, notes: notes[row].clone() });
+        rows.push(Table1Row { material, group, cells, notes: t.text(row, c_notes) });
     }
     Ok(rows)
-}
-
-/// What `partlife datasets check` found.
-#[derive(Debug, Clone, PartialEq)]
-pub enum CheckedFile {
-    /// A crush dataset.
-    Crush(CrushData),
-    /// Table 1.
-    Table1(Vec<Table1Row>),
-}
-
-/// Validates a dataset file, recognising its kind from its header.
-pub fn check_file(path: &Path) -> Result<CheckedFile> {
-    let df = read_text_table(path)?;
-    if df.column("size_um_min").is_ok() {
-        read_table1(path).map(CheckedFile::Table1)
-    } else {
-        read_crush(path).map(CheckedFile::Crush)
-    }
 }
 
 #[cfg(test)]
@@ -414,7 +407,7 @@ mod tests {
         let p = write(dir.path(), "c.csv", "id,material,diameter_m,crush_force_n\nA1,X,900,120\n");
         let msg = read_crush(&p).unwrap_err().to_string();
         assert!(msg.contains("metres"), "{msg}");
-        let p = write(dir.path(), "d.csv", "id,material,diameter_m,crush_force_n\nA1,X,0.001,1\nA1,X,0.001,2\n");
+        let p = write(dir.path(), "d.csv", "id,material,diameter_m,crush_force_n\nA1,X,0.001,100\nA1,X,0.001,200\n");
         assert!(read_crush(&p).unwrap_err().to_string().contains("duplicate id"));
     }
 }

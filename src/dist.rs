@@ -10,7 +10,6 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::io::{col_f64, col_str, read_table};
 use crate::params::{Param, Prior};
 
 /// A distribution declared in a study file (`{ distribution = "…", … }`).
@@ -182,37 +181,45 @@ impl Dist {
 /// `q<k>_v_normal_m_s` give the k % quantiles. Rejects negative or non-finite speeds, quantiles
 /// out of order, and a missing or empty row, naming file, row and rule.
 pub fn read_spectrum(path: &Path, target: &str, row: u32) -> Result<Vec<(f64, f64)>> {
-    let df = read_table(path)?;
-    let targets = col_str(&df, path, "target")?;
-    let rows = col_f64(&df, path, "row")?;
-    let impacts = col_f64(&df, path, "impacts")?;
-    let mut cols: Vec<(f64, String)> = df
-        .get_column_names()
+    let t = crate::intake::read_raw(&crate::intake::Source::file(path))?;
+    let c = t.require(&["target", "row", "impacts"])?;
+    let mut cols: Vec<(f64, usize)> = t
+        .headers
         .iter()
-        .filter_map(|c| {
-            let s = c.as_str();
-            let k = s.strip_prefix('q')?.strip_suffix("_v_normal_m_s")?.parse::<f64>().ok()?;
-            Some((k / 100.0, s.to_string()))
+        .enumerate()
+        .filter_map(|(k, s)| {
+            let p = s.strip_prefix('q')?.strip_suffix("_v_normal_m_s")?.parse::<f64>().ok()?;
+            Some((p / 100.0, k))
         })
         .collect();
     cols.sort_by(|a, b| a.0.total_cmp(&b.0));
     if cols.is_empty() {
         return Err(Error::data_file(path, "columns", "no quantile columns `q<k>_v_normal_m_s`: not an impact spectrum"));
     }
-    let Some(i) = (0..targets.len()).find(|&i| targets[i] == target && rows[i] == row as f64) else {
+    let mut found = None;
+    for i in 0..t.rows.len() {
+        if t.text(i, c[0]).as_deref() == Some(target) && t.need_number(i, c[1])? == row as f64 {
+            found = Some(i);
+            break;
+        }
+    }
+    let Some(i) = found else {
         return Err(Error::data_file(path, "target/row", format!("no row with target `{target}` and row {row}")));
     };
-    if !(impacts[i] >= 1.0) {
-        return Err(Error::data_row(path, i, "impacts", format!("the spectrum of target `{target}`, row {row} is empty ({} impacts)", impacts[i])));
+    let impacts = t.need_number(i, c[2])?;
+    if !(impacts >= 1.0) {
+        return Err(t.error(i, Some(c[2]), format!("the spectrum of target `{target}`, row {row} is empty ({impacts} impacts)")));
     }
     let mut q = vec![(0.0, 0.0)];
-    for (p, c) in &cols {
-        let v = col_f64(&df, path, c)?[i];
-        crate::data::VELOCITY.check(path, i, c, v)?;
-        if v < q[q.len() - 1].1 {
-            return Err(Error::data_row(path, i, c, format!("quantiles must not decrease ({v} after {})", q[q.len() - 1].1)));
+    for &(p, k) in &cols {
+        let v = t.need_number(i, k)?;
+        if let Some(rule) = crate::data::VELOCITY.broken(v) {
+            return Err(t.error(i, Some(k), rule));
         }
-        q.push((*p, v));
+        if v < q[q.len() - 1].1 {
+            return Err(t.error(i, Some(k), format!("quantiles must not decrease ({v} after {})", q[q.len() - 1].1)));
+        }
+        q.push((p, v));
     }
     Ok(q)
 }

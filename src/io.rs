@@ -330,13 +330,30 @@ pub struct InputFile {
     pub sha256: String,
     /// Size in bytes.
     pub bytes: u64,
+    /// How a tabular input was read: format, sheet, columns with units and conversions, filter,
+    /// joined files ([`crate::intake`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub read: Option<crate::intake::Provenance>,
 }
 
 impl InputFile {
     /// Hashes a file.
     pub fn hash(path: &Path) -> Result<Self> {
         let bytes = std::fs::read(path).map_err(|e| Error::read(path, e))?;
-        Ok(InputFile { path: path.display().to_string(), sha256: sha256_hex(&bytes), bytes: bytes.len() as u64 })
+        Ok(InputFile { path: path.display().to_string(), sha256: sha256_hex(&bytes), bytes: bytes.len() as u64, read: None })
+    }
+
+    /// Hashes a tabular input and keeps the record of how it was read; a joined file gets an
+    /// entry of its own (hash only: its record is inside this one's).
+    pub fn read(path: &Path, provenance: &crate::intake::Provenance) -> Result<Vec<Self>> {
+        let mut out = vec![InputFile { read: Some(provenance.clone()), ..InputFile::hash(path)? }];
+        for j in &provenance.joined {
+            let p = Path::new(&j.file);
+            if p != path {
+                out.push(InputFile::hash(p)?);
+            }
+        }
+        Ok(out)
     }
 }
 

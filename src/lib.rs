@@ -38,21 +38,22 @@
 //! missing from it).
 //!
 //! ```text
-//! 16  bench                          speed figures (the CLI, src/main.rs, sits above)
-//! 15  runner                         loaded study → its runner (only main and bench import it)
-//! 14  study                          kind → schema + validation
-//! 13  experiments · temperature      experiment design on the main study's state of knowledge; temperature across the chain
-//! 12  lifetime_study · uq            the lifetime study; the main study
-//! 11  discrepancy                    the naming loop, KOH, the curve level
-//! 10  strength                       the one lifetime model (its Bayesian draws use calibrate::mcmc)
-//!  9  calibrate                      LSQ, MCMC, emulator, calibration studies, curve generator
-//!  8  dem · fem · micro              the solvers with their studies (micro: microstructure micromechanics)
-//!  7  runkit · synth · thermal       run helpers; the crush-data generator; parameters against temperature
-//!  6  schema                         study files, TOML errors, shared options
-//!  5  dist · phases · report         declared distributions; phase-fraction tables; figures from tables
-//!  4  data · testfns                 datasets with plausibility ranges; analytic simulators
-//!  3  lifetime · model · weibull     P_N and damage laws; the Simulator seam; ASTM C1239
-//!  2  contact · design · io · params · stats
+//! 17  bench                          speed figures (the CLI, src/main.rs, sits above)
+//! 16  runner                         loaded study → its runner (only main and bench import it)
+//! 15  study                          kind → schema + validation
+//! 14  experiments · temperature      experiment design on the main study's state of knowledge; temperature across the chain
+//! 13  lifetime_study · uq            the lifetime study; the main study
+//! 12  discrepancy                    the naming loop, KOH, the curve level
+//! 11  strength · inspect             the one lifetime model (its Bayesian draws use calibrate::mcmc); what `datasets check` says of a file
+//! 10  calibrate                      LSQ, MCMC, emulator, calibration studies, curve generator
+//!  9  dem · fem · micro              the solvers with their studies (micro: microstructure micromechanics)
+//!  8  runkit · synth · thermal       run helpers; the crush-data generator; parameters against temperature
+//!  7  schema                         study files, TOML errors, shared options
+//!  6  dist · lab · phases · report   declared distributions; the example lab exports; phase-fraction tables; figures from tables
+//!  5  data · testfns                 datasets with plausibility ranges; analytic simulators
+//!  4  lifetime · model · weibull     P_N and damage laws; the Simulator seam; ASTM C1239
+//!  3  contact · design · io · params · stats
+//!  2  intake                         every tabular input: encodings, delimiters, spreadsheets, units, columns, joins
 //!  1  error · fracture
 //! ```
 //!
@@ -118,7 +119,10 @@ pub mod fem;
 pub mod fracture;
 pub mod error;
 pub mod experiments;
+pub mod intake;
+pub mod inspect;
 pub mod io;
+pub mod lab;
 pub mod lifetime;
 pub mod lifetime_study;
 pub mod micro;

@@ -184,11 +184,35 @@ enum DatasetsCommand {
         #[arg(long)]
         out_dir: Option<PathBuf>,
     },
-    /// Validate dataset files (crush CSV, Table 1 or a phase-fraction table) and summarise them.
+    /// Write the example lab exports of datasets/examples/ (a semicolon CSV and a workbook) from
+    /// the shipped SI crush files.
+    LabExamples {
+        /// Directory of the SI crush files.
+        #[arg(long, default_value = "datasets")]
+        datasets: PathBuf,
+        /// Output directory.
+        #[arg(long, default_value = "datasets/examples")]
+        out_dir: PathBuf,
+    },
+    /// Validate input files (crush data, curves, observations, spectra, phase tables, Table 1;
+    /// text or spreadsheets) and say what was read: format, columns, units, conversions.
     Check {
-        /// Files to check.
-        #[arg(required = true)]
+        /// Files to check (every sheet of a workbook unless --sheet names one).
+        #[arg(required_unless_present = "study")]
         files: Vec<PathBuf>,
+        /// The data files of this study, read as the study describes them (sheets, column
+        /// maps, units, material filters, shape files).
+        #[arg(long, conflicts_with_all = ["sheet", "header_row", "material"])]
+        study: Option<PathBuf>,
+        /// The sheet of a workbook: its name or its position from 1.
+        #[arg(long)]
+        sheet: Option<String>,
+        /// The header's line (text) or sheet row (spreadsheet), from 1.
+        #[arg(long)]
+        header_row: Option<usize>,
+        /// Only the rows of this material (a campaign file holding several).
+        #[arg(long)]
+        material: Option<String>,
     },
 }
 
@@ -328,41 +352,28 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             partlife::io::write_atomic(&path, &png)?;
             out!("{}: {} × {} pixels, soft fraction {:.4}", path.display(), m.nx, m.ny, m.fraction(1));
         }
-        Command::Datasets { command: DatasetsCommand::Check { files } } => {
-            for f in files {
-                if partlife::data::read_text_table(&f)?.column("phase").is_ok() {
-                    let t = partlife::phases::read_phases(&f)?;
-                    let fa = t.amorphous_fractions();
-                    out!(
-                        "{}: phase fractions ({}), {} phases at {} temperatures ({}–{} °C), amorphous fraction {:.3}–{:.3}: ok",
-                        f.display(),
-                        t.basis.column(),
-                        t.phases.len(),
-                        t.temperatures_c.len(),
-                        t.range().0,
-                        t.range().1,
-                        fa.iter().cloned().fold(f64::INFINITY, f64::min),
-                        fa.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
-                    );
-                    continue;
-                }
-                match partlife::data::check_file(&f)? {
-                    partlife::data::CheckedFile::Crush(d) => {
-                        let dd = d.diameters();
-                        let ff = d.forces();
-                        out!(
-                            "{}: crush data, material \"{}\", {} particles, d = {:.0}–{:.0} µm, F = {:.1}–{:.1} N: ok",
-                            f.display(),
-                            d.material(),
-                            d.records.len(),
-                            dd.iter().cloned().fold(f64::MAX, f64::min) * 1e6,
-                            dd.iter().cloned().fold(f64::MIN, f64::max) * 1e6,
-                            ff.iter().cloned().fold(f64::MAX, f64::min),
-                            ff.iter().cloned().fold(f64::MIN, f64::max)
-                        );
-                    }
-                    partlife::data::CheckedFile::Table1(rows) => {
-                        out!("{}: Table 1, {} rows: ok", f.display(), rows.len());
+        Command::Datasets { command: DatasetsCommand::LabExamples { datasets, out_dir } } => {
+            for p in partlife::lab::write_examples(&datasets, &out_dir)? {
+                out!("{}", p.display());
+            }
+        }
+        Command::Datasets { command: DatasetsCommand::Check { files, study, sheet, header_row, material } } => {
+            let sources: Vec<partlife::intake::Source> = match study {
+                Some(path) => partlife::study::load(&path)?.data_sources(),
+                None => files
+                    .into_iter()
+                    .map(|f| partlife::intake::Source {
+                        sheet: sheet.as_ref().map(|s| s.parse::<usize>().map(partlife::intake::SheetRef::Index).unwrap_or_else(|_| partlife::intake::SheetRef::Name(s.clone()))),
+                        header_row,
+                        material: material.clone(),
+                        ..partlife::intake::Source::file(f)
+                    })
+                    .collect(),
+            };
+            for src in sources {
+                for checked in partlife::inspect::check(&src)? {
+                    for line in checked.lines() {
+                        out!("{line}");
                     }
                 }
             }

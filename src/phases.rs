@@ -48,7 +48,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::data::{parse_number, read_text_table, text_column};
+use crate::intake::{Field, Kind, MapOrigin, Provenance, Quantity, Source, read_raw, resolve};
 use crate::error::{Error, Result};
 
 /// The shipped illustrative table's file name in `datasets/`.
@@ -104,54 +104,61 @@ fn folded(name: &str) -> String {
     name.chars().filter(|c| !matches!(c, ' ' | '_' | '-')).flat_map(char::to_lowercase).collect()
 }
 
-/// Reads and validates a phase-fraction table (module docs: format and rules).
+/// The fields of a phase-fraction table.
+pub const PHASE_FIELDS: [Field; 5] = [
+    Field { key: "temperature", column: "temperature_c", kind: Kind::Number(Quantity::Temperature), synonyms: &["t"], required: true, plausible: None },
+    Field { key: "phase", column: "phase", kind: Kind::Text, synonyms: &[], required: true, plausible: None },
+    Field { key: "mole_fraction", column: "mole_fraction", kind: Kind::Number(Quantity::Ratio), synonyms: &[], required: false, plausible: None },
+    Field { key: "mass_fraction", column: "mass_fraction", kind: Kind::Number(Quantity::Ratio), synonyms: &[], required: false, plausible: None },
+    Field { key: "amorphous", column: "amorphous", kind: Kind::Text, synonyms: &[], required: false, plausible: None },
+];
+
+/// Reads and validates a phase-fraction table (module docs: format and rules), through
+/// [`crate::intake`] (any delimiter, decimal mark and encoding, or a sheet; the temperature in
+/// °C or K, `temperature_c`, `temperature_k`, `T [K]`).
 pub fn read_phases(path: &Path) -> Result<PhaseTable> {
-    let df = read_text_table(path)?;
-    let present = |c: &str| df.column(c).is_ok();
-    let header = |rule: String| Err(Error::data_file(path, "header", rule));
-    let t_col = match (present("temperature_c"), present("temperature_k")) {
-        (true, false) => "temperature_c",
-        (false, true) => "temperature_k",
-        (true, true) => return header("both `temperature_c` and `temperature_k`: give the temperature once".into()),
-        (false, false) => return header("missing column `temperature_c` or `temperature_k` (required: a temperature, `phase`, and `mole_fraction` or `mass_fraction`; optional: `amorphous`)".into()),
-    };
-    let basis = match (present("mole_fraction"), present("mass_fraction")) {
+    read_phases_source(&Source::file(path)).map(|(t, _)| t)
+}
+
+/// [`read_phases`] as a study describes the file, with the record of how it was read.
+pub fn read_phases_source(src: &Source) -> Result<(PhaseTable, Provenance)> {
+    let path = src.file.as_path();
+    let raw = read_raw(src)?;
+    let r = resolve(&raw, &PHASE_FIELDS, &src.columns, &src.units, &MapOrigin::default())?;
+    let basis = match (r.has("mole_fraction"), r.has("mass_fraction")) {
         (true, false) => Basis::Mole,
         (false, true) => Basis::Mass,
-        (true, true) => return header("both `mole_fraction` and `mass_fraction`: one file holds one basis".into()),
-        (false, false) => return header("missing column `mole_fraction` or `mass_fraction` (the column's name states the basis)".into()),
+        (true, true) => return Err(raw.header_error(None, "both `mole_fraction` and `mass_fraction`: one file holds one basis")),
+        (false, false) => return Err(raw.header_error(None, "missing column `mole_fraction` or `mass_fraction` (the column's name states the basis)")),
     };
-    if !present("phase") {
-        return header("missing column `phase`".into());
-    }
-    if df.height() == 0 {
+    let key = basis.column();
+    if raw.rows.is_empty() {
         return Err(Error::data_file(path, "file", "no data rows"));
     }
-    let get = |name: &str| text_column(&df, name).map(|c| c.unwrap_or_default());
-    let (temps, names, values) = (get(t_col)?, get("phase")?, get(basis.column())?);
-    let flags = text_column(&df, "amorphous")?;
+    let t_col = raw.headers[r.column("temperature").unwrap_or(0)].clone();
 
     let mut table = PhaseTable { path: path.to_path_buf(), basis, temperatures_c: Vec::new(), phases: Vec::new(), amorphous: Vec::new(), fractions: Vec::new() };
     // The row each temperature starts at, and each phase's first row.
     let (mut starts, mut first_row): (Vec<usize>, Vec<usize>) = (Vec::new(), Vec::new());
-    for row in 0..df.height() {
-        let need = |col: &[Option<String>], name: &str| col[row].clone().ok_or_else(|| Error::data_row(path, row, name, "cell is empty; a value is required"));
-        let raw = parse_number(path, row, t_col, &need(&temps, t_col)?)?;
-        let t = if t_col == "temperature_k" { raw - KELVIN } else { raw };
+    let mut names: Vec<String> = Vec::new();
+    for row in 0..raw.rows.len() {
+        let t = r.need_number("temperature", row)?;
+        let shown_t = r.text("temperature", row).unwrap_or_default();
         if !(t.is_finite() && t > -KELVIN) {
-            return Err(Error::data_row(path, row, t_col, format!("{raw} lies at or below absolute zero (−273.15 °C, 0 K)")));
+            return Err(r.error(row, "temperature", format!("{shown_t} lies at or below absolute zero (−273.15 °C, 0 K)")));
         }
-        let name = need(&names, "phase")?;
-        let value = parse_number(path, row, basis.column(), &need(&values, basis.column())?)?;
+        let name = r.need_text("phase", row)?;
+        names.push(name.clone());
+        let value = r.need_number(key, row)?;
         if !value.is_finite() || value < -ROUND_OFF {
-            return Err(Error::data_row(path, row, basis.column(), format!("a fraction must be finite and ≥ 0, got {value}")));
+            return Err(r.error(row, key, format!("a fraction must be finite and ≥ 0, got {value}")));
         }
-        let amorphous = match flags.as_ref().and_then(|f| f[row].as_deref()) {
+        let amorphous = match r.text("amorphous", row) {
             None => false,
             Some(v) => match v.to_ascii_lowercase().as_str() {
                 "true" | "1" | "yes" => true,
                 "false" | "0" | "no" => false,
-                _ => return Err(Error::data_row(path, row, "amorphous", format!("must be true or false, got \"{v}\""))),
+                _ => return Err(r.error(row, "amorphous", format!("must be true or false, got \"{v}\""))),
             },
         };
         // A new temperature starts a new block; it must be above the previous one.
@@ -159,7 +166,7 @@ pub fn read_phases(path: &Path) -> Result<PhaseTable> {
             if let Some(&prev) = table.temperatures_c.last()
                 && t <= prev
             {
-                return Err(Error::data_row(path, row, t_col, format!("temperatures must increase down the file, with the rows of one temperature together: {raw} after {}", if t_col == "temperature_k" { prev + KELVIN } else { prev })));
+                return Err(r.error(row, "temperature", format!("temperatures must increase down the file, with the rows of one temperature together: {shown_t} ({t} °C) after {prev} °C")));
             }
             table.temperatures_c.push(t);
             table.fractions.push(vec![0.0; table.phases.len()]);
@@ -168,13 +175,13 @@ pub fn read_phases(path: &Path) -> Result<PhaseTable> {
         let p = match table.phases.iter().position(|n| *n == name) {
             Some(p) => {
                 if table.amorphous[p] != amorphous {
-                    return Err(Error::data_row(path, row, "amorphous", format!("phase \"{name}\" is {} here but {} on row {}: a phase is amorphous or not at every temperature", if amorphous { "amorphous" } else { "not amorphous" }, if amorphous { "not amorphous" } else { "amorphous" }, first_row[p] + 1)));
+                    return Err(r.error(row, "amorphous", format!("phase \"{name}\" is {} here but {} on row {}: a phase is amorphous or not at every temperature", if amorphous { "amorphous" } else { "not amorphous" }, if amorphous { "not amorphous" } else { "amorphous" }, first_row[p] + 1)));
                 }
                 p
             }
             None => {
                 if let Some(q) = table.phases.iter().position(|n| folded(n) == folded(&name)) {
-                    return Err(Error::data_row(path, row, "phase", format!("\"{name}\" differs from \"{}\" (row {}) only in case, spaces, '_' or '-': spell each phase the same way at every temperature", table.phases[q], first_row[q] + 1)));
+                    return Err(r.error(row, "phase", format!("\"{name}\" differs from \"{}\" (row {}) only in case, spaces, '_' or '-': spell each phase the same way at every temperature", table.phases[q], first_row[q] + 1)));
                 }
                 table.phases.push(name.clone());
                 table.amorphous.push(amorphous);
@@ -184,8 +191,8 @@ pub fn read_phases(path: &Path) -> Result<PhaseTable> {
             }
         };
         let block = table.fractions.last_mut().expect("a block was started");
-        if (starts[starts.len() - 1]..row).any(|r| names[r].as_deref() == Some(name.as_str())) {
-            return Err(Error::data_row(path, row, "phase", format!("phase \"{name}\" appears twice at {raw} {}", if t_col == "temperature_k" { "K" } else { "°C" })));
+        if (starts[starts.len() - 1]..row).any(|q| names[q] == name) {
+            return Err(r.error(row, "phase", format!("phase \"{name}\" appears twice at {shown_t} ({t_col})")));
         }
         block[p] = value.max(0.0);
     }
@@ -196,11 +203,16 @@ pub fn read_phases(path: &Path) -> Result<PhaseTable> {
         let sum: f64 = f.iter().sum();
         if (sum - 1.0).abs() > SUM_TOLERANCE {
             let (row, t) = (starts[b], table.temperatures_c[b]);
-            return Err(Error::data_row(path, row, basis.column(), format!("the fractions at {t} °C sum to {sum:.6}, not 1 within {SUM_TOLERANCE} (rows {}–{})", row + 1, starts.get(b + 1).map_or(df.height(), |&s| s))));
+            return Err(r.error(row, key, format!("the fractions at {t} °C sum to {sum:.6}, not 1 within {SUM_TOLERANCE} (rows {}–{})", row + 1, starts.get(b + 1).map_or(raw.rows.len(), |&s| s))));
         }
         f.iter_mut().for_each(|x| *x /= sum);
     }
-    Ok(table)
+    let mut provenance = r.provenance.clone();
+    for w in &provenance.warnings {
+        crate::intake::warn(w);
+    }
+    provenance.rows = raw.rows.len();
+    Ok((table, provenance))
 }
 
 impl PhaseTable {

@@ -163,8 +163,10 @@ pub struct MaterialSpec {
     pub key: String,
     /// Label for figures (`BL 16/30`).
     pub label: String,
-    /// Crush dataset (CSV), relative to the study file.
-    pub data: PathBuf,
+    /// Crush data: a file relative to the study file (`data = "crush.csv"`), or a table saying
+    /// how to read it (`data = { file = "campaign.xlsx", sheet = "BL", material = "BL 16/30",
+    /// columns = { … }, units = { … }, shape = { … } }`; [`crate::intake::Source`]).
+    pub data: crate::intake::DataRef,
     /// Particle elastic constants.
     pub elastic: Elastic,
     /// Particle (apparent) density (kg/m³).
@@ -179,6 +181,15 @@ pub struct MaterialSpec {
 }
 
 impl MaterialSpec {
+    /// Reads the material's crush data as its `data` describes it (files relative to the study
+    /// file `study`); `index` is its place among the study's `[[material]]`s (for messages).
+    pub fn read_data(&self, study: &Path, index: usize) -> Result<crate::data::CrushData> {
+        let file = study.display().to_string();
+        let key = format!("material[{index}].data");
+        self.data.validate(&file, &key)?;
+        crate::data::read_crush_source(&self.data.resolved(study), &crate::intake::MapOrigin { file, key })
+    }
+
     /// The reference particle of the impact outputs: `impact_diameter_m` or the median
     /// diameter of `data`.
     pub fn sphere(&self, data: &crate::data::CrushData) -> crate::contact::Sphere {
@@ -188,25 +199,7 @@ impl MaterialSpec {
 }
 
 
-/// Resolves `p` relative to the directory of the file `study` (lexically:
-/// `studies/../datasets/x.csv` becomes `datasets/x.csv`); absolute paths stay.
-pub fn resolve_relative(study: &Path, p: &Path) -> PathBuf {
-    if p.is_absolute() {
-        return p.to_path_buf();
-    }
-    let joined = study.parent().unwrap_or(Path::new(".")).join(p);
-    let mut out = PathBuf::new();
-    for c in joined.components() {
-        match c {
-            std::path::Component::CurDir => {}
-            std::path::Component::ParentDir if matches!(out.components().next_back(), Some(std::path::Component::Normal(_))) => {
-                out.pop();
-            }
-            other => out.push(other),
-        }
-    }
-    out
-}
+pub use crate::intake::resolve_relative;
 
 
 /// `Ok` if `ok`, else a configuration error naming `file`, `key` and `rule`.

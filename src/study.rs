@@ -64,6 +64,21 @@ pub struct LoadedStudy {
     pub study: Study,
 }
 
+impl LoadedStudy {
+    /// The crush data of its materials, each as the study describes it (files resolved relative
+    /// to the study file): what `partlife datasets check --study` reads. Kinds without
+    /// `[[material]]` read none.
+    pub fn data_sources(&self) -> Vec<crate::intake::Source> {
+        let materials: &[MaterialSpec] = match &self.study {
+            Study::Lifetime(s) => &s.material,
+            Study::Uq(s) => &s.material,
+            Study::Discrepancy(s) => &s.material,
+            _ => &[],
+        };
+        materials.iter().map(|m| m.data.resolved(&self.file.path)).collect()
+    }
+}
+
 /// Reads, parses and validates a study file.
 pub fn load(path: &Path) -> Result<LoadedStudy> {
     let file = StudyFile::read(path)?;

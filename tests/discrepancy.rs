@@ -98,7 +98,7 @@ fn false_positives(seeds: std::ops::Range<u64>, count: usize, q: f64) -> usize {
     for seed in seeds {
         generator.seed = 5000 + seed;
         let records = generate(&generator, 0).unwrap().into_iter().map(|p| p.record).collect();
-        let data = partlife::data::CrushData { path: "hidden.csv".into(), records };
+        let data = partlife::data::CrushData::new("hidden.csv", records);
         let sample = sample_of(&data, &elastic, &ContactOptions::default()).unwrap();
         let o = analyse(&sample, &NamingSettings { bootstrap: 199, seed, ..NamingSettings::default() }, false).unwrap();
         hits += usize::from(o.named.iter().any(|c| *c != Effect::Roundness));

@@ -49,7 +49,7 @@ fn truth() -> f64 {
 fn bands(count: usize, seed: u64) -> (Vec<Effect>, (f64, f64, f64), (f64, f64, f64)) {
     let g = generator(count, seed);
     let records = generate(&g, 0).unwrap().into_iter().map(|p| p.record).collect();
-    let data = CrushData { path: format!("generated-{seed}.csv").into(), records };
+    let data = CrushData::new(format!("generated-{seed}.csv"), records);
     let elastic = g.material[0].elastic;
     let sample = sample_of(&data, &elastic, &ContactOptions::default()).unwrap();
     let naming = NamingSettings { bootstrap: 199, seed, ..NamingSettings::default() };
@@ -93,7 +93,7 @@ fn true_model_weight(count: usize, seeds: std::ops::Range<u64>) -> (f64, f64) {
     for seed in seeds {
         let g = generator(count, 70_000 + seed);
         let records = generate(&g, 0).unwrap().into_iter().map(|p| p.record).collect();
-        let data = CrushData { path: "generated.csv".into(), records };
+        let data = CrushData::new("generated.csv", records);
         let sample = sample_of(&data, &g.material[0].elastic, &ContactOptions::default()).unwrap();
         let naming = NamingSettings { seed, ..NamingSettings::default() };
         let lpd: Vec<Vec<f64>> = specs.iter().map(|s| cv_scores(s, &sample, &naming, "bl").unwrap()).collect();

@@ -27,7 +27,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::fracture::{FractureDetector, FractureParams};
-use crate::io::{col_f64, col_str, read_table};
+use crate::intake::{Field, Kind, MapOrigin, Quantity, Source, read_raw, resolve};
 use crate::model::OutputSpec;
 
 /// One measured curve.
@@ -79,43 +79,47 @@ impl Curve {
     }
 }
 
+/// The fields of a curve file (read through [`crate::intake`]: any delimiter, decimal mark,
+/// encoding or sheet; units from the headers, `displacement [mm]`, `F [kN]`).
+pub const CURVE_FIELDS: [Field; 4] = [
+    Field { key: "particle", column: "particle", kind: Kind::Text, synonyms: &["id", "particle_id", "probe", "sample", "specimen"], required: true, plausible: None },
+    Field { key: "diameter", column: "diameter_m", kind: Kind::Number(Quantity::Length), synonyms: &["d", "dp"], required: true, plausible: Some(crate::data::DIAMETER) },
+    Field { key: "displacement", column: "displacement_m", kind: Kind::Number(Quantity::Length), synonyms: &["s", "delta", "travel", "deformation"], required: true, plausible: None },
+    Field { key: "force", column: "force_n", kind: Kind::Number(Quantity::Force), synonyms: &["f", "load"], required: true, plausible: Some(crate::data::CURVE_FORCE) },
+];
+
 /// Reads a curve file; every rule broken names the file, row and column.
 pub fn load_curves(path: &Path) -> Result<Vec<Curve>> {
-    let df = read_table(path)?;
-    let particle = col_str(&df, path, "particle")?;
-    let cols: Vec<Vec<f64>> = ["diameter_m", "displacement_m", "force_n"].iter().map(|c| col_f64(&df, path, c)).collect::<Result<_>>()?;
-    let (diam, disp, force) = (&cols[0], &cols[1], &cols[2]);
+    let t = read_raw(&Source::file(path))?;
+    let r = resolve(&t, &CURVE_FIELDS, &Default::default(), &Default::default(), &MapOrigin::default())?;
+    for w in &r.provenance.warnings {
+        crate::intake::warn(w);
+    }
     let mut curves: Vec<Curve> = Vec::new();
-    for i in 0..particle.len() {
-        for (name, v) in [("diameter_m", diam[i]), ("displacement_m", disp[i]), ("force_n", force[i])] {
-            if !v.is_finite() {
-                return Err(Error::data_row(path, i, name, format!("{v} is not a finite number")));
-            }
-        }
-        crate::data::DIAMETER.check(path, i, "diameter_m", diam[i])?;
-        crate::data::CURVE_FORCE.check(path, i, "force_n", force[i])?;
-        if !(disp[i] >= 0.0 && disp[i] <= diam[i]) {
-            return Err(Error::data_row(path, i, "displacement_m", format!("displacement must lie in [0, d = {} m] (a platen cannot travel more than the particle's diameter); got {}", diam[i], disp[i])));
-        }
-        if particle[i].is_empty() {
-            return Err(Error::data_row(path, i, "particle", "is empty"));
+    for i in 0..t.rows.len() {
+        let particle = r.need_text("particle", i)?;
+        let diam = r.need_number("diameter", i)?;
+        let disp = r.need_number("displacement", i)?;
+        let force = r.need_number("force", i)?;
+        if !(disp >= 0.0 && disp <= diam) {
+            return Err(r.error(i, "displacement", format!("displacement must lie in [0, d = {diam} m] (a platen cannot travel more than the particle's diameter); got {disp} m")));
         }
         match curves.last_mut() {
-            Some(c) if c.particle == particle[i] => {
-                if diam[i] != c.diameter {
-                    return Err(Error::data_row(path, i, "diameter_m", format!("{} differs from {} earlier in particle {}'s curve", diam[i], c.diameter, c.particle)));
+            Some(c) if c.particle == particle => {
+                if diam != c.diameter {
+                    return Err(r.error(i, "diameter", format!("{diam} m differs from {} m earlier in particle {}'s curve", c.diameter, c.particle)));
                 }
-                if disp[i] < *c.displacement.last().unwrap_or(&0.0) {
-                    return Err(Error::data_row(path, i, "displacement_m", format!("falls back (from {:e} to {:e}): a curve's displacement must not decrease", c.displacement.last().unwrap_or(&0.0), disp[i])));
+                if disp < *c.displacement.last().unwrap_or(&0.0) {
+                    return Err(r.error(i, "displacement", format!("falls back (from {:e} to {:e} m): a curve's displacement must not decrease", c.displacement.last().unwrap_or(&0.0), disp)));
                 }
-                c.displacement.push(disp[i]);
-                c.force.push(force[i]);
+                c.displacement.push(disp);
+                c.force.push(force);
             }
             _ => {
-                if curves.iter().any(|c| c.particle == particle[i]) {
-                    return Err(Error::data_row(path, i, "particle", format!("particle {} appears again after another particle's rows", particle[i])));
+                if curves.iter().any(|c| c.particle == particle) {
+                    return Err(r.error(i, "particle", format!("particle {particle} appears again after another particle's rows")));
                 }
-                curves.push(Curve { particle: particle[i].clone(), diameter: diam[i], displacement: vec![disp[i]], force: vec![force[i]] });
+                curves.push(Curve { particle, diameter: diam, displacement: vec![disp], force: vec![force] });
             }
         }
     }
@@ -211,35 +215,58 @@ pub fn reduce_curves(path: &Path, curves: &[Curve], d0: f64, points: usize, frac
     Ok(CrushReduction { reference_diameter: d0, grid, curves, fractures, observations: obs })
 }
 
+/// One row of an observation file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObservationRow {
+    /// The model output's name.
+    pub output: String,
+    /// Its unit as written.
+    pub unit: String,
+    /// The value.
+    pub value: f64,
+    /// Its standard deviation (> 0).
+    pub sd: f64,
+}
+
+/// Reads the rows of an observation file (`output, unit, value, sd`, through
+/// [`crate::intake`]), checking each number; `place` gives each row's location for messages.
+pub fn read_observation_rows(path: &Path) -> Result<(Vec<ObservationRow>, crate::intake::RawTable)> {
+    let t = read_raw(&Source::file(path))?;
+    let c = t.require(&["output", "unit", "value", "sd"])?;
+    let mut rows = Vec::with_capacity(t.rows.len());
+    for i in 0..t.rows.len() {
+        let output = t.need_text(i, c[0])?;
+        let unit = t.text(i, c[1]).unwrap_or_default();
+        let value = t.need_number(i, c[2])?;
+        let sd = t.need_number(i, c[3])?;
+        if !(sd > 0.0) {
+            return Err(t.error(i, Some(c[3]), format!("{sd} must be a finite number > 0")));
+        }
+        rows.push(ObservationRow { output, unit, value, sd });
+    }
+    if rows.is_empty() {
+        return Err(Error::data_file(path, "file", "no observations"));
+    }
+    Ok((rows, t))
+}
+
 /// Reads an observation file (`output, unit, value, sd`) against the model outputs.
 pub fn load_observations(path: &Path, outputs: &[OutputSpec]) -> Result<Observations> {
-    let df = read_table(path)?;
-    let name = col_str(&df, path, "output")?;
-    let unit = col_str(&df, path, "unit")?;
-    let value = col_f64(&df, path, "value")?;
-    let sd = col_f64(&df, path, "sd")?;
+    let (rows, t) = read_observation_rows(path)?;
+    let (c_output, c_unit) = (t.column("output"), t.column("unit"));
     let mut obs = Observations { values: vec![], sigma: vec![], output: vec![], group: vec![] };
-    for i in 0..name.len() {
-        let Some(o) = outputs.iter().position(|s| s.name == name[i]) else {
+    for (i, row) in rows.iter().enumerate() {
+        let Some(o) = outputs.iter().position(|s| s.name == row.output) else {
             let known: Vec<&str> = outputs.iter().map(|s| s.name.as_str()).collect();
-            return Err(Error::data_row(path, i, "output", format!("`{}` is not an output of the model ({})", name[i], known.join(", "))));
+            return Err(t.error(i, c_output, format!("`{}` is not an output of the model ({})", row.output, known.join(", "))));
         };
-        if unit[i] != outputs[o].unit {
-            return Err(Error::data_row(path, i, "unit", format!("`{}` does not match the model output's unit `{}`", unit[i], outputs[o].unit)));
+        if row.unit != outputs[o].unit {
+            return Err(t.error(i, c_unit, format!("`{}` does not match the model output's unit `{}`", row.unit, outputs[o].unit)));
         }
-        if !value[i].is_finite() {
-            return Err(Error::data_row(path, i, "value", format!("{} is not a finite number", value[i])));
-        }
-        if !(sd[i].is_finite() && sd[i] > 0.0) {
-            return Err(Error::data_row(path, i, "sd", format!("{} must be a finite number > 0", sd[i])));
-        }
-        obs.values.push(value[i]);
-        obs.sigma.push(sd[i]);
+        obs.values.push(row.value);
+        obs.sigma.push(row.sd);
         obs.output.push(o);
         obs.group.push(0);
-    }
-    if obs.is_empty() {
-        return Err(Error::data_file(path, "file", "no observations"));
     }
     Ok(obs)
 }

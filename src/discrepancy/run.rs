@@ -68,8 +68,8 @@ pub fn quick_study(data: &Path) -> Result<(StudyFile, DiscrepancyStudy)> {
     let file_name = data.file_name().map(PathBuf::from).unwrap_or_else(|| data.to_path_buf());
     let material = MaterialSpec {
         key,
-        label: crush.material().to_string(),
-        data: file_name,
+        label: if crush.material().is_empty() { stem.clone() } else { crush.material().to_string() },
+        data: crate::intake::DataRef(crate::intake::Source::file(file_name)),
         elastic: crate::contact::Elastic { youngs_modulus_pa: 112e9, poisson_ratio: 0.25 },
         density_kg_m3: 3600.0,
         impact_diameter_m: None,
@@ -166,10 +166,9 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         inputs.push(InputFile::hash(&loaded.path)?);
     }
     let mut prepared = Vec::new();
-    for m in &s.material {
-        let path = loaded.resolve(&m.data);
-        let data = read_crush(&path)?;
-        inputs.push(InputFile::hash(&path)?);
+    for (k, m) in s.material.iter().enumerate() {
+        let data = m.read_data(&loaded.path, k)?;
+        inputs.extend(InputFile::read(&data.path, &data.provenance)?);
         let sample = sample_of(&data, &m.elastic, &s.contact)?;
         validate(&sample)?;
         let population = crate::strength::Population::of_material(m, prepared.len(), &data, &loaded.path, s.seed)?;

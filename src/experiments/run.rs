@@ -95,7 +95,7 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     let state = State::new(forms, damage_weights, horizon, s.decision.loss, a.samples + a.reserve, s.seed)?;
     pb.inc(1);
     for m in &state.forms[0].setup.materials {
-        inputs.push(InputFile::hash(&m.path)?);
+        inputs.extend(InputFile::read(&m.path, &m.read)?);
     }
 
     // Every candidate at every size.

@@ -23,7 +23,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use crate::contact::ContactState;
-use crate::data::{CrushData, read_crush};
+use crate::data::CrushData;
 use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir};
 use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
@@ -230,11 +230,10 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
     // 1. Inputs first: every bad-input error happens before anything is written.
     let mut inputs = vec![InputFile::hash(&loaded.path)?];
     let mut datasets = Vec::new();
-    for m in &s.material {
-        let path = loaded.resolve(&m.data);
-        pb.set_message(format!("reading {}", path.display()));
-        let data = read_crush(&path)?;
-        inputs.push(InputFile::hash(&path)?);
+    for (k, m) in s.material.iter().enumerate() {
+        pb.set_message(format!("reading {}", m.data.file.display()));
+        let data = m.read_data(&loaded.path, k)?;
+        inputs.extend(InputFile::read(&data.path, &data.provenance)?);
         datasets.push(data);
     }
 
@@ -243,7 +242,7 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
     let mut runs = Vec::new();
     for (index, (m, data)) in s.material.iter().zip(datasets).enumerate() {
         pb.set_message(format!("{}: contact stresses and Weibull fit", m.label));
-        let at_break = contact_at_break(&data.records, &m.elastic, &s.contact)?;
+        let at_break = contact_at_break(&data, &m.elastic, &s.contact)?;
         let sigma_bar: Vec<f64> = at_break.iter().map(|c| c.mean_tensile).collect();
         let fit = fit_mle(&sigma_bar).map_err(|e| {
             Error::data_file(&data.path, "all rows", format!("Weibull fit of the average tensile stress failed: {e}"))

@@ -14,7 +14,7 @@ use rand_chacha::ChaCha8Rng;
 use super::effects::{Effect, Term, damage_offset};
 use super::regress::{Design, RegFit, fit};
 use crate::contact::{ContactOptions, ContactState, ContactStress, Elastic, Hertz, TensileZone};
-use crate::data::{CrushData, CrushRecord};
+use crate::data::CrushData;
 use crate::error::{Error, Result};
 use crate::lifetime::damage::tk_ratio_path;
 
@@ -31,21 +31,28 @@ pub struct Sample {
 
 /// Hertz contact state of each crushed particle at its force at break: sphere of radius d/2 on
 /// the platen, σ̄ over the contact options' averaging domain (the deliverable's reduction).
-pub fn contact_at_break(records: &[CrushRecord], elastic: &Elastic, contact: &ContactOptions) -> Result<Vec<ContactState>> {
+/// A σ̄ outside [`crate::data::SIGMA_BAR`] is refused naming the particle's row, with the hint
+/// to check the force and diameter units.
+pub fn contact_at_break(data: &CrushData, elastic: &Elastic, contact: &ContactOptions) -> Result<Vec<ContactState>> {
     let zone = TensileZone::new(elastic.poisson_ratio);
-    records
+    data.records
         .iter()
-        .map(|r| {
+        .enumerate()
+        .map(|(k, r)| {
             let radius = 0.5 * r.diameter_m;
             let hertz = Hertz::sphere_on_flat(elastic, &contact.platen, radius);
-            ContactStress { hertz, zone, domain: contact.averaging, particle_radius: radius }.at_force(r.crush_force_n)
+            let state = ContactStress { hertz, zone, domain: contact.averaging, particle_radius: radius }.at_force(r.crush_force_n)?;
+            if let Some(rule) = crate::data::SIGMA_BAR.broken(state.mean_tensile) {
+                return Err(data.error(k, "crush_force_n", format!("{rule}, from F = {} N, d = {} m and E = {} Pa: check the force and diameter units", r.crush_force_n, r.diameter_m, elastic.youngs_modulus_pa)));
+            }
+            Ok(state)
         })
         .collect()
 }
 
 /// Strengths (σ̄ at break) and covariates of a crush dataset.
 pub fn sample_of(data: &CrushData, elastic: &Elastic, contact: &ContactOptions) -> Result<Sample> {
-    let at = contact_at_break(&data.records, elastic, contact)?;
+    let at = contact_at_break(data, elastic, contact)?;
     let r = &data.records;
     Ok(Sample {
         source: data.path.display().to_string(),

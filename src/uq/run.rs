@@ -60,7 +60,7 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     let forms = forms(s, &loaded.path, &shared, &|| pb.inc(1))?;
     let mut inputs = vec![InputFile::hash(&loaded.path)?];
     for m in &forms[0].setup.materials {
-        inputs.push(InputFile::hash(&m.path)?);
+        inputs.extend(InputFile::read(&m.path, &m.read)?);
     }
     if let crate::dist::Dist::Spectrum { file, .. } = &s.impact.velocity {
         inputs.push(InputFile::hash(&loaded.resolve(std::path::Path::new(file)))?);

@@ -35,7 +35,6 @@ use std::sync::Arc;
 
 use super::study::UqStudy;
 use crate::contact::{AveragingDomain, ContactOptions};
-use crate::data::read_crush;
 use crate::dist::Marginal;
 use crate::error::{Error, Result};
 use crate::lifetime::damage::{CriticalRatioTable, DamageModel, Law};
@@ -75,6 +74,8 @@ pub struct Material {
     pub sample: Sample,
     /// The crush data file.
     pub path: PathBuf,
+    /// How it was read (for the manifest).
+    pub read: crate::intake::Provenance,
     /// Index of `strength_<key>` in the inputs.
     strength_input: usize,
     /// Indices of its effect parameters in the inputs (order of the linear effects).
@@ -227,11 +228,8 @@ impl Setup {
         let mut materials = Vec::new();
         for (slot, &i) in s.order().iter().enumerate() {
             let m = &s.material[i];
-            let dpath = crate::schema::resolve_relative(path, &m.data);
-            if !dpath.is_file() {
-                return Err(Error::config(&file, format!("material[{i}].data"), format!("{} does not exist", dpath.display())));
-            }
-            let data = read_crush(&dpath)?;
+            let data = m.read_data(path, i)?;
+            let dpath = data.path.clone();
             let sample = sample_of(&data, &m.elastic, &contact)?;
             let naming = NamingSettings { seed: s.seed.wrapping_add(7919 * i as u64), ..s.strength.naming.clone() };
             let effects = crate::discrepancy::workflow::resolve(spec, &sample, &naming)?;
@@ -251,7 +249,7 @@ impl Setup {
                 effect_inputs.push(inputs.len());
                 inputs.push(Input { name: format!("{}_{sym}_{}", e.name(), m.key), unit: "-".into(), marginal: Marginal::Quantiles { p, v } });
             }
-            materials.push(Material { model, draws, weights, sample, path: dpath, strength_input, effect_inputs });
+            materials.push(Material { model, draws, weights, sample, path: dpath, read: data.provenance.clone(), strength_input, effect_inputs });
         }
         let shared_at = inputs.len();
         inputs.extend(shared.inputs.iter().cloned());

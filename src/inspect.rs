@@ -1,0 +1,168 @@
+//! What `partlife datasets check` says of a file: which kind of input it is, what was read
+//! (format, columns, units and conversions, the material filter and joins, through
+//! [`crate::intake`]), a one-line summary of its values, and any warning.
+//!
+//! The kind is recognised from the header: Table 1 (`size_um_min`), a phase-fraction table
+//! (`phase`), observations (`output`, `unit`, `value`, `sd`), an impact spectrum
+//! (`q<k>_v_normal_m_s`), force–displacement curves (a displacement column), a shape file
+//! (an id and roundness or sphericity, no force), else crush data. A crush file holding several
+//! materials is summarised per material; a workbook sheet by sheet.
+//!
+//! Verified by `tests/intake.rs`.
+
+use std::path::Path;
+
+use crate::error::Result;
+use crate::intake::{MapOrigin, Provenance, RawTable, SheetRef, Source, read_raw, resolve};
+
+/// One checked table (a file, a sheet of a workbook, a material of a campaign file).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checked {
+    /// What was checked: the file, with its sheet and material filter if any.
+    pub what: String,
+    /// The kind of input and a summary of its values.
+    pub summary: String,
+    /// How it was read (when the reader records it).
+    pub read: Option<Provenance>,
+}
+
+impl Checked {
+    /// The lines `datasets check` prints.
+    pub fn lines(&self) -> Vec<String> {
+        let mut out = vec![format!("{}: {}: ok", self.what, self.summary)];
+        if let Some(p) = &self.read {
+            out.push(format!("  read: {}", p.describe()));
+        }
+        out
+    }
+}
+
+fn range(v: &[f64]) -> (f64, f64) {
+    v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)))
+}
+
+/// The kind of table a header shows (module docs).
+fn kind_of(t: &RawTable) -> &'static str {
+    let has = |n: &str| t.column(n).is_some();
+    let folded: Vec<String> = t.headers.iter().map(|h| crate::intake::units::fold(&crate::intake::units::parse_header(h).name)).collect();
+    let any = |names: &[&str]| folded.iter().any(|f| names.contains(&f.as_str()));
+    if has("size_um_min") {
+        "table1"
+    } else if has("phase") {
+        "phases"
+    } else if has("output") && has("value") && has("sd") {
+        "observations"
+    } else if t.headers.iter().any(|h| h.starts_with('q') && h.ends_with("_v_normal_m_s")) {
+        "spectrum"
+    } else if any(&["displacement", "s", "delta", "travel", "deformation"]) {
+        "curves"
+    } else if any(&["roundness", "sphericity", "wadellroundness", "b/l"]) && !any(&["crushforce", "f", "fmax", "force", "load", "breakingforce", "peakforce", "crushingforce"]) {
+        "shape"
+    } else {
+        "crush"
+    }
+}
+
+/// Checks one file as `src` describes it (every sheet of a workbook when no sheet is named).
+pub fn check(src: &Source) -> Result<Vec<Checked>> {
+    let path = src.file.as_path();
+    if crate::intake::sheet::is_spreadsheet(path) && src.sheet.is_none() {
+        let names = sheet_names(path)?;
+        let mut out = Vec::new();
+        for (k, _) in names.iter().enumerate() {
+            let s = Source { sheet: Some(SheetRef::Index(k + 1)), ..src.clone() };
+            out.extend(check_table(&s)?);
+        }
+        return Ok(out);
+    }
+    check_table(src)
+}
+
+fn sheet_names(path: &Path) -> Result<Vec<String>> {
+    let bytes = crate::intake::read_bytes(path)?;
+    crate::intake::sheet::sheet_names(path, bytes)
+}
+
+fn check_table(src: &Source) -> Result<Vec<Checked>> {
+    let path = src.file.as_path();
+    let t = read_raw(src)?;
+    let what = match &t.origin.sheet {
+        Some(s) => format!("{} sheet \"{s}\"", path.display()),
+        None => path.display().to_string(),
+    };
+    let one = |summary: String, read: Option<Provenance>| Ok(vec![Checked { what: what.clone(), summary, read }]);
+    match kind_of(&t) {
+        "table1" => {
+            let rows = crate::data::read_table1(path)?;
+            one(format!("Table 1, {} rows ({})", rows.len(), t.format), None)
+        }
+        "phases" => {
+            let (p, read) = crate::phases::read_phases_source(src)?;
+            let fa = p.amorphous_fractions();
+            let (lo, hi) = range(&fa);
+            one(format!("phase fractions ({}), {} phases at {} temperatures ({}–{} °C), amorphous fraction {lo:.3}–{hi:.3}", p.basis.column(), p.phases.len(), p.temperatures_c.len(), p.range().0, p.range().1), Some(read))
+        }
+        "observations" => {
+            let (rows, _) = crate::calibrate::data::read_observation_rows(path)?;
+            let outputs: Vec<String> = rows.iter().map(|r| format!("{} [{}]", r.output, r.unit)).collect();
+            one(format!("{} observations ({}): {}", rows.len(), t.format, outputs.join(", ")), None)
+        }
+        "spectrum" => {
+            let c = t.require(&["target", "row"])?;
+            let mut lines = Vec::new();
+            for i in 0..t.rows.len() {
+                let (target, row) = (t.need_text(i, c[0])?, t.need_number(i, c[1])?);
+                let q = crate::dist::read_spectrum(path, &target, row as u32)?;
+                lines.push(format!("{target} row {row}: median {:.2} m/s", q.iter().find(|x| x.0 >= 0.5).map_or(f64::NAN, |x| x.1)));
+            }
+            one(format!("impact spectrum ({}), {} rows: {}", t.format, t.rows.len(), lines.join("; ")), None)
+        }
+        "curves" => {
+            let curves = crate::calibrate::data::load_curves(path)?;
+            let (dlo, dhi) = range(&curves.iter().map(|c| c.diameter).collect::<Vec<_>>());
+            let r = resolve(&t, &crate::calibrate::data::CURVE_FIELDS, &src.columns, &src.units, &MapOrigin::default())?;
+            one(format!("crush curves, {} particles, d = {:.0}–{:.0} µm, {} samples", curves.len(), dlo * 1e6, dhi * 1e6, t.rows.len()), Some(r.provenance.clone()))
+        }
+        "shape" => {
+            let r = resolve(&t, &crate::data::SHAPE_FIELDS, &src.columns, &src.units, &MapOrigin::default())?;
+            for row in 0..t.rows.len() {
+                r.need_text("id", row)?;
+                for k in ["roundness", "sphericity", "temperature", "impacts"] {
+                    r.number(k, row)?;
+                }
+            }
+            one(format!("shape data of {} particles, to be joined by id to crush data (data = {{ …, shape = {{ file = \"…\" }} }})", t.rows.len()), Some(r.provenance.clone()))
+        }
+        _ => {
+            // A campaign file with several materials is checked material by material.
+            let r = resolve(&t, &crate::data::CRUSH_FIELDS, &src.columns, &src.units, &MapOrigin::default())?;
+            let mut materials: Vec<String> = Vec::new();
+            if src.material.is_none() && r.has("material") {
+                for row in 0..t.rows.len() {
+                    if let Some(m) = r.text("material", row)
+                        && !materials.contains(&m)
+                    {
+                        materials.push(m);
+                    }
+                }
+            }
+            if materials.len() < 2 {
+                materials = vec![src.material.clone().unwrap_or_default()];
+            }
+            let mut out = Vec::new();
+            for m in materials {
+                let s = Source { material: (!m.is_empty()).then_some(m.clone()), ..src.clone() };
+                let d = crate::data::read_crush_source(&s, &MapOrigin::default())?;
+                let (dlo, dhi) = range(&d.diameters());
+                let (flo, fhi) = range(&d.forces());
+                let label = if d.material().is_empty() { "no material column".to_string() } else { format!("material \"{}\"", d.material()) };
+                out.push(Checked {
+                    what: if s.material.is_some() && src.material.is_none() { format!("{what} [{m}]") } else { what.clone() },
+                    summary: format!("crush data, {label}, {} particle{}, d = {:.0}–{:.0} µm, F = {:.1}–{:.1} N", d.records.len(), if d.records.len() == 1 { "" } else { "s" }, dlo * 1e6, dhi * 1e6, flo, fhi),
+                    read: Some(d.provenance),
+                });
+            }
+            Ok(out)
+        }
+    }
+}

@@ -464,7 +464,7 @@ pub fn uq_speed(study: &Path) -> Result<UqSpeed> {
     let crate::study::Study::Uq(s) = &loaded.study else {
         return Err(crate::Error::config(study.display().to_string(), "kind", "the UQ benchmark needs a kind = \"uq\" study"));
     };
-    let shared = crate::uq::setup::Shared::new(s, &loaded.file.path)?;
+    let shared = crate::uq::setup::Shared::new(s, &loaded.file.path, Path::new("reports"))?;
     let setup = crate::uq::setup::Setup::new(s, &loaded.file.path, &s.strength.effects, &s.contact.averaging, &shared)?;
     let samples = 1 << 20;
     let prop = crate::uq::study::Propagation { method: crate::uq::study::Method::Sobol, samples, replicates: 8 };
@@ -581,4 +581,58 @@ pub fn micro_speed(pixels: usize, repeats: usize) -> Result<MicroSpeed> {
         }
     }
     best.ok_or_else(|| Error::numerical("bench", "no repeat ran"))
+}
+
+/// The intake's speed on one large lab export.
+#[derive(Debug, Clone)]
+pub struct IntakeSpeed {
+    /// Data rows.
+    pub rows: usize,
+    /// Seconds to read the semicolon CSV (decimal comma, mm and N): fastest of the repeats.
+    pub csv_s: f64,
+    /// Seconds to read the .xlsx sheet (mm and kgf, study-mapped headers): fastest of the repeats.
+    pub xlsx_s: f64,
+    /// File sizes (bytes): CSV, .xlsx.
+    pub bytes: (u64, u64),
+}
+
+/// Reads a `rows`-row crush export through the whole intake (decode, sniff or unzip, resolve,
+/// exact unit conversion, plausibility, records), as a semicolon CSV and as an .xlsx sheet,
+/// `repeats` times each; the files are made in a scratch directory from seeded random particles.
+pub fn intake_speed(rows: usize, repeats: usize) -> Result<IntakeSpeed> {
+    use crate::intake::write::{Sheet, Value};
+    let dir = TempDir::new("bench-intake")?;
+    let mut rng = ChaCha8Rng::seed_from_u64(31);
+    let mut csv = String::from("Probe;Material;D [mm];Fmax [N];roundness;sphericity;T [°C]\n");
+    let mut sheet = vec![vec![Value::Text("Nr.".into()), Value::Text("Dp".into()), Value::Text("Last".into()), Value::Text("T [°C]".into())]];
+    for k in 0..rows {
+        let d: f64 = (rng.random_range(0.6..1.1f64) * 1e3).round() / 1e3;
+        let f: f64 = (rng.random_range(50.0..250.0f64) * 10.0).round() / 10.0;
+        let (r, s): (f64, f64) = (rng.random_range(0.6..0.95), rng.random_range(0.7..0.98));
+        csv.push_str(&format!("P{k};BL 16/30;{};{};{:.3};{:.3};20\n", format!("{d}").replace('.', ","), format!("{f}").replace('.', ","), r, s).replace("0.", "0,"));
+        sheet.push(vec![Value::Text(format!("P{k}")), Value::Number(d), Value::Number(f / 9.80665), Value::Number(20.0)]);
+    }
+    let csv_path = dir.path().join("bench.csv");
+    std::fs::write(&csv_path, &csv).map_err(|e| Error::write(&csv_path, e))?;
+    let xlsx_path = dir.path().join("bench.xlsx");
+    std::fs::write(&xlsx_path, crate::intake::write::xlsx(&[Sheet { name: "BL".into(), rows: sheet, merged: vec![] }])?).map_err(|e| Error::write(&xlsx_path, e))?;
+    let csv_src = crate::intake::Source::file(&csv_path);
+    let mut xlsx_src = crate::intake::Source::file(&xlsx_path);
+    xlsx_src.columns = [("diameter", "Dp"), ("crush_force", "Last")].iter().map(|(a, b)| (a.to_string(), b.to_string())).collect();
+    xlsx_src.units = [("diameter", "mm"), ("crush_force", "kgf")].iter().map(|(a, b)| (a.to_string(), b.to_string())).collect();
+    let time = |src: &crate::intake::Source| -> Result<f64> {
+        let mut best = f64::INFINITY;
+        for _ in 0..repeats.max(1) {
+            let t = Instant::now();
+            let d = crate::data::read_crush_source(src, &crate::intake::MapOrigin::default())?;
+            best = best.min(t.elapsed().as_secs_f64());
+            if d.records.len() != rows {
+                return Err(Error::numerical("intake benchmark", format!("read {} of {rows} rows", d.records.len())));
+            }
+            black_box(d);
+        }
+        Ok(best)
+    };
+    let size = |p: &Path| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0);
+    Ok(IntakeSpeed { rows, csv_s: time(&csv_src)?, xlsx_s: time(&xlsx_src)?, bytes: (size(&csv_path), size(&xlsx_path)) })
 }

@@ -70,22 +70,28 @@ pub struct CrushData {
     pub records: Vec<CrushRecord>,
     /// How it was read: format, columns, units and conversions, filter, join.
     pub provenance: Provenance,
-    /// Where each record is in the file (`row 3 (line 4)`, `sheet "BL", row 3 (sheet row 5)`),
-    /// for messages about it.
-    pub places: Vec<String>,
+    /// Where each record is in the file: (data row from 0, physical line or sheet row), for
+    /// messages about it.
+    pub places: Vec<(usize, usize)>,
+    /// The sheet, for a spreadsheet.
+    pub sheet: Option<String>,
 }
 
 impl CrushData {
     /// Data made in code (a generator, a test): places as if written to `path` in partlife's own
     /// form, header on line 1.
     pub fn new(path: impl Into<PathBuf>, records: Vec<CrushRecord>) -> CrushData {
-        let places = (0..records.len()).map(|k| format!("row {} (line {})", k + 1, k + 2)).collect();
-        CrushData { path: path.into(), records, provenance: Provenance::default(), places }
+        let places = (0..records.len()).map(|k| (k, k + 2)).collect();
+        CrushData { path: path.into(), records, provenance: Provenance::default(), places, sheet: None }
     }
 
     /// An error about record `k` and a column.
     pub fn error(&self, k: usize, column: &str, rule: impl Into<String>) -> Error {
-        let place = self.places.get(k).cloned().unwrap_or_else(|| format!("particle {}", k + 1));
+        let place = match (self.places.get(k), &self.sheet) {
+            (Some((row, line)), None) => format!("row {} (line {line})", row + 1),
+            (Some((row, line)), Some(sheet)) => format!("sheet \"{sheet}\", row {} (sheet row {line})", row + 1),
+            (None, _) => format!("particle {}", k + 1),
+        };
         // The column as the file names it (`Fmax [N]` for crush_force_n).
         let named = self.provenance.columns.iter().find(|c| c.field == column).map_or(column, |c| c.source.as_str());
         Error::data_file(&self.path, format!("{place}, column {named}"), rule)
@@ -216,7 +222,7 @@ pub fn read_crush_source(src: &Source, origin: &MapOrigin) -> Result<CrushData> 
             temperature_c: r.number("temperature", row)?,
             impacts: impacts.map(|k| k as u64),
         });
-        places.push(table.place(row, None));
+        places.push((row, table.lines[row]));
         let rec = &records[records.len() - 1];
         if let Some(rule) = NOMINAL_STRENGTH.broken(nominal_strength(rec.crush_force_n, rec.diameter_m)) {
             return Err(r.error(row, "crush_force", format!("{rule}, from F = {} N and d = {} m: check the force and diameter units", shown(rec.crush_force_n), shown(rec.diameter_m))));
@@ -243,7 +249,7 @@ pub fn read_crush_source(src: &Source, origin: &MapOrigin) -> Result<CrushData> 
         let mut joined = Vec::with_capacity(pairs.len());
         let mut joined_places = Vec::with_capacity(pairs.len());
         for (k, srow) in pairs {
-            joined_places.push(places[k].clone());
+            joined_places.push(places[k]);
             let mut rec = records[k].clone();
             for key in &supplied {
                 let v = sr.number(key, srow)?;
@@ -278,7 +284,7 @@ pub fn read_crush_source(src: &Source, origin: &MapOrigin) -> Result<CrushData> 
     for w in provenance.warnings.iter().chain(provenance.joined.iter().flat_map(|j| &j.warnings)) {
         crate::intake::warn(w);
     }
-    Ok(CrushData { path: path.to_path_buf(), records, provenance, places })
+    Ok(CrushData { path: path.to_path_buf(), records, provenance, places, sheet: table.origin.sheet.clone() })
 }
 
 /// Numeric properties of Table 1, each stored as `<name>_min`, `<name>_max`, `<name>_qualifier`.

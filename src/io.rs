@@ -233,37 +233,16 @@ pub fn read_csv(path: &Path, infer: Option<usize>) -> Result<DataFrame> {
         .map_err(|e| polars_read_error(path, &e.to_string()))
 }
 
-/// The text of an input file. A missing path, a directory, an unreadable file and bytes that
-/// are not UTF-8 are each named as such.
+/// The text of an input file (a study file, a report table). A missing path, a directory, an
+/// unreadable file ([`crate::intake::read_bytes`]) and bytes that are not UTF-8 are each named
+/// as such.
 pub fn read_input_text(path: &Path) -> Result<String> {
-    let why = |what: &str| Error::read(path, std::io::Error::other(what.to_string()));
-    match std::fs::metadata(path) {
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Err(why("no such file")),
-        Err(e) => return Err(Error::read(path, e)),
-        Ok(m) if m.is_dir() => return Err(why("is a directory, not a file")),
-        Ok(m) if !m.is_file() => return Err(why("is not a regular file")),
-        Ok(_) => {}
-    }
-    let bytes = std::fs::read(path).map_err(|e| Error::read(path, e))?;
+    let bytes = crate::intake::read_bytes(path)?;
     String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
-        Error::data_file(path, format!("line {line}"), "is not UTF-8 text (a CSV file is expected)")
+        Error::data_file(path, format!("line {line}"), "is not UTF-8 text")
     })
-}
-
-/// Fields of one CSV line (double quotes respected; quotes and surrounding blanks removed).
-fn csv_fields(line: &str) -> Vec<String> {
-    let mut out = vec![String::new()];
-    let mut quoted = false;
-    for c in line.trim_end_matches('\r').chars() {
-        match c {
-            '"' => quoted = !quoted,
-            ',' if !quoted => out.push(String::new()),
-            _ => out.last_mut().expect("one field at least").push(c),
-        }
-    }
-    out.into_iter().map(|f| f.trim().to_string()).collect()
 }
 
 /// Checks the shape of a CSV text before any cell is read: a header with named, distinct
@@ -274,7 +253,7 @@ pub fn check_csv_shape(path: &Path, text: &str) -> Result<()> {
     let Some(header) = lines.next().filter(|h| !h.trim().is_empty()) else {
         return Err(Error::data_file(path, "header", "the file is empty or its first line is blank: a header row is expected"));
     };
-    let names = csv_fields(header);
+    let names = crate::intake::text::split_line(header, ',');
     for (k, name) in names.iter().enumerate() {
         if name.is_empty() {
             return Err(Error::data_file(path, "header", format!("column {} has no name", k + 1)));
@@ -284,7 +263,7 @@ pub fn check_csv_shape(path: &Path, text: &str) -> Result<()> {
         }
     }
     for (i, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
-        let got = csv_fields(line).len();
+        let got = crate::intake::text::split_line(line, ',').len();
         if got != names.len() {
             return Err(Error::Data { file: path.display().to_string(), location: format!("row {} (line {})", i + 1, i + 2), rule: format!("has {got} fields, the header has {}", names.len()) });
         }

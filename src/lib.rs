@@ -8,8 +8,11 @@
 //! ## Data flow
 //!
 //! ```text
-//! datasets/*.csv ───────┐
+//! lab exports (.csv any delimiter/decimal/encoding, .xlsx/.ods) ─► intake (units → SI, provenance)
+//!                                                     │
+//! datasets/*.csv ───────┐                             ▼
 //! studies/<name>.toml ──┴► study::load + validate ─► Study (materials, options, seed)
+//!                          runner: prerequisite studies first (missing or stale reports)
 //!                                                     │
 //!          contact (Hertz) ─► σ̄ at break ─► weibull (ASTM C1239 MLE, pivotal bounds)
 //!                                                     │
@@ -86,7 +89,10 @@
 //! | [`experiments`] | decision-driven experiment design: preposterior analysis by importance reweighting (probability of correct selection, EVSI, expected posterior bands and model weights, reserve-sample fallback); the main study's state of knowledge as weighted samples; candidates: crush tests (sieve fraction, shape measured or not, temperature; optionally the discrepancy naming loop's verdict on the pooled data), single- and repeated-impact breakage tests, η and impact-velocity measurements; the `experiments` study: ranked plans, greedy or exhaustive budget allocation, report |
 //! | [`temperature`] | the `temperature` study: the phase-fraction table (Fig. 2 style), the temperature laws of the calibrated parameters with bands next to the calibrated states, the discrepancy workflow's softening term beside them, held-out crush curves at another temperature predicted through the crush FE from the laws (and from each calibrated state as it is), and the main study's breakage against operating temperature with Table 1's softening temperatures |
 //! | [`uq`] | the main study (`kind = "uq"`): strength models as a model-form choice with stacking weights, Monte Carlo propagation through each material's `LifetimeModel`, damage models and averaging domains side by side, Sobol' indices with bootstrap intervals; optionally at operating temperatures through the laws of [`thermal`] |
-//! | [`data`] | crush datasets and Table 1: reading (polars) with row/column-precise validation; the plausibility range of every numeric input column |
+//! | [`intake`] | the one data intake of every tabular input: bytes → text (UTF-8, BOM, UTF-16, Windows-1252) → table (delimiter and decimal mark sniffed, header row; or one sheet of .xlsx/.xls/.xlsb/.ods via calamine) → columns resolved to fields (study map, then name + unit grammar) → SI values (exact decimal conversion) → plausibility; material filter, join by id, the provenance record; a minimal .xlsx/.ods writer |
+//! | [`data`] | crush datasets and Table 1 through the intake, with row/column-precise validation; the plausibility range of every numeric input column, and of the derived strength |
+//! | [`lab`] | the example lab exports of `datasets/examples/` (a semicolon CSV and a workbook) from the SI crush files |
+//! | [`inspect`] | what `partlife datasets check` says of a file: its kind, how it was read, a summary of its values |
 //! | [`synth`] | the documented generator of the synthetic crush datasets |
 //! | [`thermal`] | the temperature law of each calibrated parameter (thermal term × crystalline/glassy mixture in the amorphous fraction), fitted draw by draw to calibration posteriors at two temperatures; the factors of the Weibull scale and Young's modulus between the crush data's and the operating temperature |
 //! | [`phases`] | phase-fraction tables against temperature (Thermo-Calc/pycalphad exports): format, validation, linear interpolation, the amorphous fraction; the rule of the shipped illustrative table |
@@ -95,8 +101,8 @@
 //! | [`runkit`] | what every run shares: options (the executor choice among them), summary, clock, progress bars, figures' records, the report commit with `manifest.json` |
 //! | [`lifetime_study`] | the lifetime study (`kind = "lifetime"`): schema and run, through `strength` |
 //! | [`study`] | the dispatch from `kind` to each study module's schema and validation: `load` → `LoadedStudy` |
-//! | [`runner`] | the dispatch from a loaded study to its runner (top of the graph: only the CLI and `bench` use it) |
-//! | [`io`] | atomic report directories, CSV tables, manifest, the one VTK `DataArray` writer; reading input files (path kind, UTF-8, CSV shape: distinct columns, no short or long rows); scratch directories |
+//! | [`runner`] | the dispatch from a loaded study to its runner, after the prerequisite studies whose reports it reads when those are missing or stale (the study graph; top of the graph: only the CLI and `bench` use it) |
+//! | [`io`] | atomic report directories, CSV tables, manifest (with each input's intake record), the one VTK `DataArray` writer; reading report tables and study files; scratch directories |
 //! | [`report`] | figures from tables only: SVG (plotters) → PNG (resvg) and vector PDF (svg2pdf) |
 //! | [`bench`](mod@bench) | the speed figures the issues ask for |
 //!

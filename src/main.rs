@@ -36,6 +36,10 @@ enum Command {
         /// (slurm; options in the study's [executor] table). Default: the study's choice, local.
         #[arg(long, value_enum)]
         executor: Option<Executor>,
+        /// Do not run the studies whose reports this one reads when they are missing or stale:
+        /// refuse, listing them all.
+        #[arg(long)]
+        no_deps: bool,
     },
     /// Evaluate one Slurm array task of a batch file written by `run --executor slurm`
     /// (the task index from --task or SLURM_ARRAY_TASK_ID); results go to the batch's cache.
@@ -74,6 +78,10 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Do not run the calibration a curve-level study reads when its report is missing or
+        /// stale: refuse instead.
+        #[arg(long)]
+        no_deps: bool,
     },
     /// Dataset tools.
     Datasets {
@@ -81,7 +89,7 @@ enum Command {
         command: DatasetsCommand,
     },
     /// Measure the speed figures (evaluations per second, fit time, study wall time).
-    #[command(group(clap::ArgGroup::new("benchmark").args(["study", "dem", "fem", "mcmc", "uq", "discrepancy", "experiments", "micro"]).multiple(false)))]
+    #[command(group(clap::ArgGroup::new("benchmark").args(["study", "dem", "fem", "mcmc", "uq", "discrepancy", "experiments", "micro", "intake"]).multiple(false)))]
     Bench {
         /// Time the core figures and this study end to end.
         #[arg(long)]
@@ -120,6 +128,14 @@ enum Command {
         /// Pixels a side of the microstructure benchmark.
         #[arg(long, default_value_t = 512, requires = "micro")]
         pixels: usize,
+        /// Run the data-intake benchmark instead: a `--rows`-row crush export read through the
+        /// whole intake as a semicolon CSV (decimal comma, mm) and as an .xlsx sheet (mm, kgf),
+        /// fastest of three (goal < 1 s each at 100 000 rows).
+        #[arg(long)]
+        intake: bool,
+        /// Rows of the intake benchmark.
+        #[arg(long, default_value_t = 100_000, requires = "intake")]
+        rows: usize,
     },
 }
 
@@ -242,8 +258,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         rayon::ThreadPoolBuilder::new().num_threads(n.into()).build_global().context("setting the thread count")?;
     }
     match cli.command {
-        Command::Run { study, reports_dir, quiet, executor } => {
+        Command::Run { study, reports_dir, quiet, executor, no_deps } => {
             let mut opts = partlife::runner::RunOptions::new(reports_dir, !quiet);
+            if no_deps {
+                opts.deps = partlife::runner::Deps::Refuse;
+            }
             opts.executor = executor.map(|e| match e {
                 Executor::Local => partlife::runkit::ExecutorKind::Local,
                 Executor::Slurm => partlife::runkit::ExecutorKind::Slurm,
@@ -254,7 +273,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             out!("wrote {} in {:.2} s", summary.report_dir.display(), summary.wall_time_s);
         }
-        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, reports_dir, quiet } => {
+        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, reports_dir, quiet, no_deps } => {
             let loaded = match (&study, &data) {
                 (_, Some(d)) => {
                     let (file, s) = partlife::discrepancy::run::quick_study(d)?;
@@ -266,8 +285,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if study.is_some() && !matches!(loaded.study, partlife::study::Study::Discrepancy(_) | partlife::study::Study::DiscrepancyCurves(_)) {
                 return Err(partlife::Error::config(loaded.file.path.display().to_string(), "kind", "`partlife discrepancy` runs studies of kind \"discrepancy\" or \"discrepancy_curves\"").into());
             }
-            let opts = partlife::runner::RunOptions::new(reports_dir, !quiet);
-            let summary = partlife::runner::run(&loaded, &opts)?;
+            let mut opts = partlife::runner::RunOptions::new(reports_dir, !quiet);
+            if no_deps {
+                opts.deps = partlife::runner::Deps::Refuse;
+            }
+            let summary = partlife::runner::run_with_prerequisites(&loaded, &opts)?;
             for line in &summary.headlines {
                 out!("{line}");
             }
@@ -449,6 +471,20 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 u.samples as f64 / u.propagation_s
             );
             out!("Sobol' indices of Ishigami, N = 2¹⁴ (81 920 runs) + 1000 bootstrap resamples: {:.3} s, largest |Ŝ − S| = {:.4}", u.ishigami_s, u.ishigami_error);
+        }
+        Command::Bench { intake: true, rows, .. } => {
+            if !(10..=10_000_000).contains(&rows) {
+                return Err(partlife::Error::config("partlife bench", "--rows", format!("must lie in 10…10000000, got {rows}")).into());
+            }
+            let i = partlife::bench::intake_speed(rows, 3)?;
+            out!(
+                "data intake, {} rows of crush data (decode, sniff or unzip, columns, exact unit conversion, plausibility, records), fastest of 3: semicolon CSV with decimal commas in mm and N ({:.1} MB) {:.3} s; .xlsx sheet in mm and kgf with study-mapped headers ({:.1} MB) {:.3} s (goal < 1 s each)",
+                i.rows,
+                i.bytes.0 as f64 / 1e6,
+                i.csv_s,
+                i.bytes.1 as f64 / 1e6,
+                i.xlsx_s
+            );
         }
         Command::Bench { micro: true, pixels, .. } => {
             if !(8..=4096).contains(&pixels) {

@@ -34,12 +34,25 @@ pub struct RunOptions {
     /// Where simulator ensembles run (`partlife run --executor`), overriding the study's
     /// `[executor] kind`; None: the study's choice, local by default.
     pub executor: Option<ExecutorKind>,
+    /// What to do with a study this one reads whose report is missing or stale.
+    pub deps: Deps,
+}
+
+/// What a run does with a prerequisite study (one whose report it reads) when that report is
+/// missing or stale (`crate::runner`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Deps {
+    /// Run it first, saying what runs and why (default).
+    #[default]
+    Run,
+    /// Refuse, listing every missing or stale prerequisite at once (`--no-deps`).
+    Refuse,
 }
 
 impl RunOptions {
-    /// Reports under `reports_root`, the study's executor.
+    /// Reports under `reports_root`, the study's executor, prerequisites run when needed.
     pub fn new(reports_root: impl Into<PathBuf>, progress: bool) -> Self {
-        RunOptions { reports_root: reports_root.into(), progress, executor: None }
+        RunOptions { reports_root: reports_root.into(), progress, executor: None, deps: Deps::Run }
     }
 }
 

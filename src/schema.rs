@@ -201,6 +201,40 @@ impl MaterialSpec {
 
 pub use crate::intake::resolve_relative;
 
+/// A study whose report another study reads: found by the study file's name under the same
+/// reports root as the reading study's own report (`--reports-dir`), run first when its report
+/// is missing or stale (`crate::runner`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prerequisite {
+    /// The reading study's key that names it (`law.calibrations[0].study`).
+    pub key: String,
+    /// The prerequisite study file (resolved).
+    pub study: PathBuf,
+    /// The files of its report that are read.
+    pub files: Vec<&'static str>,
+}
+
+/// The report directory of study file `study` under `reports_root` (`<root>/<study stem>`).
+pub fn report_dir(reports_root: &Path, study: &Path) -> PathBuf {
+    reports_root.join(study.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default())
+}
+
+/// The file `name` of the report of study file `study` under `reports_root`
+/// (`<root>/<study stem>/<name>`).
+pub fn report_file(reports_root: &Path, study: &Path, name: &str) -> PathBuf {
+    report_dir(reports_root, study).join(name)
+}
+
+/// A file read from another study's report or given directly: exactly one of `study` (a study
+/// file, relative to the reading study) and `file` (relative to the reading study).
+pub fn one_of(file: &str, key: &str, study: &Option<PathBuf>, given: &Option<PathBuf>, study_key: &str, file_key: &str) -> Result<()> {
+    match (study, given) {
+        (Some(_), None) | (None, Some(_)) => Ok(()),
+        (Some(_), Some(_)) => Err(Error::config(file, key, format!("give `{study_key}` (a study whose report is read) or `{file_key}` (a file), not both"))),
+        (None, None) => Err(Error::config(file, key, format!("needs `{study_key}` (a study whose report is read, run first when its report is missing or stale) or `{file_key}` (a file)"))),
+    }
+}
+
 
 /// `Ok` if `ok`, else a configuration error naming `file`, `key` and `rule`.
 pub(crate) fn check(file: &str, key: &str, ok: bool, rule: String) -> Result<()> {

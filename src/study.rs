@@ -65,6 +65,32 @@ pub struct LoadedStudy {
 }
 
 impl LoadedStudy {
+    /// The studies whose reports this one reads, each with the key that names it and the
+    /// report files it needs (none for most kinds).
+    pub fn prerequisites(&self) -> Result<Vec<crate::schema::Prerequisite>> {
+        let f = &self.file;
+        Ok(match &self.study {
+            Study::Calibrate(s) => s.prerequisites(&|p: &str| f.resolve(Path::new(p))),
+            Study::DiscrepancyCurves(s) => s.prerequisites(f),
+            Study::Temperature(s) => s.prerequisites(f)?,
+            Study::Uq(s) => s.prerequisites(&f.path)?,
+            Study::Experiments(s) => s.prerequisites(f)?,
+            _ => Vec::new(),
+        })
+    }
+
+    /// Checks the study's own input files where a run reads them only after the reports of
+    /// other studies (the curve files of a curve-level study, the phase table of a temperature
+    /// study), so that a bad file is refused before any prerequisite runs.
+    pub fn check_inputs(&self) -> Result<()> {
+        let f = &self.file;
+        match &self.study {
+            Study::DiscrepancyCurves(s) => s.read_data(f).map(|_| ()),
+            Study::Temperature(s) => crate::thermal::read_phases_of(&f.path.display().to_string(), &f.resolve(&s.phases.file)).map(|_| ()),
+            _ => Ok(()),
+        }
+    }
+
     /// The crush data of its materials, each as the study describes it (files resolved relative
     /// to the study file): what `partlife datasets check --study` reads. Kinds without
     /// `[[material]]` read none.

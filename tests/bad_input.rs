@@ -67,8 +67,8 @@ fn missing_study_file() {
 #[test]
 fn missing_column() {
     check(
-        |s| edit_csv(s, "crush_bl1630.csv", |t| t.replacen("crush_force_n", "force", 1)),
-        &["crush_bl1630.csv", "header", "missing column `crush_force_n`"],
+        |s| edit_csv(s, "crush_bl1630.csv", |t| t.replacen("crush_force_n", "pressure_n", 1)),
+        &["crush_bl1630.csv", "header", "missing column crush_force (a force, e.g. `crush_force_n`, `Fmax [N]`)", "the file's columns are"],
     );
 }
 

@@ -134,21 +134,22 @@ fn curve_loop_names_curvature() {
     assert!(v["gap_after"].as_f64().unwrap() < 0.5 * v["gap_before"].as_f64().unwrap(), "{v}");
 }
 
-/// Without the calibration's report the study stops before writing, naming what to run.
+/// Without the calibration's report and with `--no-deps` the study stops before writing, naming
+/// what to run (without `--no-deps` the calibration runs first: `tests/temperature.rs`).
 #[test]
 fn curve_study_without_its_calibration_report_is_refused() {
     let s = Scratch::new();
     s.write("studies/curves.toml", &curve_study(&[("crush_curves_gen3_rt.csv", 20.0)]));
-    let out = s.run(&["run", "studies/curves.toml", "--quiet"]);
+    let out = s.run(&["run", "studies/curves.toml", "--quiet", "--no-deps"]);
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(!out.stderr.contains("panicked"), "{}", out.stderr);
-    for e in ["curves.toml", "calibration", "runs.csv", "calibrate_gen3_rt.toml"] {
+    for e in ["curves.toml", "read by calibration", "its report reports/calibrate_gen3_rt is missing", "calibrate_gen3_rt.toml", "--no-deps"] {
         assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
     }
     assert!(s.report_files().is_empty(), "{:?}", s.report_files());
     // A bad key is refused at load, naming it.
     s.expect_bad_study("studies/curves.toml", "temperature_c = 20", "temperature_c = -400", &["data[0].temperature_c"]);
-    // A missing curve file names its key (checked before the calibration is read).
+    // A missing curve file names its key (checked before the calibration is read or run).
     s.write("studies/curves.toml", &curve_study(&[("crush_curves_gen3_rt.csv", 20.0), ("no_such.csv", 800.0)]));
     let out = s.run(&["run", "studies/curves.toml", "--quiet"]);
     assert_eq!(out.code, 2, "{}", out.stderr);

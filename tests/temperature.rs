@@ -37,12 +37,17 @@ const VALIDATION: &str = "[[validation]]\ntemperature_c = 950\nstudy = \"calibra
 /// synthetic calibration chains at 20 and 800 °C (the generator's truths of
 /// datasets/synth_curves.toml as medians) and a discrepancy evidence table; the study reads them
 /// from datasets/ (a failed run must leave reports/ empty).
+/// The shipped study's references to the reports it reads.
+const RT: &str = "study = \"calibrate_gen3_rt.toml\"";
+const HOT: &str = "study = \"calibrate_gen3_800c.toml\"";
+const CURVES: &str = "study = \"discrepancy_curves.toml\"";
+
 fn scratch() -> Scratch {
     let s = Scratch::new();
     let study = std::fs::read_to_string(root().join("studies/temperature.toml")).unwrap();
     s.write(
         "studies/temperature.toml",
-        &common::edited(&study, &[("../reports/calibrate_gen3_rt/chains.csv", "../datasets/chains_rt.csv"), ("../reports/calibrate_gen3_800c/chains.csv", "../datasets/chains_800c.csv"), ("../reports/discrepancy_curves/curve_evidence.csv", "../datasets/curve_evidence.csv"), (VALIDATION, "")]),
+        &common::edited(&study, &[(RT, "chains = \"../datasets/chains_rt.csv\""), (HOT, "chains = \"../datasets/chains_800c.csv\""), (CURVES, "evidence = \"../datasets/curve_evidence.csv\""), (VALIDATION, "")]),
     );
     for f in ["studies/gen4_vs_bl.toml", "datasets/table1_particle_properties.csv"] {
         std::fs::copy(root().join(f), s.path(f)).unwrap();
@@ -113,7 +118,7 @@ fn bad_phase_tables_exit_2_naming_file_row_and_rule() {
         assert!(!s.path("reports/temperature").exists(), "{body}: a report was written");
     }
     // The header: both bases, no basis, no temperature.
-    for (header, expect) in [("temperature_c,phase,mole_fraction,mass_fraction\n20,A,1,1\n900,A,1,1\n", "one basis"), ("temperature_c,phase,fraction\n20,A,1\n900,A,1\n", "mole_fraction` or `mass_fraction"), ("t,phase,mole_fraction\n20,A,1\n900,A,1\n", "temperature_c` or `temperature_k")] {
+    for (header, expect) in [("temperature_c,phase,mole_fraction,mass_fraction\n20,A,1,1\n900,A,1,1\n", "one basis"), ("temperature_c,phase,fraction\n20,A,1\n900,A,1\n", "mole_fraction` or `mass_fraction"), ("t,phase,mole_fraction\n20,A,1\n900,A,1\n", "column t: states no unit for the temperature"), ("phase,mole_fraction\nA,1\nA,1\n", "missing column temperature (a temperature, e.g. `temperature_c`, `T [°C]`)")] {
         let s = scratch();
         std::fs::write(s.path("datasets/phases_granulated_illustrative.csv"), header).unwrap();
         let out = s.run(&["run", "studies/temperature.toml", "--quiet"]);
@@ -206,10 +211,10 @@ fn operating_at_the_data_temperature_changes_nothing(t0: f64) {
     let main = s.path("studies/gen4_vs_bl.toml");
     let file = partlife::schema::StudyFile::read(&main).unwrap();
     let u: partlife::uq::study::UqStudy = file.parse().unwrap();
-    let shared = Shared::new(&u, &main).unwrap();
+    let shared = Shared::new(&u, &main, std::path::Path::new("reports")).unwrap();
     let plain = Setup::new(&u, &main, &u.strength.effects, &u.contact.averaging, &shared).unwrap();
     let mut hot = plain.clone();
-    let laws = std::sync::Arc::new(partlife::thermal::load_from_study(&s.path("studies/temperature.toml")).unwrap());
+    let laws = std::sync::Arc::new(partlife::thermal::load_from_study(&s.path("studies/temperature.toml"), std::path::Path::new("reports")).unwrap());
     assert_eq!(plain.materials[0].data_temperature_c().unwrap(), t0);
     hot.attach_thermal(laws.clone(), [partlife::dist::Marginal::Fixed(t0), partlife::dist::Marginal::Fixed(t0)]).unwrap();
     let d = plain.varying(Mode::Joint).len();
@@ -382,14 +387,13 @@ fn calibrated_at_two_temperatures_the_laws_predict_the_third() {
     for f in ["studies/calibrate_gen3_rt.toml", "studies/calibrate_gen3_800c.toml", "datasets/crush_curves_gen3_800c.csv"] {
         std::fs::copy(root().join(f), s.path(f)).unwrap();
     }
-    for c in ["calibrate_gen3_rt", "calibrate_gen3_800c"] {
-        let out = s.run(&["run", &format!("studies/{c}.toml"), "--quiet"]);
-        assert_eq!(out.code, 0, "{c}: {}", out.stderr);
-    }
-    let study = common::edited(&s.read("studies/temperature.toml"), &[("../datasets/chains_rt.csv", "../reports/calibrate_gen3_rt/chains.csv"), ("../datasets/chains_800c.csv", "../reports/calibrate_gen3_800c/chains.csv")]);
+    // The calibrations' reports are missing: the temperature study runs them first.
+    let study = common::edited(&s.read("studies/temperature.toml"), &[("chains = \"../datasets/chains_rt.csv\"", RT), ("chains = \"../datasets/chains_800c.csv\"", HOT)]);
     s.write("studies/temperature.toml", &study);
     let out = s.run(&["run", "studies/temperature.toml", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stderr.contains("running studies/calibrate_gen3_rt.toml first: its report reports/calibrate_gen3_rt is missing"), "{}", out.stderr);
+    assert!(out.stderr.contains("running studies/calibrate_gen3_800c.toml first"), "{}", out.stderr);
     let coverage = judge_held_out(&s);
     eprintln!("held-out coverage: {coverage:?}");
 }

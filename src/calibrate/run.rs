@@ -11,7 +11,8 @@
 //!                   # kind = "dem": study = "<dem study file>", duration, heights, window
 //! [[param]]         # name, lower, upper, prior = { kind = "uniform" | "normal" | "log_normal", … }
 //! [calibration]     # PipelineOptions: design, rounds, points, tolerance, sampler, walkers, steps, …
-//! [compare]         # optional: reference = "<parameters.csv of another calibration>", label
+//! [compare]         # optional: study = "<another calibration study>" (its report's parameters.csv; run first
+//!                   # when missing or stale) or reference = "<a parameters.csv>", label
 //! [figures]         # width_cm
 //! [executor]        # optional: kind = "local" | "slurm", partition, time_limit, … (super::executor)
 //! ```
@@ -62,6 +63,14 @@ pub fn run_calibrate(loaded: &StudyFile, s: &CalibrateStudy, opts: &RunOptions) 
     for p in &prep.inputs {
         inputs.push(InputFile::hash(p)?);
     }
+    // The calibration compared with: its parameters.csv, hashed when it is there.
+    let compare_file = match &s.compare {
+        Some(c) => Some(c.parameters_file(&loaded.path.display().to_string(), &resolve, &opts.reports_root)?),
+        None => None,
+    };
+    if let Some(p) = compare_file.as_ref().filter(|p| p.is_file()) {
+        inputs.push(InputFile::hash(p)?);
+    }
     let cache_dir = opts.reports_root.join(".cache").join(&loaded.name);
     let pb = crate::runkit::progress_bar(1, opts.progress, "{spinner} [{elapsed_precise}] {msg}");
     pb.enable_steady_tick(std::time::Duration::from_millis(200));
@@ -91,7 +100,7 @@ pub fn run_calibrate(loaded: &StudyFile, s: &CalibrateStudy, opts: &RunOptions) 
     progress("tables");
     let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
     let space = cal.emulator.space().clone();
-    let headlines = write_tables(&mut dir, s, &prep, &cal, curves, &resolve)?;
+    let headlines = write_tables(&mut dir, s, &prep, &cal, curves, compare_file.as_deref())?;
     progress("figures");
     let mut failures: Vec<String> = cal.warnings.clone();
     failures.extend(cal.failures.iter().map(|(t, e)| format!("simulator failed at θ = {t:?}: {e}")));
@@ -210,7 +219,7 @@ fn pr_mean(preds: &[Vec<(f64, f64)>], o: usize) -> f64 {
 
 
 #[allow(clippy::too_many_lines)]
-fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &Calibration, curves: Option<CurveSet>, resolve: &dyn Fn(&str) -> PathBuf) -> Result<Vec<String>> {
+fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &Calibration, curves: Option<CurveSet>, compare_file: Option<&std::path::Path>) -> Result<Vec<String>> {
     let space = cal.emulator.space();
     let params = space.params();
     let p = params.len();
@@ -418,9 +427,8 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
 
     // Comparison with a reference calibration.
     let mut compare_line = None;
-    if let Some(c) = &s.compare {
-        let path = resolve(&c.reference);
-        match crate::report::Table::load_file(&path) {
+    if let (Some(c), Some(path)) = (&s.compare, compare_file) {
+        match crate::report::Table::load_file(path) {
             Ok(t) => {
                 let (rn, rm, r5, r95) = (t.s("name")?, t.f("posterior_mean")?, t.f("q05")?, t.f("q95")?);
                 let (mut nn, mut a, mut a5, mut a95, mut b, mut b5, mut b95, mut ch) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);

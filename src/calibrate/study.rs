@@ -96,10 +96,27 @@ fn uniform() -> Prior {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Compare {
-    /// `parameters.csv` of another calibration report (relative to the study file).
-    pub reference: String,
+    /// The calibration study (relative to the study file) whose report's `parameters.csv` is
+    /// compared with (run first when its report is missing or stale).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub study: Option<std::path::PathBuf>,
+    /// Or a `parameters.csv` of another calibration given directly (relative to the study file).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<std::path::PathBuf>,
     /// Its label (`Gen 3, RT`).
     pub label: String,
+}
+
+impl Compare {
+    /// The `parameters.csv` compared with (`resolve`: paths relative to the study file).
+    pub fn parameters_file(&self, file: &str, resolve: &dyn Fn(&str) -> PathBuf, reports_root: &std::path::Path) -> Result<PathBuf> {
+        crate::schema::one_of(file, "compare", &self.study, &self.reference, "study", "reference")?;
+        Ok(match (&self.study, &self.reference) {
+            (Some(st), _) => crate::schema::report_file(reports_root, &resolve(&st.to_string_lossy()), "parameters.csv"),
+            (_, Some(r)) => resolve(&r.to_string_lossy()),
+            _ => unreachable!("one_of checked"),
+        })
+    }
 }
 
 /// `[figures]`
@@ -168,10 +185,18 @@ pub struct Prepared {
 }
 
 impl CalibrateStudy {
+    /// The studies whose reports it reads: the calibration of `[compare] study`.
+    pub fn prerequisites(&self, resolve: &dyn Fn(&str) -> PathBuf) -> Vec<crate::schema::Prerequisite> {
+        self.compare.as_ref().and_then(|c| c.study.as_ref()).map(|st| crate::schema::Prerequisite { key: "compare.study".into(), study: resolve(&st.to_string_lossy()), files: vec!["parameters.csv"] }).into_iter().collect()
+    }
+
     /// Loads the data and builds the model; every mismatch is an error naming the file and key.
     pub fn prepare(&self, loaded_path: &std::path::Path, resolve: &dyn Fn(&str) -> PathBuf) -> Result<Prepared> {
         let file = loaded_path.display().to_string();
         self.executor.validate(&file)?;
+        if let Some(c) = &self.compare {
+            crate::schema::one_of(&file, "compare", &c.study, &c.reference, "study", "reference")?;
+        }
         if self.param.is_empty() {
             return Err(Error::config(&file, "param", "at least one [[param]] is required"));
         }

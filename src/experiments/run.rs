@@ -81,7 +81,7 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     let (main_path, u, keys) = main_study(loaded, s)?;
     s.validate(&file, Some(&keys))?;
     let horizon = u.impact.years.iter().position(|&y| y == s.decision.horizon_years).ok_or_else(|| Error::config(&file, "decision.horizon_years", format!("must be one of the main study's horizons {:?}, got {}", u.impact.years, s.decision.horizon_years)))?;
-    let shared = crate::uq::setup::Shared::new(&u, &main_path)?;
+    let shared = crate::uq::setup::Shared::new(&u, &main_path, &opts.reports_root)?;
     let damage_weights = s.decision.damage_weights.clone().unwrap_or_else(|| vec![1.0; shared.models.len()]);
     if damage_weights.len() != shared.models.len() {
         return Err(Error::config(&file, "decision.damage_weights", format!("needs one weight per damage model of the main study ({}), got {}", shared.models.iter().map(|m| m.name()).collect::<Vec<_>>().join(", "), damage_weights.len())));

@@ -242,6 +242,11 @@ pub struct ExperimentsStudy {
 }
 
 impl ExperimentsStudy {
+    /// The studies whose reports it reads: those of its main study (which is read, not run).
+    pub fn prerequisites(&self, file: &crate::schema::StudyFile) -> Result<Vec<crate::schema::Prerequisite>> {
+        crate::uq::study::UqStudy::prerequisites_of_file(&file.resolve(std::path::Path::new(&self.study)))
+    }
+
     /// Checks every option that needs neither data nor the main study; `keys` are the main
     /// study's material keys when known (an unknown material is then named).
     pub fn validate(&self, file: &str, keys: Option<&[String]>) -> Result<()> {

@@ -121,6 +121,16 @@ impl Field {
     }
 }
 
+impl Kind {
+    /// The internal unit of a numeric kind, for messages.
+    fn si_of(k: Kind) -> &'static str {
+        match k {
+            Kind::Number(q) => q.si(),
+            Kind::Text => "-",
+        }
+    }
+}
+
 /// How a column was found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Found {
@@ -137,6 +147,8 @@ pub struct Mapped {
     pub col: usize,
     /// Unit (numbers).
     pub unit: Option<&'static Unit>,
+    /// Its exact conversion to SI (None: values taken as written).
+    conversion: Option<super::decimal::Conversion>,
     found: Found,
 }
 
@@ -270,10 +282,17 @@ pub fn resolve<'a>(table: &'a RawTable, fields: &'a [Field], columns: &BTreeMap<
     }
     let headers: Vec<_> = table.headers.iter().map(|h| parse_header(h)).collect();
     let mut map: Vec<Option<(usize, Found)>> = vec![None; fields.len()];
+    if let Some(k) = units.keys().find(|k| fields.iter().any(|f| f.key == k.as_str() && f.kind == Kind::Text)) {
+        return Err(origin.error(&format!("units.{k}"), format!("{k} holds text: it has no unit")));
+    }
     // 1. The study's map.
     for (i, f) in fields.iter().enumerate() {
         if let Some(name) = columns.get(f.key) {
             match table.headers.iter().position(|h| h == name.trim()) {
+                Some(c) if map.iter().flatten().any(|(k, _)| *k == c) => {
+                    let other = fields.iter().zip(&map).find(|(_, m)| m.is_some_and(|(k, _)| k == c)).map_or("", |(g, _)| g.key);
+                    return Err(origin.error(&format!("columns.{}", f.key), format!("column \"{name}\" is already mapped to {other}: a column holds one field")));
+                }
                 Some(c) => map[i] = Some((c, Found::Mapped)),
                 None => {
                     return Err(origin.error(
@@ -356,7 +375,7 @@ pub fn resolve<'a>(table: &'a RawTable, fields: &'a [Field], columns: &BTreeMap<
                 }
             }
         };
-        resolved.push(Some(Mapped { col: c, unit, found }));
+        resolved.push(Some(Mapped { col: c, unit, conversion: unit.filter(|u| !u.is_si()).map(|u| u.conversion()), found }));
     }
     // The record: columns used, unused ones, likely misspellings.
     let mut provenance = Provenance {
@@ -432,8 +451,12 @@ impl Resolved<'_> {
     pub fn number(&self, key: &str, row: usize) -> Result<Option<f64>> {
         let i = self.index(key);
         let Some(m) = &self.map[i] else { return Ok(None) };
-        let f = &self.fields[i];
         let col = Some(m.col);
+        let unit = m.unit.expect("numeric fields have a unit");
+        // A spreadsheet's number in the internal unit is taken as it is.
+        if let (Cell::Number(v), None) = (&self.table.rows[row][m.col], &m.conversion) {
+            return self.plausible(i, row, *v, unit, &|| format!("{v}"));
+        }
         if let Cell::Text(raw) = &self.table.rows[row][m.col]
             && self.table.origin.sheet.is_some()
         {
@@ -452,13 +475,27 @@ impl Resolved<'_> {
         if !parsed.is_finite() {
             return Err(self.table.error(row, col, format!("value \"{raw}\" is not a finite number")));
         }
-        let unit = m.unit.expect("numeric fields have a unit");
-        let v = if unit.is_si() { parsed } else { unit.conversion().apply(&text).ok_or_else(|| self.table.error(row, col, format!("value \"{raw}\" is not a decimal number")))? };
+        let v = match &m.conversion {
+            None => parsed,
+            Some(c) => c.apply(&text).ok_or_else(|| self.table.error(row, col, format!("value \"{raw}\" is not a decimal number")))?,
+        };
+        if !v.is_finite() {
+            return Err(self.table.error(row, col, format!("value \"{raw}\" {} is not a finite number in {}", unit.symbol, Kind::si_of(self.fields[i].kind))));
+        }
+        self.plausible(i, row, v, unit, &|| text.clone())
+    }
+
+    /// v if it lies in field `i`'s plausible range, else the error with its hint (module docs);
+    /// `text` gives the cell's decimal form (only on the error path).
+    fn plausible(&self, i: usize, row: usize, v: f64, unit: &Unit, text: &dyn Fn() -> String) -> Result<Option<f64>> {
+        let f = &self.fields[i];
+        let col = self.map[i].as_ref().map(|m| m.col);
         if let Some(p) = &f.plausible
             && let Some(mut rule) = p.broken(v)
         {
+            let text = text();
             if !unit.is_si() {
-                rule = format!("{rule} (read as {raw} {})", unit.symbol);
+                rule = format!("{rule} (read as {text} {})", unit.symbol);
             }
             let Kind::Number(q) = f.kind else { unreachable!("plausible ranges belong to numbers") };
             let other: Vec<&str> = super::units::UNITS
@@ -545,6 +582,10 @@ mod tests {
         assert!(e.contains("material[0].columns.diameter") && e.contains("no column \"Dp\""), "{e}");
         let e = err("id,D [mm],F [N]\n1,2,3\n", &[("size", "D [mm]")], &[]);
         assert!(e.contains("columns.size") && e.contains("unknown field"), "{e}");
+        let e = err("id,D,F [N]\n1,2,3\n", &[("diameter", "D"), ("crush_force", "D")], &[]);
+        assert!(e.contains("columns.crush_force") && e.contains("already mapped to diameter"), "{e}");
+        let e = err("id,D [mm],F [N]\n1,2,3\n", &[], &[("id", "mm")]);
+        assert!(e.contains("units.id") && e.contains("holds text"), "{e}");
     }
 
     #[test]

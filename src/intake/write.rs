@@ -1,7 +1,8 @@
 //! A minimal spreadsheet writer: workbooks of plain sheets (numbers, text, formulas with or
 //! without their cached value, merged cells) as .xlsx (Office Open XML, ECMA-376) or .ods
 //! (OpenDocument 1.2). It writes the example lab exports of `datasets/examples/` and the
-//! spreadsheets the tests read; bytes are reproducible (fixed zip timestamps, fixed order).
+//! spreadsheets the tests read; bytes are reproducible (deflated, fixed zip timestamps, fixed
+//! order).
 //!
 //! Numbers are written in Rust's shortest round-trip form, so a spreadsheet reader gets the very
 //! `f64` that was written.
@@ -41,7 +42,7 @@ fn escape(s: &str) -> String {
 
 fn zip(parts: &[(&str, String)]) -> Result<Vec<u8>> {
     let mut z = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
-    let opts = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored).last_modified_time(zip::DateTime::DEFAULT);
+    let opts = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated).last_modified_time(zip::DateTime::DEFAULT);
     let fail = |e: String| Error::numerical("writing a spreadsheet", e);
     for (name, body) in parts {
         z.start_file(*name, opts).map_err(|e| fail(e.to_string()))?;

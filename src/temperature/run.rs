@@ -223,7 +223,7 @@ fn softening_marks(file: &str, l: &LifetimeOptions, resolve: &dyn Fn(&Path) -> P
 
 /// Breakage against temperature. Returns the summary's paragraph and the inputs read.
 #[allow(clippy::too_many_arguments)]
-fn write_lifetime(dir: &mut ReportDir, file: &str, l: &LifetimeOptions, laws: &ParameterLaws, grid: &[f64], at: &[f64], level: f64, seed: u64, resolve: &dyn Fn(&Path) -> PathBuf, tick: &(dyn Fn() + Sync)) -> Result<(String, Vec<PathBuf>)> {
+fn write_lifetime(dir: &mut ReportDir, file: &str, l: &LifetimeOptions, laws: &ParameterLaws, grid: &[f64], at: &[f64], level: f64, seed: u64, resolve: &dyn Fn(&Path) -> PathBuf, reports_root: &Path, tick: &(dyn Fn() + Sync)) -> Result<(String, Vec<PathBuf>)> {
     let main_path = resolve(&l.main);
     if !main_path.is_file() {
         return Err(Error::config(file, "lifetime.main", format!("{} does not exist", main_path.display())));
@@ -236,7 +236,7 @@ fn write_lifetime(dir: &mut ReportDir, file: &str, l: &LifetimeOptions, laws: &P
     u.validate(&main_path.display().to_string())?;
     // The operating temperatures are this study's grid, with this study's laws.
     u.operating = None;
-    let shared = Shared::new(&u, &main_path)?;
+    let shared = Shared::new(&u, &main_path, reports_root)?;
     let mut setup = Setup::new(&u, &main_path, &u.strength.effects, &u.contact.averaging, &shared)?;
     let t0 = grid[0];
     setup.attach_thermal(Arc::new(laws.clone()), [Marginal::Fixed(t0), Marginal::Fixed(t0)])?;
@@ -348,7 +348,7 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
     let mut inputs = vec![InputFile::hash(&loaded.path)?, InputFile::hash(&path)?];
     let resolve = |p: &Path| loaded.resolve(p);
     let laws = match &s.law {
-        Some(l) => Some(ParameterLaws::load(&file, &resolve, phases.clone(), l, s.seed)?),
+        Some(l) => Some(ParameterLaws::load(&file, &resolve, &opts.reports_root, phases.clone(), l, s.seed)?),
         None => None,
     };
     if let Some(l) = &laws {
@@ -370,9 +370,13 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
         md.push_str(&format!("\n## Parameters against temperature\n\n{}\n", write_laws(&mut dir, laws, &grid, s.level)?));
         evaluations.insert("law_draws".to_string(), laws.len() as u64);
         if let Some(so) = &s.softening {
-            let ev = loaded.resolve(&so.evidence);
+            let (ev, key) = match (&so.study, &so.evidence) {
+                (Some(st), _) => (crate::schema::report_file(&opts.reports_root, &loaded.resolve(st), "curve_evidence.csv"), "softening.study"),
+                (_, Some(e)) => (loaded.resolve(e), "softening.evidence"),
+                _ => return Err(Error::config(&file, "softening", "needs `study` or `evidence`")),
+            };
             if !ev.is_file() {
-                return Err(Error::config(&file, "softening.evidence", format!("{} does not exist: it is the curve_evidence.csv a `discrepancy_curves` study's run writes", ev.display())));
+                return Err(Error::config(&file, key, format!("{} does not exist: it is the curve_evidence.csv a `discrepancy_curves` study's run writes", ev.display())));
             }
             md.push_str(&format!("\n## Softening: the laws and the discrepancy workflow\n\n{}\n", write_softening(&mut dir, laws, &ev, s.level)?));
             inputs.push(InputFile::hash(&ev)?);
@@ -393,7 +397,7 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
     if let (Some(laws), Some(l)) = (&laws, &s.lifetime) {
         pb.set_message("breakage against temperature");
         let tick = || pb.inc(1);
-        let (text, read) = write_lifetime(&mut dir, &file, l, laws, &grid, &at, s.level, s.seed, &resolve, &tick)?;
+        let (text, read) = write_lifetime(&mut dir, &file, l, laws, &grid, &at, s.level, s.seed, &resolve, &opts.reports_root, &tick)?;
         md.push_str(&format!("\n## Breakage against temperature\n\n{text}\n"));
         for p in read {
             inputs.push(InputFile::hash(&p)?);

@@ -13,12 +13,12 @@
 //! level = 0.9                        # probability of the central bands
 //!
 //! [law]                              # crate::thermal: calibrated states, glassy-ratio priors
-//! calibrations = [{ temperature_c = 20, chains = "…/chains.csv" }, { temperature_c = 800, chains = "…" }]
+//! calibrations = [{ temperature_c = 20, study = "calibrate_gen3_rt.toml" }, { temperature_c = 800, study = "…" }]
 //! [law.glassy_ratio]
 //! g = { distribution = "uniform", min = 0.01, max = 0.2 }
 //!
 //! [softening]                        # optional: the discrepancy workflow's temperature term
-//! evidence = "../reports/discrepancy_curves/curve_evidence.csv"
+//! study = "discrepancy_curves.toml" # its report's curve_evidence.csv (or evidence = "<file>")
 //!
 //! [[validation]]                     # optional: held-out crush curves predicted from the laws
 //! temperature_c = 950
@@ -50,8 +50,13 @@ use crate::thermal::{LawOptions, PhasesOptions};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SofteningOptions {
-    /// `curve_evidence.csv` of a `discrepancy_curves` report, relative to the study file.
-    pub evidence: PathBuf,
+    /// The `discrepancy_curves` study (relative to the study file) whose report's
+    /// `curve_evidence.csv` is read (run first when missing or stale).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub study: Option<PathBuf>,
+    /// Or a `curve_evidence.csv` given directly, relative to the study file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub evidence: Option<PathBuf>,
 }
 
 /// `[lifetime]`: the main study's breakage against temperature.
@@ -152,6 +157,9 @@ impl TemperatureStudy {
         if let Some(l) = &self.law {
             l.validate(file)?;
         }
+        if let Some(so) = &self.softening {
+            crate::schema::one_of(file, "softening", &so.study, &so.evidence, "study", "evidence")?;
+        }
         if self.law.is_none() {
             for (present, key) in [(self.softening.is_some(), "softening"), (self.lifetime.is_some(), "lifetime"), (!self.validation.is_empty(), "validation")] {
                 if present {
@@ -176,6 +184,23 @@ impl TemperatureStudy {
             }
         }
         self.figures.validate(file)
+    }
+
+    /// The studies whose reports it reads (study file `file`): the calibrations of `[law]`, the
+    /// curve-level discrepancy study of `[softening]`, and those of the main study of
+    /// `[lifetime]` (which is read, not run). `[[validation]]` studies are read, not run.
+    pub fn prerequisites(&self, file: &crate::schema::StudyFile) -> Result<Vec<crate::schema::Prerequisite>> {
+        let resolve = |p: &std::path::Path| file.resolve(p);
+        let mut out = self.law.as_ref().map(|l| crate::thermal::law_prerequisites(l, &resolve)).unwrap_or_default();
+        if let Some(so) = &self.softening
+            && let Some(st) = &so.study
+        {
+            out.push(crate::schema::Prerequisite { key: "softening.study".into(), study: resolve(st), files: vec!["curve_evidence.csv"] });
+        }
+        if let Some(l) = &self.lifetime {
+            out.extend(crate::uq::study::UqStudy::prerequisites_of_file(&resolve(&l.main))?);
+        }
+        Ok(out)
     }
 
     /// The temperatures of the tables against temperature, within the phase table's range `lo`–`hi`.

@@ -14,9 +14,10 @@
 //! composition = "granulated (illustrative)"
 //!
 //! [law]
-//! calibrations = [   # posterior draws (chains.csv of a calibration study's report), two temperatures
-//!   { temperature_c = 20,  chains = "../reports/calibrate_gen3_rt/chains.csv" },
-//!   { temperature_c = 800, chains = "../reports/calibrate_gen3_800c/chains.csv" },
+//! calibrations = [   # posterior draws at two temperatures: the chains.csv of a calibration
+//!                     # study's report (run first when missing or stale), or a file (`chains`)
+//!   { temperature_c = 20,  study = "calibrate_gen3_rt.toml" },
+//!   { temperature_c = 800, study = "calibrate_gen3_800c.toml" },
 //! ]
 //! draws = 2000        # joint draws of the laws (drawn without replacement from each posterior)
 //! strength = "t"      # the parameter whose law scales the Weibull scale σ_θ of the strength model
@@ -84,9 +85,42 @@ fn onset_level() -> f64 {
 pub struct CalibratedState {
     /// The temperature of the calibration's data (°C).
     pub temperature_c: f64,
-    /// Its posterior draws (`chains.csv` of the calibration study's report), relative to the
-    /// study file.
-    pub chains: PathBuf,
+    /// The calibration study (relative to the study file) whose report's `chains.csv` holds the
+    /// posterior draws; its report is found under the run's reports root, and the study is run
+    /// first when its report is missing or stale.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub study: Option<PathBuf>,
+    /// Or a file of posterior draws given directly (relative to the study file).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chains: Option<PathBuf>,
+}
+
+impl CalibratedState {
+    /// The file of posterior draws: `<reports_root>/<study stem>/chains.csv`, or `chains`.
+    pub fn chains_file(&self, file: &str, key: &str, resolve: &dyn Fn(&Path) -> PathBuf, reports_root: &Path) -> Result<PathBuf> {
+        crate::schema::one_of(file, key, &self.study, &self.chains, "study", "chains")?;
+        Ok(match (&self.study, &self.chains) {
+            (Some(s), _) => crate::schema::report_file(reports_root, &resolve(s), "chains.csv"),
+            (_, Some(c)) => resolve(c),
+            _ => unreachable!("one_of checked"),
+        })
+    }
+}
+
+/// The studies whose reports the `[law]` of a temperature study reads (its calibrations).
+pub fn law_prerequisites(o: &LawOptions, resolve: &dyn Fn(&Path) -> PathBuf) -> Vec<crate::schema::Prerequisite> {
+    o.calibrations
+        .iter()
+        .enumerate()
+        .filter_map(|(i, c)| c.study.as_ref().map(|s| crate::schema::Prerequisite { key: format!("law.calibrations[{i}].study"), study: resolve(s), files: vec!["chains.csv", "parameters.csv"] }))
+        .collect()
+}
+
+/// The prerequisites of the `[law]` of the temperature study at `path` (none without a law).
+pub fn law_prerequisites_of_study(path: &Path) -> Result<Vec<crate::schema::Prerequisite>> {
+    let loaded = crate::schema::StudyFile::read(path)?;
+    let src: LawSource = loaded.parse()?;
+    Ok(src.law.as_ref().map(|l| law_prerequisites(l, &|p| loaded.resolve(p))).unwrap_or_default())
 }
 
 /// `[law]` of a temperature study.
@@ -132,6 +166,7 @@ impl LawOptions {
             return Err(Error::config(file, "law.calibrations", format!("the law is fitted to exactly two calibrated states, got {}", c.len())));
         }
         for (i, s) in c.iter().enumerate() {
+            crate::schema::one_of(file, &format!("law.calibrations[{i}]"), &s.study, &s.chains, "study", "chains")?;
             if !(s.temperature_c.is_finite() && s.temperature_c > -273.15) {
                 return Err(Error::config(file, format!("law.calibrations[{i}].temperature_c"), format!("must be a temperature above absolute zero (°C), got {}", s.temperature_c)));
             }
@@ -197,7 +232,7 @@ struct LawSource {
 
 /// Reads the phase table and fits the laws of temperature study `path` (its `[phases]` and
 /// `[law]`, its seed): what a main study's `[operating] law = "…"` points at.
-pub fn load_from_study(path: &Path) -> Result<ParameterLaws> {
+pub fn load_from_study(path: &Path, reports_root: &Path) -> Result<ParameterLaws> {
     let loaded = crate::schema::StudyFile::read(path)?;
     let file = path.display().to_string();
     loaded.kind(&["temperature"])?;
@@ -206,7 +241,7 @@ pub fn load_from_study(path: &Path) -> Result<ParameterLaws> {
         return Err(Error::config(&file, "law", "this temperature study declares no [law] (calibrated states and glassy-ratio priors)"));
     };
     let phases = read_phases_of(&file, &loaded.resolve(&src.phases.file))?;
-    ParameterLaws::load(&file, &|p| loaded.resolve(p), phases, law, src.seed)
+    ParameterLaws::load(&file, &|p| loaded.resolve(p), reports_root, phases, law, src.seed)
 }
 
 /// The phase table at `path`, or an error naming the study key when it does not exist.
@@ -220,7 +255,7 @@ pub fn read_phases_of(file: &str, path: &Path) -> Result<PhaseTable> {
 impl ParameterLaws {
     /// Fits the laws of `o` (study file `file`, paths resolved by `resolve`) with the amorphous
     /// fraction of `phases`; `seed` chooses the posterior draws and the glassy ratios.
-    pub fn load(file: &str, resolve: &dyn Fn(&Path) -> PathBuf, phases: PhaseTable, o: &LawOptions, seed: u64) -> Result<ParameterLaws> {
+    pub fn load(file: &str, resolve: &dyn Fn(&Path) -> PathBuf, reports_root: &Path, phases: PhaseTable, o: &LawOptions, seed: u64) -> Result<ParameterLaws> {
         o.validate(file)?;
         let (lo, hi) = phases.range();
         let names: Vec<String> = o.glassy_ratio.keys().cloned().collect();
@@ -231,9 +266,10 @@ impl ParameterLaws {
             if c.temperature_c < lo || c.temperature_c > hi {
                 return Err(Error::config(file, format!("{key}.temperature_c"), format!("{} °C lies outside the phase table {} ({lo}–{hi} °C)", c.temperature_c, phases.path.display())));
             }
-            let path = resolve(&c.chains);
+            let path = c.chains_file(file, &key, resolve, reports_root)?;
             if !path.is_file() {
-                return Err(Error::config(file, format!("{key}.chains"), format!("{} does not exist: it is the chains.csv a calibration study's run writes (`partlife run studies/<calibration>.toml`)", path.display())));
+                let sub = if c.study.is_some() { "study" } else { "chains" };
+                return Err(Error::config(file, format!("{key}.{sub}"), format!("{} does not exist: it is the chains.csv a calibration study's run writes", path.display())));
             }
             let t = crate::report::Table::load_file(&path)?;
             let cols: Vec<Vec<f64>> = names.iter().map(|n| t.f(n)).collect::<Result<_>>()?;

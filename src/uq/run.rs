@@ -52,7 +52,7 @@ fn lg(p: f64) -> f64 {
 pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunSummary> {
     let clock = RunClock::start();
     s.validate(&loaded.path.display().to_string())?;
-    let shared = Shared::new(s, &loaded.path)?;
+    let shared = Shared::new(s, &loaded.path, &opts.reports_root)?;
     let specs = s.specs();
     let sens_sizes: Vec<usize> = (0..5).rev().map(|k| (s.sensitivity.n >> k).max(64)).collect();
     let pb = progress_bar((specs.len() * s.propagation.replicates + sens_sizes.len() + 3) as u64, opts.progress, crate::runkit::PROGRESS_COUNT);

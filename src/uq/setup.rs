@@ -141,8 +141,9 @@ pub struct Shared {
 }
 
 impl Shared {
-    /// Builds the shared inputs of a study (`path` its file).
-    pub fn new(s: &UqStudy, path: &Path) -> Result<Shared> {
+    /// Builds the shared inputs of a study (`path` its file; the reports of the studies its
+    /// operating-temperature law reads are under `reports_root`).
+    pub fn new(s: &UqStudy, path: &Path, reports_root: &Path) -> Result<Shared> {
         let file = path.display().to_string();
         let resolve = |p: &str| crate::schema::resolve_relative(path, Path::new(p));
         let m = |d: &crate::dist::Dist, key: &str, unit: &str, lo: f64, hi: f64| -> Result<Marginal> {
@@ -173,7 +174,7 @@ impl Shared {
                 if !law_path.is_file() {
                     return Err(Error::config(&file, "operating.law", format!("{} does not exist (a `kind = \"temperature\"` study with [phases] and [law])", law_path.display())));
                 }
-                let laws = Arc::new(crate::thermal::load_from_study(&law_path)?);
+                let laws = Arc::new(crate::thermal::load_from_study(&law_path, reports_root)?);
                 let temperatures = s
                     .material
                     .iter()

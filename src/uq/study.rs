@@ -226,6 +226,34 @@ impl UqStudy {
         [pos(&self.compare.candidate), pos(&self.compare.reference)]
     }
 
+    /// The studies whose reports it reads (study file at `path`): those of the temperature
+    /// study its `[operating] law` names (that study is read, not run).
+    pub fn prerequisites(&self, path: &std::path::Path) -> Result<Vec<crate::schema::Prerequisite>> {
+        match &self.operating {
+            Some(op) => {
+                let law = crate::schema::resolve_relative(path, &op.law);
+                if !law.is_file() {
+                    return Ok(Vec::new());
+                }
+                crate::thermal::law_prerequisites_of_study(&law)
+            }
+            None => Ok(Vec::new()),
+        }
+    }
+
+    /// [`UqStudy::prerequisites`] of the main study file at `path` (none when it is not a main
+    /// study: its reader says so).
+    pub fn prerequisites_of_file(path: &std::path::Path) -> Result<Vec<crate::schema::Prerequisite>> {
+        if !path.is_file() {
+            return Ok(Vec::new());
+        }
+        let f = crate::schema::StudyFile::read(path)?;
+        match f.parse::<UqStudy>() {
+            Ok(u) => u.prerequisites(path),
+            Err(_) => Ok(Vec::new()),
+        }
+    }
+
     /// Checks every option that needs no data (file named in messages).
     pub fn validate(&self, file: &str) -> Result<()> {
         let bad = |k: &str, rule: String| Err(Error::config(file, k, rule));

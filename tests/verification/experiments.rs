@@ -128,7 +128,7 @@ fn state_of(k: usize, deliverable_only: bool) -> partlife::experiments::State {
         s.model_form.strength = vec![Default::default()];
         s.strength.draws = 4000;
     }
-    let shared = Shared::new(&s, &path).unwrap();
+    let shared = Shared::new(&s, &path, std::path::Path::new("reports")).unwrap();
     let forms = weighed(&s, &path, &shared).unwrap();
     let n = forms[0].setup.models.len();
     partlife::experiments::State::new(forms, vec![1.0 / n as f64; n], 0, 1.0, k, 17).unwrap()

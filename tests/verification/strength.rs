@@ -85,7 +85,7 @@ fn three_studies_give_the_same_breakage_at_fixed_inputs() {
         let loaded = partlife::study::load(&studies.join("gen4_vs_bl.toml")).unwrap();
         let partlife::study::Study::Uq(s) = &loaded.study else { panic!("not a uq study") };
         let spec = StrengthSpec::Effects(effects.clone());
-        let shared = Shared::new(s, &loaded.file.path).unwrap();
+        let shared = Shared::new(s, &loaded.file.path, std::path::Path::new("reports")).unwrap();
         let setup = Setup::new(s, &loaded.file.path, &spec, &AveragingDomain::default(), &shared).unwrap();
         let mut out = vec![0.0; setup.outputs()];
         let mle = [0, 1].map(|j| (setup.materials[j].model.fit.estimate(), None));

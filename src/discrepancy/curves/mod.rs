@@ -216,6 +216,28 @@ fn floor() -> f64 {
 }
 
 impl CurveStudy {
+    /// Reads its curve files (each must exist and parse), in order: what a run checks first,
+    /// before its calibration's report is read or run.
+    pub fn read_data(&self, loaded: &StudyFile) -> Result<(Vec<std::path::PathBuf>, Vec<Vec<crate::calibrate::data::Curve>>)> {
+        let file = loaded.path.display().to_string();
+        let (mut paths, mut raw) = (Vec::new(), Vec::new());
+        for (i, d) in self.data.iter().enumerate() {
+            let path = loaded.resolve(Path::new(&d.file));
+            if !path.is_file() {
+                return Err(Error::config(&file, format!("data[{i}].file"), format!("{} does not exist", path.display())));
+            }
+            raw.push(load_curves(&path)?);
+            paths.push(path);
+        }
+        Ok((paths, raw))
+    }
+
+    /// The studies whose reports it reads: its crush calibration (emulator runs, posterior,
+    /// grid).
+    pub fn prerequisites(&self, file: &StudyFile) -> Vec<crate::schema::Prerequisite> {
+        vec![crate::schema::Prerequisite { key: "calibration".into(), study: file.resolve(Path::new(&self.calibration)), files: vec!["runs.csv", "parameters.csv", "grid.csv"] }]
+    }
+
     /// Checks every setting that does not need a file.
     pub fn validate(&self, file: &str) -> Result<()> {
         check(file, "data", !self.data.is_empty(), "at least one [[data]] curve file is required".into())?;
@@ -237,16 +259,7 @@ pub fn run_curves(loaded: &StudyFile, s: &CurveStudy, opts: &RunOptions) -> Resu
     let clock = RunClock::start();
     let file = loaded.path.display().to_string();
     // The curve files first (cheap), then the calibration and its emulator.
-    let mut paths = Vec::new();
-    let mut raw = Vec::new();
-    for (i, d) in s.data.iter().enumerate() {
-        let path = loaded.resolve(Path::new(&d.file));
-        if !path.is_file() {
-            return Err(Error::config(&file, format!("data[{i}].file"), format!("{} does not exist", path.display())));
-        }
-        raw.push(load_curves(&path)?);
-        paths.push(path);
-    }
+    let (paths, raw) = s.read_data(loaded)?;
     let cal = load_calibration(&file, "calibration", &loaded.resolve(Path::new(&s.calibration)), &opts.reports_root)?;
     let groups: Vec<Group> = s
         .data

@@ -130,10 +130,10 @@ fn walk(by: &Path, prereqs: Vec<Prerequisite>, stack: &mut Vec<PathBuf>, seen: &
         stack.push(p.study.clone());
         walk(&p.study, own.clone(), stack, seen, steps, of, stale_of)?;
         stack.pop();
-        let rerun = own.iter().find(|q| steps.iter().any(|s| s.study == q.study));
-        let why = match rerun {
-            Some(q) => Some(format!("{} is run first", q.study.display())),
-            None => stale_of(&p.study, &p.files)?,
+        // Its own report's state first; else whether a study it reads is run first.
+        let why = match stale_of(&p.study, &p.files)? {
+            Some(why) => Some(why),
+            None => own.iter().find(|q| steps.iter().any(|s| s.study == q.study)).map(|q| format!("{} is run first", q.study.display())),
         };
         if let Some(why) = why {
             steps.push(Step { study: p.study.clone(), why, key: p.key.clone(), by: by.to_path_buf() });
@@ -200,7 +200,7 @@ mod tests {
     fn prerequisites_run_in_order_and_once() {
         // temperature reads rt, c800 and curves; c800 and curves read rt.
         let edges: &[(&str, &[&str])] = &[("temperature", &["rt", "c800", "curves"]), ("c800", &["rt"]), ("curves", &["rt"])];
-        assert_eq!(planned("temperature", edges, &["rt", "c800", "curves"]).unwrap(), vec!["rt:missing", "c800:/rt is run first", "curves:/rt is run first"]);
+        assert_eq!(planned("temperature", edges, &["rt", "c800", "curves"]).unwrap(), vec!["rt:missing", "c800:missing", "curves:missing"]);
         // Current reports run nothing; a stale one reruns what reads it.
         assert!(planned("temperature", edges, &[]).unwrap().is_empty());
         assert_eq!(planned("temperature", edges, &["c800"]).unwrap(), vec!["c800:missing"]);

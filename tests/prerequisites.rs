@@ -89,8 +89,8 @@ fn no_deps_names_every_missing_or_stale_prerequisite_at_once() {
     for e in [
         "studies/temperature.toml: prerequisites: 3 studies' reports are missing or stale (--no-deps)",
         "studies/calibrate_gen3_rt.toml (its input datasets/crush_curves_gen3_rt.csv changed since its report was written; read by law.calibrations[0].study of studies/temperature.toml)",
-        "studies/calibrate_gen3_800c.toml (studies/calibrate_gen3_rt.toml is run first; read by law.calibrations[1].study",
-        "studies/discrepancy_curves.toml (studies/calibrate_gen3_rt.toml is run first; read by softening.study",
+        "studies/calibrate_gen3_800c.toml (studies/calibrate_gen3_800c.toml changed since its report was written; read by law.calibrations[1].study",
+        "studies/discrepancy_curves.toml (its input datasets/crush_curves_gen3_rt.csv changed since its report was written; read by softening.study",
     ] {
         assert!(out.stderr.contains(e), "lacks {e}: {}", out.stderr);
     }

@@ -41,6 +41,12 @@ fn range(v: &[f64]) -> (f64, f64) {
     v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)))
 }
 
+/// `lo–hi` as printed (scaled, `places` decimals), or the one value when both print alike.
+fn span((lo, hi): (f64, f64), scale: f64, places: usize) -> String {
+    let (a, b) = (format!("{:.*}", places, lo * scale), format!("{:.*}", places, hi * scale));
+    if a == b { a } else { format!("{a}–{b}") }
+}
+
 /// The kind of table a header shows (module docs).
 fn kind_of(t: &RawTable) -> &'static str {
     let has = |n: &str| t.column(n).is_some();
@@ -119,9 +125,9 @@ fn check_table(src: &Source) -> Result<Vec<Checked>> {
         }
         "curves" => {
             let curves = crate::calibrate::data::load_curves(path)?;
-            let (dlo, dhi) = range(&curves.iter().map(|c| c.diameter).collect::<Vec<_>>());
+            let d = span(range(&curves.iter().map(|c| c.diameter).collect::<Vec<_>>()), 1e6, 0);
             let r = resolve(&t, &crate::calibrate::data::CURVE_FIELDS, &src.columns, &src.units, &MapOrigin::default())?;
-            one(format!("crush curves, {} particles, d = {:.0}–{:.0} µm, {} samples", curves.len(), dlo * 1e6, dhi * 1e6, t.rows.len()), Some(r.provenance.clone()))
+            one(format!("crush curves, {} particles, d = {d} µm, {} samples", curves.len(), t.rows.len()), Some(r.provenance.clone()))
         }
         "shape" => {
             let r = resolve(&t, &crate::data::SHAPE_FIELDS, &src.columns, &src.units, &MapOrigin::default())?;
@@ -153,12 +159,11 @@ fn check_table(src: &Source) -> Result<Vec<Checked>> {
             for m in materials {
                 let s = Source { material: (!m.is_empty()).then_some(m.clone()), ..src.clone() };
                 let d = crate::data::read_crush_source(&s, &MapOrigin::default())?;
-                let (dlo, dhi) = range(&d.diameters());
-                let (flo, fhi) = range(&d.forces());
+                let (dia, force) = (span(range(&d.diameters()), 1e6, 0), span(range(&d.forces()), 1.0, 1));
                 let label = if d.material().is_empty() { "no material column".to_string() } else { format!("material \"{}\"", d.material()) };
                 out.push(Checked {
                     what: if s.material.is_some() && src.material.is_none() { format!("{what} [{m}]") } else { what.clone() },
-                    summary: format!("crush data, {label}, {} particle{}, d = {:.0}–{:.0} µm, F = {:.1}–{:.1} N", d.records.len(), if d.records.len() == 1 { "" } else { "s" }, dlo * 1e6, dhi * 1e6, flo, fhi),
+                    summary: format!("crush data, {label}, {} particle{}, d = {dia} µm, F = {force} N", d.records.len(), if d.records.len() == 1 { "" } else { "s" }),
                     read: Some(d.provenance),
                 });
             }

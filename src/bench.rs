@@ -512,7 +512,8 @@ pub fn discrepancy_speed(settings: &Path) -> Result<DiscrepancySpeed> {
     let dir = scratch.path();
     crate::synth::synthesize(&gen_settings, dir)?;
     let data = dir.join("bench_crush_100.csv");
-    let (file, s) = crate::discrepancy::run::quick_study(&data)?;
+    // The generator's elastic constants; the density of the lifetime study's particles.
+    let (file, s) = crate::discrepancy::run::quick_study(&data, gen_settings.material[0].elastic, 3600.0)?;
     let crush = crate::data::read_crush(&data)?;
     let sample = crate::strength::sample_of(&crush, &s.material[0].elastic, &s.contact)?;
     let settings = crate::strength::NamingSettings { seed: s.seed, ..Default::default() };

@@ -14,7 +14,9 @@
 //! Values are converted from the SI text exactly ([`crate::intake::decimal`]): diameters by a
 //! decimal shift, forces to kgf with 17 significant digits (what an `f64` cell holds). Read back
 //! through the intake they are the SI files' numbers bit for bit, so the studies reading them
-//! give byte-identical tables (`tests/intake.rs`). Written by `partlife datasets lab-examples`.
+//! give byte-identical tables (`tests/intake.rs`). Written by `partlife datasets lab-examples`;
+//! `datasets/examples/exports.toml` records what each export was made from, which labels them
+//! synthetic as their sources are ([`crate::intake::synthetic_label`]).
 
 use std::path::{Path, PathBuf};
 

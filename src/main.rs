@@ -70,6 +70,16 @@ enum Command {
         /// Model to diagnose (the deliverable's Weibull law of the Hertz σ̄ at break).
         #[arg(long, value_enum, default_value = "weibull-hertz", requires = "data")]
         model: DiscrepancyModel,
+        /// With --data (required): the particles' Young's modulus (Pa), e.g. 112e9 for the
+        /// deliverable's Gen 4. It sets the Hertz stresses, hence the lifetime (not the verdict).
+        #[arg(long, requires = "data", value_name = "PA")]
+        youngs_modulus_pa: Option<f64>,
+        /// With --data (required): the particles' Poisson's ratio, e.g. 0.25.
+        #[arg(long, requires = "data")]
+        poisson_ratio: Option<f64>,
+        /// With --data (required): the particles' apparent density (kg/m³), e.g. 3600.
+        #[arg(long, requires = "data", value_name = "KG_M3")]
+        density_kg_m3: Option<f64>,
         /// Root directory of the reports (as for `run`): the report goes to
         /// <root>/<study name>/ (<root>/discrepancy-<file stem>/ with --data), and a curve-level
         /// study finds its calibration's report under the same root.
@@ -273,10 +283,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             out!("wrote {} in {:.2} s", summary.report_dir.display(), summary.wall_time_s);
         }
-        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, reports_dir, quiet, no_deps } => {
+        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, youngs_modulus_pa, poisson_ratio, density_kg_m3, reports_dir, quiet, no_deps } => {
             let loaded = match (&study, &data) {
                 (_, Some(d)) => {
-                    let (file, s) = partlife::discrepancy::run::quick_study(d)?;
+                    let (Some(e), Some(nu), Some(rho)) = (youngs_modulus_pa, poisson_ratio, density_kg_m3) else {
+                        let missing: Vec<&str> = [("--youngs-modulus-pa", youngs_modulus_pa), ("--poisson-ratio", poisson_ratio), ("--density-kg-m3", density_kg_m3)].iter().filter(|(_, v)| v.is_none()).map(|(k, _)| *k).collect();
+                        return Err(partlife::Error::config("--data", missing.join(", "), "the lifetime needs the particles' elastic constants and density, which set the impact stress (no material is assumed): give --youngs-modulus-pa, --poisson-ratio and --density-kg-m3 (the deliverable's Gen 4: 112e9, 0.25, 3600)").into());
+                    };
+                    let (file, s) = partlife::discrepancy::run::quick_study(d, partlife::contact::Elastic { youngs_modulus_pa: e, poisson_ratio: nu }, rho)?;
                     partlife::study::LoadedStudy { file, study: partlife::study::Study::Discrepancy(Box::new(s)) }
                 }
                 (Some(s), None) => partlife::study::load(s)?,

@@ -15,7 +15,7 @@
 //! |---|---|
 //! | `temperature_c` or `temperature_k` | temperature, °C or K (exactly one of the two columns) |
 //! | `phase` | the phase's name as the database spells it (`CORUNDUM`, `MULLITE`, …) |
-//! | `mole_fraction` or `mass_fraction` | the phase's fraction; the column's name states the basis (exactly one) |
+//! | `volume_fraction`, `mole_fraction` or `mass_fraction` | the phase's fraction; the column's name states the basis (exactly one) |
 //! | `amorphous` | optional: `true` for a disordered or glassy phase, `false` or empty otherwise |
 //!
 //! Rules, each refused with the file, row and rule (exit 2):
@@ -45,6 +45,23 @@
 //!
 //! Between the tabulated temperatures the fractions are interpolated linearly; outside them
 //! nothing is extrapolated ([`PhaseTable::at`] refuses).
+//!
+//! # Volume fractions
+//!
+//! The temperature law ([`crate::thermal::law`]) mixes crystalline and glassy behaviour by a
+//! rule of mixtures, which is a rule in **volume** fractions. A table of volume fractions is used
+//! as it is; mole or mass fractions are converted ([`PhaseTable::to_volume`]) with a per-phase
+//! quantity the study declares with its source (`[phases]` of a temperature study):
+//!
+//! ```text
+//! φ_i = x_i q_i / Σ_j x_j q_j,   q = molar volume V_m (mole fractions) or 1/ρ (mass fractions)
+//! ```
+//!
+//! The molar volume is per mole as the table counts moles: Thermo-Calc's `NP` and pycalphad's
+//! `NP` count moles of components (atoms) in the phase, so V_m = M/(ρ·n) for a formula unit of
+//! molar mass M and n atoms. A table in mole or mass fractions without those quantities is
+//! refused with what to declare: mixing mole fractions as volume fractions would be silently
+//! wrong by the phases' ratio of molar volumes.
 
 use std::path::{Path, PathBuf};
 
@@ -66,6 +83,8 @@ const KELVIN: f64 = 273.15;
 /// The basis of the fractions.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Basis {
+    /// Volume fractions of phase (what a rule of mixtures takes).
+    Volume,
     /// Mole fractions of phase.
     Mole,
     /// Mass fractions of phase.
@@ -76,10 +95,31 @@ impl Basis {
     /// The column that holds fractions of this basis.
     pub fn column(self) -> &'static str {
         match self {
+            Basis::Volume => "volume_fraction",
             Basis::Mole => "mole_fraction",
             Basis::Mass => "mass_fraction",
         }
     }
+
+    /// In words ("mole fractions").
+    pub fn words(self) -> &'static str {
+        match self {
+            Basis::Volume => "volume fractions",
+            Basis::Mole => "mole fractions",
+            Basis::Mass => "mass fractions",
+        }
+    }
+}
+
+/// What converts a table's mole or mass fractions to volume fractions: per phase, its molar
+/// volume (m³/mol, as the table counts moles) or its density (kg/m³), and where the values come
+/// from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VolumeConversion {
+    /// Per phase name, q_i: the molar volume (mole basis) or the density (mass basis).
+    pub per_phase: std::collections::BTreeMap<String, f64>,
+    /// The key that held them (for messages): `phases.molar_volume_m3_mol`, say.
+    pub key: String,
 }
 
 /// A validated phase-fraction table.
@@ -89,6 +129,8 @@ pub struct PhaseTable {
     pub path: PathBuf,
     /// The basis of the fractions.
     pub basis: Basis,
+    /// The basis the file held (≠ `basis` after [`PhaseTable::to_volume`] converted it).
+    pub file_basis: Basis,
     /// Temperatures (°C), increasing.
     pub temperatures_c: Vec<f64>,
     /// Phase names, in order of first appearance.
@@ -105,9 +147,10 @@ fn folded(name: &str) -> String {
 }
 
 /// The fields of a phase-fraction table.
-pub const PHASE_FIELDS: [Field; 5] = [
+pub const PHASE_FIELDS: [Field; 6] = [
     Field { key: "temperature", column: "temperature_c", kind: Kind::Number(Quantity::Temperature), synonyms: &["t"], required: true, plausible: None },
     Field { key: "phase", column: "phase", kind: Kind::Text, synonyms: &[], required: true, plausible: None },
+    Field { key: "volume_fraction", column: "volume_fraction", kind: Kind::Number(Quantity::Ratio), synonyms: &[], required: false, plausible: None },
     Field { key: "mole_fraction", column: "mole_fraction", kind: Kind::Number(Quantity::Ratio), synonyms: &[], required: false, plausible: None },
     Field { key: "mass_fraction", column: "mass_fraction", kind: Kind::Number(Quantity::Ratio), synonyms: &[], required: false, plausible: None },
     Field { key: "amorphous", column: "amorphous", kind: Kind::Text, synonyms: &[], required: false, plausible: None },
@@ -125,11 +168,11 @@ pub fn read_phases_source(src: &Source) -> Result<(PhaseTable, Provenance)> {
     let path = src.file.as_path();
     let raw = read_raw(src)?;
     let r = resolve(&raw, &PHASE_FIELDS, &src.columns, &src.units, &MapOrigin::default())?;
-    let basis = match (r.has("mole_fraction"), r.has("mass_fraction")) {
-        (true, false) => Basis::Mole,
-        (false, true) => Basis::Mass,
-        (true, true) => return Err(raw.header_error(None, "both `mole_fraction` and `mass_fraction`: one file holds one basis")),
-        (false, false) => return Err(raw.header_error(None, "missing column `mole_fraction` or `mass_fraction` (the column's name states the basis)")),
+    let bases: Vec<Basis> = [Basis::Volume, Basis::Mole, Basis::Mass].into_iter().filter(|b| r.has(b.column())).collect();
+    let basis = match bases.as_slice() {
+        [b] => *b,
+        [] => return Err(raw.header_error(None, "missing column `volume_fraction`, `mole_fraction` or `mass_fraction` (the column's name states the basis)")),
+        _ => return Err(raw.header_error(None, format!("{}: one file holds one basis", bases.iter().map(|b| format!("`{}`", b.column())).collect::<Vec<_>>().join(" and ")))),
     };
     let key = basis.column();
     if raw.rows.is_empty() {
@@ -137,7 +180,7 @@ pub fn read_phases_source(src: &Source) -> Result<(PhaseTable, Provenance)> {
     }
     let t_col = raw.headers[r.column("temperature").unwrap_or(0)].clone();
 
-    let mut table = PhaseTable { path: path.to_path_buf(), basis, temperatures_c: Vec::new(), phases: Vec::new(), amorphous: Vec::new(), fractions: Vec::new() };
+    let mut table = PhaseTable { path: path.to_path_buf(), basis, file_basis: basis, temperatures_c: Vec::new(), phases: Vec::new(), amorphous: Vec::new(), fractions: Vec::new() };
     // The row each temperature starts at, and each phase's first row.
     let (mut starts, mut first_row): (Vec<usize>, Vec<usize>) = (Vec::new(), Vec::new());
     let mut names: Vec<String> = Vec::new();
@@ -254,6 +297,60 @@ impl PhaseTable {
         self.amorphous_fractions().iter().position(|&f| f > level).map(|i| self.temperatures_c[i])
     }
 
+    /// The table in volume fractions (module docs): as it is when it holds volume fractions;
+    /// else converted with `conversion` (molar volumes for mole fractions, densities for mass
+    /// fractions). Refused, naming what to declare, when the table needs a conversion and none
+    /// is given, when a phase with a non-zero fraction lacks its value, or when a value is not
+    /// finite and positive.
+    /// `study` is the study file that declares the table (for messages).
+    pub fn to_volume(&self, study: &str, conversion: Option<&VolumeConversion>) -> Result<PhaseTable> {
+        let file = study;
+        let (what, unit, example) = match self.basis {
+            Basis::Volume => return Ok(self.clone()),
+            Basis::Mole => ("molar volume", "m³ per mole as the table counts moles", "molar_volume_m3_mol"),
+            Basis::Mass => ("density", "kg/m³", "density_kg_m3"),
+        };
+        let used: Vec<&String> = self.phases.iter().enumerate().filter(|(p, _)| self.fractions.iter().any(|f| f[*p] > 0.0)).map(|(_, n)| n).collect();
+        let Some(c) = conversion else {
+            return Err(Error::config(
+                file,
+                "phases.file",
+                format!(
+                    "{} holds {} (column `{}`), and the temperature law mixes phases by volume (a rule of mixtures): declare each phase's {what} ({unit}) in the temperature study's [phases] {example} = {{ {} }} with its `source`, or give volume fractions (a `volume_fraction` column)",
+                    self.path.display(),
+                    self.basis.words(),
+                    self.basis.column(),
+                    used.iter().map(|n| format!("{n} = …")).collect::<Vec<_>>().join(", ")
+                ),
+            ));
+        };
+        let missing: Vec<&&String> = used.iter().filter(|n| !c.per_phase.contains_key(n.as_str())).collect();
+        if !missing.is_empty() {
+            return Err(Error::config(file, &c.key, format!("lacks the {what} of {} (phases of the table with a non-zero fraction)", missing.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(", "))));
+        }
+        if let Some((n, v)) = c.per_phase.iter().find(|(_, v)| !(v.is_finite() && **v > 0.0)) {
+            return Err(Error::config(file, &c.key, format!("the {what} of \"{n}\" must be finite and > 0, got {v}")));
+        }
+        let q: Vec<f64> = self
+            .phases
+            .iter()
+            .map(|n| {
+                let v = c.per_phase.get(n).copied().unwrap_or(1.0);
+                if self.basis == Basis::Mass { 1.0 / v } else { v }
+            })
+            .collect();
+        let fractions = self
+            .fractions
+            .iter()
+            .map(|f| {
+                let v: Vec<f64> = f.iter().zip(&q).map(|(x, q)| x * q).collect();
+                let total: f64 = v.iter().sum();
+                v.iter().map(|x| x / total).collect()
+            })
+            .collect();
+        Ok(PhaseTable { basis: Basis::Volume, fractions, ..self.clone() })
+    }
+
     /// The table as CSV (`temperature_c`, `phase`, the basis column, `amorphous`), every phase at
     /// every temperature, fractions to 6 decimals.
     pub fn to_csv(&self) -> String {
@@ -270,7 +367,8 @@ impl PhaseTable {
 /// The shipped illustrative table (`datasets/phases_granulated_illustrative.csv`): **not
 /// computed** — a shape that follows the deliverable's text, made by this rule:
 ///
-/// * temperatures 20 °C, then 50–1400 °C in steps of 50 °C; mole fractions;
+/// * temperatures 20 °C, then 50–1400 °C in steps of 50 °C; volume fractions (the basis the
+///   temperature law mixes in; the table is illustrative, so no conversion is pretended);
 /// * amorphous phase `IONIC_LIQ`: f_a = 0 up to 880 °C, then f_a = 0.30 · s((T − 880)/300) with
 ///   the smoothstep s(x) = 3x² − 2x³ (x clipped to [0, 1]), so it starts to rise around 900 °C
 ///   and reaches 0.30 at 1180 °C;
@@ -291,7 +389,8 @@ pub fn illustrative() -> PhaseTable {
         .collect();
     PhaseTable {
         path: PathBuf::new(),
-        basis: Basis::Mole,
+        basis: Basis::Volume,
+        file_basis: Basis::Volume,
         temperatures_c,
         phases: ["CORUNDUM", "MULLITE", "PSEUDO_BROOKITE", "IONIC_LIQ"].map(String::from).to_vec(),
         amorphous: vec![false, false, false, true],
@@ -323,6 +422,35 @@ mod tests {
         assert!((t.at(1050.0).unwrap()[0] - 0.25).abs() < 1e-12);
         assert!(t.at(799.0).is_err() && t.at(1100.1).is_err());
         assert_eq!(t.amorphous_onset(0.45), Some(t.temperatures_c[1]));
+    }
+
+    #[test]
+    fn mass_and_mole_fractions_convert_to_volume_fractions() {
+        // Equal masses of a phase twice as dense as the other: a third of the volume.
+        let (_d, p) = write("temperature_c,phase,mass_fraction,amorphous\n20,DENSE,0.5,\n20,GLASS,0.5,true\n900,DENSE,0.8,\n900,GLASS,0.2,true\n");
+        let t = read_phases(&p).unwrap();
+        let per_phase = [("DENSE".to_string(), 4000.0), ("GLASS".to_string(), 2000.0)].into_iter().collect();
+        let v = t.to_volume("s.toml", Some(&VolumeConversion { per_phase, key: "phases.density_kg_m3".into() })).unwrap();
+        assert_eq!((v.basis, v.file_basis), (Basis::Volume, Basis::Mass));
+        assert!((v.amorphous_at(20.0).unwrap() - 2.0 / 3.0).abs() < 1e-12, "{:?}", v.fractions);
+        // 0.8/4000 : 0.2/2000 = 2 : 1.
+        assert!((v.amorphous_at(900.0).unwrap() - 1.0 / 3.0).abs() < 1e-12, "{:?}", v.fractions);
+        // Mole fractions with molar volumes 1 : 3.
+        let (_d, p) = write("temperature_c,phase,mole_fraction,amorphous\n20,A,0.5,\n20,GLASS,0.5,true\n900,A,0.5,\n900,GLASS,0.5,true\n");
+        let t = read_phases(&p).unwrap();
+        let per_phase = [("A".to_string(), 1e-6), ("GLASS".to_string(), 3e-6)].into_iter().collect();
+        let v = t.to_volume("s.toml", Some(&VolumeConversion { per_phase, key: "phases.molar_volume_m3_mol".into() })).unwrap();
+        assert!((v.amorphous_at(20.0).unwrap() - 0.75).abs() < 1e-12);
+        // Without the conversion: refused, saying what to declare; a phase's value missing.
+        let e = t.to_volume("s.toml", None).unwrap_err().to_string();
+        assert!(e.contains("s.toml") && e.contains("phases.file") && e.contains("mole fractions") && e.contains("molar_volume_m3_mol = { A = …, GLASS = … }") && e.contains("volume_fraction"), "{e}");
+        let per_phase = [("A".to_string(), 1e-6)].into_iter().collect();
+        let e = t.to_volume("s.toml", Some(&VolumeConversion { per_phase, key: "phases.molar_volume_m3_mol".into() })).unwrap_err().to_string();
+        assert!(e.contains("phases.molar_volume_m3_mol") && e.contains("lacks the molar volume of \"GLASS\""), "{e}");
+        // Volume fractions are used as they are.
+        let (_d, p) = write("temperature_c,phase,volume_fraction,amorphous\n20,A,0.5,\n20,GLASS,0.5,true\n900,A,0.5,\n900,GLASS,0.5,true\n");
+        let t = read_phases(&p).unwrap();
+        assert_eq!(t.to_volume("s.toml", None).unwrap(), t);
     }
 
     #[test]

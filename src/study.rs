@@ -86,7 +86,7 @@ impl LoadedStudy {
         let f = &self.file;
         match &self.study {
             Study::DiscrepancyCurves(s) => s.read_data(f).map(|_| ()),
-            Study::Temperature(s) => crate::thermal::read_phases_of(&f.path.display().to_string(), &f.resolve(&s.phases.file)).map(|_| ()),
+            Study::Temperature(s) => s.phases.read(&f.path.display().to_string(), &f.resolve(&s.phases.file)).map(|_| ()),
             _ => Ok(()),
         }
     }

@@ -16,7 +16,7 @@ fn verdict_of(s: &Scratch, generator: &str) -> serde_json::Value {
     s.write("datasets/hidden.toml", generator);
     let out = s.run(&["datasets", "synth", "--settings", "datasets/hidden.toml"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
-    let out = s.run(&["discrepancy", "--data", "datasets/hidden.csv", "--quiet"]);
+    let out = s.run(&["discrepancy", "--data", "datasets/hidden.csv", "--youngs-modulus-pa", "112e9", "--poisson-ratio", "0.25", "--density-kg-m3", "3600", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     serde_json::from_str(&s.read("reports/discrepancy-hidden/verdict.json")).unwrap()
 }
@@ -140,25 +140,33 @@ fn missing_covariates_skip_their_candidates_and_few_particles_are_refused() {
         })
         .collect();
     s.write("datasets/bare.csv", &stripped);
-    let out = s.run(&["discrepancy", "--data", "datasets/bare.csv", "--quiet"]);
+    let out = s.run(&["discrepancy", "--data", "datasets/bare.csv", "--youngs-modulus-pa", "112e9", "--poisson-ratio", "0.25", "--density-kg-m3", "3600", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     let v: serde_json::Value = serde_json::from_str(&s.read("reports/discrepancy-bare/verdict.json")).unwrap();
+    // The lifetime's material constants are the ones given, stated in the summary.
+    assert!(s.read("reports/discrepancy-bare/summary.md").contains("particles with E = 112 GPa, ν = 0.25, ρ = 3600 kg/m³"));
     let ev = v["evidence"]["bare"].as_array().unwrap();
     for c in ["roundness", "sphericity"] {
         let e = ev.iter().find(|e| e["candidate"] == c).unwrap();
         assert!(e["skipped"].as_str().unwrap().contains(&format!("no `{c}` values")), "{e}");
     }
+    // Without the particles' constants no material is assumed (before, Gen 4's were, silently):
+    // refused naming the options missing.
+    let out = s.run(&["discrepancy", "--data", "datasets/bare.csv", "--youngs-modulus-pa", "90e9", "--quiet", "--reports-dir", "other"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("--poisson-ratio, --density-kg-m3") && out.stderr.contains("no material is assumed"), "{}", out.stderr);
+    assert!(!s.path("other").exists());
     // Nine particles: refused, exit 2, nothing written.
     let nine: String = text.lines().take(10).map(|l| format!("{l}\n")).collect();
     s.write("datasets/nine.csv", &nine);
-    let out = s.run(&["discrepancy", "--data", "datasets/nine.csv", "--quiet"]);
+    let out = s.run(&["discrepancy", "--data", "datasets/nine.csv", "--youngs-modulus-pa", "112e9", "--poisson-ratio", "0.25", "--density-kg-m3", "3600", "--quiet"]);
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("nine.csv") && out.stderr.contains("too few"), "{}", out.stderr);
     assert!(!s.path("reports/discrepancy-nine").exists());
     // A non-finite value: exit 2 naming the file, row and column.
     let bad = text.replacen("0.853", "inf", 1);
     s.write("datasets/bad.csv", &bad);
-    let out = s.run(&["discrepancy", "--data", "datasets/bad.csv", "--quiet"]);
+    let out = s.run(&["discrepancy", "--data", "datasets/bad.csv", "--youngs-modulus-pa", "112e9", "--poisson-ratio", "0.25", "--density-kg-m3", "3600", "--quiet"]);
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("bad.csv") && out.stderr.contains("row 1") && out.stderr.contains("roundness"), "{}", out.stderr);
     assert!(!out.stderr.contains("panicked"));

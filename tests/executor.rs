@@ -105,3 +105,67 @@ fn a_task_killed_at_any_moment_leaves_only_whole_cache_entries() {
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("cal.toml") && out.stderr.contains("changed since"), "{}", out.stderr);
 }
+
+/// A stub Slurm in `dir`: `sbatch` runs an array's tasks at once except task 1 (as if it were
+/// cancelled before it started), `squeue` finds nothing queued, `scontrol` always fails (a
+/// controller that does not answer), and `sacct` reports task 1 CANCELLED and the rest
+/// COMPLETED — or fails too when `dir/sacct_fails` exists. `dir/count` counts the sbatch calls.
+fn stub_slurm(dir: &std::path::Path) {
+    let scripts = [
+        (
+            "sbatch",
+            r#"stub="$(dirname "$0")"
+for a in "$@"; do case "$a" in --array=*) arr="${a#--array=}";; --output=*) out="${a#--output=}";; --wrap=*) wrap="${a#--wrap=}";; esac; done
+n=$(( $(cat "$stub/count" 2>/dev/null || echo 0) + 1 )); echo "$n" > "$stub/count"
+id=$((1000 + n)); last="${arr#0-}"; echo "$last" > "$stub/job_$id"
+for t in $(seq 0 "$last"); do
+  [ "$t" = 1 ] && continue
+  SLURM_ARRAY_TASK_ID=$t bash -c "$wrap" > "${out//%a/$t}" 2>&1
+done
+echo "$id""#,
+        ),
+        ("squeue", "exit 0"),
+        ("scontrol", r#"echo "slurm_load_jobs error: Unable to contact slurm controller (connect failure)" >&2; exit 1"#),
+        (
+            "sacct",
+            r#"stub="$(dirname "$0")"
+[ -e "$stub/sacct_fails" ] && { echo "sacct: error: Slurm accounting storage is disabled" >&2; exit 1; }
+id="${@: -1}"; last=$(cat "$stub/job_$id")
+for t in $(seq 0 "$last"); do if [ "$t" = 1 ]; then echo "${id}_$t|CANCELLED by 0"; else echo "${id}_$t|COMPLETED"; fi; done"#,
+        ),
+    ];
+    for (name, body) in scripts {
+        let p = dir.join(name);
+        std::fs::write(&p, format!("#!/bin/bash\n{body}\n")).unwrap();
+        std::fs::set_permissions(&p, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    }
+}
+
+/// Where `scontrol` fails, the states come from `sacct`: the task it reports CANCELLED is not
+/// resubmitted. Where both fail, a task without its result has an unknown state, which is
+/// reported as such and not resubmitted blindly. (Before, a failed scontrol made every task
+/// UNKNOWN and resubmitted the cancelled ones.)
+#[test]
+fn task_states_come_from_sacct_when_scontrol_fails_and_unknown_states_are_not_resubmitted() {
+    for sacct_fails in [false, true] {
+        let s = Scratch::new();
+        tiny_calibration(&s, "kind = \"slurm\"\nevaluations_per_task = 1\npoll_seconds = 0.05\nretries = 2");
+        let stub = s.path("stub");
+        std::fs::create_dir_all(&stub).unwrap();
+        stub_slurm(&stub);
+        if sacct_fails {
+            std::fs::write(stub.join("sacct_fails"), "").unwrap();
+        }
+        let path = format!("{}:{}", stub.display(), std::env::var("PATH").unwrap_or_default());
+        let out = s.run_env(&["run", "studies/cal.toml", "--quiet"], &[("PATH", &path)]);
+        assert_eq!(out.code, 0, "sacct fails: {sacct_fails}: {}", out.stderr);
+        let attempts = common::table_f64(&s.path("reports/cal/executor.csv"), "attempt");
+        assert!(!attempts.is_empty() && attempts.iter().all(|&a| a == 0.0), "sacct fails: {sacct_fails}: resubmitted: attempts {attempts:?}");
+        let manifest = s.read("reports/cal/manifest.json");
+        let expect: &[&str] = if sacct_fails { &["state unknown", "Unable to contact slurm controller", "accounting storage is disabled", "not resubmitted"] } else { &["was cancelled", "not resubmitted"] };
+        for e in expect {
+            assert!(manifest.contains(e), "sacct fails: {sacct_fails}: the manifest lacks \"{e}\"");
+        }
+        assert!(!manifest.contains("ended UNKNOWN"), "sacct fails: {sacct_fails}");
+    }
+}

@@ -81,7 +81,11 @@ fn slurm_runs_match_local_runs_bit_for_bit_and_survive_failed_and_cancelled_task
     let cluster = match start() {
         Ok(c) => c,
         Err(why) => {
-            eprintln!("skipped: no Slurm cluster on this machine: {why}");
+            // Where CI installed Slurm (PARTLIFE_EXPECT_SLURM=1, set by .ci/run) a skip is a
+            // failure; elsewhere it is said on the real stderr, which the test harness does not
+            // capture, so it shows in the log even though the test passes.
+            assert!(std::env::var_os("PARTLIFE_EXPECT_SLURM").is_none(), "PARTLIFE_EXPECT_SLURM is set but no Slurm cluster could be started: {why}");
+            let _ = std::io::Write::write_all(&mut std::io::stderr(), format!("\nSKIPPED tests/slurm.rs: no Slurm cluster on this machine: {why}\n").as_bytes());
             return;
         }
     };

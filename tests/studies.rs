@@ -226,6 +226,13 @@ fn main_uq_study_writes_the_headline_deterministically() {
     }
     let manifest: serde_json::Value = serde_json::from_str(&a.read(&format!("{dir}/manifest.json"))).unwrap();
     assert_eq!(manifest["failures"].as_array().map(|v| v.len()), Some(0), "{}", manifest["failures"]);
+    // Figures of one strength and damage model say which; Sobol' panels name their output in
+    // words, not by column name (before: "Index of log10 p gen4").
+    for (f, said) in [("uq_breakage_vs_velocity", "diagnosed strength, indep. trials"), ("uq_distributions", "diagnosed strength, indep. trials"), ("uq_sobol", "strength model: diagnosed; damage: independent trials")] {
+        assert!(a.read(&format!("{dir}/{f}.svg")).contains(said), "{f}.svg does not name its models");
+    }
+    let sobol_svg = a.read(&format!("{dir}/uq_sobol.svg"));
+    assert!(sobol_svg.contains("Index of log₁₀ P Gen 4") && sobol_svg.contains("P after 10 years") && !sobol_svg.contains("log10 p gen4"), "uq_sobol.svg output names");
 
     // Golden values (tests/reference/gen4_vs_bl_headline.csv; the rule for regenerating them is
     // written in that file): P(candidate worse) within four Monte Carlo standard errors (floor

@@ -125,6 +125,20 @@ fn bad_phase_tables_exit_2_naming_file_row_and_rule() {
         assert_eq!(out.code, 2, "{header}: {}", out.stderr);
         assert!(out.stderr.contains("header") && out.stderr.contains(expect), "{header}: {}", out.stderr);
     }
+    // Mole fractions are not volume fractions: refused without the phases' molar volumes and
+    // their source, and a conversion of the other basis is refused (before, the mole fractions
+    // entered the rule of mixtures as they were).
+    let mole = partlife::phases::illustrative().to_csv().replacen("volume_fraction", "mole_fraction", 1);
+    let volumes = "molar_volume_m3_mol = { CORUNDUM = 5.1e-6, MULLITE = 5.4e-6, PSEUDO_BROOKITE = 6.6e-6, IONIC_LIQ = 5.6e-6 }";
+    for (extra, expect) in [
+        ("", &["phases.file", "holds mole fractions", "molar_volume_m3_mol = { CORUNDUM = …, MULLITE = …, PSEUDO_BROOKITE = …, IONIC_LIQ = … }", "source"][..]),
+        (volumes, &["phases.source", "needs its source"][..]),
+        ("density_kg_m3 = { CORUNDUM = 3987 }\nsource = \"a handbook\"", &["phases.density_kg_m3", "converts mass fractions", "holds mole fractions"][..]),
+    ] {
+        let s = scratch();
+        std::fs::write(s.path("datasets/phases_granulated_illustrative.csv"), &mole).unwrap();
+        s.expect_bad_study("studies/temperature.toml", "onset_level = 0.01", &format!("onset_level = 0.01\n{extra}"), expect);
+    }
     // Study keys: a missing table, an onset level outside (0, 1).
     let s = scratch();
     s.expect_bad_study("studies/temperature.toml", "file = \"../datasets/phases_granulated_illustrative.csv\"", "file = \"../datasets/none.csv\"", &["phases.file", "does not exist"]);

@@ -31,10 +31,13 @@
 //!    task killed mid-write leaves a whole entry or none, and keeps what it finished — and
 //!    writes a small timing record;
 //! 3. the driver polls `squeue` until the array has left the queue, reads every task's final
-//!    state from `scontrol show job` (`COMPLETED`, `FAILED`, `TIMEOUT`, `CANCELLED`, …), and looks
-//!    the θ's up in the cache;
+//!    state from `scontrol show job` (`COMPLETED`, `FAILED`, `TIMEOUT`, `CANCELLED`, …) — from
+//!    the accounting (`sacct`, when installed) where scontrol fails or has forgotten the job —
+//!    and looks the θ's up in the cache;
 //! 4. θ's still missing are resubmitted, up to `retries` times; a cancelled task's θ's are not
-//!    (someone cancelled them) and are reported. What is still missing then is returned as a
+//!    (someone cancelled them) and are reported; nor are those of a task whose state neither
+//!    scontrol nor sacct can tell (it may still run, or have been cancelled): "state unknown" is
+//!    reported as its own outcome with both commands' errors. What is still missing then is returned as a
 //!    failed evaluation with its θ, the task's state and the tail of its log — never an abort:
 //!    the calibration records failed evaluations as it does the model's own failures.
 //!
@@ -304,6 +307,35 @@ fn run_command(cmd: &mut Command, what: &str) -> Result<String> {
     Ok(String::from_utf8_lossy(&out.stdout).into_owned())
 }
 
+/// Task index → state from `scontrol show job -o` lines (`ArrayTaskId=… JobState=…`).
+fn parse_scontrol(text: &str) -> HashMap<usize, String> {
+    let mut out = HashMap::new();
+    for line in text.lines() {
+        let field = |k: &str| line.split_whitespace().find_map(|w| w.strip_prefix(k)).map(str::to_string);
+        if let (Some(ids), Some(state)) = (field("ArrayTaskId="), field("JobState=")) {
+            for t in task_ids(&ids) {
+                out.insert(t, state.clone());
+            }
+        }
+    }
+    out
+}
+
+/// Task index → state from `sacct -n -P -X -o JobID,State -j <id>` lines (`123_4|COMPLETED`,
+/// `123_[5-7]|PENDING`, `123_2|CANCELLED by 0`): the state's first word, the lines of job `id`.
+fn parse_sacct(text: &str, id: &str) -> HashMap<usize, String> {
+    let mut out = HashMap::new();
+    for line in text.lines() {
+        let Some((job, state)) = line.trim().split_once('|') else { continue };
+        let Some(tasks) = job.strip_prefix(id).and_then(|t| t.strip_prefix('_')) else { continue };
+        let state = state.split_whitespace().next().unwrap_or("").to_string();
+        for t in task_ids(tasks.trim_start_matches('[').trim_end_matches(']')) {
+            out.insert(t, state.clone());
+        }
+    }
+    out
+}
+
 /// The task indices of a `scontrol` ArrayTaskId value (`3`, `0-7`, `1,4-6`, `0-15%4`).
 fn task_ids(v: &str) -> Vec<usize> {
     let v = v.split('%').next().unwrap_or("");
@@ -397,19 +429,22 @@ impl Slurm {
         Ok(!String::from_utf8_lossy(&out.stdout).trim().is_empty())
     }
 
-    /// The final state of every task of job `id` (`scontrol show job -o`), by task index.
-    fn states(&self, id: &str) -> HashMap<usize, String> {
-        let mut out = HashMap::new();
-        let Ok(text) = run_command(Command::new("scontrol").arg("show").arg("job").arg("-o").arg(id), "scontrol") else { return out };
-        for line in text.lines() {
-            let field = |k: &str| line.split_whitespace().find_map(|w| w.strip_prefix(k)).map(str::to_string);
-            if let (Some(ids), Some(state)) = (field("ArrayTaskId="), field("JobState=")) {
-                for t in task_ids(&ids) {
-                    out.insert(t, state.clone());
+    /// The final state of every task of job `id`, by task index: from `scontrol show job -o`,
+    /// else (scontrol failed, or no longer knows the job) from the accounting, `sacct`; Err
+    /// with both failures when neither answers (the states are then unknown).
+    fn states(&self, id: &str) -> std::result::Result<HashMap<usize, String>, String> {
+        let scontrol = run_command(Command::new("scontrol").arg("show").arg("job").arg("-o").arg(id), "scontrol").map(|t| parse_scontrol(&t));
+        match scontrol {
+            Ok(s) if !s.is_empty() => Ok(s),
+            first => {
+                let why = first.err().map_or_else(|| "scontrol no longer knows the job".to_string(), |e| e.to_string());
+                match run_command(Command::new("sacct").arg("-n").arg("-P").arg("-X").arg("-o").arg("JobID,State").arg("-j").arg(id), "sacct") {
+                    Ok(t) if !parse_sacct(&t, id).is_empty() => Ok(parse_sacct(&t, id)),
+                    Ok(_) => Err(format!("{why}; sacct has no record of job {id}")),
+                    Err(e) => Err(format!("{why}; {e}")),
                 }
             }
         }
-        out
     }
 
     /// Evaluates through Slurm every θ of `thetas` that `done` says has no cache entry yet, and
@@ -480,7 +515,10 @@ impl Slurm {
                 std::thread::sleep(Duration::from_secs_f64(self.opts.poll_seconds));
             }
             for (id, path, tasks, submit_s, t0, part) in jobs {
-                let states = self.states(&id);
+                let (states, unknown) = match self.states(&id) {
+                    Ok(s) => (s, None),
+                    Err(why) => (HashMap::new(), Some(why)),
+                };
                 let batch_tasks: Vec<usize> = (0..tasks).collect();
                 let k = self.opts.evaluations_per_task;
                 let records: Vec<TaskRecord> = batch_tasks.iter().filter_map(|&t| std::fs::read_to_string(task_record_path(&path, t)).ok().and_then(|s| serde_json::from_str(&s).ok())).collect();
@@ -515,7 +553,16 @@ impl Slurm {
                         continue;
                     }
                     let task = i / k;
-                    let state = states.get(&task).cloned().unwrap_or_else(|| "UNKNOWN".into());
+                    let Some(state) = states.get(&task).cloned() else {
+                        // Its own outcome: a task whose state nobody can tell may still run or
+                        // have been cancelled, so it is reported and not resubmitted blindly.
+                        let why = unknown.clone().unwrap_or_else(|| format!("job {id} lists no state for the task"));
+                        if i % k == 0 {
+                            log.events.push(format!("array job {id} task {task}: state unknown ({why}); its {} evaluation(s) are recorded as failed, not resubmitted", part[i..].len().min(k)));
+                        }
+                        reasons.insert(key(t), format!("array job {id} task {task}: state unknown ({why}), result not in the cache"));
+                        continue;
+                    };
                     let tail = std::fs::read_to_string(path.with_file_name(format!("task-{task}.out"))).map(|s| s.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("").trim().to_string()).unwrap_or_default();
                     let why = format!("array job {id} task {task} ended {state} without its result (attempt {attempt}){}", if tail.is_empty() { String::new() } else { format!(": {tail}") });
                     if state == "CANCELLED" {

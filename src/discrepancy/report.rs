@@ -314,8 +314,13 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             md.push_str(&format!("After: largest trend `{}` (ρ = {:.2}, p = {:.3}).\n", f.covariate, f.rho, f.p));
         }
         md.push_str(&format!(
-            "\n**Lifetime at {} m/s, η = {}, {} impacts a year** (population of the measured particles; 90 % band of the strength model's joint draws — pivotal bootstrap of its parameters and Bayesian bootstrap of the population):\n\n| horizon | base model | final model |\n|---|---|---|\n",
-            s.impact.reference_velocity_m_s, s.impact.energy_fraction, s.impact.impacts_per_year
+            "\n**Lifetime at {} m/s, η = {}, {} impacts a year** (particles with E = {} GPa, ν = {}, ρ = {} kg/m³; population of the measured particles; 90 % band of the strength model's joint draws — pivotal bootstrap of its parameters and Bayesian bootstrap of the population):\n\n| horizon | base model | final model |\n|---|---|---|\n",
+            s.impact.reference_velocity_m_s,
+            s.impact.energy_fraction,
+            s.impact.impacts_per_year,
+            r.spec.elastic.youngs_modulus_pa / 1e9,
+            r.spec.elastic.poisson_ratio,
+            r.spec.density_kg_m3
         ));
         let (lb, la) = (&r.lifetime[0].1, &r.lifetime[1].1);
         for (x, y) in lb.iter().zip(la) {

@@ -54,7 +54,7 @@
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::preposterior::Experiment;
+use super::preposterior::{Experiment, Score};
 use super::state::State;
 use crate::error::{Error, Result};
 use crate::strength::regress::{draw_particles, ln_density_of_log};
@@ -268,7 +268,7 @@ impl Experiment for CrushTest {
     }
 
     /// 1 when the naming loop on the pooled data names exactly the truth's effects (module docs).
-    fn score(&self, data: &Self::Data, truth: usize, draw: usize) -> Option<f64> {
+    fn score(&self, data: &Self::Data, truth: usize, draw: usize) -> Option<Score> {
         let n = self.naming.as_ref()?;
         let mut pooled = n.sample.clone();
         pooled.source = format!("{} + {} simulated particles", n.sample.source, data.len());
@@ -278,16 +278,39 @@ impl Experiment for CrushTest {
             column.extend(data.iter().map(|&(i, _)| at_test.or(base[self.rows[i]])));
         }
         let settings = NamingSettings { seed: n.settings.seed.wrapping_add(draw as u64 + 1), ..n.settings.clone() };
-        // A loop that fails on the data names nothing.
-        let named = crate::discrepancy::workflow::analyse(&pooled, &settings, false).map(|o| o.named).unwrap_or_default();
-        let truth_effects = &n.effects[n.forms[truth]];
-        Some(if named.len() == truth_effects.len() && truth_effects.iter().all(|e| named.contains(e)) { 1.0 } else { 0.0 })
+        // A loop that fails on the data scores 0 and is counted as a failure: it names no
+        // model, not the model without effects.
+        let Ok(outcome) = crate::discrepancy::workflow::analyse(&pooled, &settings, false) else {
+            return Some(Score { value: 0.0, failed: true });
+        };
+        let (named, truth_effects) = (&outcome.named, &n.effects[n.forms[truth]]);
+        Some(Score { value: if named.len() == truth_effects.len() && truth_effects.iter().all(|e| named.contains(e)) { 1.0 } else { 0.0 }, failed: false })
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A crush test of one sample with no effects whose naming loop runs on `sample` plus the
+    /// simulated strengths.
+    fn naming_test(sample: Sample) -> CrushTest {
+        let settings = NamingSettings { bootstrap: 49, permutations: 99, ..NamingSettings::default() };
+        let naming = NamingCheck { settings, sample, temperature_c: None, effects: vec![vec![]], forms: vec![0] };
+        CrushTest { material: 0, particles: 2, diameter: None, rows: vec![0, 1], shape: vec![8.0], ln_scale: vec![18.4; 2], mixture: None, naming: Some(naming) }
+    }
+
+    #[test]
+    fn a_naming_loop_that_fails_scores_zero_and_is_counted_as_a_failure() {
+        // Five particles are too few for the loop. The truth's model has no effects, which a
+        // failure read as "named nothing" would match (it scored 1 before).
+        let few = Sample { source: "few".into(), strength: vec![1.0e8, 1.2e8, 0.9e8, 1.1e8, 0.95e8], covariates: vec![] };
+        assert_eq!(naming_test(few).score(&vec![(0, 18.4), (1, 18.5)], 0, 0), Some(Score { value: 0.0, failed: true }));
+        // Forty Weibull-like strengths without covariates: the loop runs, names nothing, and
+        // that is the truth's model.
+        let many = Sample { source: "many".into(), strength: (0..40).map(|i| 1e8 * (-(1.0 - (i as f64 + 0.5) / 40.0).ln()).powf(1.0 / 8.0)).collect(), covariates: vec![] };
+        assert_eq!(naming_test(many).score(&vec![(0, 18.4), (1, 18.5)], 0, 0), Some(Score { value: 1.0, failed: false }));
+    }
 
     #[test]
     fn the_tabulated_mixture_matches_the_exact_sum() {

@@ -25,6 +25,10 @@ use crate::uq::setup::Mode;
 /// Smallest interval probability in the likelihood (keeps ln finite for impossible counts).
 const PI_FLOOR: f64 = 1e-300;
 
+/// A P_N that falls with N, or exceeds 1, by more than this is counted as clamped; less is
+/// round-off and clamped silently.
+pub const CLAMP_TOLERANCE: f64 = 1e-12;
+
 /// An impact test with its interval probabilities under every sample.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImpactTest {
@@ -38,6 +42,25 @@ pub struct ImpactTest {
     pub counts: Vec<u64>,
     /// π per sample, K × (m + 1).
     probs: Vec<f64>,
+    /// Samples whose P_N fell with N or exceeded 1 by more than [`CLAMP_TOLERANCE`] (clamped
+    /// to be non-decreasing and ≤ 1, as probabilities of being broken by N impacts must be),
+    /// and the largest such violation.
+    pub clamped: (usize, f64),
+}
+
+/// The interval probabilities π of P_N at the counted impacts (P clamped to be non-decreasing
+/// and ≤ 1), and the largest violation it mended (0 when none).
+fn intervals(pn: &[f64]) -> (Vec<f64>, f64) {
+    let mut pi = Vec::with_capacity(pn.len() + 1);
+    let (mut prev, mut worst) = (0.0, 0.0f64);
+    for &x in pn {
+        worst = worst.max(prev - x).max(x - 1.0);
+        let x = x.clamp(prev, 1.0);
+        pi.push(x - prev);
+        prev = x;
+    }
+    pi.push(1.0 - prev);
+    (pi, worst)
 }
 
 impl ImpactTest {
@@ -50,10 +73,10 @@ impl ImpactTest {
         let (glo, ghi) = state.gamma_range;
         let tk: Option<Vec<CriticalRatioTable>> = state.damage.contains(&DamageModel::TavaresKing).then(|| counts.iter().map(|&n| CriticalRatioTable::new(n, glo, ghi.max(glo + 1e-9), 41)).collect());
         let m = counts.len();
-        let per: Vec<Vec<f64>> = state
+        let per: Vec<(Vec<f64>, f64)> = state
             .samples
             .par_iter()
-            .map(|s| -> Result<Vec<f64>> {
+            .map(|s| -> Result<(Vec<f64>, f64)> {
                 let st = &state.forms[s.form].setup;
                 let (p, w) = st.params(material, &s.x, Mode::Joint);
                 let (eta, gamma) = (s.x[st.shared(0)], s.x[st.shared(3)]);
@@ -62,18 +85,12 @@ impl ImpactTest {
                 let mut pn = vec![0.0; m];
                 let lm = &st.materials[material].model;
                 lm.breakage_into(&p, w, lm.ln_impact_stress(eta, velocity)?, &laws, &mut pn);
-                let mut pi = Vec::with_capacity(m + 1);
-                let mut prev = 0.0;
-                for &x in &pn {
-                    let x = x.clamp(prev, 1.0);
-                    pi.push(x - prev);
-                    prev = x;
-                }
-                pi.push(1.0 - prev);
-                Ok(pi)
+                Ok(intervals(&pn))
             })
             .collect::<Result<_>>()?;
-        Ok(ImpactTest { material, particles, velocity, counts, probs: per.concat() })
+        let violations: Vec<f64> = per.iter().map(|(_, w)| *w).filter(|&w| w > CLAMP_TOLERANCE).collect();
+        let clamped = (violations.len(), violations.iter().copied().fold(0.0, f64::max));
+        Ok(ImpactTest { material, particles, velocity, counts, probs: per.into_iter().flat_map(|(p, _)| p).collect(), clamped })
     }
 
     /// π of sample k.
@@ -105,5 +122,20 @@ impl Experiment for ImpactTest {
 
     fn loglik(&self, c: &Vec<u64>, k: usize) -> f64 {
         self.probabilities(k).iter().zip(c).filter(|(_, n)| **n > 0).map(|(p, &n)| n as f64 * p.max(PI_FLOOR).ln()).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn non_monotone_breakage_is_clamped_and_measured() {
+        let (pi, worst) = intervals(&[0.3, 0.2, 0.5]);
+        assert_eq!(pi, [0.3, 0.0, 0.2, 0.5]);
+        assert!((worst - 0.1).abs() < 1e-15, "{worst}");
+        let (pi, worst) = intervals(&[0.3, 1.25]);
+        assert_eq!((pi, worst), (vec![0.3, 0.7, 0.0], 0.25));
+        assert_eq!(intervals(&[0.1, 0.4]).1, 0.0);
     }
 }

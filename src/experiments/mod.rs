@@ -55,7 +55,7 @@ mod summary;
 pub use crush::{CrushOptions, CrushTest};
 pub use impact::ImpactTest;
 pub use measure::{Measured, Measurement};
-pub use preposterior::{Draw, Estimate, Experiment, Knowledge, Metrics, Posterior, Route, Scored, Settings, preposterior};
+pub use preposterior::{Draw, Estimate, Experiment, Knowledge, Metrics, Posterior, Route, Score, Scored, Settings, preposterior};
 pub use run::run_experiments;
 pub use state::{State, StateSample};
 pub use study::ExperimentsStudy;

@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 use super::crush::CrushTest;
 use super::impact::ImpactTest;
 use super::measure::Measurement;
-use super::preposterior::{Experiment, Metrics};
+use super::preposterior::{Experiment, Metrics, Score};
 use super::study::ExperimentsStudy;
 
 /// One candidate experiment of any kind.
@@ -67,7 +67,7 @@ impl Experiment for Candidate {
         }
     }
 
-    fn score(&self, data: &Data, truth: usize, draw: usize) -> Option<f64> {
+    fn score(&self, data: &Data, truth: usize, draw: usize) -> Option<Score> {
         match (self, data) {
             (Candidate::Crush(c), Data::Crush(d)) => c.score(d, truth, draw),
             _ => None,
@@ -92,7 +92,7 @@ impl Experiment for Plan<'_> {
 
     /// A single candidate's score (a plan of several has none: the naming loop's verdict is
     /// of one crush test).
-    fn score(&self, data: &Vec<Data>, truth: usize, draw: usize) -> Option<f64> {
+    fn score(&self, data: &Vec<Data>, truth: usize, draw: usize) -> Option<Score> {
         match (self.0.as_slice(), data.as_slice()) {
             ([c], [d]) => c.score(d, truth, draw),
             _ => None,

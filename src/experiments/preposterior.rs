@@ -30,7 +30,12 @@
 //! * probability of correct selection, PCS = P(a* is the truth's best action), against the
 //!   prior's PCS_0 = Σ_k w_k [a₀ best for k] for the prior Bayes action a₀;
 //! * expected value of sample information, EVSI = min_a Σ_k w_k L_ka − E_y[min_a Σ_k w'_k L_ka]
-//!   (prior Bayes risk minus preposterior Bayes risk, ≥ 0);
+//!   (prior Bayes risk minus preposterior Bayes risk, ≥ 0). With the truths drawn only among
+//!   the samples of a given label ([`Settings::truth`]) the prior PCS is taken over those
+//!   truths and the value is the loss the data save under the truth, E_t[L_ta₀ − L_ta*] (a₀ the
+//!   unconditioned prior's action, which is what one would choose without the experiment);
+//!   over the whole prior the two definitions have the same expectation, and only the first
+//!   must be ≥ 0;
 //! * per quantity: the expected posterior mean, variance and width of the central 90 % band
 //!   (weighted quantiles, [`crate::stats::weighted_quantiles`]);
 //! * per label: the expected posterior weight of the truth's label;
@@ -203,9 +208,19 @@ pub trait Experiment: Sync {
     }
     /// A score of outer draw `draw`'s data under its truth (1 when the naming loop names the
     /// truth's effects, say); None when the experiment has none.
-    fn score(&self, _data: &Self::Data, _truth: usize, _draw: usize) -> Option<f64> {
+    fn score(&self, _data: &Self::Data, _truth: usize, _draw: usize) -> Option<Score> {
         None
     }
+}
+
+/// One outer draw's score ([`Experiment::score`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Score {
+    /// The score (a failure scores what its experiment says, 0 for the naming loop).
+    pub value: f64,
+    /// Whether the scored procedure failed on the draw's data (counted apart, so that a
+    /// failure is never read as a verdict).
+    pub failed: bool,
 }
 
 /// Settings of the preposterior analysis.
@@ -241,7 +256,7 @@ pub struct Draw {
     /// How the posterior was obtained.
     pub route: Route,
     /// The experiment's score of the data, when computed.
-    pub score: Option<f64>,
+    pub score: Option<Score>,
 }
 
 /// How an outer draw's posterior was obtained.
@@ -315,6 +330,8 @@ pub struct Metrics {
 pub struct Scored {
     /// Outer draws that computed the score.
     pub draws: usize,
+    /// Of those, the draws on whose data the scored procedure failed (scored as it says).
+    pub failures: usize,
     /// Mean score.
     pub mean: Estimate,
     /// Expected posterior weight of the truth's label, per label kind, on the same draws.
@@ -375,17 +392,32 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
     };
     let prior = kn.summarise(&prior_w);
     let a0 = prior.action();
-    let prior_pcs = (0..active).filter(|&k| kn.is_best(k, a0)).map(|k| prior_w[k]).sum();
-    let prior_risk = prior.expected_loss[a0];
+    // Over the truths' distribution: the prior, or its part with the conditioned label (the
+    // prior Bayes action a₀ stays the unconditioned prior's: the decision-maker does not know
+    // the truth's label).
+    let truth_w: Vec<f64> = eligible.iter().map(|w| w / truths.total()).collect();
+    let loss = |k: usize, a: usize| kn.loss[k * kn.actions + a];
+    let prior_pcs = (0..active).filter(|&k| kn.is_best(k, a0)).map(|k| truth_w[k]).sum();
     let col = |f: &dyn Fn(&Draw) -> f64| Estimate::of(&draws.iter().map(f).collect::<Vec<_>>());
     let pcs = col(&|d| if kn.is_best(d.truth, d.posterior.action()) { 1.0 } else { 0.0 });
-    let evsi = col(&|d| prior_risk - d.posterior.expected_loss[d.posterior.action()]);
+    let evsi = match settings.truth {
+        // Prior Bayes risk minus the posterior Bayes risk (module docs; ≥ 0 in expectation).
+        None => {
+            let prior_risk = prior.expected_loss[a0];
+            col(&|d| prior_risk - d.posterior.expected_loss[d.posterior.action()])
+        }
+        // Under a conditioned truth the posterior risk is not an expectation over the truths'
+        // distribution; the value is then the loss the data save under the truth itself,
+        // L(t, a₀) − L(t, a*) (its expectation over the unconditioned prior is the EVSI above),
+        // which may be negative: data can mislead under a given truth.
+        Some(_) => col(&|d| loss(d.truth, a0) - loss(d.truth, d.posterior.action())),
+    };
     let label = |kind: usize, k: usize| kn.labels[k * kn.label_kinds + kind] as usize;
     let true_weight = |kind: usize, d: &Draw| d.posterior.label_weights[kind].get(label(kind, d.truth)).copied().unwrap_or(0.0);
     let scored: Vec<&Draw> = draws.iter().filter(|d| d.score.is_some()).collect();
     let score = (!scored.is_empty()).then(|| {
         let of = |f: &dyn Fn(&Draw) -> f64| Estimate::of(&scored.iter().map(|d| f(d)).collect::<Vec<_>>());
-        Scored { draws: scored.len(), mean: of(&|d| d.score.unwrap_or(f64::NAN)), true_label_weight: (0..kn.label_kinds).map(|kind| of(&|d| true_weight(kind, d))).collect() }
+        Scored { draws: scored.len(), failures: scored.iter().filter(|d| d.score.is_some_and(|s| s.failed)).count(), mean: of(&|d| d.score.map_or(f64::NAN, |s| s.value)), true_label_weight: (0..kn.label_kinds).map(|kind| of(&|d| true_weight(kind, d))).collect() }
     });
     let mut ess: Vec<f64> = draws.iter().map(|d| d.ess).collect();
     ess.sort_by(f64::total_cmp);

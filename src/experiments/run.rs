@@ -101,6 +101,8 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     // Every candidate at every size.
     pb.set_message("candidates");
     let mut built: Vec<Vec<Candidate>> = Vec::new();
+    // What the run had to mend without stopping (recorded in the manifest and the summary).
+    let mut notes: Vec<String> = Vec::new();
     for (i, c) in s.candidate.iter().enumerate() {
         let material = c.material.as_ref().map(|m| keys.iter().position(|k| k == m).unwrap_or(0)).unwrap_or(0);
         // The per-sample likelihood tables do not depend on the size: built once at the first
@@ -120,6 +122,11 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
         // What fails here is the candidate as declared (a sieve fraction with no crushed
         // particle, a strength model without a crush likelihood): bad input.
         .map_err(|e| Error::config(&file, format!("candidate[{i}]"), format!("\"{}\": {e}", c.name)))?;
+        if let Candidate::Impact(t) = &base
+            && t.clamped.0 > 0
+        {
+            notes.push(format!("candidate \"{}\": P_N fell with N or exceeded 1 in {} of {} prior samples (largest by {:.2e}); clamped to be non-decreasing and at most 1", c.name, t.clamped.0, state.samples.len(), t.clamped.1));
+        }
         built.push(c.sizes.iter().map(|&n| base.sized(n as u64)).collect());
     }
     let settings = |salt: u64, scored: usize| Settings { outer: a.outer, min_ess: a.min_ess, seed: s.seed ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15), truth: None, active: Some(a.samples), scored };
@@ -173,9 +180,14 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
     write_tables(&mut dir, s, &state, &keys, &singles, &allocated)?;
     let summary = super::summary::summary(s, &state, &singles, &allocated);
-    dir.write_bytes("summary.md", summary.text.as_bytes())?;
+    let mut text = summary.text.clone();
+    if !notes.is_empty() {
+        text.push_str("\n## What the run mended\n\n");
+        text.extend(notes.iter().map(|n| format!("- {n}.\n")));
+    }
+    dir.write_bytes("summary.md", text.as_bytes())?;
     pb.set_message("figures");
-    let mut failures = Vec::new();
+    let mut failures = notes.clone();
     let rendered = crate::report::experiments::render(dir.path(), s.figures.width_cm)?;
     record_figures(&mut dir, rendered, &mut failures);
     let mut evaluations = std::collections::BTreeMap::new();
@@ -258,6 +270,8 @@ fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: 
             fcol("naming_names_truth", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.mean.mean), rows)),
             fcol("naming_names_truth_se", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.mean.se), rows)),
             ucol("naming_draws", rows.iter().map(|e| e.metrics.score.as_ref().map_or(0, |s| s.draws as u64)).collect()),
+            // Of those, the campaigns on which the loop failed (each scored 0).
+            ucol("naming_failures", rows.iter().map(|e| e.metrics.score.as_ref().map_or(0, |s| s.failures as u64)).collect()),
             fcol("true_strength_model_weight_naming_draws", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.true_label_weight[1].mean), rows)),
             fcol("median_ess", col(&|e| e.metrics.median_ess, rows)),
             ucol("fallbacks", rows.iter().map(|e| e.metrics.fallbacks as u64).collect()),

@@ -53,7 +53,7 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
     let prior = &singles[0].1.metrics;
     let mut md = format!("# Which experiment next? {} against {}\n\n", labels[0], labels[1]);
     md.push_str(&format!(
-        "Prior: the state of knowledge of the main study `{}` ({} samples and a reserve of {}: strength models with their stacking weights, damage models {} with prior weights {}). Decision: which particle to choose for a plant over {}, a wrong choice costing {} {cur}. Each candidate and size: {} simulated datasets (preposterior analysis by importance reweighting; `partlife::experiments`). **The crush data are synthetic stand-ins** (datasets/README.md).\n\n",
+        "Prior: the state of knowledge of the main study `{}` ({} samples and a reserve of {}: strength models with their stacking weights, damage models {} with prior weights {}). Decision: which particle to choose for a plant over {}, a wrong choice costing {} {cur}. Each candidate and size: {} simulated datasets (preposterior analysis by importance reweighting; `partlife::experiments`).{}\n\n",
         s.study,
         s.analysis.samples,
         s.analysis.reserve,
@@ -61,7 +61,8 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         state.damage_weights.iter().map(|w| format!("{w}")).collect::<Vec<_>>().join(", "),
         years(state.years[state.horizon]),
         s.decision.loss,
-        s.analysis.outer
+        s.analysis.outer,
+        crate::intake::synthetic_sentence("crush data", &state.forms[0].setup.materials.iter().map(|m| (m.model.label.as_str(), m.path.as_path())).collect::<Vec<_>>())
     ));
     md.push_str("## Today\n\n");
     md.push_str(&format!(
@@ -195,11 +196,11 @@ fn naming_section(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize
         return String::new();
     }
     let mut md = String::from("\n## Would the discrepancy workflow find the true strength model?\n\n");
-    md.push_str("The main study's diagnosed strength model is what the discrepancy naming loop names in each material's crush data. For the crush candidates below, the loop was also run on the pooled data — today's crushed particles and the simulated ones — of the first simulated campaigns, and scored 1 when it named exactly the effects of the strength model the campaign was simulated under. Beside it, on the same campaigns, the reweighting's expected posterior weight of that model.\n\n");
-    md.push_str("| candidate | particles | campaigns | naming loop names the true model's effects | expected weight of the true strength model |\n|---|---|---|---|---|\n");
+    md.push_str("The main study's diagnosed strength model is what the discrepancy naming loop names in each material's crush data. For the crush candidates below, the loop was also run on the pooled data — today's crushed particles and the simulated ones — of the first simulated campaigns, and scored 1 when it named exactly the effects of the strength model the campaign was simulated under (0 when it named other effects or failed on the data; failures are counted apart). Beside it, on the same campaigns, the reweighting's expected posterior weight of that model.\n\n");
+    md.push_str("| candidate | particles | campaigns | loop failed | naming loop names the true model's effects | expected weight of the true strength model |\n|---|---|---|---|---|---|\n");
     for (_, e, sc) in &scored {
         let (verdict, weight) = (sc.mean, sc.true_label_weight[1]);
-        md.push_str(&format!("| {} | {} | {} | {} | {} |\n", e.names[0], e.sizes[0], sc.draws, pm(verdict.mean, verdict.se), pm(weight.mean, weight.se)));
+        md.push_str(&format!("| {} | {} | {} | {} | {} | {} |\n", e.names[0], e.sizes[0], sc.draws, sc.failures, pm(verdict.mean, verdict.se), pm(weight.mean, weight.se)));
     }
     // Each candidate's largest size: which rule identifies the truth more often.
     for (i, c) in s.candidate.iter().enumerate() {
@@ -215,11 +216,15 @@ fn naming_section(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize
             "the two rules agree within two Monte Carlo standard errors"
         };
         md.push_str(&format!(
-            "\nWith {} more {} crush tests (today {}), the naming loop names exactly the true model's effects in {} of the simulated campaigns and the expected posterior weight of the true model is {}: {words}.\n",
+            "\nWith {} more {} crush tests (today {}), the naming loop names exactly the true model's effects in {} of the simulated campaigns{} and the expected posterior weight of the true model is {}: {words}.\n",
             e.sizes[0],
             m.model.label,
             m.sample.strength.len(),
             pm(verdict.mean, verdict.se),
+            match sc.failures {
+                0 => String::new(),
+                f => format!(" (it failed on the data of {f} of the {} and these count as not naming it)", sc.draws),
+            },
             pm(weight.mean, weight.se)
         ));
     }

@@ -198,7 +198,7 @@ pub struct Provenance {
 }
 
 impl Provenance {
-    /// One line: `semicolon-separated, decimal comma, UTF-8; `D [mm]` → diameter_m (× 1e-3); …`.
+    /// One line, e.g. "semicolon-separated, decimal comma, UTF-8; `D [mm]` → diameter_m (× 1e-3); …".
     pub fn describe(&self) -> String {
         let mut parts = vec![self.format.clone()];
         for c in &self.columns {

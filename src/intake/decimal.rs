@@ -18,7 +18,7 @@
 pub const SIGNIFICANT: usize = 15;
 
 /// Digits a division is carried to before rounding (a remainder adds a sticky digit).
-const GUARD_DIGITS: usize = 24;
+pub const GUARD_DIGITS: usize = 24;
 
 /// A decimal number: `±digits × 10^exp`, digits most significant first, no leading zeros
 /// (empty for zero).

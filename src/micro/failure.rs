@@ -98,6 +98,10 @@ impl FailureOptions {
 /// `Progressive::stopped` of a run that used up `max_events`.
 pub const MAX_EVENTS: &str = "max_events";
 
+/// `Progressive::stopped` of a run whose effective stiffness became singular (a numerical
+/// failure, not a physical stop: its strength so far is a lower bound).
+pub const SINGULAR: &str = "failed: singular effective stiffness";
+
 /// One crack.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Event {
@@ -124,12 +128,21 @@ pub struct Progressive {
     pub stiffness_left: f64,
     /// Why the run stopped.
     pub stopped: &'static str,
+    /// When the run failed ([`SINGULAR`]): the number of cracks at that step.
+    pub failed_at: Option<usize>,
 }
 
-/// The stiffness along x of an effective stiffness C: 1/S₁₁.
-fn stiffness_x(c: &[[f64; 3]; 3]) -> f64 {
+impl Progressive {
+    /// Whether its strength is only a lower bound: it used up `max_events` or failed.
+    pub fn lower_bound(&self) -> bool {
+        self.stopped == MAX_EVENTS || self.failed_at.is_some()
+    }
+}
+
+/// The stiffness along x of an effective stiffness C: 1/S₁₁; None when C is singular.
+fn stiffness_x(c: &[[f64; 3]; 3]) -> Option<f64> {
     let m = nalgebra::Matrix3::from_fn(|i, j| c[i][j]);
-    m.try_inverse().map_or(0.0, |s| 1.0 / s[(0, 0)])
+    m.try_inverse().map(|s| 1.0 / s[(0, 0)]).filter(|e| e.is_finite())
 }
 
 /// Cracks the cell of in-plane constants `lame[e]` and tensile strengths `strength[e]` (Pa)
@@ -144,9 +157,14 @@ pub fn progressive(periodic: &Periodic, lame: &[(f64, f64)], strength: &[f64], p
     let (mut peak, mut peak_event) = (0.0f64, 0usize);
     let mut stopped = MAX_EVENTS;
     let (mut e0, mut left) = (f64::NAN, 1.0);
+    let mut failed_at = None;
     for _ in 0..=opts.max_events {
         let eff = periodic.solve(&lame)?;
-        let ex = stiffness_x(&eff.c);
+        let Some(ex) = stiffness_x(&eff.c) else {
+            // A failure with its step, not the stiffness criterion's ordinary stop.
+            (stopped, failed_at) = (SINGULAR, Some(events.len()));
+            break;
+        };
         if e0.is_nan() {
             e0 = ex;
         }
@@ -179,7 +197,7 @@ pub fn progressive(periodic: &Periodic, lame: &[(f64, f64)], strength: &[f64], p
         intact[e] = false;
         lame[e] = (lame[e].0 * opts.residual, lame[e].1 * opts.residual);
     }
-    Ok(Progressive { test, events, strength_pa: peak, peak_event, stiffness_left: left, stopped })
+    Ok(Progressive { test, events, strength_pa: peak, peak_event, stiffness_left: left, stopped, failed_at })
 }
 
 #[cfg(test)]
@@ -187,6 +205,18 @@ mod tests {
     use super::*;
     use crate::contact::Elastic;
     use crate::micro::homogenise::plane_lame;
+
+    /// A singular effective stiffness is no stiffness (which would end the run as the ordinary
+    /// stiffness criterion): it has no value, and the run records a failure.
+    #[test]
+    fn a_singular_stiffness_is_a_failure_not_a_zero() {
+        assert_eq!(stiffness_x(&[[0.0; 3]; 3]), None);
+        assert_eq!(stiffness_x(&[[1.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]]), None);
+        let e = stiffness_x(&[[2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]).unwrap();
+        assert!((e - 2.0).abs() < 1e-12);
+        let run = Progressive { test: Test::Tension, events: vec![], strength_pa: 0.0, peak_event: 0, stiffness_left: 1.0, stopped: SINGULAR, failed_at: Some(0) };
+        assert!(run.lower_bound());
+    }
 
     /// A homogeneous cell with one weaker pixel: it cracks first at its own strength, then the
     /// pixels beside it, across the load, at lower applied stresses (the crack's stress

@@ -253,7 +253,7 @@ fn write_summary_table(dir: &mut ReportDir, s: &MicroStudy, by: &[Vec<&Solved>],
             let runs: Vec<&Cracked> = cracked.iter().filter(|c| c.structure == i && c.run.test == test).collect();
             if !runs.is_empty() {
                 // A run that used up max_events gives a lower bound, named as such.
-                let bound = if runs.iter().any(|c| c.run.stopped == super::failure::MAX_EVENTS) { "_lower_bound" } else { "" };
+                let bound = if runs.iter().any(|c| c.run.lower_bound()) { "_lower_bound" } else { "" };
                 rows.push((format!("strength_{}{bound}", test.name()), "Pa", runs.iter().map(|c| c.run.strength_pa).collect()));
             }
         }
@@ -369,6 +369,8 @@ fn write_failure(dir: &mut ReportDir, s: &MicroStudy, built: &[Built], cracked: 
         scol("cracked_share_at_peak", shares),
         fcol("stiffness_left", cracked.iter().map(|c| c.run.stiffness_left).collect()),
         scol("stopped", stopped),
+        // The number of cracks at which the run failed (empty: it did not).
+        scol("failed_at_event", cracked.iter().map(|c| c.run.failed_at.map_or(String::new(), |k| k.to_string())).collect()),
     ])?;
     dir.write_table("failure_summary", &mut t)?;
     let rows: Vec<(&Cracked, usize)> = cracked.iter().flat_map(|c| (0..c.run.events.len()).map(move |k| (c, k))).collect();

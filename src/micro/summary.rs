@@ -245,15 +245,15 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
             ];
             if with_strength {
                 let (sc, sd) = (strengths(ic, *test), strengths(id, *test));
-                // A run that ended at max_events has a lower bound for a strength: not compared.
-                let bounded = cracked.iter().filter(|c| (c.structure == ic || c.structure == id) && c.run.test == *test).all(|c| c.run.stopped != super::failure::MAX_EVENTS);
+                // A run that ended at max_events or failed has a lower bound for a strength: not compared.
+                let bounded = cracked.iter().filter(|c| (c.structure == ic || c.structure == id) && c.run.test == *test).all(|c| !c.run.lower_bound());
                 let ok = bounded && !sc.is_empty() && !sd.is_empty() && sc.iter().chain(&sd).all(|x| *x > 0.0);
                 let (ds, ss) = if ok { difference(&sc, &sd, paired && sc.len() == sd.len()) } else { (f64::NAN, None) };
                 judged.push(if ok { judge(ds, ss, true) } else { 0 });
                 cells.push(if ok {
                     format!("{}; {}; {} ± {}", pm(&sc, mpa), pm(&sd, mpa), mpa(ds), se(ss, mpa))
                 } else if !bounded {
-                    "– (runs ended at max_events: lower bounds)".into()
+                    "– (runs ended at max_events or failed: lower bounds)".into()
                 } else {
                     "–".into()
                 });
@@ -278,7 +278,7 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
     }
 
     if !cracked.is_empty() {
-        md.push_str("\n## Progressive failure\n\nEach cell is cracked pixel by pixel (sequentially linear analysis: the pixel that reaches its tensile strength at the lowest applied stress cracks, its stiffness drops to a residual, the cell is solved again; `failure_summary.csv`, `failure_events.csv`). The strength is the largest applied stress on the way; a run that ended at `max_events` gives a lower bound (cracks across the largest tension split a compressed cell along the load and hardly soften it, so compression runs tend to end there).\n\n| structure | test | runs | strength (MPa) | first crack (MPa) | cracks to the peak | first cracks in | cracked pixels at the peak, by phase | runs ended by |\n|---|---|---|---|---|---|---|---|---|\n");
+        md.push_str("\n## Progressive failure\n\nEach cell is cracked pixel by pixel (sequentially linear analysis: the pixel that reaches its tensile strength at the lowest applied stress cracks, its stiffness drops to a residual, the cell is solved again; `failure_summary.csv`, `failure_events.csv`). The strength is the largest applied stress on the way; a run that ended at `max_events` gives a lower bound, and so does a run that failed (its effective stiffness became singular: `failed_at_event` names the step) (cracks across the largest tension split a compressed cell along the load and hardly soften it, so compression runs tend to end there).\n\n| structure | test | runs | strength (MPa) | first crack (MPa) | cracks to the peak | first cracks in | cracked pixels at the peak, by phase | runs ended by |\n|---|---|---|---|---|---|---|---|---|\n");
         for (i, st) in s.structure.iter().enumerate() {
             for test in Test::BOTH {
                 let runs: Vec<&Cracked> = cracked.iter().filter(|c| c.structure == i && c.run.test == test).collect();

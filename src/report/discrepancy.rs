@@ -115,12 +115,22 @@ fn residuals(dir: &Path, width_cm: f64, key: &str) -> Result<Drawn> {
 }
 
 fn probability(dir: &Path, width_cm: f64, key: &str, label: &str, c: RGBColor) -> Result<Drawn> {
+    let p = probability_panel(dir, key, label, c)?;
+    figure(&format!("discrepancy_probability_{key}"), width_cm, 0.8, &[(p, 1.0)])
+}
+
+/// The Weibull probability plot of material `key`: each stage's strengths at their plotting
+/// positions and its fitted line ln(−ln(1 − F)) = m (ln σ − ln σ_θ). The line spans exactly the
+/// x axis and the y axis holds both its ends, so nothing of it is clipped and its drawn slope is
+/// the fitted m.
+fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<Panel> {
     let t = Table::load(dir, "residuals")?;
     let (mat, stage, raw, adj) = (t.s("material")?, t.s("stage")?, t.f("strength_pa")?, t.f("adjusted_pa")?);
     let fits = Table::load(dir, "fits")?;
     let (fm, fs, fe, shape, scale) = (fits.s("material")?, fits.s("stage")?, fits.s("effects")?, fits.f("weibull_modulus")?, fits.f("scale_pa")?);
     let mut series = Vec::new();
     let mut xs = Vec::new();
+    let mut lines = Vec::new();
     for (si, st) in ["before", "after"].iter().enumerate() {
         let mut v: Vec<f64> = (0..mat.len()).filter(|&i| mat[i] == key && stage[i] == *st).map(|i| if si == 0 { raw[i] } else { adj[i] } / 1e6).collect();
         v.sort_by(f64::total_cmp);
@@ -129,24 +139,28 @@ fn probability(dir: &Path, width_cm: f64, key: &str, label: &str, c: RGBColor) -
         xs.extend(pts.iter().map(|p| p.0));
         let Some(j) = (0..fm.len()).find(|&i| fm[i] == key && fs[i] == *st) else { continue };
         let (m, s) = (shape[j], (scale[j] / 1e6).ln());
-        let (lo, hi) = (pts.first().map_or(s - 0.3, |p| p.0) - 0.05, pts.last().map_or(s + 0.3, |p| p.0) + 0.05);
+        if pts.is_empty() {
+            xs.extend([s - 0.3, s + 0.3]);
+        }
         let colour_st = if si == 0 { GREY } else { c };
         let name = if si == 0 { "base model".to_string() } else { format!("+ {}", fe[j].replace(" then ", " + ")) };
         series.push(Series { label: Some(format!("{name}: m = {m:.1}")), points: pts, colour: colour_st, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 1.6) });
-        series.push(Series::line(None, vec![(lo, m * (lo - s)), (hi, m * (hi - s))], colour_st, 1.0));
+        lines.push((m, s, colour_st));
     }
     let xr = padded(xs.iter().copied(), 0.05, 0.05);
-    let p = Panel {
+    for (m, s, colour_st) in lines {
+        series.push(Series::line(None, vec![(xr.0, m * (xr.0 - s)), (xr.1, m * (xr.1 - s))], colour_st, 1.0));
+    }
+    Ok(Panel {
         x_categories: vec![],
         x_desc: format!("ln(σ̄ at break / 1 MPa), {label}"),
         y_desc: "ln(−ln(1 − F))".into(),
         x_range: xr,
-        y_range: padded(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)).filter(|_| true), 0.05, 0.05),
+        y_range: padded(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)), 0.05, 0.05),
         y_log: false,
         series,
         legend: Some(SeriesLabelPosition::UpperLeft),
-    };
-    figure(&format!("discrepancy_probability_{key}"), width_cm, 0.8, &[(p, 1.0)])
+    })
 }
 
 fn gap(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<Drawn> {
@@ -359,4 +373,43 @@ pub fn render_curves(dir: &Path, width_cm: f64) -> Result<Rendered> {
     ];
     let drawn = figure("discrepancy_curves", width_cm, 1.25, &panels)?;
     super::write_figures(dir, vec![("discrepancy_curves", drawn)])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fitted line of the Weibull probability plot is drawn with the fitted modulus as its
+    /// slope: both ends inside the axes (nothing clipped), for moduli from 3 to 40. Before, the
+    /// line ran 0.05 in ln σ past the data, beyond a narrow x axis, and a clipped x with an
+    /// unclipped y drew m = 26 with a slope of about 38.
+    #[test]
+    fn the_probability_line_has_the_fitted_slope_for_any_modulus() {
+        for m in [3.0, 5.0, 8.0, 12.0, 20.0, 26.3, 40.0] {
+            let dir = crate::io::TempDir::new("probability").unwrap();
+            let n = 30;
+            let mut residuals = String::from("material,stage,strength_pa,adjusted_pa\n");
+            for stage in ["before", "after"] {
+                for i in 0..n {
+                    let f = (i as f64 + 0.5) / n as f64;
+                    let x = 1.2e9 * (-(1.0 - f).ln()).powf(1.0 / m);
+                    residuals.push_str(&format!("bl,{stage},{x},{}\n", 0.97 * x));
+                }
+            }
+            std::fs::write(dir.path().join("residuals.csv"), residuals).unwrap();
+            std::fs::write(dir.path().join("fits.csv"), format!("material,stage,effects,weibull_modulus,scale_pa\nbl,before,none,{m},1.2e9\nbl,after,size,{},1.16e9\n", m * 1.1)).unwrap();
+            let p = probability_panel(dir.path(), "bl", "BL", BLACK).unwrap();
+            let lines: Vec<&Series> = p.series.iter().filter(|s| matches!(s.kind, Kind::Line(_))).collect();
+            assert_eq!(lines.len(), 2, "m = {m}");
+            for (line, fitted) in lines.iter().zip([m, m * 1.1]) {
+                let [(x0, y0), (x1, y1)] = line.points[..] else { panic!("a line of two points") };
+                for (x, y) in [(x0, y0), (x1, y1)] {
+                    assert!(x >= p.x_range.0 && x <= p.x_range.1 && y >= p.y_range.0 && y <= p.y_range.1, "m = {m}: ({x}, {y}) outside {:?} × {:?}", p.x_range, p.y_range);
+                }
+                assert!(((y1 - y0) / (x1 - x0) / fitted - 1.0).abs() < 1e-12, "m = {m}: slope {}", (y1 - y0) / (x1 - x0));
+            }
+            // Every point lies inside the axes too.
+            assert!(p.series.iter().flat_map(|s| &s.points).all(|&(x, y)| x >= p.x_range.0 && x <= p.x_range.1 && y >= p.y_range.0 && y <= p.y_range.1));
+        }
+    }
 }

@@ -14,7 +14,7 @@ use plotters::prelude::SeriesLabelPosition;
 use super::canvas::{Encoded, colour};
 use super::panel::{Kind, Marker, Panel, Series, figure, figure_grid, padded};
 use super::{Rendered, Table, distinct, lg};
-use crate::error::Result;
+use crate::error::{Error, Result};
 
 /// Draws every figure of a temperature report in `dir` (those whose tables it has).
 pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
@@ -217,7 +217,10 @@ fn breakage(dir: &Path, width_cm: f64) -> Result<(Encoded, usize)> {
 fn phase_fractions(dir: &Path, width_cm: f64) -> Result<(Encoded, usize)> {
     let t = Table::load(dir, "phases")?;
     let names: Vec<String> = t.df.get_column_names().iter().map(|n| n.to_string()).collect();
-    let (column, basis) = if names.iter().any(|n| n == "mass_fraction") { ("mass_fraction", "Mass") } else { ("mole_fraction", "Mole") };
+    // The study writes volume fractions; reports written before it did hold the file's basis.
+    let Some((column, basis)) = [("volume_fraction", "Volume"), ("mass_fraction", "Mass"), ("mole_fraction", "Mole")].into_iter().find(|(c, _)| names.iter().any(|n| n == c)) else {
+        return Err(Error::data_file(&dir.join("phases.csv"), "header", "no column `volume_fraction`, `mass_fraction` or `mole_fraction`"));
+    };
     let (temp, phase, frac, amorphous) = (t.f("temperature_c")?, t.s("phase")?, t.f(column)?, t.s("amorphous")?);
     let mut series = Vec::new();
     for (k, p) in distinct(&phase).iter().enumerate() {

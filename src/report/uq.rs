@@ -13,7 +13,11 @@
 //! | `uq_strength_models` | the strength models side by side and model-averaged (stacking weights in the labels): P(candidate breaks more) with ±2 MC standard errors per horizon, and P_break at the last horizon, median and 90 % band per material | `comparison.csv`, `breakage.csv`, `weights.csv` |
 //!
 //! Tables and figures other than `uq_strength_models` describe the primary strength model
-//! (`primary_strength_model` of `materials.csv`).
+//! (`primary_strength_model` of `materials.csv`) and, where one damage model is shown, the
+//! primary damage model (`primary_damage_model`); the bottom x axis of `uq_breakage_vs_velocity`,
+//! `uq_distributions` (briefly: "diagnosed strength, indep. trials") and `uq_sobol` names both. Sobol' panels name their output in words
+//! (`output_label` of `sobol.csv`). In `uq_model_form` a P = 0 (below Vogel–Peukert's
+//! threshold) is drawn on the axis floor, which the y-axis label then names ("floor: P = 0").
 
 use std::path::Path;
 
@@ -36,11 +40,23 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
     let (keys, labels) = ([k[0].clone(), k[1].clone()], [l[0].clone(), l[1].clone()]);
     let (keys, labels) = (&keys, &labels);
     let primary = m.s("primary_strength_model")?[0].clone();
+    // Which models a figure of the primary models shows (reports written before the damage
+    // model was recorded name the strength model only).
+    // model, and in a short form for the single-width figures.
+    let damage = m.s("primary_damage_model").ok().and_then(|d| d.first().cloned());
+    let shown = match &damage {
+        Some(d) => format!("strength model: {}; damage: {d}", short_model(&primary)),
+        None => format!("strength model: {}", short_model(&primary)),
+    };
+    let brief = match &damage {
+        Some(d) => format!("{} strength, {}", short_model(&primary), d.replace("independent", "indep.")),
+        None => format!("{} strength model", short_model(&primary)),
+    };
     let figures = vec![
-        ("uq_breakage_vs_velocity", breakage_vs_velocity(dir, width_cm, labels, keys)?),
-        ("uq_distributions", distributions(dir, width_cm, labels, keys)?),
+        ("uq_breakage_vs_velocity", breakage_vs_velocity(dir, width_cm, labels, keys, &brief)?),
+        ("uq_distributions", distributions(dir, width_cm, labels, keys, &brief)?),
         ("uq_convergence", convergence(dir, width_cm, labels)?),
-        ("uq_sobol", sobol(dir, 2.0 * width_cm)?),
+        ("uq_sobol", sobol(dir, 2.0 * width_cm, &shown)?),
         ("uq_sobol_convergence", sobol_convergence(dir, width_cm)?),
         ("uq_model_form", model_form(dir, width_cm, labels, keys, &primary)?),
         ("uq_strength_models", strength_models(dir, 2.0 * width_cm, labels, keys)?),
@@ -52,7 +68,7 @@ fn years_label(y: f64) -> String {
     if y == 1.0 { "1 year".into() } else { format!("{y} years") }
 }
 
-fn breakage_vs_velocity(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[String; 2]) -> Result<Drawn> {
+fn breakage_vs_velocity(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[String; 2], shown: &str) -> Result<Drawn> {
     let t = Table::load(dir, "breakage_vs_velocity")?;
     let (mat, yrs, v, q05, q50, q95) = (t.s("material")?, t.f("years")?, t.f("velocity_m_s")?, t.f("q05")?, t.f("median")?, t.f("q95")?);
     let horizons = distinct(&yrs);
@@ -74,7 +90,7 @@ fn breakage_vs_velocity(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &
         panels.push((
             Panel {
                 x_categories: vec![],
-                x_desc: if hi + 1 == horizons.len() { "Impact velocity (m/s)".into() } else { String::new() },
+                x_desc: if hi + 1 == horizons.len() { format!("Velocity (m/s); {shown}") } else { String::new() },
                 y_desc: format!("P break, {}", years_label(h)),
                 x_range: padded(v.iter().cloned(), 0.0, 0.0),
                 y_range: (lo, 0.3),
@@ -88,7 +104,7 @@ fn breakage_vs_velocity(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &
     figure("uq_breakage_vs_velocity", width_cm, 0.6 * horizons.len() as f64, &panels)
 }
 
-fn distributions(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[String; 2]) -> Result<Drawn> {
+fn distributions(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[String; 2], shown: &str) -> Result<Drawn> {
     let t = Table::load(dir, "distributions")?;
     let (mat, yrs, x, d) = (t.s("material")?, t.f("years")?, t.f("log10_p")?, t.f("density")?);
     let horizons = distinct(&yrs);
@@ -103,7 +119,7 @@ fn distributions(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[String
         panels.push((
             Panel {
                 x_categories: vec![],
-                x_desc: format!("log₁₀ P break in {}", years_label(h)),
+                x_desc: if hi + 1 == horizons.len() { format!("log₁₀ P, {}; {shown}", years_label(h)) } else { format!("log₁₀ P, {}", years_label(h)) },
                 y_desc: "Density (per decade)".into(),
                 x_range: padded(rows_h.iter().map(|&i| x[i]), 0.02, 0.02),
                 y_range: (0.0, rows_h.iter().map(|&i| d[i]).fold(0.0, f64::max) * 1.3),
@@ -157,9 +173,12 @@ fn short(name: &str) -> String {
         .replace("tk_gamma", "γ (TK)")
 }
 
-fn sobol(dir: &Path, width_cm: f64) -> Result<Drawn> {
+fn sobol(dir: &Path, width_cm: f64, shown: &str) -> Result<Drawn> {
     let t = Table::load(dir, "sobol")?;
     let (out, n, input) = (t.s("output")?, t.f("n")?, t.s("input")?);
+    // The output in words (older reports: its column name, spaced), and its horizon.
+    let words = t.s("output_label").unwrap_or_else(|_| out.iter().map(|o| o.replace('_', " ")).collect());
+    let horizon = t.f("years").ok().and_then(|y| y.first().copied()).map_or(String::new(), |y| format!(", P after {}", years_label(y)));
     let (s1, s1l, s1h, st, stl, sth) = (t.f("s1")?, t.f("s1_lo")?, t.f("s1_hi")?, t.f("st")?, t.f("st_lo")?, t.f("st_hi")?);
     let nmax = n.iter().cloned().fold(0.0, f64::max);
     let outputs = distinct(&out);
@@ -180,8 +199,8 @@ fn sobol(dir: &Path, width_cm: f64) -> Result<Drawn> {
         panels.push((
             Panel {
                 x_categories: rows.iter().map(|&i| short(&input[i])).collect(),
-                x_desc: if oi + 1 == outputs.len() { "Input".into() } else { String::new() },
-                y_desc: format!("Index of {}", o.replace('_', " ")),
+                x_desc: if oi + 1 == outputs.len() { format!("Input — {shown}{horizon}") } else { String::new() },
+                y_desc: format!("Index of {}", rows.first().map_or_else(|| o.replace('_', " "), |&i| words[i].clone())),
                 x_range: (0.5, rows.len() as f64 + 0.5),
                 y_range: (lo - 0.02, hi * 1.25),
                 y_log: false,
@@ -198,6 +217,7 @@ fn sobol_convergence(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let t = Table::load(dir, "sobol")?;
     let (out, n, input, st) = (t.s("output")?, t.f("n")?, t.s("input")?, t.f("st")?);
     let first = out.first().cloned().unwrap_or_default();
+    let first_words = t.s("output_label").ok().and_then(|w| w.first().cloned()).unwrap_or_else(|| first.replace('_', " "));
     let nmax = n.iter().cloned().fold(0.0, f64::max);
     // The four inputs with the largest final total index.
     let mut fin: Vec<(String, f64)> = (0..out.len()).filter(|&i| out[i] == first && n[i] == nmax).map(|i| (input[i].clone(), st[i])).collect();
@@ -212,7 +232,7 @@ fn sobol_convergence(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let panel = Panel {
         x_categories: vec![],
         x_desc: "Saltelli base sample size (log₂ n)".into(),
-        y_desc: format!("S_T of {}", first.replace('_', " ")),
+        y_desc: format!("S_T of {first_words}"),
         x_range: padded(n.iter().map(|v| v.log2()), 0.05, 0.05),
         // Indices lie in [0, 1]: the upper part of the axis is left to the legend.
         y_range: (ys.iter().cloned().fold(0.0, f64::min) - 0.02, ys.iter().cloned().fold(1.0, f64::max) + 0.05),
@@ -246,20 +266,27 @@ fn model_form(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[String; 2
         // P = 0 (below the Vogel–Peukert threshold) sits on the axis floor, two decades below
         // the smallest non-zero value.
         let lo = (ys.iter().cloned().fold(0.0, f64::min) - 2.0).floor().max(LG_FLOOR);
+        let mut floored = false;
         for s in series.iter_mut() {
             for p in s.points.iter_mut() {
+                floored |= p.1 <= lo;
                 p.1 = p.1.max(lo);
             }
             if let Kind::Band(up, _) = &mut s.kind {
-                up.iter_mut().for_each(|v| *v = v.max(lo));
+                up.iter_mut().for_each(|v| {
+                    floored |= *v <= lo;
+                    *v = v.max(lo)
+                });
             }
         }
+
         panels.push((
             Panel {
                 // P = 0 (below the Vogel–Peukert threshold) is drawn on the axis floor.
                 x_categories: models.iter().map(|m| match m.as_str() { "independent" => "indep.".to_string(), "vogel_peukert" => "VP".into(), "tavares_king" => "TK".into(), o => o.into() }).collect(),
                 x_desc: if hi + 1 == horizons.len() { "Damage model (dot: median, bar: 90 %)".into() } else { String::new() },
-                y_desc: format!("P break, {}", years_label(h)),
+                // Named, so that a bar or dot on the floor does not read as a small probability.
+                y_desc: if floored { format!("P break, {} (floor: P = 0)", years_label(h)) } else { format!("P break, {}", years_label(h)) },
                 // One empty column on the right keeps the legend off the data.
                 x_range: (0.5, models.len() as f64 + 1.7),
                 y_range: (lo, 0.8),

@@ -24,7 +24,7 @@ use crate::phases::PhaseTable;
 use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
 use crate::schema::StudyFile;
 use crate::stats::median_and_band as band;
-use crate::thermal::{ParameterLaws, read_phases_of, youngs_modulus};
+use crate::thermal::{ParameterLaws, youngs_modulus};
 use crate::uq::setup::{Mode, Setup, Shared};
 
 /// The summary's sentences about the phase table.
@@ -32,16 +32,17 @@ fn describe(s: &TemperatureStudy, t: &PhaseTable, shown_path: &str) -> (String, 
     let (lo, hi) = t.range();
     let fa = t.amorphous_fractions();
     let amorphous: Vec<&str> = t.phases.iter().zip(&t.amorphous).filter(|(_, a)| **a).map(|(n, _)| n.as_str()).collect();
-    let basis = match t.basis {
-        crate::phases::Basis::Mole => "mole",
-        crate::phases::Basis::Mass => "mass",
+    let basis = match (t.file_basis, &s.phases.source) {
+        (crate::phases::Basis::Volume, _) => "volume fractions".to_string(),
+        (b, source) => format!("{}, converted to volume fractions (the basis of the rule of mixtures) with the phases' {} from {}", b.words(), if b == crate::phases::Basis::Mole { "molar volumes" } else { "densities" }, source.as_deref().unwrap_or("the study")),
     };
     let crystalline: Vec<String> = t.phases.iter().zip(&t.amorphous).enumerate().filter(|(_, (_, a))| !**a).map(|(p, (n, _))| format!("{n} {:.3}", t.fractions[0][p])).collect();
     let mut md = format!(
-        "The phase table `{shown_path}` — {} — gives {} phases at {} temperatures from {lo} to {hi} °C as {basis} fractions. At {lo} °C: {}.",
+        "The phase table `{shown_path}` — {} — gives {} phases at {} temperatures from {lo} to {hi} °C as {basis}. At {lo} °C{}: {}.",
         s.phases.composition,
         t.phases.len(),
         t.temperatures_c.len(),
+        if t.file_basis == crate::phases::Basis::Volume { "" } else { " (as volume fractions)" },
         if crystalline.is_empty() { "no crystalline phase".to_string() } else { crystalline.join(", ") }
     );
     let headline = if amorphous.is_empty() {
@@ -332,7 +333,7 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
     let file = loaded.path.display().to_string();
     s.validate(&file)?;
     let path = loaded.resolve(&s.phases.file);
-    let phases = read_phases_of(&file, &path)?;
+    let phases = s.phases.read(&file, &path)?;
     let grid = s.grid(phases.range());
     let (lo, hi) = phases.range();
     if grid[0] < lo || grid[grid.len() - 1] > hi {

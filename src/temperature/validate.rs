@@ -167,20 +167,14 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
                 return Err(Error::numerical("validation", format!("{key} ({label}): {} of {} crush runs failed ({why}): widen the parameter bounds of {}", thetas.len() - ok.len(), thetas.len(), path.display())));
             }
             let (mut inside_all, mut peak) = (0u64, String::from("(no fracture observed)"));
-            for (o, spec) in outputs.iter().enumerate() {
-                let idx: Vec<usize> = (0..obs.len()).filter(|&i| obs.output[i] == o).collect();
-                if idx.is_empty() {
-                    continue;
-                }
+            // One row per output and scatter σ (a reduction of crush curves has one σ per
+            // output; an observation file may give each row its own): the interval a row
+            // prints is the one its observations are counted against.
+            for (o, sigma, idx) in by_output_and_sigma(&obs.output, &obs.sigma) {
+                let spec = &outputs[o];
                 let y: Vec<f64> = ok.iter().map(|r| r[o]).collect();
-                let (centre, half) = predictive_interval(&y, obs.sigma[idx[0]], model_error, z);
-                let inside = idx
-                    .iter()
-                    .filter(|&&i| {
-                        let (c, h) = predictive_interval(&y, obs.sigma[i], model_error, z);
-                        (obs.values[i] - c).abs() <= h
-                    })
-                    .count() as u64;
+                let (centre, half) = predictive_interval(&y, sigma, model_error, z);
+                let inside = idx.iter().filter(|&&i| (obs.values[i] - centre).abs() <= half).count() as u64;
                 inside_all += inside;
                 let observed_mean = idx.iter().map(|&i| obs.values[i]).sum::<f64>() / idx.len() as f64;
                 if spec.name == "peak_force" {
@@ -264,4 +258,30 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
     ])?;
     dir.write_table("validation_observations", &mut t)?;
     Ok((md.join("\n\n"), inputs, fe_runs))
+}
+
+/// The observations grouped by output and scatter σ (bitwise), by output, then σ in order of
+/// first appearance: (output, σ, the observations' indices).
+fn by_output_and_sigma(output: &[usize], sigma: &[f64]) -> Vec<(usize, f64, Vec<usize>)> {
+    let mut g: Vec<(usize, f64, Vec<usize>)> = Vec::new();
+    for (i, (&o, &s)) in output.iter().zip(sigma).enumerate() {
+        match g.iter_mut().find(|(go, gs, _)| *go == o && gs.to_bits() == s.to_bits()) {
+            Some((_, _, idx)) => idx.push(i),
+            None => g.push((o, s, vec![i])),
+        }
+    }
+    g.sort_by_key(|(o, _, _)| *o);
+    g
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn observations_with_their_own_scatter_get_their_own_interval() {
+        // Output 0 twice with σ 1, once with σ 2 (an observation file's own sd); output 1 once.
+        let g = by_output_and_sigma(&[0, 1, 0, 0], &[1.0, 5.0, 2.0, 1.0]);
+        assert_eq!(g, vec![(0, 1.0, vec![0, 3]), (0, 2.0, vec![2]), (1, 5.0, vec![1])]);
+    }
 }

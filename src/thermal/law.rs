@@ -9,8 +9,11 @@
 //! θ_c is the crystalline value at the reference temperature T_ref, a the thermal coefficient
 //! (1/°C; small, linear in ln θ) and r = θ_glass/θ_crystalline the glassy ratio (r < 1: the
 //! amorphous phase softens). The mixture is the Voigt (arithmetic) rule in the amorphous
-//! fraction: an upper bound for a modulus and the simplest law that gives θ_c at f_a = 0 and
-//! r·θ_c (times the thermal term) for a fully glassy particle.
+//! **volume** fraction: an upper bound for a modulus and the simplest law that gives θ_c at
+//! f_a = 0 and r·θ_c (times the thermal term) for a fully glassy particle. A rule of mixtures
+//! is a rule in volume fractions, so a table of mole or mass fractions is converted first
+//! ([`crate::phases::PhaseTable::to_volume`]) and [`TemperatureLaw::fit`] refuses any other
+//! basis.
 //!
 //! # Fitting to two calibrated states
 //!
@@ -31,7 +34,7 @@
 //! reduces to its thermal term, whatever r.
 
 use crate::error::{Error, Result};
-use crate::phases::PhaseTable;
+use crate::phases::{Basis, PhaseTable};
 
 /// One draw of the law's coefficients.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -82,6 +85,9 @@ impl TemperatureLaw {
         if let Some(r) = ratio.iter().find(|r| !(r.is_finite() && **r > 0.0)) {
             return bad(format!("a glassy ratio {r} is not positive"));
         }
+        if phases.basis != Basis::Volume {
+            return bad(format!("the rule of mixtures takes volume fractions; {} holds {} (convert them first: PhaseTable::to_volume)", phases.path.display(), phases.basis.words()));
+        }
         let (f1, f2) = (phases.amorphous_at(t1_c)?, phases.amorphous_at(t2_c)?);
         let draws = theta1
             .iter()
@@ -111,15 +117,23 @@ impl TemperatureLaw {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::phases::{Basis, illustrative};
+    use crate::phases::illustrative;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn a_table_not_in_volume_fractions_is_refused() {
+        let mole = PhaseTable { basis: Basis::Mole, file_basis: Basis::Mole, ..table(&|_| 0.1) };
+        let e = TemperatureLaw::fit(&mole, (20.0, &[1.0]), (800.0, &[0.9]), &[0.5]).unwrap_err().to_string();
+        assert!(e.contains("volume fractions") && e.contains("mole fractions"), "{e}");
+        assert!(TemperatureLaw::fit(&table(&|_| 0.1), (20.0, &[1.0]), (800.0, &[0.9]), &[0.5]).is_ok());
+    }
 
     /// A two-phase table with amorphous fraction `f(T)` on 20–1000 °C.
     fn table(f: &dyn Fn(f64) -> f64) -> PhaseTable {
         let temperatures_c: Vec<f64> = (0..=49).map(|k| 20.0 + 20.0 * k as f64).collect();
         let fractions = temperatures_c.iter().map(|&t| vec![1.0 - f(t), f(t)]).collect();
-        PhaseTable { path: Default::default(), basis: Basis::Mole, temperatures_c, phases: vec!["C".into(), "GLASS".into()], amorphous: vec![false, true], fractions }
+        PhaseTable { path: Default::default(), basis: Basis::Volume, file_basis: Basis::Volume, temperatures_c, phases: vec!["C".into(), "GLASS".into()], amorphous: vec![false, true], fractions }
     }
 
     /// Lognormal draws around `median` with sd of ln `sd`.

@@ -12,6 +12,10 @@
 //! [phases]
 //! file = "../datasets/phases_granulated_illustrative.csv"   # crate::phases
 //! composition = "granulated (illustrative)"
+//! # A table of mole (or mass) fractions is converted to volume fractions with each phase's
+//! # molar volume (or density_kg_m3) and their source; volume fractions are used as they are.
+//! # molar_volume_m3_mol = { CORUNDUM = 5.1e-6, … }
+//! # source = "…"
 //!
 //! [law]
 //! calibrations = [   # posterior draws at two temperatures: the chains.csv of a calibration
@@ -60,7 +64,7 @@ pub use law::{LawDraw, TemperatureLaw};
 use crate::contact::Elastic;
 use crate::dist::Dist;
 use crate::error::{Error, Result};
-use crate::phases::{PhaseTable, read_phases};
+use crate::phases::{Basis, PhaseTable, VolumeConversion, read_phases};
 
 /// `[phases]` of a temperature study.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -73,6 +77,42 @@ pub struct PhasesOptions {
     /// Amorphous fraction above which the amorphous phase counts as risen.
     #[serde(default = "onset_level")]
     pub onset_level: f64,
+    /// Per phase, its molar volume (m³ per mole as the table counts moles): converts a table
+    /// of mole fractions to volume fractions ([`crate::phases`], "Volume fractions").
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub molar_volume_m3_mol: BTreeMap<String, f64>,
+    /// Per phase, its density (kg/m³): converts a table of mass fractions.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub density_kg_m3: BTreeMap<String, f64>,
+    /// Where the molar volumes or densities come from (required with them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+impl PhasesOptions {
+    /// The table of `path` (declared by study `file`) in volume fractions: read, then converted
+    /// with the declared molar volumes or densities when it holds mole or mass fractions.
+    pub fn read(&self, file: &str, path: &Path) -> Result<PhaseTable> {
+        if !path.is_file() {
+            return Err(Error::config(file, "phases.file", format!("{} does not exist", path.display())));
+        }
+        let table = read_phases(path)?;
+        let declared = [("phases.molar_volume_m3_mol", &self.molar_volume_m3_mol, Basis::Mole), ("phases.density_kg_m3", &self.density_kg_m3, Basis::Mass)];
+        let mut conversion = None;
+        for (key, values, basis) in declared {
+            if values.is_empty() {
+                continue;
+            }
+            if table.basis != basis {
+                return Err(Error::config(file, key, format!("converts {}, but {} holds {}", basis.words(), path.display(), table.basis.words())));
+            }
+            if self.source.as_deref().is_none_or(|s| s.trim().is_empty()) {
+                return Err(Error::config(file, "phases.source", format!("{key} needs its source (a handbook, a database, a paper): where each value comes from")));
+            }
+            conversion = Some(VolumeConversion { per_phase: values.clone(), key: key.into() });
+        }
+        table.to_volume(file, conversion.as_ref())
+    }
 }
 
 fn onset_level() -> f64 {
@@ -240,16 +280,8 @@ pub fn load_from_study(path: &Path, reports_root: &Path) -> Result<ParameterLaws
     let Some(law) = &src.law else {
         return Err(Error::config(&file, "law", "this temperature study declares no [law] (calibrated states and glassy-ratio priors)"));
     };
-    let phases = read_phases_of(&file, &loaded.resolve(&src.phases.file))?;
+    let phases = src.phases.read(&file, &loaded.resolve(&src.phases.file))?;
     ParameterLaws::load(&file, &|p| loaded.resolve(p), reports_root, phases, law, src.seed)
-}
-
-/// The phase table at `path`, or an error naming the study key when it does not exist.
-pub fn read_phases_of(file: &str, path: &Path) -> Result<PhaseTable> {
-    if !path.is_file() {
-        return Err(Error::config(file, "phases.file", format!("{} does not exist", path.display())));
-    }
-    read_phases(path)
 }
 
 impl ParameterLaws {

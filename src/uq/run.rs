@@ -11,8 +11,10 @@
 //! comes from predictive evidence: the 10-fold cross-validated log density of every crush test
 //! of both materials, combined by **stacking** ([`crate::strength::weights`], which says why
 //! stacking rather than pseudo-BMA; both are reported). The model-averaged headline is
-//! P̄ = Σ_M w_M P_M with standard error (Σ_M w_M² se_M²)^(1/2) (the runs are independent); the
-//! averaged breakage bands are the quantiles of the weighted mixture of the models' samples.
+//! P̄ = Σ_M w_M P_M; the models share the seed and sample points block for block, so its
+//! standard error is that of the per-block averages Σ_M w_M P_M,b over the independent blocks
+//! ([`averaged`]), which carries the models' correlation. The averaged breakage bands are the
+//! quantiles of the weighted mixture of the models' samples.
 //!
 //! # One sample
 //!
@@ -124,9 +126,11 @@ fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
     for (k, &damage) in st.models.iter().enumerate() {
         for (h, &years) in st.years.iter().enumerate() {
             let (a, b) = (st.slot(0, h, k), st.slot(1, h, k));
+            let mut fractions = Vec::new();
             for f in forms {
                 let nb = f.prop.blocks[0].n;
-                let (worse, se) = mean_se(&f.prop.fraction_worse(a, b, nb));
+                fractions.push(f.prop.fraction_worse(a, b, nb));
+                let (worse, se) = mean_se(&fractions[fractions.len() - 1]);
                 let mut median = [0.0; 2];
                 let mut band = [(0.0, 0.0); 2];
                 for (j, slot) in [a, b].into_iter().enumerate() {
@@ -143,7 +147,8 @@ fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
             if forms.len() > 1 {
                 // The weighted mixture of the models' samples.
                 let weights: Vec<f64> = forms.iter().map(|f| f.weight).collect();
-                let (worse, se, ties) = averaged(&weights, &rows[rows.len() - forms.len()..]);
+                let ties: Vec<f64> = rows[rows.len() - forms.len()..].iter().map(|r| r.ties).collect();
+                let (worse, se, ties) = averaged(&weights, &fractions, &ties)?;
                 let mut median = [0.0; 2];
                 let mut band = [(0.0, 0.0); 2];
                 for (j, slot) in [a, b].into_iter().enumerate() {
@@ -204,6 +209,8 @@ fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
             ucol("population_particles", st.materials.iter().map(|m| m.model.population.len() as u64).collect()),
             fcol("reference_diameter_m", st.materials.iter().map(|m| m.model.sphere.diameter).collect()),
             scol("primary_strength_model", vec![st.spec.name(); 2]),
+            // The damage model of the figures and tables that show one (the first of the study's).
+            scol("primary_damage_model", vec![st.models[0].label().to_string(); 2]),
         ])?,
     )?;
     dir.write_table(
@@ -401,13 +408,18 @@ fn write_sobol(dir: &mut ReportDir, st: &Setup, s: &UqStudy, sizes: &[usize], ti
     };
     let keys = [&st.materials[0].model.key, &st.materials[1].model.key];
     let outputs = vec![format!("log10_p_{}", keys[0]), format!("log10_p_{}", keys[1]), format!("p_{}_minus_p_{}", keys[0], keys[1])];
+    // What each output is, in words, for the figures.
+    let labels = [&st.materials[0].model.label, &st.materials[1].model.label];
+    let output_labels = [format!("log₁₀ P {}", labels[0]), format!("log₁₀ P {}", labels[1]), format!("P {} − P {}", labels[0], labels[1])];
     let mut sob: (Vec<String>, Vec<u64>, Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<String>) = Default::default();
+    let mut sob_labels: Vec<String> = Vec::new();
     let mut final_indices: Vec<SobolIndices> = Vec::new();
     for &n in sizes {
         let ind = sobol_indices(f, varying.len(), n, s.seed ^ 0x50B0, s.sensitivity.bootstrap, s.sensitivity.level)?;
         for (o, si) in ind.iter().enumerate() {
             for (k, &i) in varying.iter().enumerate() {
                 sob.0.push(outputs[o].clone());
+                sob_labels.push(output_labels[o].clone());
                 sob.1.push(n as u64);
                 sob.2.push(st.inputs[i].name.clone());
                 sob.3.push(si.first[k]);
@@ -424,6 +436,7 @@ fn write_sobol(dir: &mut ReportDir, st: &Setup, s: &UqStudy, sizes: &[usize], ti
         }
         tick();
     }
+    let rows = sob.0.len();
     dir.write_table(
         "sobol",
         &mut table(vec![
@@ -437,6 +450,9 @@ fn write_sobol(dir: &mut ReportDir, st: &Setup, s: &UqStudy, sizes: &[usize], ti
             fcol("st_lo", sob.7),
             fcol("st_hi", sob.8),
             scol("flag", sob.9),
+            scol("output_label", sob_labels),
+            // The horizon of the breaking probabilities the outputs are of.
+            fcol("years", vec![st.years[h]; rows]),
         ])?,
     )?;
     Ok((final_indices, outputs))

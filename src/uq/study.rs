@@ -136,6 +136,13 @@ pub struct ModelForm {
     /// model (its own Weibull refit of the crush data) with a quarter of the samples;
     /// `averaging.csv` compares them.
     pub averaging: Vec<AveragingDomain>,
+    /// The study states the deliverable's hypothesis — accounting for the particles' shape
+    /// (roundness, non-sphericity) makes the lifetime model favour the candidate — and the
+    /// summary tests it against the strength models with shape effects fitted to both
+    /// materials' data. Not stated (the default), or no such model (no shape columns), and the
+    /// summary says nothing of it.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub shape_hypothesis: bool,
 }
 
 /// `[operating]`: the operating temperature of each material and the temperature study whose

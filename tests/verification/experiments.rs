@@ -68,6 +68,29 @@ fn normal_normal_preposterior_variance_and_evsi_match_their_closed_forms() {
     assert!(m.pcs.mean > m.prior_pcs + 10.0 * m.pcs.se, "{:?}", m.pcs);
 }
 
+/// With the truth conditioned on a label ("if θ > 0 …") the prior PCS and the value are taken
+/// over those truths, against the action one would take without the experiment (adopt, as
+/// μ₀ > 0): where θ > 0 adopting is already right, so PCS₀ = 1 and the data can only mislead
+/// (value ≤ 0); where θ ≤ 0 PCS₀ = 0 and the data can only help (value ≥ 0). Weighted by the
+/// labels' prior probabilities the two values make the unconditioned EVSI (≥ 0, the closed
+/// form). Before, the conditioned runs used the unconditioned prior's PCS and risk.
+#[test]
+fn a_conditioned_truth_gets_its_own_prior_pcs_and_value() {
+    let (mu0, tau, sigma, n) = (0.3, 1.0, 1.0, 4.0);
+    let (theta, _) = prior(mu0, tau, 4000);
+    let labels: Vec<u32> = theta.iter().map(|t| u32::from(*t > 0.0)).collect();
+    let kn = Knowledge::new(vec![1.0; theta.len()], 2, theta.iter().flat_map(|t| [-t, 0.0]).collect(), 1, theta.clone(), 1, labels).unwrap();
+    let exp = Means { theta: theta.clone(), sigma, n };
+    let run = |truth| preposterior(&kn, &exp, Settings { outer: 4000, min_ess: 50.0, seed: 9, truth, active: None, scored: 0 }).unwrap();
+    let (all, above, below) = (run(None), run(Some((0, 1))), run(Some((0, 0))));
+    assert!((above.prior_pcs - 1.0).abs() < 1e-12 && below.prior_pcs.abs() < 1e-12, "{} {}", above.prior_pcs, below.prior_pcs);
+    assert!(above.evsi.mean <= 1e-12 && below.evsi.mean >= -1e-12, "{:?} {:?}", above.evsi, below.evsi);
+    let p_above = theta.iter().filter(|t| **t > 0.0).count() as f64 / theta.len() as f64;
+    let mixed = p_above * above.evsi.mean + (1.0 - p_above) * below.evsi.mean;
+    let se = (p_above * above.evsi.se).hypot((1.0 - p_above) * below.evsi.se).hypot(all.evsi.se);
+    assert!(all.evsi.mean >= 0.0 && (all.evsi.mean - mixed).abs() < 4.0 * se, "EVSI {:?} against Σ P(label) value = {mixed} (se {se})", all.evsi);
+}
+
 #[test]
 fn a_decision_that_is_already_certain_has_no_value_of_information() {
     // θ ~ N(5, 0.1²): adopting is best for every prior sample, whatever the data say.
@@ -265,8 +288,24 @@ fn the_shape_measurement_is_worth_what_the_shape_effects_explain() {
     let options = |shape_measured| CrushOptions { shape_measured, ..Default::default() };
     let settings = Settings { outer: 200, min_ess: 50.0, seed: 31, truth: None, active: Some(4000), scored: 0 };
     let state = state_of(8000, true);
-    let run = |measured| preposterior(&state.knowledge, &CrushTest::new(&state, 0, 100, &options(measured)).unwrap(), settings).unwrap();
-    assert_eq!(run(true), run(false));
+    // Both tests' likelihoods against an independent sum: under sample k every particle is
+    // Weibull(m_k, e^μ_k), so ln p(s | k) = Σ_i [ln m_k + m_k (y_i − μ_k) − e^(m_k (y_i − μ_k))],
+    // y_i = ln s_i (up to the Jacobian, common to every k). (Before, the two tests were only
+    // compared with each other, and with one scale per sample they run the same code.)
+    let (measured, unmeasured) = (CrushTest::new(&state, 0, 100, &options(true)).unwrap(), CrushTest::new(&state, 0, 100, &options(false)).unwrap());
+    let mut rng = <ChaCha8Rng as rand::SeedableRng>::seed_from_u64(5);
+    let data = measured.simulate(3, &mut rng);
+    for k in [0, 1, 7, 1234, 7999] {
+        let s = &state.samples[k];
+        let (p, _) = state.forms[s.form].setup.params(0, &s.x, partlife::uq::setup::Mode::Joint);
+        let direct: f64 = data.iter().map(|&(_, y)| p.shape.ln() + p.shape * (y - p.mu) - (p.shape * (y - p.mu)).exp()).sum();
+        for (what, t) in [("measured", &measured), ("not measured", &unmeasured)] {
+            let ll = t.loglik(&data, k);
+            assert!((ll - direct).abs() < 1e-9 * direct.abs().max(1.0), "sample {k}, {what}: {ll} against the direct sum {direct}");
+        }
+    }
+    let run = |t: &CrushTest| preposterior(&state.knowledge, t, settings).unwrap();
+    assert_eq!(run(&measured), run(&unmeasured));
 
     let state = main_study_state(8000);
     let shape = state.forms.iter().position(|f| f.setup.materials[0].model.fit.linear() == [Effect::Roundness, Effect::Sphericity]).expect("the main study has the shape model") as u32;

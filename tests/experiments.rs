@@ -66,6 +66,17 @@ fn experiments_study_writes_ranked_plans_allocation_summary_and_figure() {
     let gen4_100 = (0..test.len()).find(|&i| names[i] == "crush Gen 4" && size[i] == 100.0).unwrap();
     let line = summary.lines().find(|l| l.starts_with("With 100 more Gen 4 crush tests (today 45)")).unwrap_or_else(|| panic!("no naming sentence in\n{summary}"));
     assert!(line.contains(&format!("in {:.2}", verdict[gen4_100])) || line.contains(&format!("in {:.3}", verdict[gen4_100])), "{line} vs {}", verdict[gen4_100]);
+    // Every allocation step whose reweighting degenerated (median ESS < 100 or ≥ 5 % of the
+    // simulated datasets collapsed, in allocation.csv) is flagged in the summary, and only those.
+    let (ess, collapsed) = (partlife::io::col_f64(&alloc, &a, "median_ess").unwrap(), partlife::io::col_f64(&alloc, &a, "collapsed").unwrap());
+    let outer: f64 = s.read("studies/experiments.toml").lines().find_map(|l| l.trim().strip_prefix("outer = ").and_then(|v| v.split_whitespace().next()?.parse().ok())).expect("outer in the study");
+    for k in 0..ess.len() {
+        let weak = ess[k] < 100.0 || collapsed[k] >= 0.05 * outer;
+        assert_eq!(summary.contains(&format!("step {} (median ESS", k + 1)), weak, "step {}: median ESS {}, collapsed {}", k + 1, ess[k], collapsed[k]);
+    }
+    // Negative EVSI estimates are explained.
+    let evsi = partlife::io::col_f64(&df, &p, "evsi").unwrap();
+    assert_eq!(evsi.iter().any(|v| *v < 0.0), summary.contains("EVSI estimates are negative"), "{summary}");
     // The allocation spends within the budget, each step more.
     let spent = partlife::io::col_f64(&alloc, &a, "cost").unwrap();
     assert!(spent.windows(2).all(|w| w[1] > w[0]) && spent.last().is_none_or(|c| *c <= 15000.0), "{spent:?}");

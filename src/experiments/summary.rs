@@ -3,7 +3,18 @@
 use super::plan::{Allocated, Evaluated, first_step};
 use super::preposterior::Scored;
 use super::state::State;
-use super::study::ExperimentsStudy;
+use super::preposterior::Metrics;
+use super::study::{ExperimentsStudy, Objective};
+
+/// A reweighted evaluation is reliable with a median effective sample size of at least this…
+pub const RELIABLE_ESS: f64 = 100.0;
+/// …and fewer than this share of its simulated datasets collapsed.
+pub const RELIABLE_COLLAPSED: f64 = 0.05;
+
+/// Whether an evaluation's reweighting degenerated ([`RELIABLE_ESS`], [`RELIABLE_COLLAPSED`]).
+pub fn unreliable(m: &Metrics, outer: usize) -> bool {
+    m.median_ess < RELIABLE_ESS || m.collapsed as f64 >= RELIABLE_COLLAPSED * outer as f64
+}
 
 /// The summary and the headline lines printed by the CLI.
 pub struct Summary {
@@ -146,6 +157,16 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
                     }
                     let total = steps.last().map_or(0.0, |e| e.cost);
                     md.push_str(&format!("\nThe plan spends {total:.0} of {} {cur}; the rule (largest gain per cost, stop below two standard errors) is stated in `partlife::experiments::run`.\n", s.budget.total));
+                    // Steps whose reweighting degenerated: their numbers are not reliable.
+                    let weak: Vec<String> = steps
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, e)| unreliable(&e.metrics, s.analysis.outer))
+                        .map(|(k, e)| format!("step {} (median ESS {:.1}, {} of {} simulated datasets collapsed)", k + 1, e.metrics.median_ess, e.metrics.collapsed, s.analysis.outer))
+                        .collect();
+                    if !weak.is_empty() {
+                        md.push_str(&format!("\n**Not reliable:** {} — below a median effective sample size of {RELIABLE_ESS} or with {:.0} % or more of the reweighted posteriors collapsed, importance reweighting of the prior samples no longer represents the posterior after so many tests, and these steps' objectives, P(correct choice) and weights may be far off. The allocation up to the last reliable step stands; beyond it, rerun the study once those tests are done.\n", weak.join("; "), 100.0 * RELIABLE_COLLAPSED));
+                    }
                 }
                 Allocated::Exhaustive { plans, chosen } => {
                     md.push_str(&head("rank"));
@@ -175,6 +196,37 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         md.push_str(&format!(
             "\nNo candidate's expected value of information exceeds 1 % of the loss (largest upper 2-se bound {:.3e} {cur}): the choice between the particles is already settled by today's knowledge ({:.3}), and the tests are worth running for what they teach about the lifetime itself — the damage model and the breakage bands — rather than for the choice.\n",
             max_evsi, prior.prior_pcs
+        ));
+    }
+    // An objective that ranks by what the tests teach about the lifetime while the choice
+    // itself is still open: say so, with the candidate that serves the choice best.
+    let clear_evsi = |e: &Evaluated| e.metrics.evsi.mean > 2.0 * e.metrics.evsi.se && e.metrics.evsi.mean > 0.01 * s.decision.loss;
+    if matches!(s.decision.objective, Objective::BandWidth | Objective::DamageModel)
+        && let Some(k) = (0..order.len()).filter(|&r| clear_evsi(&singles[order[r]].1)).max_by(|&a, &b| {
+            let v = |r: usize| singles[order[r]].1.metrics.evsi.mean / singles[order[r]].1.cost;
+            v(a).total_cmp(&v(b))
+        })
+    {
+        let e = &singles[order[k]].1;
+        md.push_str(&format!(
+            "\n**The objective does not fit the decision:** the choice between the particles is not settled today (P(correct choice) {:.3}) and {} ({} {}) has a clearly positive expected value of information ({} {cur}), yet ranks {} by {}. That objective ranks what the tests teach about the lifetime; to rank by what they are worth for the choice, set `objective = \"evsi\"` (or \"pcs\").\n",
+            prior.prior_pcs,
+            e.names[0],
+            e.sizes[0],
+            s.candidate[singles[order[k]].0.0].test.unit(),
+            pm(e.metrics.evsi.mean, e.metrics.evsi.se),
+            k + 1,
+            s.decision.objective.describe()
+        ));
+    }
+    // Negative EVSI estimates: noise, or a sign that the reweighting failed.
+    let negative: Vec<&Evaluated> = singles.iter().map(|(_, e)| e).filter(|e| e.metrics.evsi.mean < 0.0).collect();
+    if !negative.is_empty() {
+        let beyond: Vec<String> = negative.iter().filter(|e| e.metrics.evsi.mean < -2.0 * e.metrics.evsi.se).map(|e| format!("{} ({})", e.names[0], e.sizes[0])).collect();
+        md.push_str(&format!(
+            "\n{} of the candidates' EVSI estimates are negative. The EVSI of an experiment is never negative in expectation (the truths are drawn from the same prior the posterior is reweighted from), so a small negative estimate is Monte Carlo noise{}.\n",
+            negative.len(),
+            if beyond.is_empty() { ": every one lies within two standard errors of 0".to_string() } else { format!("; beyond two standard errors — {} — it is not noise but a sign that the reweighting did not represent the posterior (see `median_ess` and `collapsed` in `plans.csv`), and those rows are not reliable", beyond.join(", ")) }
         ));
     }
     md.push_str(&naming_section(s, state, singles));

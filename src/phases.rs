@@ -112,8 +112,8 @@ impl Basis {
 }
 
 /// What converts a table's mole or mass fractions to volume fractions: per phase, its molar
-/// volume (m³/mol, as the table counts moles) or its density (kg/m³), and where the values come
-/// from.
+/// volume (m³/mol, as the table counts moles) or its density (kg/m³), and the study key that
+/// declared them (the study requires their source next to them).
 #[derive(Debug, Clone, PartialEq)]
 pub struct VolumeConversion {
     /// Per phase name, q_i: the molar volume (mole basis) or the density (mass basis).
@@ -302,9 +302,8 @@ impl PhaseTable {
     /// fractions). Refused, naming what to declare, when the table needs a conversion and none
     /// is given, when a phase with a non-zero fraction lacks its value, or when a value is not
     /// finite and positive.
-    /// `study` is the study file that declares the table (for messages).
-    pub fn to_volume(&self, study: &str, conversion: Option<&VolumeConversion>) -> Result<PhaseTable> {
-        let file = study;
+    /// `file` is the study file that declares the table (for messages).
+    pub fn to_volume(&self, file: &str, conversion: Option<&VolumeConversion>) -> Result<PhaseTable> {
         let (what, unit, example) = match self.basis {
             Basis::Volume => return Ok(self.clone()),
             Basis::Mole => ("molar volume", "m³ per mole as the table counts moles", "molar_volume_m3_mol"),

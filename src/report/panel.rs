@@ -77,6 +77,43 @@ pub struct Panel {
     pub legend: Option<SeriesLabelPosition>,
 }
 
+/// The parts of polyline `points` inside the rectangle `x` × `y` (Liang–Barsky per segment;
+/// consecutive visible segments joined), each a polyline of its own.
+pub fn clip_polyline(points: &[(f64, f64)], x: (f64, f64), y: (f64, f64)) -> Vec<Vec<(f64, f64)>> {
+    let mut out: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut open = false;
+    for w in points.windows(2) {
+        let ((x0, y0), (x1, y1)) = (w[0], w[1]);
+        let (dx, dy) = (x1 - x0, y1 - y0);
+        let (mut t0, mut t1) = (0.0f64, 1.0f64);
+        let mut visible = true;
+        for (p, q) in [(-dx, x0 - x.0), (dx, x.1 - x0), (-dy, y0 - y.0), (dy, y.1 - y0)] {
+            if p == 0.0 {
+                visible &= q >= 0.0;
+            } else if p < 0.0 {
+                t0 = t0.max(q / p);
+            } else {
+                t1 = t1.min(q / p);
+            }
+        }
+        if !visible || t0 > t1 || !(t0.is_finite() && t1.is_finite()) {
+            open = false;
+            continue;
+        }
+        let (a, b) = ((x0 + t0 * dx, y0 + t0 * dy), (x0 + t1 * dx, y0 + t1 * dy));
+        if open && t0 == 0.0 {
+            out.last_mut().expect("an open piece").push(b);
+        } else {
+            out.push(vec![a, b]);
+        }
+        open = t1 == 1.0;
+    }
+    if points.len() == 1 && points[0].0 >= x.0 && points[0].0 <= x.1 && points[0].1 >= y.0 && points[0].1 <= y.1 {
+        out.push(points.to_vec());
+    }
+    out
+}
+
 /// Range of values padded by a fraction on each side (and never empty).
 pub fn padded(values: impl IntoIterator<Item = f64>, lo_frac: f64, hi_frac: f64) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -203,7 +240,14 @@ fn draw_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, p: &Panel, name: &str) 
         match &s.kind {
             Kind::Line(w) => {
                 let style = c.stroke_width(pt(*w));
-                let a = chart.draw_series(LineSeries::new(s.points.iter().cloned(), style)).map_err(&err)?;
+                // Clipped to the axes as lines, so that a line leaving them keeps its slope
+                // (coordinates clamped one by one would bend it).
+                let pieces = clip_polyline(&s.points, p.x_range, p.y_range);
+                for piece in pieces.iter().skip(1) {
+                    chart.draw_series(LineSeries::new(piece.iter().cloned(), style)).map_err(&err)?;
+                }
+                // The first piece carries the legend entry (an empty one when nothing shows).
+                let a = chart.draw_series(LineSeries::new(pieces.first().cloned().unwrap_or_default(), style)).map_err(&err)?;
                 if let Some(l) = &s.label {
                     a.label(l.as_str()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + pt(12.0) as i32, y)], style));
                 }
@@ -421,4 +465,23 @@ pub fn figure_legend_below(name: &str, width_cm: f64, aspect: f64, panels: &[(Pa
         root.present().map_err(&err)?;
     }
     Ok((encode(name, &svg, size, width_cm)?, hidden))
+}
+
+#[cfg(test)]
+mod clip_tests {
+    use super::clip_polyline;
+
+    #[test]
+    fn a_clipped_line_keeps_its_slope() {
+        // Slope 38 from (−1, −38) to (2, 76) through the box [0, 1] × [−10, 10]: it enters at
+        // the left edge (0, 0) and leaves at the top (10/38, 10).
+        let pieces = clip_polyline(&[(-1.0, -38.0), (2.0, 76.0)], (0.0, 1.0), (-10.0, 10.0));
+        assert_eq!(pieces.len(), 1);
+        let [(xa, ya), (xb, yb)] = pieces[0][..] else { panic!("{pieces:?}") };
+        assert!(((yb - ya) / (xb - xa) - 38.0).abs() < 1e-9 && xa.abs() < 1e-12 && ya.abs() < 1e-9 && (yb - 10.0).abs() < 1e-9, "{pieces:?}");
+        // Inside: unchanged and joined; leaving and coming back: two pieces; outside: none.
+        assert_eq!(clip_polyline(&[(0.1, 0.0), (0.5, 1.0), (0.9, 0.0)], (0.0, 1.0), (-1.0, 2.0)), vec![vec![(0.1, 0.0), (0.5, 1.0), (0.9, 0.0)]]);
+        assert_eq!(clip_polyline(&[(0.1, 0.0), (0.5, 5.0), (0.9, 0.0)], (0.0, 1.0), (-1.0, 2.0)).len(), 2);
+        assert!(clip_polyline(&[(2.0, 0.0), (3.0, 0.0)], (0.0, 1.0), (-1.0, 2.0)).is_empty());
+    }
 }

@@ -42,6 +42,40 @@ fn experiments_study_writes_ranked_plans_allocation_summary_and_figure() {
     let names = partlife::io::col_str(&df, &p, "candidate").unwrap();
     let size = partlife::io::col_f64(&df, &p, "size").unwrap();
     assert_eq!(names[best], "repeated impacts Gen 4");
+    // The band objective is floor-free: the narrowing of the 90 % bands of P_break itself at the
+    // last horizon, summed over the materials — prior widths (prior.csv) minus the expected
+    // posterior widths (plans.csv), in probability, not decades of a floored log10 P.
+    let q = dir.join("prior.csv");
+    let prior = partlife::io::read_table(&q).unwrap();
+    let (quantity, prior_w) = (partlife::io::col_str(&prior, &q, "quantity").unwrap(), partlife::io::col_f64(&prior, &q, "prior_width90").unwrap());
+    let prior_of = |name: &str| prior_w[quantity.iter().position(|x| x == name).unwrap_or_else(|| panic!("no {name} in prior.csv: {quantity:?}"))];
+    let (wg, wb) = (partlife::io::col_f64(&df, &p, "width90_p_gen4_10yr").unwrap(), partlife::io::col_f64(&df, &p, "width90_p_bl1630_10yr").unwrap());
+    for i in 0..obj.len() {
+        let expected = prior_of("p_gen4_10yr") - wg[i] + prior_of("p_bl1630_10yr") - wb[i];
+        assert!((obj[i] - expected).abs() < 1e-9, "{} {}: objective {} vs Σ prior − posterior width of P {expected}", names[i], size[i], obj[i]);
+        assert!((0.0..=1.0).contains(&wg[i]) && (0.0..=1.0).contains(&wb[i]), "a band of a probability is at most 1 wide: {} {}", wg[i], wb[i]);
+    }
+    // The ranking the floored log10 P bands would give is shown at three floors, each rank
+    // following its narrowing per cost, and the summary says whether the floor moves it.
+    let f = dir.join("floor_sensitivity.csv");
+    let floors = partlife::io::read_table(&f).unwrap();
+    let mut ranks = Vec::new();
+    for tag in ["1e-9", "1e-12", "1e-15"] {
+        let n = partlife::io::col_f64(&floors, &f, &format!("narrowing_log10_p_floor_{tag}")).unwrap();
+        let r = partlife::io::col_f64(&floors, &f, &format!("rank_floor_{tag}")).unwrap();
+        let fc = partlife::io::col_f64(&floors, &f, "cost").unwrap();
+        for a in 0..r.len() {
+            for b in 0..r.len() {
+                if n[a] / fc[a] > n[b] / fc[b] {
+                    assert!(r[a] < r[b], "floor {tag}: row {a} narrows more per cost than row {b} but ranks {} vs {}", r[a], r[b]);
+                }
+            }
+        }
+        ranks.push(r);
+    }
+    let same = ranks.windows(2).all(|w| w[0] == w[1]);
+    assert_eq!(summary_has(&s, "come in the same order at every floor"), same);
+    assert_eq!(summary_has(&s, "the order changes with the floor"), !same);
     // The summary's headline sentence states the first allocation step's numbers.
     let a = dir.join("allocation.csv");
     let alloc = partlife::io::read_table(&a).unwrap();
@@ -80,6 +114,11 @@ fn experiments_study_writes_ranked_plans_allocation_summary_and_figure() {
     // The allocation spends within the budget, each step more.
     let spent = partlife::io::col_f64(&alloc, &a, "cost").unwrap();
     assert!(spent.windows(2).all(|w| w[1] > w[0]) && spent.last().is_none_or(|c| *c <= 15000.0), "{spent:?}");
+}
+
+/// Whether the experiments summary contains `text`.
+fn summary_has(s: &Scratch, text: &str) -> bool {
+    s.read("reports/experiments/summary.md").contains(text)
 }
 
 #[test]

@@ -145,6 +145,7 @@ impl Knowledge {
         let mut mean = vec![0.0; self.quantities];
         let mut var = vec![0.0; self.quantities];
         let mut width90 = vec![0.0; self.quantities];
+        let mut band90 = vec![(0.0, 0.0); self.quantities];
         for j in 0..self.quantities {
             let v = |k: usize| self.values[k * self.quantities + j];
             let m: f64 = w.iter().enumerate().map(|(k, wk)| wk * v(k)).sum();
@@ -153,9 +154,10 @@ impl Knowledge {
             let sorted = self.order[j].iter().map(|&k| k as usize).filter(|&k| w[k] > 0.0).map(|k| (v(k), w[k]));
             let q = crate::stats::weighted_quantiles_sorted(sorted, &[0.05, 0.95]);
             width90[j] = q[1] - q[0];
+            band90[j] = (q[0], q[1]);
         }
         let label_weight = |kind: usize, label: u32| w.iter().enumerate().filter(|(k, _)| self.labels[k * self.label_kinds + kind] == label).map(|(_, wk)| wk).sum();
-        Posterior { expected_loss, mean, var, width90, label_weights: (0..self.label_kinds).map(|kind| (0..=self.labels.iter().copied().max().unwrap_or(0)).map(|l| label_weight(kind, l)).collect()).collect() }
+        Posterior { expected_loss, mean, var, width90, band90, label_weights: (0..self.label_kinds).map(|kind| (0..=self.labels.iter().copied().max().unwrap_or(0)).map(|l| label_weight(kind, l)).collect()).collect() }
     }
 }
 
@@ -181,6 +183,10 @@ pub struct Posterior {
     pub var: Vec<f64>,
     /// Width of the central 90 % band of each quantity.
     pub width90: Vec<f64>,
+    /// The band itself (its 5 % and 95 % weighted quantiles, inverse-CDF definition: each is a
+    /// sample's value), so that the width of any non-decreasing map of the quantity — log10 P
+    /// floored at some P, say — is the map's difference at the two ends, exactly.
+    pub band90: Vec<(f64, f64)>,
     /// Weight of each label, per label kind.
     pub label_weights: Vec<Vec<f64>>,
 }
@@ -321,6 +327,16 @@ pub struct Metrics {
     pub score: Option<Scored>,
     /// Every outer draw.
     pub draws: Vec<Draw>,
+}
+
+impl Metrics {
+    /// The expected value over the outer draws of `width(band)` for quantity q's posterior
+    /// 90 % band, with its Monte Carlo error, and the prior's: for a non-decreasing map g of the
+    /// quantity, `width = |(lo, hi)| g(hi) − g(lo)` is the width of g's band, exactly
+    /// ([`Posterior::band90`]).
+    pub fn mapped_width90(&self, q: usize, f: &dyn Fn((f64, f64)) -> f64) -> (Estimate, f64) {
+        (Estimate::of(&self.draws.iter().map(|d| f(d.posterior.band90[q])).collect::<Vec<_>>()), f(self.prior.band90[q]))
+    }
 }
 
 /// The experiment's score ([`Experiment::score`]) over the outer draws that computed it, with

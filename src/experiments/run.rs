@@ -47,12 +47,35 @@ pub fn objective(o: Objective, state: &State, m: &Metrics) -> (f64, f64) {
         Objective::Evsi => (m.evsi.mean, m.evsi.se),
         Objective::Pcs => (m.pcs.mean - m.prior_pcs, m.pcs.se),
         Objective::DamageModel => (m.true_label_weight[0].mean - m.prior_true_label_weight[0], m.true_label_weight[0].se),
-        Objective::BandWidth => {
-            let h = state.years.len() - 1;
-            let q = [state.log10_p_quantity(0, h), state.log10_p_quantity(1, h)];
-            (q.iter().map(|&q| m.prior.width90[q] - m.width90[q].mean).sum(), q.iter().map(|&q| m.width90[q].se.powi(2)).sum::<f64>().sqrt())
-        }
+        Objective::BandWidth => band_narrowing(state, m, &|b| b.1 - b.0),
     }
+}
+
+/// The narrowing of the 90 % bands of P_break at the last horizon, summed over both materials,
+/// with its Monte Carlo error, for the band width `width` (P itself: `hi − lo`; log10 P above a
+/// floor: [`super::state::log_width`]). The two materials' widths come from the same simulated
+/// datasets, so the error is that of the per-draw sum.
+pub fn band_narrowing(state: &State, m: &Metrics, width: &dyn Fn((f64, f64)) -> f64) -> (f64, f64) {
+    let h = state.years.len() - 1;
+    let q = [state.p_quantity(0, h), state.p_quantity(1, h)];
+    let prior: f64 = q.iter().map(|&q| width(m.prior.band90[q])).sum();
+    let per_draw: Vec<f64> = m.draws.iter().map(|d| q.iter().map(|&q| width(d.posterior.band90[q])).sum()).collect();
+    let e = super::preposterior::Estimate::of(&per_draw);
+    (prior - e.mean, e.se)
+}
+
+/// For each single candidate (in `singles` order), the band narrowing of log10 P_break at each
+/// floor of [`super::state::LOG_FLOORS`] (decades) and the candidates' ranks by it per cost
+/// (1 = best; ties share their average rank).
+pub fn floor_rankings(state: &State, singles: &[((usize, usize), Evaluated)]) -> Vec<(f64, Vec<(f64, f64)>, Vec<f64>)> {
+    super::state::LOG_FLOORS
+        .iter()
+        .map(|&floor| {
+            let narrowing: Vec<(f64, f64)> = singles.iter().map(|(_, e)| band_narrowing(state, &e.metrics, &|b| super::state::log_width(b, floor))).collect();
+            let rank = crate::stats::ranks(&narrowing.iter().zip(singles).map(|(n, (_, e))| -n.0 / e.cost).collect::<Vec<_>>());
+            (floor, narrowing, rank)
+        })
+        .collect()
 }
 
 /// The main study the experiments study builds on, validated (its path, study, material keys
@@ -234,11 +257,12 @@ fn greedy(s: &ExperimentsStudy, singles: &[((usize, usize), Evaluated)], evaluat
 
 /// `plans.csv` (every candidate at every size, ranked), `allocation.csv` (the greedy steps, or
 /// every affordable plan by decreasing objective with the recommended one marked),
-/// `prior.csv` (the state of knowledge's prior metrics).
+/// `prior.csv` (the state of knowledge's prior metrics), `floor_sensitivity.csv` (the ranking
+/// by the log10 P bands at each floor of [`super::state::LOG_FLOORS`]).
 fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: &[String], singles: &[((usize, usize), Evaluated)], allocated: &Allocated) -> Result<()> {
     let h = state.years.len() - 1;
     let last = state.years[h];
-    let qs = [state.log10_p_quantity(0, h), state.log10_p_quantity(1, h)];
+    let qs = [state.p_quantity(0, h), state.p_quantity(1, h)];
     let worse = state.worse_quantity();
     // Rank 1 = the largest objective per cost (ties share their average rank).
     let rank = crate::stats::ranks(&singles.iter().map(|(_, e)| -e.objective.0 / e.cost).collect::<Vec<_>>());
@@ -257,8 +281,8 @@ fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: 
             fcol("evsi_per_cost", col(&|e| e.metrics.evsi.mean / e.cost, rows)),
         ];
         for (j, &q) in qs.iter().enumerate() {
-            c.push(fcol(&format!("width90_log10_p_{}_{last}yr", keys[j]), col(&|e| e.metrics.width90[q].mean, rows)));
-            c.push(fcol(&format!("width90_log10_p_{}_{last}yr_se", keys[j]), col(&|e| e.metrics.width90[q].se, rows)));
+            c.push(fcol(&format!("width90_p_{}_{last}yr", keys[j]), col(&|e| e.metrics.width90[q].mean, rows)));
+            c.push(fcol(&format!("width90_p_{}_{last}yr_se", keys[j]), col(&|e| e.metrics.width90[q].se, rows)));
         }
         c.extend([
             fcol("true_damage_model_weight", col(&|e| e.metrics.true_label_weight[0].mean, rows)),
@@ -316,6 +340,16 @@ fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: 
     ];
     cols.push(fcol("prior_pcs", vec![p.prior_pcs; state.quantity_names.len()]));
     dir.write_table("prior", &mut table(cols)?)?;
+    // The ranking the log10 P bands would give, at each floor (state module docs): whether the
+    // floor moves it is shown, and only the floor-free objective ranks the plans.
+    let mut cols = vec![scol("candidate", singles.iter().map(|((i, _), _)| s.candidate[*i].name.clone()).collect()), ucol("size", singles.iter().map(|(_, e)| e.sizes[0]).collect()), fcol("cost", singles.iter().map(|(_, e)| e.cost).collect())];
+    for (floor, narrowing, rank) in floor_rankings(state, singles) {
+        let tag = format!("{floor:e}");
+        cols.push(fcol(&format!("narrowing_log10_p_floor_{tag}"), narrowing.iter().map(|n| n.0).collect()));
+        cols.push(fcol(&format!("narrowing_log10_p_floor_{tag}_se"), narrowing.iter().map(|n| n.1).collect()));
+        cols.push(fcol(&format!("rank_floor_{tag}"), rank));
+    }
+    dir.write_table("floor_sensitivity", &mut table(cols)?)?;
     let mut t = table(vec![
         scol("key", keys.to_vec()),
         scol("label", state.forms[0].setup.materials.iter().map(|m| m.model.label.clone()).collect()),

@@ -8,10 +8,20 @@
 //!
 //! The decision is which particle to choose for a plant: action 0 = the candidate, 1 = the
 //! reference. Choosing the particle that breaks more at the decision horizon costs the declared
-//! loss L; a tie costs nothing. The quantities are log10 P_break per material and horizon
-//! (floored at [`P_FLOOR`]), ln η and ln V, each material's Weibull modulus m, and
-//! the indicator that the candidate breaks more (its posterior mean is the posterior
-//! P(candidate worse)); the labels are D and M.
+//! loss L; a tie costs nothing. The quantities are P_break itself per material and horizon,
+//! ln η and ln V, each material's Weibull modulus m, and the indicator that the candidate breaks
+//! more (its posterior mean is the posterior P(candidate worse)); the labels are D and M.
+//!
+//! # Why P and not log10 P
+//!
+//! Vogel–Peukert's threshold gives P = 0 exactly for many samples, and a band of log10 P then
+//! reaches −∞: its width exists only above a floor, and the floor, not the data, sets how much
+//! a test "narrows" it (a review found the shipped ranking of plans moved with it). Bands of P
+//! itself need no floor: the 90 % band of P_break is a probability interval whose lower end may
+//! be 0. The log-band widths at the floors [`LOG_FLOORS`] are still derived, exactly, from the
+//! same posterior quantiles (a weighted quantile commutes with the non-decreasing map
+//! P ↦ log10 max(P, floor)), so the summary can show whether a ranking by them depends on the
+//! floor.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -24,10 +34,14 @@ use crate::stats::Categorical;
 use crate::uq::run::Weighed;
 use crate::uq::setup::Mode;
 
-/// P_break below which the quantities log10 P are floored: Vogel–Peukert's threshold gives
-/// P = 0 exactly for many samples, and a band reaching log10 0 = −∞ would have no width to
-/// compare; 10⁻¹² over a plant's horizon is "no breakage" for every purpose here.
-pub const P_FLOOR: f64 = 1e-12;
+/// Floors of P_break at which the widths of the log10 P bands are shown, to show whether a
+/// ranking by them depends on the floor (module docs).
+pub const LOG_FLOORS: [f64; 3] = [1e-9, 1e-12, 1e-15];
+
+/// Width in decades of the band [lo, hi] of P_break on a log scale, with P floored at `floor`.
+pub fn log_width(band: (f64, f64), floor: f64) -> f64 {
+    band.1.max(floor).log10() - band.0.max(floor).log10()
+}
 
 /// One sample of the state of knowledge.
 #[derive(Debug, Clone, PartialEq)]
@@ -98,7 +112,7 @@ impl State {
             })
             .collect::<Result<_>>()?;
         let keys = [first.materials[0].model.key.clone(), first.materials[1].model.key.clone()];
-        let mut quantity_names: Vec<String> = (0..2).flat_map(|j| years.iter().map(move |y| (j, y))).map(|(j, y)| format!("log10_p_{}_{y}yr", keys[j])).collect();
+        let mut quantity_names: Vec<String> = (0..2).flat_map(|j| years.iter().map(move |y| (j, y))).map(|(j, y)| format!("p_{}_{y}yr", keys[j])).collect();
         quantity_names.extend(["ln_energy_fraction".to_string(), "ln_velocity".to_string(), format!("weibull_m_{}", keys[0]), format!("weibull_m_{}", keys[1])]);
         quantity_names.push(format!("{}_worse_{}yr", keys[0], years[horizon]));
         let q = quantity_names.len();
@@ -108,7 +122,7 @@ impl State {
         for s in &samples {
             let (a, b) = (s.p[horizon], s.p[h_n + horizon]);
             loss_v.extend([if a > b { loss } else { 0.0 }, if b > a { loss } else { 0.0 }]);
-            values.extend(s.p.iter().map(|p| p.max(P_FLOOR).log10()));
+            values.extend(s.p.iter().copied());
             let st = &forms[s.form].setup;
             values.extend([s.x[st.shared(0)].ln(), s.x[st.shared(1)].ln(), st.params(0, &s.x, Mode::Joint).0.shape, st.params(1, &s.x, Mode::Joint).0.shape]);
             values.push(if a > b { 1.0 } else { 0.0 });
@@ -133,8 +147,31 @@ impl State {
         2 * self.years.len() + 2 + j
     }
 
-    /// Index of the quantity log10 P_break of material j at horizon h.
-    pub fn log10_p_quantity(&self, j: usize, h: usize) -> usize {
+    /// Index of the quantity P_break of material j at horizon h.
+    pub fn p_quantity(&self, j: usize, h: usize) -> usize {
         j * self.years.len() + h
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::preposterior::Knowledge;
+    use super::*;
+
+    /// The log-band width at a floor derived from the band of P equals the width of the band of
+    /// log10 max(P, floor) computed directly, for weights and values with many exact zeros.
+    #[test]
+    fn log_widths_from_the_band_of_p_are_exact() {
+        let k = 200;
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let p: Vec<f64> = (0..k).map(|_| if rng.random::<f64>() < 0.4 { 0.0 } else { 10f64.powf(-20.0 * rng.random::<f64>()) }).collect();
+        let w: Vec<f64> = (0..k).map(|_| rng.random::<f64>()).collect();
+        for floor in LOG_FLOORS {
+            let values: Vec<f64> = p.iter().flat_map(|&x| [x, x.max(floor).log10()]).collect();
+            let kn = Knowledge::new(w.clone(), 1, vec![0.0; k], 2, values, 0, vec![]).unwrap();
+            let post = kn.summarise(&kn.weights);
+            assert_eq!(log_width(post.band90[0], floor), post.width90[1], "floor {floor}");
+            assert!(post.band90[0].0 == 0.0 && post.width90[0] == post.band90[0].1, "{:?}", post.band90[0]);
+        }
     }
 }

@@ -80,8 +80,8 @@ pub enum Objective {
     Pcs,
     /// Gain in the expected posterior weight of the true damage model.
     DamageModel,
-    /// Reduction of the expected 90 % band width of log10 P_break at the last horizon, summed
-    /// over both materials (decades).
+    /// Reduction of the expected 90 % band width of P_break at the last horizon, summed over
+    /// both materials (a probability; no floor: see [`super::state`]).
     BandWidth,
 }
 
@@ -92,7 +92,7 @@ impl Objective {
             Objective::Evsi => "expected value of sample information",
             Objective::Pcs => "gain in the probability of choosing the better particle",
             Objective::DamageModel => "gain in the expected posterior weight of the true damage model",
-            Objective::BandWidth => "narrowing of the 90 % bands of log10 P_break at the last horizon (decades, both materials)",
+            Objective::BandWidth => "narrowing of the 90 % bands of P_break at the last horizon (probability, both materials summed)",
         }
     }
 }

@@ -53,15 +53,58 @@ fn pm(v: f64, se: f64) -> String {
     }
 }
 
+/// A probability to three significant figures ("0", "1.23e-5", "0.0412", "0.871").
+fn prob(p: f64) -> String {
+    if p == 0.0 {
+        "0".into()
+    } else if p.abs() < 1e-3 {
+        format!("{p:.2e}")
+    } else {
+        format!("{:.*}", (2.0 - p.abs().log10().floor()).clamp(0.0, 6.0) as usize, p)
+    }
+}
+
+/// Whether a ranking by the bands of log10 P would depend on the floor put under P, and the
+/// ranking that does not (`order`: the singles by the study's objective per cost, best first).
+fn floor_section(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), Evaluated)], order: &[usize]) -> String {
+    let rankings = super::run::floor_rankings(state, singles);
+    let name = |i: usize| format!("{} ({} {})", singles[i].1.names[0], singles[i].1.sizes[0], s.candidate[singles[i].0.0].test.unit());
+    let leader = |rank: &[f64]| (0..rank.len()).min_by(|&a, &b| rank[a].total_cmp(&rank[b])).unwrap_or(0);
+    let floors: Vec<String> = rankings.iter().map(|r| crate::report::canvas::power_of_ten(&r.0)).collect();
+    let mut md = format!("\n### Would a floor under P decide the ranking?\n\nVogel–Peukert gives P_break = 0 exactly for many samples, where log10 P is −∞; the 90 % bands of log10 P have a width only above a floor. Ranked instead by how much they narrow the bands of log10 P_break over {} (both materials, per cost), with P floored at {} (`floor_sensitivity.csv`), ", years(state.years[state.years.len() - 1]), floors.join(", "));
+    let same = rankings.windows(2).all(|w| w[0].2 == w[1].2);
+    let leaders: Vec<usize> = rankings.iter().map(|r| leader(&r.2)).collect();
+    if same {
+        md.push_str(&format!("the {} candidates come in the same order at every floor, led by {}.", singles.len(), name(leaders[0])));
+    } else {
+        let moved = (0..singles.len()).filter(|&i| rankings.iter().any(|r| r.2[i] != rankings[0].2[i])).count();
+        md.push_str(&format!(
+            "the order changes with the floor: {moved} of the {} candidates change rank, and the leader is {}. The floor, not the data, sets that ranking, so it is not used here.",
+            singles.len(),
+            if leaders.iter().all(|&l| l == leaders[0]) { format!("{} at every floor", name(leaders[0])) } else { rankings.iter().zip(&leaders).map(|(r, &l)| format!("{} at {}", name(l), crate::report::canvas::power_of_ten(&r.0))).collect::<Vec<_>>().join(", ") }
+        ));
+    }
+    if s.decision.objective == Objective::BandWidth {
+        let first = order.first().copied().unwrap_or(0);
+        md.push_str(&format!(" The plans are ranked by the bands of P itself, which need no floor{}.", if leaders.iter().all(|&l| l == first) { format!(", and lead with the same candidate, {}", name(first)) } else { format!("; that ranking is led by {}", name(first)) }));
+    }
+    md.push('\n');
+    md
+}
+
 /// The summary of the study.
 pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), Evaluated)], allocated: &Allocated) -> Summary {
     let cur = &s.decision.currency;
     let labels: Vec<String> = state.forms[0].setup.materials.iter().map(|m| m.model.label.clone()).collect();
     let h = state.years.len() - 1;
     let last = state.years[h];
-    let qs = [state.log10_p_quantity(0, h), state.log10_p_quantity(1, h)];
+    let qs = [state.p_quantity(0, h), state.p_quantity(1, h)];
     let worse = state.worse_quantity();
     let prior = &singles[0].1.metrics;
+    // Share of the (active) prior samples with no breakage at all at the last horizon.
+    let active = &state.samples[..s.analysis.samples.min(state.samples.len())];
+    let zero = |j: usize| active.iter().filter(|x| x.p[j * state.years.len() + h] == 0.0).count() as f64 / active.len().max(1) as f64;
+    let band = |j: usize| prior.prior.band90[qs[j]];
     let mut md = format!("# Which experiment next? {} against {}\n\n", labels[0], labels[1]);
     md.push_str(&format!(
         "Prior: the state of knowledge of the main study `{}` ({} samples and a reserve of {}: strength models with their stacking weights, damage models {} with prior weights {}). Decision: which particle to choose for a plant over {}, a wrong choice costing {} {cur}. Each candidate and size: {} simulated datasets (preposterior analysis by importance reweighting; `partlife::experiments`).{}\n\n",
@@ -77,29 +120,33 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
     ));
     md.push_str("## Today\n\n");
     md.push_str(&format!(
-        "P({} breaks more than {} in {}) = {:.3}; choosing the better particle today is right with probability {:.3}. The 90 % bands of log10 P_break over {} span {:.1} decades for {} and {:.1} for {} (P floored at 10⁻¹²: Vogel–Peukert's threshold gives P = 0 for many samples). The prior weight of the true damage model is {:.3} on average.\n\n",
+        "P({} breaks more than {} in {}) = {:.3}; choosing the better particle today is right with probability {:.3}. The 90 % band of P_break over {} is [{}, {}] for {} and [{}, {}] for {}; P_break is exactly 0 (no breakage: Vogel–Peukert below its threshold) in {:.0} % and {:.0} % of the samples. The prior weight of the true damage model is {:.3} on average.\n\n",
         labels[0],
         labels[1],
         years(state.years[state.horizon]),
         prior.prior.mean[worse],
         prior.prior_pcs,
         years(last),
-        prior.prior.width90[qs[0]],
+        prob(band(0).0),
+        prob(band(0).1),
         labels[0],
-        prior.prior.width90[qs[1]],
+        prob(band(1).0),
+        prob(band(1).1),
         labels[1],
+        100.0 * zero(0),
+        100.0 * zero(1),
         prior.prior_true_label_weight[0]
     ));
 
     md.push_str(&format!("## Candidates ranked by {} per cost\n\n", s.decision.objective.describe()));
-    md.push_str(&format!("| rank | candidate | size | cost ({cur}) | objective | P(correct choice) | EVSI ({cur}) | width90 log10 P {} | width90 log10 P {} | weight of true damage model |\n|---|---|---|---|---|---|---|---|---|---|\n", labels[0], labels[1]));
+    md.push_str(&format!("| rank | candidate | size | cost ({cur}) | objective | P(correct choice) | EVSI ({cur}) | width90 P {} | width90 P {} | weight of true damage model |\n|---|---|---|---|---|---|---|---|---|---|\n", labels[0], labels[1]));
     let mut order: Vec<usize> = (0..singles.len()).collect();
     order.sort_by(|&a, &b| (singles[b].1.objective.0 / singles[b].1.cost).total_cmp(&(singles[a].1.objective.0 / singles[a].1.cost)));
     for (r, &i) in order.iter().enumerate() {
         let e = &singles[i].1;
         let m = &e.metrics;
         md.push_str(&format!(
-            "| {} | {} | {} | {:.0} | {} | {} | {} | {:.2} | {:.2} | {} |\n",
+            "| {} | {} | {} | {:.0} | {} | {} | {} | {} | {} | {} |\n",
             r + 1,
             e.names[0],
             e.sizes[0],
@@ -107,11 +154,12 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
             pm(e.objective.0, e.objective.1),
             pm(m.pcs.mean, m.pcs.se),
             pm(m.evsi.mean, m.evsi.se),
-            m.width90[qs[0]].mean,
-            m.width90[qs[1]].mean,
+            prob(m.width90[qs[0]].mean),
+            prob(m.width90[qs[1]].mean),
             pm(m.true_label_weight[0].mean, m.true_label_weight[0].se)
         ));
     }
+    md.push_str(&floor_section(s, state, singles, &order));
 
     let rule = match allocated {
         Allocated::Greedy(_) => "greedily".to_string(),
@@ -128,7 +176,7 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         Some(first) => {
             let m = &first.metrics;
             let line = format!(
-                "With a budget of {} {cur}, the most informative next step is {} for {:.0} {cur}: it raises the probability of choosing the better particle from {:.3} to {}, the expected weight of the true damage model from {:.3} to {}, and narrows the 90 % band of log10 P_break over {} from {:.1} to {:.1} decades ({}) and from {:.1} to {:.1} ({}); its expected value of information is {} {cur}.",
+                "With a budget of {} {cur}, the most informative next step is {} for {:.0} {cur}: it raises the probability of choosing the better particle from {:.3} to {}, the expected weight of the true damage model from {:.3} to {}, and narrows the 90 % band of P_break over {} from a width of {} to {} ({}) and from {} to {} ({}); its expected value of information is {} {cur}.",
                 s.budget.total,
                 plan_phrase(s, first),
                 first.cost,
@@ -137,11 +185,11 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
                 m.prior_true_label_weight[0],
                 pm(m.true_label_weight[0].mean, m.true_label_weight[0].se),
                 years(last),
-                m.prior.width90[qs[0]],
-                m.width90[qs[0]].mean,
+                prob(m.prior.width90[qs[0]]),
+                prob(m.width90[qs[0]].mean),
                 labels[0],
-                m.prior.width90[qs[1]],
-                m.width90[qs[1]].mean,
+                prob(m.prior.width90[qs[1]]),
+                prob(m.width90[qs[1]].mean),
                 labels[1],
                 pm(m.evsi.mean, m.evsi.se)
             );

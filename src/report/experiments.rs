@@ -2,7 +2,7 @@
 //!
 //! | file stem | content | table |
 //! |---|---|---|
-//! | `experiments_metrics` | each metric against sample size, one line per candidate: probability of choosing the better particle, expected posterior weight of the true damage model, expected 90 % band widths of log₁₀ P_break at the last horizon (both materials summed, decades), EVSI in the study's currency; and, when crush candidates ran it (`naming_draws`), the share of simulated campaigns after which the discrepancy naming loop names the true strength model's effects | `plans.csv` |
+//! | `experiments_metrics` | each metric against sample size, one line per candidate: probability of choosing the better particle, expected posterior weight of the true damage model, expected 90 % band widths of P_break at the last horizon (both materials summed, a probability), EVSI in the study's currency; and, when crush candidates ran it (`naming_draws`), the share of simulated campaigns after which the discrepancy naming loop names the true strength model's effects | `plans.csv` |
 
 use std::path::Path;
 
@@ -24,7 +24,7 @@ fn metrics(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let t = Table::load(dir, "plans")?;
     let (cand, size) = (t.s("candidate")?, t.f("size")?);
     let names: Vec<String> = t.df.get_column_names().iter().map(|n| n.to_string()).collect();
-    let widths: Vec<&String> = names.iter().filter(|n| n.starts_with("width90_log10_p_") && !n.ends_with("_se")).collect();
+    let widths: Vec<&String> = names.iter().filter(|n| n.starts_with("width90_p_") && !n.ends_with("_se")).collect();
     let horizon = widths.first().and_then(|n| n.rsplit('_').next()).map(|s| s.trim_end_matches("yr").to_string()).unwrap_or_default();
     let mut band = vec![0.0; cand.len()];
     for w in &widths {
@@ -37,7 +37,7 @@ fn metrics(dir: &Path, width_cm: f64) -> Result<Drawn> {
     let mut panels_spec: Vec<(String, Vec<f64>)> = vec![
         ("P(correct choice)".into(), t.f("pcs")?),
         ("Weight, true damage".into(), t.f("true_damage_model_weight")?),
-        (format!("Σ bands, {horizon} yr (dec.)"), band),
+        (format!("Σ width P, {horizon} yr"), band),
         (format!("EVSI ({currency})"), evsi),
     ];
     // Only the crush candidates that ran the naming loop have its verdict (NaN elsewhere).

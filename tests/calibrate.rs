@@ -28,7 +28,7 @@ fn column(csv: &str, name: &str) -> Vec<String> {
 
 /// Fast settings: 20 design runs, one refinement round, short chains.
 fn fast(study: &str) -> String {
-    common::edited(study, &[("design = 32", "design = 20"), ("rounds = 4", "rounds = 1"), ("points = 8\n", "points = 6\n"), ("steps = 20000", "steps = 2000"), ("burn_in = 5000", "burn_in = 800"), ("check = 12", "check = 4")])
+    common::edited(study, &[("design = 32", "design = 20"), ("rounds = 6", "rounds = 1"), ("points = 8\n", "points = 6\n"), ("steps = 20000", "steps = 2000"), ("burn_in = 5000", "burn_in = 800"), ("check = 32", "check = 4")])
 }
 
 #[test]
@@ -133,6 +133,95 @@ fn loop_on_an_analytic_model_recovers_the_truth_and_refines_until_the_emulator_i
     let agg = Aggregated::new(&obs, 0.0);
     assert_eq!(agg.output, (0..6).collect::<Vec<_>>());
     assert!(agg.sd.iter().all(|s| (s - 0.02 / 3f64.sqrt()).abs() < 1e-12));
+}
+
+/// [`Decay`] plus a deterministic run-to-run scatter of sd `tau` that changes completely with
+/// the last digits of θ — the crush FE's fracture, which starts in whichever element fails
+/// first, behaves so: no emulator can learn it, and it is noise to the likelihood.
+struct Jittery(Decay, f64);
+
+impl Simulator for Jittery {
+    fn space(&self) -> &ParamSpace {
+        self.0.space()
+    }
+    fn outputs(&self) -> &[OutputSpec] {
+        self.0.outputs()
+    }
+    fn simulate(&self, t: &[f64]) -> Result<Vec<f64>> {
+        let y = self.0.simulate(t)?;
+        Ok(y.iter().enumerate().map(|(j, v)| v + self.1 * std::f64::consts::SQRT_2 * (1.0e6 * (t[0] + 1.7 * t[1]) + 2.3 * j as f64).sin()).collect())
+    }
+}
+
+/// With a simulator that scatters by more than the data resolve (τ ≈ 4 × the sd of the combined
+/// observations), the loop converges and its checks pass — the scatter is noise in the
+/// likelihood, not an emulator failure (issue 32, item 9: the old check measured the emulator
+/// against the data's resolution alone and warned here) — and the posterior is the one of the
+/// smooth model with the scatter as noise, computed independently on a grid.
+#[test]
+fn a_simulator_scattering_more_than_the_data_resolve_is_calibrated_without_false_warnings() {
+    let x: Vec<f64> = (0..4).map(|i| 0.6 * i as f64).collect();
+    let decay = Decay {
+        space: ParamSpace::new(vec![Param::uniform("amplitude", "-", 0.5, 2.0, 1.0), Param::uniform("rate", "-", 0.1, 1.5, 0.5)]).unwrap(),
+        outputs: (0..4).map(|i| OutputSpec::new(format!("y{i}"), "-")).collect(),
+        x: x.clone(),
+    };
+    let tau = 0.05;
+    let clean = decay.simulate(&[1.3, 0.7]).unwrap();
+    // Three replicates per output, sd 0.02: the combined sd is 0.0115, a quarter of τ.
+    let noise = [0.02, -0.015, 0.01, -0.02, 0.005, 0.0, 0.012, -0.008, 0.018, -0.01, 0.0, 0.007];
+    let mut obs = Observations { values: vec![], sigma: vec![], output: vec![], group: vec![] };
+    for (i, n) in noise.iter().enumerate() {
+        obs.values.push(clean[i % 4] + n);
+        obs.sigma.push(0.02);
+        obs.output.push(i % 4);
+        obs.group.push(i / 4);
+    }
+    let model = Jittery(decay, tau);
+    let opts = PipelineOptions { design: 24, rounds: 6, points: 6, tolerance: 0.5, steps: 8000, burn_in: 2000, check: 32, walkers: 32, ..PipelineOptions::default() };
+    let cal = calibrate(&model, &obs, &opts, 11, None, &|_| {}).unwrap();
+    assert!(cal.warnings.is_empty(), "{:?}\nrounds {:?}\nz {:?} (limit {}), shift {:?} (ESS {})", cal.warnings, cal.rounds.iter().map(|r| r.epsilon).collect::<Vec<_>>(), cal.check.z_rms, cal.check.z_limit, cal.check.shift, cal.check.shift_ess);
+    // The scatter is found on every output: τ over the combined sd is 0.05 / 0.0115 = 4.3; the
+    // nugget's maximum-likelihood estimate from ~40 runs comes out between 2.2 and 4.5 here (the
+    // GP takes part of the scatter as short-scale variation), and each output is reported as
+    // scattering by more than the data resolve.
+    let agg = Aggregated::new(&obs, 0.0);
+    for o in 0..4 {
+        let want = tau / agg.sd[o];
+        eprintln!("output {o}: scatter {:.2} (true {want:.2})", cal.check.scatter[o]);
+        assert!(cal.check.scatter[o] > 1.0 && cal.check.scatter[o] < 1.2 * want, "output {o}: scatter {} vs {want}", cal.check.scatter[o]);
+    }
+    // The grid posterior of the smooth model with variance sd² + τ² per combined observation.
+    let (n, (a0, a1), (r0, r1)) = (400, (0.5, 2.0), (0.1, 1.5));
+    let (mut w, mut ma, mut mr, mut ma2, mut mr2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    let mut lps = Vec::with_capacity(n * n);
+    for i in 0..n {
+        for j in 0..n {
+            let (a, r) = (a0 + (a1 - a0) * (i as f64 + 0.5) / n as f64, r0 + (r1 - r0) * (j as f64 + 0.5) / n as f64);
+            let lp: f64 = (0..4).map(|o| -0.5 * (agg.mean[o] - a * (-r * x[o]).exp()).powi(2) / (agg.sd[o].powi(2) + tau * tau)).sum();
+            lps.push((a, r, lp));
+        }
+    }
+    let top = lps.iter().map(|l| l.2).fold(f64::NEG_INFINITY, f64::max);
+    for (a, r, lp) in lps {
+        let p = (lp - top).exp();
+        w += p;
+        ma += p * a;
+        mr += p * r;
+        ma2 += p * a * a;
+        mr2 += p * r * r;
+    }
+    let grid = [(ma / w, (ma2 / w - (ma / w).powi(2)).sqrt()), (mr / w, (mr2 / w - (mr / w).powi(2)).sqrt())];
+    for (k, (mean, sd)) in grid.iter().enumerate() {
+        let v = cal.chains.flat(k);
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        let s = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+        eprintln!("θ{k}: chains {m:.4} ± {s:.4}, grid {mean:.4} ± {sd:.4}");
+        // Measured: means within 0.3 grid sd, sds 0.74–0.82 of the grid's — narrower where the
+        // nugget is underestimated (output 3 above). Bounds: half a grid sd, and a third.
+        assert!((m - mean).abs() < 0.5 * sd, "θ{k}: posterior mean {m} vs grid {mean} (sd {sd})");
+        assert!((s / sd - 1.0).abs() < 1.0 / 3.0, "θ{k}: posterior sd {s} vs grid {sd}");
+    }
 }
 
 /// A simulator that fails in part of its space: failures are recorded, never abort.

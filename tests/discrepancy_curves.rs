@@ -10,7 +10,7 @@ use common::{Scratch, root};
 
 /// Fast calibration settings (as tests/calibrate.rs): 20 design runs, one refinement round.
 fn fast_calibration(study: &str) -> String {
-    common::edited(study, &[("design = 32", "design = 20"), ("rounds = 4", "rounds = 1"), ("steps = 20000", "steps = 2000"), ("burn_in = 5000", "burn_in = 800"), ("check = 12", "check = 4")])
+    common::edited(study, &[("design = 32", "design = 20"), ("rounds = 6", "rounds = 1"), ("steps = 20000", "steps = 2000"), ("burn_in = 5000", "burn_in = 800"), ("check = 32", "check = 4")])
 }
 
 /// A scratch directory with the Gen 3 RT calibration run.

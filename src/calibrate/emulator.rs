@@ -83,6 +83,14 @@ impl Emulator {
         self.gps.iter().map(|g| g.predict(&u).1.sqrt()).collect()
     }
 
+    /// The simulator's own run-to-run scatter per output (the square root of each GP's
+    /// nugget, in the output's unit): what no number of runs teaches the emulator, because the
+    /// simulator itself does not repeat it at nearby θ (the crush FE's fracture, for one, jumps
+    /// with which element fails first).
+    pub fn noise_sd(&self) -> Vec<f64> {
+        self.gps.iter().map(|g| g.noise_variance().sqrt()).collect()
+    }
+
     /// Leave-one-out check per output.
     pub fn leave_one_out(&self) -> Vec<LooCheck> {
         self.gps

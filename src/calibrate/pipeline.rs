@@ -13,12 +13,29 @@
 //!    where the emulator is unsure the posterior is wider, never falsely narrow. Walkers start in
 //!    a small ball around the least-squares estimate.
 //! 5. **Refinement**: the emulator error is measured at `probe` thinned posterior draws as
-//!    `ε = max_o latent_sd_o / (σ_o/√n_o)`, the emulator's sd against the posterior's resolving
-//!    power for output o (σ_o the data sd, n_o its observations). While the 90th percentile of ε
+//!    `ε = max_o latent_sd_o / √(s_o² + τ_o²)`, the emulator's own sd against the likelihood's
+//!    resolution for output o: s_o the sd of the combined observations d̄_o ([`Aggregated`]) and
+//!    τ_o the simulator's run-to-run scatter (the GP nugget, [`Emulator::noise_sd`]). Both enter
+//!    the likelihood, so no posterior resolves output o more finely than √(s_o² + τ_o²), and an
+//!    emulator sd well below it changes the posterior little. While the 90th percentile of ε
 //!    exceeds `tolerance`, the `points` draws with the largest ε (kept apart by a minimum distance in
 //!    the unit cube) are run on the simulator, the emulator is refitted and steps 3–4 repeat.
-//! 6. **Check**: the simulator is run at `check` posterior draws; the report compares those
-//!    runs with the emulator (standardised errors) and with the data.
+//! 6. **Check** with real simulator runs at `check` thinned posterior draws:
+//!    * *the emulator's stated uncertainty*: per output, the RMS of the standardised errors
+//!      `z = (y − m(θ))/√v(θ)` (v latent + nugget: what the likelihood assumes of a new run),
+//!      which is ≈ 1 when the emulator is honest; it is flagged beyond the 99 % point of its
+//!      distribution under an honest emulator whose variance is estimated from its training runs
+//!      ([`z_rms_limit`]), family-wise over the outputs;
+//!    * *the posterior itself*: the draws are importance-reweighted from the emulator's
+//!      likelihood to the simulator's, `w ∝ N(d̄; y(θ), s² + τ²) / N(d̄; m(θ), s² + v(θ))` per
+//!      output (the prior cancels; the simulator's scatter τ counts as noise in both), and each
+//!      parameter's mean shift is reported in posterior sd with the effective sample size of the
+//!      weights. A shift beyond half a posterior sd and beyond three Monte Carlo errors
+//!      (3/√ESS), or an ESS below a quarter of the draws, is flagged: the simulator's posterior is
+//!      then not the emulator's;
+//!    * the runs' coverage of the observations, and the emulator error in units of s_o (for
+//!      information: where τ_o exceeds s_o, the simulator itself scatters by more than the data
+//!      resolve, and so must the emulator).
 //!
 //! Every simulator call goes through the caller's simulator (wrap it in
 //! [`super::cache::Cached`] to reuse runs across reruns); the MCMC checkpoints to
@@ -156,8 +173,22 @@ pub struct Check {
     pub thetas: Vec<Vec<f64>>,
     /// Simulator outputs (None: failed).
     pub runs: Vec<Option<Vec<f64>>>,
-    /// Per output: RMS of (simulator − emulator)/σ_o over the successful check runs.
+    /// Per output: RMS of (simulator − emulator)/σ_o over the successful check runs, σ_o the
+    /// sd of the combined observations (information: how far the emulator is from the runs in
+    /// units of what the data resolve).
     pub emulator_error: Vec<f64>,
+    /// Per output: RMS of the standardised errors (simulator − emulator)/√v (v the emulator's
+    /// predictive variance of a new run, latent + nugget); ≈ 1 for an honest emulator.
+    pub z_rms: Vec<f64>,
+    /// Per output: the simulator's own scatter τ_o (GP nugget sd) over σ_o.
+    pub scatter: Vec<f64>,
+    /// The limit of [`z_rms`](Self::z_rms) ([`z_rms_limit`]).
+    pub z_limit: f64,
+    /// Per parameter: the shift of its posterior mean, in posterior sd, when the check draws
+    /// are reweighted from the emulator's likelihood to the simulator's ([`reweighted_shift`]).
+    pub shift: Vec<f64>,
+    /// Effective sample size of those weights.
+    pub shift_ess: f64,
     /// Fraction of the observations inside the 90 % posterior-predictive interval of the
     /// simulator runs ([`predictive_interval`] with z = [`Z90`]).
     pub coverage90: f64,
@@ -326,15 +357,63 @@ pub fn thinned(chains: &Chains, n: usize) -> Vec<Vec<f64>> {
     (0..n).map(|k| all[(k * all.len()) / n + (all.len() / n) / 2].clone()).collect()
 }
 
-/// Emulator error ε of each probed draw: max over outputs of latent sd / sd of d̄_o.
+/// Emulator error ε of each probed draw: max over outputs of latent sd / √(sd of d̄_o² + τ_o²)
+/// (module docs, step 5).
 fn epsilons(em: &Emulator, agg: &Aggregated, draws: &[Vec<f64>]) -> Vec<f64> {
+    let tau = em.noise_sd();
     draws
         .iter()
         .map(|t| {
             let sd = em.latent_sd(t);
-            agg.output.iter().zip(&agg.sd).map(|(&o, s)| sd[o] / s).fold(0.0, f64::max)
+            agg.output.iter().zip(&agg.sd).map(|(&o, s)| sd[o] / s.hypot(tau[o])).fold(0.0, f64::max)
         })
         .collect()
+}
+
+/// The simulator-against-emulator importance reweighting of posterior draws (module docs,
+/// step 6): normalised weights and, per parameter, the weighted mean's shift in posterior sd
+/// (the draws' own sd). `runs[i]` are the simulator's outputs at `thetas[i]`.
+pub fn reweighted_shift(em: &Emulator, agg: &Aggregated, thetas: &[Vec<f64>], runs: &[Vec<f64>]) -> (Vec<f64>, Vec<f64>) {
+    let tau = em.noise_sd();
+    let lw: Vec<f64> = thetas
+        .iter()
+        .zip(runs)
+        .map(|(t, y)| {
+            let pred = em.predict(t);
+            let mut l = 0.0;
+            for (k, &o) in agg.output.iter().enumerate() {
+                let (s2_sim, s2_em) = (agg.sd[k].powi(2) + tau[o].powi(2), agg.sd[k].powi(2) + pred[o].1);
+                l += -0.5 * ((agg.mean[k] - y[o]).powi(2) / s2_sim + s2_sim.ln()) + 0.5 * ((agg.mean[k] - pred[o].0).powi(2) / s2_em + s2_em.ln());
+            }
+            l
+        })
+        .collect();
+    let top = lw.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mut w: Vec<f64> = lw.iter().map(|l| (l - top).exp()).collect();
+    let total: f64 = w.iter().sum();
+    w.iter_mut().for_each(|x| *x /= total);
+    let n = thetas.len() as f64;
+    let shift = (0..thetas.first().map_or(0, |t| t.len()))
+        .map(|k| {
+            let mean = thetas.iter().map(|t| t[k]).sum::<f64>() / n;
+            let sd = (thetas.iter().map(|t| (t[k] - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt();
+            let wmean: f64 = thetas.iter().zip(&w).map(|(t, wi)| wi * t[k]).sum();
+            if sd > 0.0 { (wmean - mean) / sd } else { 0.0 }
+        })
+        .collect();
+    (w, shift)
+}
+
+/// The RMS standardised error above which `n` check runs say the emulator's stated
+/// uncertainty is too small: the 99 % point (family-wise over `outputs` outputs, Bonferroni) of
+/// √F(n, ν), ν = `dof` the degrees of freedom of the emulator's variance estimate (its training
+/// runs less its hyperparameters): the squared errors are a sample of n variances measured
+/// against a variance estimated from ν, so their ratio is F-distributed, not χ²_n/n — with the
+/// nugget estimated from 40 runs, a χ² limit would call an honest emulator dishonest.
+pub fn z_rms_limit(n: usize, dof: usize, outputs: usize) -> f64 {
+    use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+    let p = 1.0 - 0.01 / outputs.max(1) as f64;
+    FisherSnedecor::new(n.max(1) as f64, dof.max(1) as f64).map(|f| f.inverse_cdf(p).sqrt()).unwrap_or(f64::INFINITY)
 }
 
 
@@ -468,6 +547,21 @@ fn finish<S: Simulator>(
         }
     }
     let emulator_error: Vec<f64> = err.iter().map(|e| (e / ok.len().max(1) as f64).sqrt()).collect();
+    // The emulator's stated uncertainty against the runs, and the simulator's own scatter.
+    let tau = em.noise_sd();
+    let mut z2 = vec![0.0; m];
+    for (t, y) in &ok {
+        for (o, (mo, v)) in em.predict(t).into_iter().enumerate() {
+            z2[o] += (y[o] - mo).powi(2) / v.max(f64::MIN_POSITIVE);
+        }
+    }
+    let z_rms: Vec<f64> = z2.iter().map(|e| (e / ok.len().max(1) as f64).sqrt()).collect();
+    let scatter: Vec<f64> = (0..m).map(|o| tau[o] / sigma_o[o]).collect();
+    let z_limit = z_rms_limit(ok.len(), em.len().saturating_sub(space.len() + 2), agg.output.len());
+    // The posterior under the simulator's likelihood, by reweighting the check draws.
+    let (ok_t, ok_y): (Vec<Vec<f64>>, Vec<Vec<f64>>) = ok.iter().map(|(t, y)| ((*t).clone(), (*y).clone())).unzip();
+    let (weights, shift) = if ok_t.len() >= 2 { reweighted_shift(&em, agg, &ok_t, &ok_y) } else { (vec![], vec![0.0; space.len()]) };
+    let shift_ess = if weights.is_empty() { 0.0 } else { 1.0 / weights.iter().map(|w| w * w).sum::<f64>() };
     // Coverage of the observations by the 90 % predictive interval of the simulator runs.
     let mut inside = 0usize;
     for i in 0..obs.len() {
@@ -482,10 +576,21 @@ fn finish<S: Simulator>(
     if ok.len() < thetas.len() {
         warnings.push(format!("check: {} of {} simulator runs at posterior draws failed", thetas.len() - ok.len(), thetas.len()));
     }
-    if let Some((o, e)) = emulator_error.iter().enumerate().filter(|(o, _)| sigma_o[*o].is_finite()).max_by(|a, b| a.1.total_cmp(b.1))
-        && *e > 1.0
+    if let Some((o, z)) = z_rms.iter().enumerate().filter(|(o, _)| sigma_o[*o].is_finite()).max_by(|a, b| a.1.total_cmp(b.1))
+        && *z > z_limit
     {
-        warnings.push(format!("check: the emulator misses the simulator by {e:.2} σ (RMS) on output {} at posterior draws", em.outputs()[o].name));
+        warnings.push(format!(
+            "check: the emulator misses the simulator at posterior draws by {z:.2} of its own predictive sd (RMS) on output {}, above the {z_limit:.2} an honest emulator exceeds with probability 1 % (over all outputs): its uncertainty is understated there",
+            em.outputs()[o].name
+        ));
+    }
+    let moved: Vec<String> = space.params().iter().zip(&shift).filter(|(_, s)| s.abs() > 0.5_f64.max(3.0 / shift_ess.max(1e-9).sqrt())).map(|(p, s)| format!("{} by {s:+.2} sd", p.name)).collect();
+    if ok_t.len() >= 2 && (shift_ess < 0.25 * ok_t.len() as f64 || !moved.is_empty()) {
+        warnings.push(format!(
+            "check: reweighting the {} check draws from the emulator's likelihood to the simulator's {} (ESS {shift_ess:.1}): the posterior on the emulator is not the simulator's — refine the emulator (more rounds or points) or lower the tolerance",
+            ok_t.len(),
+            if moved.is_empty() { "leaves too few effective draws".to_string() } else { format!("moves the posterior mean of {}", moved.join(", ")) }
+        ));
     }
     Ok(Calibration {
         lsq,
@@ -496,7 +601,7 @@ fn finish<S: Simulator>(
         rounds,
         emulator: em,
         aggregated: agg.clone(),
-        check: Check { thetas, runs, emulator_error, coverage90 },
+        check: Check { thetas, runs, emulator_error, z_rms, scatter, z_limit, shift, shift_ess, coverage90 },
         evaluations: runner.evaluations,
         failures: std::mem::take(&mut runner.failures),
         emulator_evaluations,

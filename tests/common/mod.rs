@@ -133,7 +133,7 @@ pub fn run_in(dir: &Path, args: &[&str]) -> Out {
 /// curves, and an `[executor]` table with `executor` lines.
 pub fn tiny_calibration(s: &Scratch, executor: &str) {
     let study = std::fs::read_to_string(root().join("studies/calibrate_gen3_rt.toml")).unwrap();
-    let tiny = edited(&study, &[("design = 32", "design = 12"), ("rounds = 4", "rounds = 0"), ("points = 8\n", "points = 6\n"), ("steps = 20000", "steps = 2000"), ("burn_in = 5000", "burn_in = 800"), ("check = 12", "check = 3"), ("refinement = 8.0", "refinement = 4.0")]);
+    let tiny = edited(&study, &[("design = 32", "design = 12"), ("rounds = 6", "rounds = 0"), ("points = 8\n", "points = 6\n"), ("steps = 20000", "steps = 2000"), ("burn_in = 5000", "burn_in = 800"), ("check = 32", "check = 3"), ("refinement = 8.0", "refinement = 4.0")]);
     s.write("studies/cal.toml", &format!("{tiny}\n[executor]\n{executor}\n"));
     std::fs::copy(root().join("datasets/crush_curves_gen3_rt.csv"), s.path("datasets/crush_curves_gen3_rt.csv")).unwrap();
 }

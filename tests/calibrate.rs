@@ -94,6 +94,13 @@ impl Simulator for Decay {
     }
 }
 
+/// Observations of every output of `clean` plus `noise`, in replicates of all outputs (group
+/// i / outputs), each with sd `sigma`.
+fn replicates(clean: &[f64], noise: &[f64], sigma: f64) -> Observations {
+    let m = clean.len();
+    Observations { values: noise.iter().enumerate().map(|(i, n)| clean[i % m] + n).collect(), sigma: vec![sigma; noise.len()], output: (0..noise.len()).map(|i| i % m).collect(), group: (0..noise.len()).map(|i| i / m).collect() }
+}
+
 #[test]
 fn loop_on_an_analytic_model_recovers_the_truth_and_refines_until_the_emulator_is_good() {
     let x: Vec<f64> = (0..6).map(|i| 0.4 * i as f64).collect();
@@ -105,14 +112,7 @@ fn loop_on_an_analytic_model_recovers_the_truth_and_refines_until_the_emulator_i
     let truth = [1.3, 0.7];
     let clean = model.simulate(&truth).unwrap();
     // Three replicates per output with fixed noise (±0.02).
-    let noise = [0.02, -0.015, 0.01, -0.02, 0.005, 0.0, 0.012, -0.008, 0.018, -0.01, 0.0, 0.007, -0.004, 0.016, -0.019, 0.003, 0.011, -0.013];
-    let mut obs = Observations { values: vec![], sigma: vec![], output: vec![], group: vec![] };
-    for (i, n) in noise.iter().enumerate() {
-        obs.values.push(clean[i % 6] + n);
-        obs.sigma.push(0.02);
-        obs.output.push(i % 6);
-        obs.group.push(i / 6);
-    }
+    let obs = replicates(&clean, &[0.02, -0.015, 0.01, -0.02, 0.005, 0.0, 0.012, -0.008, 0.018, -0.01, 0.0, 0.007, -0.004, 0.016, -0.019, 0.003, 0.011, -0.013], 0.02);
     let opts = PipelineOptions { design: 10, rounds: 4, points: 4, tolerance: 0.3, steps: 2000, burn_in: 500, check: 6, walkers: 16, ..PipelineOptions::default() };
     let cal = calibrate(&model, &obs, &opts, 7, None, &|_| {}).unwrap();
     for (k, t) in truth.iter().enumerate() {
@@ -169,14 +169,7 @@ fn a_simulator_scattering_more_than_the_data_resolve_is_calibrated_without_false
     let tau = 0.05;
     let clean = decay.simulate(&[1.3, 0.7]).unwrap();
     // Three replicates per output, sd 0.02: the combined sd is 0.0115, a quarter of τ.
-    let noise = [0.02, -0.015, 0.01, -0.02, 0.005, 0.0, 0.012, -0.008, 0.018, -0.01, 0.0, 0.007];
-    let mut obs = Observations { values: vec![], sigma: vec![], output: vec![], group: vec![] };
-    for (i, n) in noise.iter().enumerate() {
-        obs.values.push(clean[i % 4] + n);
-        obs.sigma.push(0.02);
-        obs.output.push(i % 4);
-        obs.group.push(i / 4);
-    }
+    let obs = replicates(&clean, &[0.02, -0.015, 0.01, -0.02, 0.005, 0.0, 0.012, -0.008, 0.018, -0.01, 0.0, 0.007], 0.02);
     let model = Jittery(decay, tau);
     let opts = PipelineOptions { design: 24, rounds: 6, points: 6, tolerance: 0.5, steps: 8000, burn_in: 2000, check: 32, walkers: 32, ..PipelineOptions::default() };
     let cal = calibrate(&model, &obs, &opts, 11, None, &|_| {}).unwrap();

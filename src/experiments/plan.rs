@@ -9,6 +9,7 @@ use super::crush::CrushTest;
 use super::impact::ImpactTest;
 use super::measure::Measurement;
 use super::preposterior::{Experiment, Metrics, Score};
+use super::state::State;
 use super::study::ExperimentsStudy;
 
 /// One candidate experiment of any kind.
@@ -143,4 +144,18 @@ impl Allocated {
 /// standard errors).
 pub fn first_step<'a>(s: &ExperimentsStudy, singles: &'a [((usize, usize), Evaluated)]) -> Option<&'a Evaluated> {
     singles.iter().map(|(_, e)| e).filter(|e| e.cost <= s.budget.total && e.objective.0 > 2.0 * e.objective.1).max_by(|x, y| (x.objective.0 / x.cost).total_cmp(&(y.objective.0 / y.cost)))
+}
+
+/// For each single candidate (in `singles` order), the band narrowing of log10 P_break at each
+/// floor of [`super::state::LOG_FLOORS`] (decades) and the candidates' ranks by it per cost
+/// (1 = best; ties share their average rank).
+pub fn floor_rankings(state: &State, singles: &[((usize, usize), Evaluated)]) -> Vec<(f64, Vec<(f64, f64)>, Vec<f64>)> {
+    super::state::LOG_FLOORS
+        .iter()
+        .map(|&floor| {
+            let narrowing: Vec<(f64, f64)> = singles.iter().map(|(_, e)| state.band_narrowing(&e.metrics, &|b| super::state::log_width(b, floor))).collect();
+            let rank = crate::stats::ranks(&narrowing.iter().zip(singles).map(|(n, (_, e))| -n.0 / e.cost).collect::<Vec<_>>());
+            (floor, narrowing, rank)
+        })
+        .collect()
 }

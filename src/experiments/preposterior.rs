@@ -329,16 +329,6 @@ pub struct Metrics {
     pub draws: Vec<Draw>,
 }
 
-impl Metrics {
-    /// The expected value over the outer draws of `width(band)` for quantity q's posterior
-    /// 90 % band, with its Monte Carlo error, and the prior's: for a non-decreasing map g of the
-    /// quantity, `width = |(lo, hi)| g(hi) − g(lo)` is the width of g's band, exactly
-    /// ([`Posterior::band90`]).
-    pub fn mapped_width90(&self, q: usize, f: &dyn Fn((f64, f64)) -> f64) -> (Estimate, f64) {
-        (Estimate::of(&self.draws.iter().map(|d| f(d.posterior.band90[q])).collect::<Vec<_>>()), f(self.prior.band90[q]))
-    }
-}
-
 /// The experiment's score ([`Experiment::score`]) over the outer draws that computed it, with
 /// the reweighting's expected posterior weight of the truth's label on the same draws (a paired
 /// comparison of the two decision rules).

@@ -47,35 +47,8 @@ pub fn objective(o: Objective, state: &State, m: &Metrics) -> (f64, f64) {
         Objective::Evsi => (m.evsi.mean, m.evsi.se),
         Objective::Pcs => (m.pcs.mean - m.prior_pcs, m.pcs.se),
         Objective::DamageModel => (m.true_label_weight[0].mean - m.prior_true_label_weight[0], m.true_label_weight[0].se),
-        Objective::BandWidth => band_narrowing(state, m, &|b| b.1 - b.0),
+        Objective::BandWidth => state.band_narrowing(m, &|b| b.1 - b.0),
     }
-}
-
-/// The narrowing of the 90 % bands of P_break at the last horizon, summed over both materials,
-/// with its Monte Carlo error, for the band width `width` (P itself: `hi − lo`; log10 P above a
-/// floor: [`super::state::log_width`]). The two materials' widths come from the same simulated
-/// datasets, so the error is that of the per-draw sum.
-pub fn band_narrowing(state: &State, m: &Metrics, width: &dyn Fn((f64, f64)) -> f64) -> (f64, f64) {
-    let h = state.years.len() - 1;
-    let q = [state.p_quantity(0, h), state.p_quantity(1, h)];
-    let prior: f64 = q.iter().map(|&q| width(m.prior.band90[q])).sum();
-    let per_draw: Vec<f64> = m.draws.iter().map(|d| q.iter().map(|&q| width(d.posterior.band90[q])).sum()).collect();
-    let e = super::preposterior::Estimate::of(&per_draw);
-    (prior - e.mean, e.se)
-}
-
-/// For each single candidate (in `singles` order), the band narrowing of log10 P_break at each
-/// floor of [`super::state::LOG_FLOORS`] (decades) and the candidates' ranks by it per cost
-/// (1 = best; ties share their average rank).
-pub fn floor_rankings(state: &State, singles: &[((usize, usize), Evaluated)]) -> Vec<(f64, Vec<(f64, f64)>, Vec<f64>)> {
-    super::state::LOG_FLOORS
-        .iter()
-        .map(|&floor| {
-            let narrowing: Vec<(f64, f64)> = singles.iter().map(|(_, e)| band_narrowing(state, &e.metrics, &|b| super::state::log_width(b, floor))).collect();
-            let rank = crate::stats::ranks(&narrowing.iter().zip(singles).map(|(n, (_, e))| -n.0 / e.cost).collect::<Vec<_>>());
-            (floor, narrowing, rank)
-        })
-        .collect()
 }
 
 /// The main study the experiments study builds on, validated (its path, study, material keys
@@ -343,7 +316,7 @@ fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: 
     // The ranking the log10 P bands would give, at each floor (state module docs): whether the
     // floor moves it is shown, and only the floor-free objective ranks the plans.
     let mut cols = vec![scol("candidate", singles.iter().map(|((i, _), _)| s.candidate[*i].name.clone()).collect()), ucol("size", singles.iter().map(|(_, e)| e.sizes[0]).collect()), fcol("cost", singles.iter().map(|(_, e)| e.cost).collect())];
-    for (floor, narrowing, rank) in floor_rankings(state, singles) {
+    for (floor, narrowing, rank) in super::plan::floor_rankings(state, singles) {
         let tag = format!("{floor:e}");
         cols.push(fcol(&format!("narrowing_log10_p_floor_{tag}"), narrowing.iter().map(|n| n.0).collect()));
         cols.push(fcol(&format!("narrowing_log10_p_floor_{tag}_se"), narrowing.iter().map(|n| n.1).collect()));

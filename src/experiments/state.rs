@@ -18,7 +18,7 @@
 //! reaches −∞: its width exists only above a floor, and the floor, not the data, sets how much
 //! a test "narrows" it (a review found the shipped ranking of plans moved with it). Bands of P
 //! itself need no floor: the 90 % band of P_break is a probability interval whose lower end may
-//! be 0. The log-band widths at the floors [`LOG_FLOORS`] are still derived, exactly, from the
+//! be 0. The log-band widths at the floors [`LOG_FLOORS`] are still derived, exactly ([`State::band_narrowing`]), from the
 //! same posterior quantiles (a weighted quantile commutes with the non-decreasing map
 //! P ↦ log10 max(P, floor)), so the summary can show whether a ranking by them depends on the
 //! floor.
@@ -27,7 +27,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::preposterior::Knowledge;
+use super::preposterior::{Knowledge, Metrics};
 use crate::error::{Error, Result};
 use crate::lifetime::damage::DamageModel;
 use crate::stats::Categorical;
@@ -145,6 +145,19 @@ impl State {
     /// Index of the quantity "Weibull modulus m of material j".
     pub fn weibull_m_quantity(&self, j: usize) -> usize {
         2 * self.years.len() + 2 + j
+    }
+
+    /// The narrowing of the 90 % bands of P_break at the last horizon, summed over both materials,
+    /// with its Monte Carlo error, for the band width `width` (P itself: `hi − lo`; log10 P above a
+    /// floor: [`log_width`]). The two materials' widths come from the same simulated
+    /// datasets, so the error is that of the per-draw sum.
+    pub fn band_narrowing(&self, m: &Metrics, width: &dyn Fn((f64, f64)) -> f64) -> (f64, f64) {
+        let h = self.years.len() - 1;
+        let q = [self.p_quantity(0, h), self.p_quantity(1, h)];
+        let prior: f64 = q.iter().map(|&q| width(m.prior.band90[q])).sum();
+        let per_draw: Vec<f64> = m.draws.iter().map(|d| q.iter().map(|&q| width(d.posterior.band90[q])).sum()).collect();
+        let e = super::preposterior::Estimate::of(&per_draw);
+        (prior - e.mean, e.se)
     }
 
     /// Index of the quantity P_break of material j at horizon h.

@@ -67,7 +67,7 @@ fn prob(p: f64) -> String {
 /// Whether a ranking by the bands of log10 P would depend on the floor put under P, and the
 /// ranking that does not (`order`: the singles by the study's objective per cost, best first).
 fn floor_section(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), Evaluated)], order: &[usize]) -> String {
-    let rankings = super::run::floor_rankings(state, singles);
+    let rankings = super::plan::floor_rankings(state, singles);
     let name = |i: usize| format!("{} ({} {})", singles[i].1.names[0], singles[i].1.sizes[0], s.candidate[singles[i].0.0].test.unit());
     let leader = |rank: &[f64]| (0..rank.len()).min_by(|&a, &b| rank[a].total_cmp(&rank[b])).unwrap_or(0);
     let floors: Vec<String> = rankings.iter().map(|r| crate::report::canvas::power_of_ten(&r.0)).collect();

@@ -108,6 +108,13 @@ fn experiments_study_writes_ranked_plans_allocation_summary_and_figure() {
         let weak = ess[k] < 100.0 || collapsed[k] >= 0.05 * outer;
         assert_eq!(summary.contains(&format!("step {} (median ESS", k + 1)), weak, "step {}: median ESS {}, collapsed {}", k + 1, ess[k], collapsed[k]);
     }
+    // What stands is what precedes the first unreliable step, stated as such.
+    match (0..ess.len()).find(|&k| ess[k] < 100.0 || collapsed[k] >= 0.05 * outer) {
+        None => assert!(!summary.contains("**Not reliable:**"), "{summary}"),
+        Some(0) => assert!(summary.contains("No step of this allocation is reliable"), "{summary}"),
+        Some(1) => assert!(summary.contains("Step 1 stands;"), "{summary}"),
+        Some(k) => assert!(summary.contains(&format!("Steps 1–{k} stand;")), "{summary}"),
+    }
     // Negative EVSI estimates are explained.
     let evsi = partlife::io::col_f64(&df, &p, "evsi").unwrap();
     assert_eq!(evsi.iter().any(|v| *v < 0.0), summary.contains("EVSI estimates are negative"), "{summary}");

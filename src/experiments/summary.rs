@@ -53,14 +53,17 @@ fn pm(v: f64, se: f64) -> String {
     }
 }
 
-/// A probability to three significant figures ("0", "1.23e-5", "0.0412", "0.871").
+/// A probability: three decimals from 0.1 up ("0.871", "1.000"), three significant figures
+/// below ("0.0412", "1.23e-5"), "0" for exactly 0.
 fn prob(p: f64) -> String {
     if p == 0.0 {
         "0".into()
     } else if p.abs() < 1e-3 {
         format!("{p:.2e}")
+    } else if p.abs() < 0.1 {
+        format!("{:.*}", (2.0 - p.abs().log10().floor()) as usize, p)
     } else {
-        format!("{:.*}", (2.0 - p.abs().log10().floor()).clamp(0.0, 6.0) as usize, p)
+        format!("{p:.3}")
     }
 }
 
@@ -103,7 +106,16 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
     let prior = &singles[0].1.metrics;
     // Share of the (active) prior samples with no breakage at all at the last horizon.
     let active = &state.samples[..s.analysis.samples.min(state.samples.len())];
-    let zero = |j: usize| active.iter().filter(|x| x.p[j * state.years.len() + h] == 0.0).count() as f64 / active.len().max(1) as f64;
+    let is_zero = |x: &super::state::StateSample, j: usize| x.p[j * state.years.len() + h] == 0.0;
+    let zero = |j: usize| active.iter().filter(|x| is_zero(x, j)).count() as f64 / active.len().max(1) as f64;
+    // Which damage models the samples with no breakage came from (Vogel–Peukert below its
+    // threshold, typically), named from the samples, not assumed.
+    let zero_models: Vec<&str> = state.damage.iter().enumerate().filter(|(d, _)| active.iter().any(|x| x.damage == *d && (is_zero(x, 0) || is_zero(x, 1)))).map(|(_, m)| m.label()).collect();
+    let zero_note = match zero_models.as_slice() {
+        [] => String::new(),
+        [m] if *m == crate::lifetime::damage::DamageModel::VogelPeukert.label() => format!(" (all under {m}: below its threshold nothing breaks)"),
+        models => format!(" (under {})", models.join(", ")),
+    };
     let band = |j: usize| prior.prior.band90[qs[j]];
     let mut md = format!("# Which experiment next? {} against {}\n\n", labels[0], labels[1]);
     md.push_str(&format!(
@@ -120,7 +132,7 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
     ));
     md.push_str("## Today\n\n");
     md.push_str(&format!(
-        "P({} breaks more than {} in {}) = {:.3}; choosing the better particle today is right with probability {:.3}. The 90 % band of P_break over {} is [{}, {}] for {} and [{}, {}] for {}; P_break is exactly 0 (no breakage: Vogel–Peukert below its threshold) in {:.0} % and {:.0} % of the samples. The prior weight of the true damage model is {:.3} on average.\n\n",
+        "P({} breaks more than {} in {}) = {:.3}; choosing the better particle today is right with probability {:.3}. The 90 % band of P_break over {} is [{}, {}] for {} and [{}, {}] for {}; P_break is exactly 0 in {:.0} % and {:.0} % of the samples{}. The prior weight of the true damage model is {:.3} on average.\n\n",
         labels[0],
         labels[1],
         years(state.years[state.horizon]),
@@ -135,6 +147,7 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         labels[1],
         100.0 * zero(0),
         100.0 * zero(1),
+        zero_note,
         prior.prior_true_label_weight[0]
     ));
 
@@ -213,7 +226,14 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
                         .map(|(k, e)| format!("step {} (median ESS {:.1}, {} of {} simulated datasets collapsed)", k + 1, e.metrics.median_ess, e.metrics.collapsed, s.analysis.outer))
                         .collect();
                     if !weak.is_empty() {
-                        md.push_str(&format!("\n**Not reliable:** {} — below a median effective sample size of {RELIABLE_ESS} or with {:.0} % or more of the reweighted posteriors collapsed, importance reweighting of the prior samples no longer represents the posterior after so many tests, and these steps' objectives, P(correct choice) and weights may be far off. The allocation up to the last reliable step stands; beyond it, rerun the study once those tests are done.\n", weak.join("; "), 100.0 * RELIABLE_COLLAPSED));
+                        // The steps before the first unreliable one stand; say which, or that none does.
+                        let first_weak = steps.iter().position(|e| unreliable(&e.metrics, s.analysis.outer)).unwrap_or(0);
+                        let stands = match first_weak {
+                            0 => format!("No step of this allocation is reliable: raise `analysis.samples`, `reserve` or `outer` (now {}, {}, {}) and rerun.", s.analysis.samples, s.analysis.reserve, s.analysis.outer),
+                            1 => "Step 1 stands; beyond it, rerun the study once that test is done.".to_string(),
+                            k => format!("Steps 1–{k} stand; beyond them, rerun the study once those tests are done."),
+                        };
+                        md.push_str(&format!("\n**Not reliable:** {} — below a median effective sample size of {RELIABLE_ESS} or with {:.0} % or more of the reweighted posteriors collapsed, importance reweighting of the prior samples does not represent the posterior of these plans, and their objectives, P(correct choice) and weights may be far off. {stands}\n", weak.join("; "), 100.0 * RELIABLE_COLLAPSED));
                     }
                 }
                 Allocated::Exhaustive { plans, chosen } => {

@@ -30,9 +30,11 @@
 //!      likelihood to the simulator's, `w ∝ N(d̄; y(θ), s² + τ²) / N(d̄; m(θ), s² + v(θ))` per
 //!      output (the prior cancels; the simulator's scatter τ counts as noise in both), and each
 //!      parameter's mean shift is reported in posterior sd with the effective sample size of the
-//!      weights. A shift beyond half a posterior sd and beyond three Monte Carlo errors
-//!      (3/√ESS), or an ESS below a quarter of the draws, is flagged: the simulator's posterior is
-//!      then not the emulator's;
+//!      weights. The simulator's scatter alone spreads these weights, so they are judged against
+//!      the same reweighting with each run drawn from the emulator's own predictive distribution
+//!      ([`reweighting_null`]): an ESS below that null's 1 % point, or a shift beyond its 99 %
+//!      point and beyond half a posterior sd, is flagged — the simulator's posterior is then not
+//!      the emulator's;
 //!    * the runs' coverage of the observations, and the emulator error in units of s_o (for
 //!      information: where τ_o exceeds s_o, the simulator itself scatters by more than the data
 //!      resolve, and so must the emulator).
@@ -189,6 +191,9 @@ pub struct Check {
     pub shift: Vec<f64>,
     /// Effective sample size of those weights.
     pub shift_ess: f64,
+    /// Under an honest emulator ([`reweighting_null`]): the 1 % quantile of that ESS and the
+    /// 99 % quantile of the largest |shift|.
+    pub null: (f64, f64),
     /// Fraction of the observations inside the 90 % posterior-predictive interval of the
     /// simulator runs ([`predictive_interval`] with z = [`Z90`]).
     pub coverage90: f64,
@@ -404,6 +409,29 @@ pub fn reweighted_shift(em: &Emulator, agg: &Aggregated, thetas: &[Vec<f64>], ru
     (w, shift)
 }
 
+/// Replicates of the reweighting under an honest emulator ([`reweighting_null`]).
+pub const NULL_REPLICATES: usize = 400;
+
+/// The reweighting of [`reweighted_shift`] when the emulator is honest: each run replaced by a
+/// draw from the emulator's own predictive distribution, m(θ) + √v(θ)·z, [`NULL_REPLICATES`]
+/// times. The simulator's scatter τ alone spreads the weights (a single run at θ is one
+/// realisation of it), so a low ESS or a shift is evidence against the emulator only beyond what
+/// this null gives: returns its 1 % quantile of the ESS and 99 % quantile of the largest
+/// |shift| (posterior sd). Seeded; the result does not depend on the thread count.
+pub fn reweighting_null(em: &Emulator, agg: &Aggregated, thetas: &[Vec<f64>], seed: u64) -> (f64, f64) {
+    let preds: Vec<Vec<(f64, f64)>> = thetas.iter().map(|t| em.predict(t)).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x4E55_4C4C);
+    let n01 = Normal::new(0.0, 1.0).expect("unit normal");
+    let (mut ess, mut shift) = (Vec::with_capacity(NULL_REPLICATES), Vec::with_capacity(NULL_REPLICATES));
+    for _ in 0..NULL_REPLICATES {
+        let runs: Vec<Vec<f64>> = preds.iter().map(|p| p.iter().map(|(m, v)| m + v.sqrt() * n01.sample(&mut rng)).collect()).collect();
+        let (w, sh) = reweighted_shift(em, agg, thetas, &runs);
+        ess.push(1.0 / w.iter().map(|x| x * x).sum::<f64>());
+        shift.push(sh.iter().fold(0.0_f64, |a, b| a.max(b.abs())));
+    }
+    (crate::stats::interpolated_quantiles(ess, &[0.01])[0], crate::stats::interpolated_quantiles(shift, &[0.99])[0])
+}
+
 /// The RMS standardised error above which `n` check runs say the emulator's stated
 /// uncertainty is too small: the 99 % point (family-wise over `outputs` outputs, Bonferroni) of
 /// √F(n, ν), ν = `dof` the degrees of freedom of the emulator's variance estimate (its training
@@ -467,7 +495,7 @@ pub fn calibrate<S: Simulator>(sim: &S, obs: &Observations, opts: &PipelineOptio
             progress("final MCMC on the emulator");
             let chains = sample(&em, &agg, &lsq.theta, opts, opts.steps, seed.wrapping_add(1000), checkpoint_dir)?;
             emulator_evaluations += chains.evaluations;
-            return finish(&mut runner, em, lsq, chains, rounds, warnings, obs, &agg, opts, emulator_evaluations, progress);
+            return finish(&mut runner, em, lsq, chains, rounds, warnings, obs, &agg, opts, emulator_evaluations, seed, progress);
         }
         // New runs: the probed draws with the largest ε, at least 0.05 apart in the unit cube.
         let mut order: Vec<usize> = (0..probe.len()).collect();
@@ -491,7 +519,7 @@ pub fn calibrate<S: Simulator>(sim: &S, obs: &Observations, opts: &PipelineOptio
             warnings.push(format!("emulator refinement: every probed draw lies within 0.05 of a run, stopping with ε90 = {:.2}", eps_q.1));
             let chains = sample(&em, &agg, &lsq.theta, opts, opts.steps, seed.wrapping_add(1000), checkpoint_dir)?;
             emulator_evaluations += chains.evaluations;
-            return finish(&mut runner, em, lsq, chains, rounds, warnings, obs, &agg, opts, emulator_evaluations, progress);
+            return finish(&mut runner, em, lsq, chains, rounds, warnings, obs, &agg, opts, emulator_evaluations, seed, progress);
         }
         progress(&format!("round {}: {} refinement runs", round + 1, picked.len()));
         for (t, y) in picked.iter().zip(runner.run(&picked)?) {
@@ -516,6 +544,7 @@ fn finish<S: Simulator>(
     agg: &Aggregated,
     opts: &PipelineOptions,
     emulator_evaluations: u64,
+    seed: u64,
     progress: Progress,
 ) -> Result<Calibration> {
     let space = em.space().clone();
@@ -584,12 +613,15 @@ fn finish<S: Simulator>(
             em.outputs()[o].name
         ));
     }
-    let moved: Vec<String> = space.params().iter().zip(&shift).filter(|(_, s)| s.abs() > 0.5_f64.max(3.0 / shift_ess.max(1e-9).sqrt())).map(|(p, s)| format!("{} by {s:+.2} sd", p.name)).collect();
-    if ok_t.len() >= 2 && (shift_ess < 0.25 * ok_t.len() as f64 || !moved.is_empty()) {
+    // Against what an honest emulator and the simulator's scatter alone would give.
+    let (null_ess, null_shift) = if ok_t.len() >= 2 { reweighting_null(&em, agg, &ok_t, seed) } else { (0.0, f64::INFINITY) };
+    let limit = null_shift.max(0.5);
+    let moved: Vec<String> = space.params().iter().zip(&shift).filter(|(_, s)| s.abs() > limit).map(|(p, s)| format!("{} by {s:+.2} sd", p.name)).collect();
+    if ok_t.len() >= 2 && (shift_ess < null_ess || !moved.is_empty()) {
         warnings.push(format!(
-            "check: reweighting the {} check draws from the emulator's likelihood to the simulator's {} (ESS {shift_ess:.1}): the posterior on the emulator is not the simulator's — refine the emulator (more rounds or points) or lower the tolerance",
+            "check: reweighting the {} check draws from the emulator's likelihood to the simulator's {} — beyond what an honest emulator gives with this simulator's scatter (1 % of its ESS below {null_ess:.1}, 1 % of its shifts above {null_shift:.2} sd): the posterior on the emulator is not the simulator's — refine the emulator (more rounds or points) or lower the tolerance",
             ok_t.len(),
-            if moved.is_empty() { "leaves too few effective draws".to_string() } else { format!("moves the posterior mean of {}", moved.join(", ")) }
+            if moved.is_empty() { format!("leaves {shift_ess:.1} effective draws") } else { format!("moves the posterior mean of {} (ESS {shift_ess:.1})", moved.join(", ")) }
         ));
     }
     Ok(Calibration {
@@ -601,7 +633,7 @@ fn finish<S: Simulator>(
         rounds,
         emulator: em,
         aggregated: agg.clone(),
-        check: Check { thetas, runs, emulator_error, z_rms, scatter, z_limit, shift, shift_ess, coverage90 },
+        check: Check { thetas, runs, emulator_error, z_rms, scatter, z_limit, shift, shift_ess, null: (null_ess, null_shift), coverage90 },
         evaluations: runner.evaluations,
         failures: std::mem::take(&mut runner.failures),
         emulator_evaluations,

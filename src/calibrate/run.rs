@@ -489,7 +489,7 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
         md.push_str(&format!("* least squares: {l}\n"));
     }
     md.push_str(&format!(
-        "\n## Checks\n\n* {inside} of {} observations ({:.0} %) lie inside their 90 % posterior-predictive interval.\n* Check runs of the simulator at {} posterior draws: {:.0} % of the observations inside the 90 % interval of the runs plus noise; emulator error (RMS, in sd of each output's mean d̄) per output: {}.\n* The emulator's stated uncertainty at those runs (RMS of (run − emulator mean)/predictive sd, ≈ 1 when honest; limit {:.2}): {}.\n* The posterior under the simulator's own likelihood (the check draws reweighted from the emulator's likelihood to the simulator's, ESS {:.1} of {}): mean shifts in posterior sd {}.\n* Emulator refinement (ε: the emulator's sd against what the likelihood resolves, √(sd of d̄² + τ²); tolerance {}): {}.\n{}",
+        "\n## Checks\n\n* {inside} of {} observations ({:.0} %) lie inside their 90 % posterior-predictive interval.\n* Check runs of the simulator at {} posterior draws: {:.0} % of the observations inside the 90 % interval of the runs plus noise; emulator error (RMS, in sd of each output's mean d̄) per output: {}.\n* The emulator's stated uncertainty at those runs (RMS of (run − emulator mean)/predictive sd, ≈ 1 when honest; limit {:.2}): {}.\n* The posterior under the simulator's own likelihood (the check draws reweighted from the emulator's likelihood to the simulator's, ESS {:.1} of {}; an honest emulator gives ESS above {:.1} and shifts below {:.2} in 99 % of replicates): mean shifts in posterior sd {}.\n* Emulator refinement (ε: the emulator's sd against what the likelihood resolves, √(sd of d̄² + τ²); tolerance {}): {}.\n{}",
         obs.len(),
         100.0 * inside as f64 / obs.len() as f64,
         cal.check.thetas.len(),
@@ -499,6 +499,8 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
         outputs.iter().zip(&cal.check.z_rms).zip(&cal.check.emulator_error).filter(|(_, e)| e.is_finite()).map(|((o, z), _)| format!("{} {z:.2}", o.name)).collect::<Vec<_>>().join(", "),
         cal.check.shift_ess,
         cal.check.runs.iter().filter(|r| r.is_some()).count(),
+        cal.check.null.0,
+        cal.check.null.1,
         names.iter().zip(&cal.check.shift).map(|(n, s)| format!("{n} {s:+.2}")).collect::<Vec<_>>().join(", "),
         s.calibration.tolerance,
         cal.rounds.iter().map(|r| format!("{} runs → ε90 = {:.2}", r.runs, r.epsilon.1)).collect::<Vec<_>>().join("; "),

@@ -379,12 +379,17 @@ fn epsilons(em: &Emulator, agg: &Aggregated, draws: &[Vec<f64>]) -> Vec<f64> {
 /// step 6): normalised weights and, per parameter, the weighted mean's shift in posterior sd
 /// (the draws' own sd). `runs[i]` are the simulator's outputs at `thetas[i]`.
 pub fn reweighted_shift(em: &Emulator, agg: &Aggregated, thetas: &[Vec<f64>], runs: &[Vec<f64>]) -> (Vec<f64>, Vec<f64>) {
-    let tau = em.noise_sd();
-    let lw: Vec<f64> = thetas
+    let preds: Vec<Vec<(f64, f64)>> = thetas.iter().map(|t| em.predict(t)).collect();
+    reweight(agg, &em.noise_sd(), &preds, thetas, runs)
+}
+
+/// [`reweighted_shift`] with the emulator's predictions `preds` at `thetas` and its scatter
+/// `tau` given (computed once for many sets of runs).
+fn reweight(agg: &Aggregated, tau: &[f64], preds: &[Vec<(f64, f64)>], thetas: &[Vec<f64>], runs: &[Vec<f64>]) -> (Vec<f64>, Vec<f64>) {
+    let lw: Vec<f64> = preds
         .iter()
         .zip(runs)
-        .map(|(t, y)| {
-            let pred = em.predict(t);
+        .map(|(pred, y)| {
             let mut l = 0.0;
             for (k, &o) in agg.output.iter().enumerate() {
                 let (s2_sim, s2_em) = (agg.sd[k].powi(2) + tau[o].powi(2), agg.sd[k].powi(2) + pred[o].1);
@@ -420,12 +425,13 @@ pub const NULL_REPLICATES: usize = 400;
 /// |shift| (posterior sd). Seeded; the result does not depend on the thread count.
 pub fn reweighting_null(em: &Emulator, agg: &Aggregated, thetas: &[Vec<f64>], seed: u64) -> (f64, f64) {
     let preds: Vec<Vec<(f64, f64)>> = thetas.iter().map(|t| em.predict(t)).collect();
+    let tau = em.noise_sd();
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x4E55_4C4C);
     let n01 = Normal::new(0.0, 1.0).expect("unit normal");
     let (mut ess, mut shift) = (Vec::with_capacity(NULL_REPLICATES), Vec::with_capacity(NULL_REPLICATES));
     for _ in 0..NULL_REPLICATES {
         let runs: Vec<Vec<f64>> = preds.iter().map(|p| p.iter().map(|(m, v)| m + v.sqrt() * n01.sample(&mut rng)).collect()).collect();
-        let (w, sh) = reweighted_shift(em, agg, thetas, &runs);
+        let (w, sh) = reweight(agg, &tau, &preds, thetas, &runs);
         ess.push(1.0 / w.iter().map(|x| x * x).sum::<f64>());
         shift.push(sh.iter().fold(0.0_f64, |a, b| a.max(b.abs())));
     }

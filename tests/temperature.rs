@@ -31,6 +31,8 @@ fn chains(medians: [f64; 4], rows: usize, seed: u64) -> String {
 
 /// The shipped temperature study's `[[validation]]` block (held-out curves at 950 °C).
 const VALIDATION: &str = "[[validation]]\ntemperature_c = 950\nstudy = \"calibrate_gen3_950c.toml\"\ndraws = 24\n";
+/// Its second block: held-out curves at 950 °C whose truth has another form than the laws'.
+const VALIDATION_GLASS: &str = "[[validation]]\ntemperature_c = 950\nstudy = \"calibrate_gen3_950c_glass.toml\"\ndraws = 24\n";
 
 /// A scratch project with the temperature study (without its held-out data: see
 /// [`scratch_held_out`]), the shipped phase table, the main study with its data and Table 1,
@@ -47,7 +49,7 @@ fn scratch() -> Scratch {
     let study = std::fs::read_to_string(root().join("studies/temperature.toml")).unwrap();
     s.write(
         "studies/temperature.toml",
-        &common::edited(&study, &[(RT, "chains = \"../datasets/chains_rt.csv\""), (HOT, "chains = \"../datasets/chains_800c.csv\""), (CURVES, "evidence = \"../datasets/curve_evidence.csv\""), (VALIDATION, "")]),
+        &common::edited(&study, &[(RT, "chains = \"../datasets/chains_rt.csv\""), (HOT, "chains = \"../datasets/chains_800c.csv\""), (CURVES, "evidence = \"../datasets/curve_evidence.csv\""), (VALIDATION, ""), (VALIDATION_GLASS, "")]),
     );
     for f in ["studies/gen4_vs_bl.toml", "datasets/table1_particle_properties.csv"] {
         std::fs::copy(root().join(f), s.path(f)).unwrap();
@@ -322,82 +324,170 @@ fn the_main_study_runs_at_operating_temperatures() {
     assert!(manifest.contains("chains_800c.csv") && manifest.contains("temperature.toml"), "the manifest lacks the law's inputs");
 }
 
-/// The generator's truth of the held-out case at 950 °C (datasets/synth_curves.toml): read here,
-/// by the test only, to judge the prediction.
-fn truth_at_950() -> Vec<(String, f64)> {
+/// The generator's truth of a held-out case (datasets/synth_curves.toml, the case writing `file`):
+/// read here, by the test only, to judge the prediction.
+fn truth_of(file: &str) -> Vec<(String, f64)> {
     let text = std::fs::read_to_string(root().join("datasets/synth_curves.toml")).unwrap();
     let settings: toml::Table = toml::from_str(&text).unwrap();
-    let case = settings["case"].as_array().unwrap().iter().find(|c| c["file"].as_str() == Some("crush_curves_gen3_950c.csv")).expect("the held-out case");
+    let case = settings["case"].as_array().unwrap().iter().find(|c| c["file"].as_str() == Some(file)).expect("the held-out case");
     let truth = case["truth"].as_table().unwrap();
     ["g", "k1", "a", "t"].iter().map(|n| (n.to_string(), truth[*n].as_float().unwrap())).collect()
 }
 
-/// A scratch project for the hidden-truth test: the temperature study with its held-out curves
-/// at 950 °C (their calibration study and data) and without `[softening]` and `[lifetime]`,
-/// `draws` joint draws per source.
-fn scratch_held_out(draws: usize) -> Scratch {
+/// The held-out data sets at 950 °C: their calibration study, data file and `[[validation]]` block.
+/// The first follows the laws' own form, the second another (Arrhenius-type softening with a
+/// glass transition, datasets/README.md).
+const HELD_OUT: [(&str, &str, &str); 2] =
+    [("calibrate_gen3_950c.toml", "crush_curves_gen3_950c.csv", VALIDATION), ("calibrate_gen3_950c_glass.toml", "crush_curves_gen3_950c_glass.csv", VALIDATION_GLASS)];
+
+/// A scratch project for the hidden-truth tests: the temperature study with the first `sets` of
+/// the held-out data sets at 950 °C (their calibration studies and data) and without `[softening]`
+/// and `[lifetime]`, `draws` joint draws per source.
+fn scratch_held_out_sets(draws: usize, sets: usize) -> Scratch {
     let s = scratch();
     let study = s.read("studies/temperature.toml");
     let head = &study[..study.find("\n[softening]\n").unwrap() + 1];
-    s.write("studies/temperature.toml", &format!("{head}{}\n[figures]\nwidth_cm = 8.5\n", VALIDATION.replace("draws = 24", &format!("draws = {draws}"))));
-    for f in ["studies/calibrate_gen3_950c.toml", "datasets/crush_curves_gen3_950c.csv"] {
-        std::fs::copy(root().join(f), s.path(f)).unwrap();
+    let blocks: String = HELD_OUT[..sets].iter().map(|h| format!("{}\n", h.2.replace("draws = 24", &format!("draws = {draws}")))).collect();
+    s.write("studies/temperature.toml", &format!("{head}{blocks}[figures]\nwidth_cm = 8.5\n"));
+    for (study, data, _) in &HELD_OUT[..sets] {
+        std::fs::copy(root().join("studies").join(study), s.path(&format!("studies/{study}"))).unwrap();
+        std::fs::copy(root().join("datasets").join(data), s.path(&format!("datasets/{data}"))).unwrap();
     }
     s
 }
 
-/// Judges a temperature report's prediction of the held-out curves at 950 °C against the
-/// generator's truth: every parameter's truth inside the laws' band there; at least 80 % of the
-/// observations inside their 90 % predictive interval from the laws; the room-temperature state
-/// as it is (no temperature model) covering at most half of them, fewer than the laws. Returns
-/// the coverage of each source.
-fn judge_held_out(s: &Scratch) -> Vec<(String, f64)> {
-    let dir = s.path("reports/temperature");
-    let p = dir.join("validation_parameters.csv");
-    let (name, lo, hi) = (table_text(&p, "parameter"), table_f64(&p, "lo"), table_f64(&p, "hi"));
-    for (n, v) in truth_at_950() {
-        let i = name.iter().position(|x| *x == n).unwrap();
-        assert!(lo[i] <= v && v <= hi[i], "{n}: truth {v} outside the laws' band [{}, {}] at 950 °C", lo[i], hi[i]);
-    }
-    let v = dir.join("validation.csv");
-    let (source, inside, count) = (table_text(&v, "source"), table_f64(&v, "inside"), table_f64(&v, "observations"));
-    let mut coverage = Vec::new();
-    for src in ["laws at 950 °C", "calibrated state at 20 °C, as is", "calibrated state at 800 °C, as is"] {
-        let rows: Vec<usize> = (0..source.len()).filter(|&i| source[i] == src).collect();
-        let (k, n): (f64, f64) = (rows.iter().map(|&i| inside[i]).sum(), rows.iter().map(|&i| count[i]).sum());
-        assert_eq!(n, 78.0, "{src}: every observation of the 950 °C curves is judged");
-        coverage.push((src.to_string(), k / n));
-    }
+/// The scratch project of the bad-input checks: the first held-out data set only.
+fn scratch_held_out(draws: usize) -> Scratch {
+    scratch_held_out_sets(draws, 1)
+}
+
+/// The sources that predict every held-out data set.
+const SOURCES: [&str; 3] = ["laws at 950 °C", "calibrated state at 20 °C, as is", "calibrated state at 800 °C, as is"];
+
+/// The coverage of each source on the held-out data of `study`, as `validation.csv` counts it
+/// (every observation of `validation_observations.csv`: 8 particles × (8 grid forces + peak +
+/// fracture) less the grid forces past fracture), checked against the summary's sentence.
+fn coverage_of(s: &Scratch, study: &str) -> Vec<f64> {
+    let v = s.path("reports/temperature/validation.csv");
+    let (studies, source, inside, count) = (table_text(&v, "study"), table_text(&v, "source"), table_f64(&v, "inside"), table_f64(&v, "observations"));
+    let observed = table_text(&s.path("reports/temperature/validation_observations.csv"), "study").iter().filter(|x| *x == study).count();
+    assert!(observed >= 8 * 6, "{study}: {observed} observations");
     let summary = s.read("reports/temperature/summary.md");
-    for (src, c) in &coverage {
-        assert!(summary.contains(&format!("{src}: {:.0} %", 100.0 * c)), "the summary lacks {src}: {summary}");
+    let para = summary.split("\n\n").find(|p| p.contains(&format!("`{study}`"))).unwrap_or_else(|| panic!("the summary has no paragraph on {study}: {summary}"));
+    SOURCES
+        .iter()
+        .map(|src| {
+            let rows: Vec<usize> = (0..source.len()).filter(|&i| source[i] == *src && studies[i] == study).collect();
+            let (k, n): (f64, f64) = (rows.iter().map(|&i| inside[i]).sum(), rows.iter().map(|&i| count[i]).sum());
+            assert_eq!(n, observed as f64, "{study}, {src}: every observation of the 950 °C curves is judged");
+            assert!(para.contains(&format!("{src}: {:.0} %", 100.0 * k / n)), "the summary's paragraph on {study} lacks {src}: {para}");
+            k / n
+        })
+        .collect()
+}
+
+/// Whether each parameter's truth of `file` lies inside the laws' band at 950 °C for `study`.
+fn truths_inside(s: &Scratch, study: &str, file: &str) -> Vec<(String, bool)> {
+    let p = s.path("reports/temperature/validation_parameters.csv");
+    let (studies, name, lo, hi) = (table_text(&p, "study"), table_text(&p, "parameter"), table_f64(&p, "lo"), table_f64(&p, "hi"));
+    truth_of(file)
+        .into_iter()
+        .map(|(n, v)| {
+            let i = (0..name.len()).find(|&i| name[i] == n && studies[i] == study).unwrap();
+            (n, lo[i] <= v && v <= hi[i])
+        })
+        .collect()
+}
+
+/// Judges a temperature report's prediction of the held-out curves of the laws' own form at
+/// 950 °C against the generator's truth: every parameter's truth inside the laws' band there; at
+/// least 80 % of the observations inside their 90 % predictive interval from the laws; the
+/// room-temperature state as it is (no temperature model) covering at most half of them, fewer
+/// than the laws. Returns the coverage of each source.
+fn judge_held_out(s: &Scratch) -> Vec<f64> {
+    let (study, file, _) = HELD_OUT[0];
+    for (n, inside) in truths_inside(s, study, file) {
+        assert!(inside, "{n}: the truth at 950 °C lies outside the laws' band there");
     }
-    assert!(coverage[0].1 >= 0.8, "the laws cover {:.2} of the held-out observations", coverage[0].1);
-    assert!(coverage[1].1 <= 0.5 && coverage[1].1 < coverage[0].1, "the room-temperature state as it is covers {:.2}: the check cannot tell a temperature model from none", coverage[1].1);
+    let coverage = coverage_of(s, study);
+    assert!(coverage[0] >= 0.8, "the laws cover {:.2} of the held-out observations", coverage[0]);
+    assert!(coverage[1] <= 0.5 && coverage[1] < coverage[0], "the room-temperature state as it is covers {:.2}: the check cannot tell a temperature model from none", coverage[1]);
+    let dir = s.path("reports/temperature");
     assert!(dir.join("held_out.pdf").is_file() && dir.join("held_out.png").is_file());
     coverage
 }
 
 /// Hidden truth, fast sibling of the test below: posterior stand-ins around the generator's truths
 /// at 20 and 800 °C (no calibration run), the laws fitted to them predict the held-out curves at
-/// 950 °C made from a known temperature law.
+/// 950 °C made from a known temperature law — and do worse on curves whose truth has another form
+/// (Arrhenius-type softening with a glass transition at 900 °C): at least one of its constants
+/// (as shipped, the shear modulus, 12 % below the laws' form) lies outside the laws' band, and the
+/// laws cover fewer of its observations (as shipped, 66 % against 92 %). Coverage on data of the laws' own form shows the chain is
+/// consistent; it cannot show that a material follows that form.
 #[test]
 fn laws_fitted_at_two_temperatures_predict_held_out_curves_at_a_third() {
-    let s = scratch_held_out(12);
+    let s = scratch_held_out_sets(12, 2);
     let out = s.run(&["run", "studies/temperature.toml", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
-    let coverage = judge_held_out(&s);
-    eprintln!("held-out coverage: {coverage:?}");
+    let same = judge_held_out(&s);
+    let (study, file, _) = HELD_OUT[1];
+    let other = coverage_of(&s, study);
+    let inside = truths_inside(&s, study, file);
+    eprintln!("held-out coverage (laws, 20 °C as is, 800 °C as is): laws' form {same:?}; another form {other:?}; its truths inside the laws' bands: {inside:?}");
+    assert!(inside.iter().any(|(_, i)| !i), "every truth of another form lies inside the laws' bands: {inside:?}");
+    assert!(other[0] < same[0], "the laws cover {:.2} of the other form's data, no fewer than of their own form's ({:.2})", other[0], same[0]);
+    let summary = s.read("reports/temperature/summary.md");
+    assert!(summary.contains("Gen 3, 950 °C, glass transition"), "{summary}");
+    // The summary says which coverage falls short of the intervals' claim (binomial, 1 %).
+    let para = |study: &str| summary.split("\n\n").find(|p| p.contains(&format!("`{study}`"))).unwrap().to_string();
+    assert!(para(HELD_OUT[0].0).contains("consistent with the nominal 90 %"), "{}", para(HELD_OUT[0].0));
+    assert!(para(study).contains("The laws cover fewer observations than their 90 % intervals claim"), "{}", para(study));
+}
+
+/// The real-calibration check in CI, coarse: the crush FE on a coarse mesh (refinement 4, the
+/// held-out predictions too), 20 design runs and one refinement round per calibration, short
+/// chains. The calibrations at 20 and 800 °C run first (the temperature study's prerequisites);
+/// the laws fitted to their posteriors predict the held-out curves of the laws' own form at
+/// 950 °C better than either calibrated state as it is. The parameters' truths are not judged:
+/// fracture is mesh dependent, so the strength constants found on this mesh are not the
+/// generator's (refinement 16).
+#[test]
+fn calibrated_on_a_coarse_mesh_the_laws_predict_the_third() {
+    let s = scratch_held_out_sets(8, 2);
+    let coarse = [("refinement = 8.0", "refinement = 4.0"), ("design = 32", "design = 20"), ("points = 8\n", "points = 6\n"), ("steps = 20000", "steps = 4000"), ("burn_in = 5000", "burn_in = 1000")];
+    for f in ["studies/calibrate_gen3_rt.toml", "studies/calibrate_gen3_800c.toml"] {
+        let study = common::edited(&std::fs::read_to_string(root().join(f)).unwrap(), &coarse);
+        let study = study.replace("rounds = 6", "rounds = 1").replace("rounds = 4", "rounds = 1").replace("check = 32", "check = 4").replace("check = 12", "check = 4");
+        s.write(f, &study);
+    }
+    std::fs::copy(root().join("datasets/crush_curves_gen3_800c.csv"), s.path("datasets/crush_curves_gen3_800c.csv")).unwrap();
+    for (study, _, _) in HELD_OUT {
+        let f = format!("studies/{study}");
+        s.write(&f, &common::edited(&s.read(&f), &[("refinement = 8.0", "refinement = 4.0")]));
+    }
+    let study = common::edited(&s.read("studies/temperature.toml"), &[("chains = \"../datasets/chains_rt.csv\"", RT), ("chains = \"../datasets/chains_800c.csv\"", HOT)]);
+    s.write("studies/temperature.toml", &study);
+    let out = s.run(&["run", "studies/temperature.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stderr.contains("running studies/calibrate_gen3_rt.toml first"), "{}", out.stderr);
+    let same = coverage_of(&s, HELD_OUT[0].0);
+    let other = coverage_of(&s, HELD_OUT[1].0);
+    eprintln!("coarse held-out coverage (laws, 20 °C as is, 800 °C as is): laws' form {same:?}; another form {other:?}");
+    assert!(same[0] >= 0.8, "the laws cover {:.2} of the held-out observations", same[0]);
+    assert!(same[0] > same[1] && same[0] > same[2], "the laws cover {:.2}, no more than a calibrated state as it is ({:.2}, {:.2})", same[0], same[1], same[2]);
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap().split_whitespace().collect::<Vec<_>>().join(" ");
+    let quoted = format!("(the CI check below: {:.0} % against {:.0} %)", 100.0 * same[0], 100.0 * other[0]);
+    assert!(readme.contains(&quoted), "the README does not quote this check's coverage {quoted}");
 }
 
 /// Hidden truth: the shipped curves at 20, 800 and 950 °C follow a known temperature law
 /// (datasets/synth_curves.toml); the crush FE is calibrated at 20 and 800 °C (the shipped
 /// calibration studies), the laws are fitted to the two posteriors and predict the curves at
-/// 950 °C and the truth there.
+/// 950 °C and the truth there; on the curves of another form at 950 °C they do worse.
 #[test]
-#[ignore = "slow: two crush calibrations (about 3 min on 2 cores)"]
+#[ignore = "slow: two crush calibrations (about 6 min on 2 cores)"]
 fn calibrated_at_two_temperatures_the_laws_predict_the_third() {
-    let s = scratch_held_out(24);
+    let s = scratch_held_out_sets(24, 2);
     for f in ["studies/calibrate_gen3_rt.toml", "studies/calibrate_gen3_800c.toml", "datasets/crush_curves_gen3_800c.csv"] {
         std::fs::copy(root().join(f), s.path(f)).unwrap();
     }
@@ -408,6 +498,19 @@ fn calibrated_at_two_temperatures_the_laws_predict_the_third() {
     assert_eq!(out.code, 0, "{}", out.stderr);
     assert!(out.stderr.contains("running studies/calibrate_gen3_rt.toml first: its report reports/calibrate_gen3_rt is missing"), "{}", out.stderr);
     assert!(out.stderr.contains("running studies/calibrate_gen3_800c.toml first"), "{}", out.stderr);
-    let coverage = judge_held_out(&s);
-    eprintln!("held-out coverage: {coverage:?}");
+    let same = judge_held_out(&s);
+    let other = coverage_of(&s, HELD_OUT[1].0);
+    let inside = truths_inside(&s, HELD_OUT[1].0, HELD_OUT[1].1);
+    eprintln!("held-out coverage (laws, 20 °C as is, 800 °C as is): laws' form {same:?}; another form {other:?}; its truths inside the laws' bands: {inside:?}");
+    assert!(other[0] < same[0], "the laws cover {:.2} of the other form's data, no fewer than of their own form's ({:.2})", other[0], same[0]);
+    // The README quotes these numbers (the shipped study's: the same calibrations and draws).
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap().split_whitespace().collect::<Vec<_>>().join(" ");
+    let pct = |c: f64| format!("{:.0} %", 100.0 * c);
+    for quoted in [
+        format!("laws cover {} of the first set's observations (the 20 °C state as it is {}, the 800 °C state as it is {}) and {} of the second ({} and {})", pct(same[0]), pct(same[1]), pct(same[2]), pct(other[0]), pct(other[1]), pct(other[2])),
+        format!("coverage falls from {} to {}", pct(same[0]), pct(other[0])),
+    ] {
+        assert!(readme.contains(&quoted), "the README does not say \"{quoted}\"");
+    }
+    assert!(!inside.iter().find(|(n, _)| n == "g").unwrap().1, "the README says the truth of the shear modulus lies outside the laws' band: {inside:?}");
 }

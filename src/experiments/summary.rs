@@ -1,5 +1,6 @@
 //! `summary.md` of an experiments study: every sentence generated from the numbers it states.
 
+use crate::report::prob_text as prob;
 use super::plan::{Allocated, Evaluated, first_step};
 use super::preposterior::Scored;
 use super::state::State;
@@ -50,20 +51,6 @@ fn pm(v: f64, se: f64) -> String {
         format!("{v:.d$} ± {se:.d$}")
     } else {
         format!("{v:.4}")
-    }
-}
-
-/// A probability: three decimals from 0.1 up ("0.871", "1.000"), three significant figures
-/// below ("0.0412", "1.23e-5"), "0" for exactly 0.
-fn prob(p: f64) -> String {
-    if p == 0.0 {
-        "0".into()
-    } else if p.abs() < 1e-3 {
-        format!("{p:.2e}")
-    } else if p.abs() < 0.1 {
-        format!("{:.*}", (2.0 - p.abs().log10().floor()) as usize, p)
-    } else {
-        format!("{p:.3}")
     }
 }
 

@@ -146,6 +146,20 @@ pub struct Rendered {
     pub legend_hidden: Vec<(String, usize)>,
 }
 
+/// A probability: three decimals from 0.1 up ("0.871", "1.000"), three significant figures
+/// below ("0.0412", "1.23e-5"), "0" for exactly 0.
+pub fn prob_text(p: f64) -> String {
+    if p == 0.0 {
+        "0".into()
+    } else if p.abs() < 1e-3 {
+        format!("{p:.2e}")
+    } else if p.abs() < 0.1 {
+        format!("{:.*}", (2.0 - p.abs().log10().floor()) as usize, p)
+    } else {
+        format!("{p:.3}")
+    }
+}
+
 /// Draws every figure of the lifetime report in `dir` from its tables.
 pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
     let mats = Materials::load(dir)?;

@@ -93,6 +93,7 @@ fn source_short(kind: &str, t: f64) -> String {
 
 fn held_out(dir: &Path, width_cm: f64) -> Result<(Encoded, usize)> {
     let t = Table::load(dir, "validation")?;
+    let label = t.s("label")?;
     let (study, temp, source, kind, ts, output, grid, lo, hi, pred) =
         (t.s("study")?, t.f("temperature_c")?, t.s("source")?, t.s("source_kind")?, t.f("source_temperature_c")?, t.s("output")?, t.f("grid_displacement_m")?, t.f("lo")?, t.f("hi")?, t.f("predicted")?);
     let pct = t.f("level")?.first().map_or(90.0, |l| (100.0 * l).round());
@@ -118,7 +119,8 @@ fn held_out(dir: &Path, width_cm: f64) -> Result<(Encoded, usize)> {
             .filter(|&i| &ostudy[i] == st)
             .filter_map(|i| force_names.iter().position(|n| *n == ooutput[i]).map(|g| (grid_x[g] * 1e6, ovalue[i])))
             .collect();
-        series.push(Series { label: Some(format!("held-out data, {t_c} °C")), points: obs_pts.clone(), colour: grey, kind: Kind::Markers(Marker::Circle, 1.3) });
+        let what = if label[rows[0]].contains("°C") { label[rows[0]].clone() } else { format!("{}, {t_c} °C", label[rows[0]]) };
+        series.push(Series { label: Some(format!("held out: {what}")), points: obs_pts.clone(), colour: grey, kind: Kind::Markers(Marker::Circle, 1.3) });
         let ys = rows.iter().filter(|&&i| grid[i].is_finite()).flat_map(|&i| [lo[i], hi[i]]).chain(obs_pts.iter().map(|p| p.1));
         panels.push((
             Panel {

@@ -23,10 +23,14 @@
 //!
 //! An observation lies inside its predictive interval at probability `level` when it is within
 //! z·√(var_runs + σ² + (model_error·mean)²) of the runs' mean
-//! ([`crate::calibrate::pipeline::predictive_interval`], the calibration's own check). With
+//! ([`crate::calibrate::pipeline::predictive_interval`], the calibration's own check). The summary
+//! says whether the laws cover as many observations as their intervals claim: below 1 %
+//! binomial probability of so few inside at `level`, it says the laws (their form or their
+//! bands) miss something there — a held-out truth of the laws' own form can pass this check by
+//! construction, so the shipped study also holds out curves of another form. With
 //! `partlife run --executor slurm` the FE runs are Slurm array tasks
 //! ([`crate::calibrate::executor`]; the calibration study's `[executor]` options). Writes
-//! `validation.csv` (per source and output: the grid displacement of a grid force, the level, observed mean,
+//! `validation.csv` (per data set — its calibration study and that study's `label` — source and output: the grid displacement of a grid force, the level, observed mean,
 //! predicted centre and interval, observations inside), `validation_observations.csv` (every
 //! observation, normalised to D₀) and `validation_parameters.csv` (the laws' median and band of
 //! every parameter at the data's temperature); figure `held_out`.
@@ -54,6 +58,7 @@ pub const SOURCES: usize = 3;
 /// One row of `validation.csv`.
 struct Row {
     study: String,
+    label: String,
     temperature_c: f64,
     source: String,
     source_kind: &'static str,
@@ -143,7 +148,7 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
             None => None,
         };
         let mut lines = vec![format!("| source | inside its {pct} % interval | peak force: observed mean; predicted [{pct} % interval] (N) |"), "|---|---|---|".into()];
-        let mut coverage = Vec::new();
+        let (mut coverage, mut inside_counts) = (Vec::new(), Vec::new());
         for (label, kind, ts, thetas) in &sources {
             let (runs, runner_failures) = match &slurm {
                 None => {
@@ -182,6 +187,7 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
                 }
                 rows.push(Row {
                     study: v.study.display().to_string(),
+                    label: cs.label.clone(),
                     temperature_c: t,
                     source: label.clone(),
                     source_kind: kind,
@@ -201,6 +207,7 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
             let runs_failed = if failed > 0 { format!("; {failed} of {} runs failed", thetas.len()) } else { String::new() };
             lines.push(format!("| {label} | {inside_all} of {} ({:.0} %){runs_failed} | {peak} |", obs.len(), 100.0 * inside_all as f64 / obs.len() as f64));
             coverage.push((label.clone(), inside_all as f64 / obs.len() as f64));
+            inside_counts.push(inside_all);
         }
         if let Some((_, driver)) = &slurm {
             events.extend(driver.log().events.iter().map(|e| format!("slurm ({}): {e}", v.study.display())));
@@ -212,9 +219,11 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
             let best = states.iter().map(|c| c.1).fold(f64::NEG_INFINITY, f64::max);
             if law > best { "the laws predict these data better than either calibrated state as it is" } else if law < best { "a calibrated state as it is predicts these data better than the laws" } else { "the laws and the better calibrated state predict these data equally well" }
         };
+        let nominal = nominal_coverage(inside_counts[0], obs.len() as u64, level)?;
         md.push(format!(
-            "The crush curves of `{}` at {t} °C ({particles} particles; {} observations: the force at {k} displacements, the peak force and the fracture displacement, normalised to D₀ = {:.3} mm) are held out: no law was fitted to them. They are predicted through the crush FE of that study (its mesh, its constants without a law, its model error {model_error}) at {draws} joint draws of each source; an observation is inside when it lies within the runs' mean ± {z:.3}·√(var of the runs + σ² + (model error·mean)²), σ the scatter between particles (`validation.csv`). The laws at {t} °C give {} ({pct} % bands; `validation_parameters.csv`). Observations inside their {pct} % interval: {}; {verdict}.\n\n{}",
+            "The crush curves of `{}` ({}) at {t} °C ({particles} particles; {} observations: the force at {k} displacements, the peak force and the fracture displacement, normalised to D₀ = {:.3} mm) are held out: no law was fitted to them. They are predicted through the crush FE of that study (its mesh, its constants without a law, its model error {model_error}) at {draws} joint draws of each source; an observation is inside when it lies within the runs' mean ± {z:.3}·√(var of the runs + σ² + (model error·mean)²), σ the scatter between particles (`validation.csv`). The laws at {t} °C give {} ({pct} % bands; `validation_parameters.csv`). Observations inside their {pct} % interval: {}; {verdict}. {nominal}\n\n{}",
             v.study.display(),
+            cs.label,
             obs.len(),
             red.reference_diameter * 1e3,
             shown.join(", "),
@@ -224,6 +233,7 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
     }
     let mut t = table(vec![
         scol("study", rows.iter().map(|r| r.study.clone()).collect()),
+        scol("label", rows.iter().map(|r| r.label.clone()).collect()),
         fcol("temperature_c", rows.iter().map(|r| r.temperature_c).collect()),
         scol("source", rows.iter().map(|r| r.source.clone()).collect()),
         scol("source_kind", rows.iter().map(|r| r.source_kind.to_string()).collect()),
@@ -258,6 +268,23 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
     ])?;
     dir.write_table("validation_observations", &mut t)?;
     Ok((md.join("\n\n"), inputs, fe_runs))
+}
+
+/// Whether the laws cover the held-out observations as often as their intervals claim: the
+/// binomial probability of `inside` or fewer of `n` at the nominal `level`, as a sentence. Below
+/// 1 % the laws (their form or their bands) miss something at that temperature. The observations
+/// of one particle (its forces along one curve) are correlated, so the probability overstates
+/// the evidence; the sentence says so.
+fn nominal_coverage(inside: u64, n: u64, level: f64) -> Result<String> {
+    use statrs::distribution::{Binomial, DiscreteCDF};
+    let p = Binomial::new(level, n).map_err(|e| Error::numerical("validation", e.to_string()))?.cdf(inside);
+    let pct = (100.0 * level).round();
+    let how = format!("binomial probability of {inside} or fewer of {n} inside at the nominal {pct} %: {}, counting the observations as independent; they are not — the forces of one particle lie on one curve — so this overstates the evidence", crate::report::prob_text(p));
+    Ok(if p < 0.01 {
+        format!("**The laws cover fewer observations than their {pct} % intervals claim** ({how}): at this temperature the laws' form or their bands miss something, and the bands do not include the error of the form itself.")
+    } else {
+        format!("That is consistent with the nominal {pct} % ({how}).")
+    })
 }
 
 /// The observations grouped by output and scatter σ (bitwise), by output, then σ in order of

@@ -507,11 +507,22 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
         {
             // Outputs on which the simulator itself scatters by more than the data resolve.
             let noisy: Vec<String> = outputs.iter().zip(&cal.check.scatter).filter(|(_, r)| r.is_finite() && **r > 1.0).map(|(o, r)| format!("{} (τ = {r:.1} × the sd of d̄)", o.name)).collect();
-            if noisy.is_empty() {
+            let mut lines = if noisy.is_empty() {
                 String::new()
             } else {
                 format!("* The simulator's own run-to-run scatter τ (the emulator's nugget) exceeds what the data resolve on {}: nearby parameters give outputs that differ by about τ (the crush FE's fracture starts in whichever element fails first), so the likelihood counts τ as noise and these outputs constrain the parameters only to within it.\n", noisy.join(", "))
+            };
+            // Understated emulator uncertainty where the error is too small to matter: a note.
+            let slight: Vec<String> = cal.check.understated().into_iter().filter(|(_, material)| !material).map(|(o, _)| format!("{} (z {:.2}; error {:.2})", outputs[o].name, cal.check.z_rms[o], cal.check.resolved_error[o])).collect();
+            if !slight.is_empty() {
+                lines.push_str(&format!(
+                    "* The emulator states less uncertainty than the check runs show on {} — above the limit {:.2}, but its error there is below {} of what the likelihood resolves (√(sd of d̄² + τ²)), so it moves no posterior mean by more than about that many posterior sd: a note, not a warning.\n",
+                    slight.join(", "),
+                    cal.check.z_limit,
+                    crate::calibrate::pipeline::MATERIAL_ERROR
+                ));
             }
+            lines
         }
     ));
     if !cal.warnings.is_empty() {

@@ -511,7 +511,7 @@ fn calibration_settings(study: &str, settings: &[(&str, &str)]) -> String {
 /// calibration studies), the laws are fitted to the two posteriors and predict the curves at
 /// 950 °C and the truth there; on the curves of another form at 950 °C they do worse.
 #[test]
-#[ignore = "slow: two crush calibrations (about 15 min on 2 cores)"]
+#[ignore = "slow: two crush calibrations (about 13 min on 2 cores)"]
 fn calibrated_at_two_temperatures_the_laws_predict_the_third() {
     let s = scratch_held_out_sets(24, 2);
     for f in ["studies/calibrate_gen3_rt.toml", "studies/calibrate_gen3_800c.toml", "datasets/crush_curves_gen3_800c.csv"] {

@@ -6,7 +6,8 @@
 mod common;
 use common::{Scratch, root};
 use partlife::calibrate::data::{Observations, load_curves, reduce_curves};
-use partlife::calibrate::pipeline::{Aggregated, PipelineOptions, calibrate};
+use partlife::calibrate::data::Aggregated;
+use partlife::calibrate::pipeline::{PipelineOptions, calibrate};
 use partlife::error::Result;
 use partlife::model::{OutputSpec, Simulator};
 use partlife::params::{Param, ParamSpace};

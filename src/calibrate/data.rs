@@ -270,3 +270,44 @@ pub fn load_observations(path: &Path, outputs: &[OutputSpec]) -> Result<Observat
     }
     Ok(obs)
 }
+
+/// The observations of each output combined into their precision-weighted mean: for Gaussian
+/// noise this carries the whole likelihood of θ (the scatter about the mean does not depend on
+/// θ), and an error common to all replicates of an output (emulator, model error) enters once,
+/// not once per replicate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Aggregated {
+    /// Model output index.
+    pub output: Vec<usize>,
+    /// Weighted mean d̄_o.
+    pub mean: Vec<f64>,
+    /// Its sd: `√(1/Σ σ_i⁻² + (model_error·d̄_o)²)`.
+    pub sd: Vec<f64>,
+    /// Observations combined.
+    pub count: Vec<usize>,
+}
+
+impl Aggregated {
+    /// Combines `obs` per output.
+    pub fn new(obs: &Observations, model_error: f64) -> Aggregated {
+        let mut outs: Vec<usize> = obs.output.clone();
+        outs.sort_unstable();
+        outs.dedup();
+        let mut a = Aggregated { output: vec![], mean: vec![], sd: vec![], count: vec![] };
+        for o in outs {
+            let (mut w, mut wd, mut n) = (0.0, 0.0, 0);
+            for i in (0..obs.len()).filter(|&i| obs.output[i] == o) {
+                let wi = 1.0 / (obs.sigma[i] * obs.sigma[i]);
+                w += wi;
+                wd += wi * obs.values[i];
+                n += 1;
+            }
+            let mean = wd / w;
+            a.output.push(o);
+            a.mean.push(mean);
+            a.sd.push((1.0 / w + (model_error * mean).powi(2)).sqrt());
+            a.count.push(n);
+        }
+        a
+    }
+}

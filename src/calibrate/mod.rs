@@ -1,6 +1,8 @@
 //! Calibration: fitting a [`crate::model::Simulator`]'s parameters θ to measured outputs.
 //!
 //! * [`cache`]: evaluations stored on disk by a hash of the configuration and θ.
+//! * [`pipeline`]: the calibration loop (design → emulator → least squares → MCMC → refinement);
+//!   [`check`]: its final check with simulator runs at posterior draws.
 //! * [`executor`]: where a batch of evaluations runs — this process or Slurm array jobs whose
 //!   tasks (`partlife eval`, [`eval`]) fill the shared cache.
 //! * [`mcmc`]: the affine-invariant ensemble sampler and convergence diagnostics (R̂, ESS).
@@ -14,6 +16,7 @@
 //! `r_i = (y_i(θ) − d_i)/σ_i`. Calibration code sees only the Simulator seam.
 
 pub mod cache;
+pub mod check;
 pub mod data;
 pub mod emulator;
 pub mod eval;

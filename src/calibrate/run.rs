@@ -519,7 +519,7 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
                     "* The emulator states less uncertainty than the check runs show on {} — above the limit {:.2}, but its error there is below {} of what the likelihood resolves (√(sd of d̄² + τ²)), so it moves no posterior mean by more than about that many posterior sd: a note, not a warning.\n",
                     slight.join(", "),
                     cal.check.z_limit,
-                    crate::calibrate::pipeline::MATERIAL_ERROR
+                    crate::calibrate::check::MATERIAL_ERROR
                 ));
             }
             lines

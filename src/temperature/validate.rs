@@ -23,7 +23,7 @@
 //!
 //! An observation lies inside its predictive interval at probability `level` when it is within
 //! z·√(var_runs + σ² + (model_error·mean)²) of the runs' mean
-//! ([`crate::calibrate::pipeline::predictive_interval`], the calibration's own check). The summary
+//! ([`crate::calibrate::check::predictive_interval`], the calibration's own check). The summary
 //! says whether the laws cover as many observations as their intervals claim: below 1 %
 //! binomial probability of so few inside at `level`, it says the laws (their form or their
 //! bands) miss something there — a held-out truth of the laws' own form can pass this check by
@@ -43,7 +43,7 @@ use super::study::ValidationOptions;
 use crate::calibrate::Runner;
 use crate::calibrate::cache::Cached;
 use crate::calibrate::executor::{Dispatched, Slurm};
-use crate::calibrate::pipeline::predictive_interval;
+use crate::calibrate::check::predictive_interval;
 use crate::calibrate::study::{Built, CalibrateStudy};
 use crate::error::{Error, Result};
 use crate::io::{ReportDir, fcol, scol, table, ucol};

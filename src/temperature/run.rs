@@ -362,7 +362,7 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
     let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
     write_phases(&mut dir, &phases)?;
     let (text, headline) = describe(s, &phases, &s.phases.file.display().to_string());
-    let mut md = format!("# Temperature: {}\n\n## Phases\n\n{text}\n\nThe figure `phase_fractions` draws every phase against temperature (amorphous phases dashed), in the style of the deliverable's Fig. 2. Between the tabulated temperatures the fractions are interpolated linearly; nothing is extrapolated beyond them. What each dataset is (measured, computed, synthetic or illustrative) is stated in datasets/README.md.\n", s.phases.composition);
+    let mut md = format!("# Temperature: {}\n\n## Phases\n\n{text}\n\nThe figure `phase_fractions` draws every phase against temperature (amorphous phases dashed), in the style of the deliverable's Fig. 2. Between the tabulated temperatures the fractions are interpolated linearly; nothing is extrapolated beyond them.{}\n", s.phases.composition, illustrative_sentence(&s.phases.file));
     let mut headlines = vec![headline];
     let mut executor_events = Vec::new();
     let mut evaluations = BTreeMap::new();
@@ -416,6 +416,17 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })
+}
+
+/// The sentence saying that the phase table is the illustrative one partlife ships (by its file
+/// name, wherever it was copied), empty for any other table: a user's own export is not called
+/// illustrative.
+fn illustrative_sentence(file: &Path) -> &'static str {
+    if file.file_name().and_then(|n| n.to_str()) == Some(crate::phases::ILLUSTRATIVE_FILE) {
+        " **The phase table is the illustrative one partlife ships** — not computed, not measured; its rule is in `partlife::phases` and datasets/README.md."
+    } else {
+        ""
+    }
 }
 
 /// `phases.csv` and `amorphous.csv`.

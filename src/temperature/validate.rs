@@ -138,6 +138,10 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
             orows.push((v.study.display().to_string(), outputs[obs.output[i]].name.clone(), red.curves[obs.group[i]].particle.clone(), obs.values[i]));
         }
         let model_error = cs.calibration.model_error;
+        // The synthetic label travels with the data file, never with the sentence.
+        let synthetic: String = prep.inputs.iter().filter_map(|p| crate::intake::synthetic_label(p)).map(|l| format!(" These curves are **synthetic stand-ins** ({l})."))
+            .next()
+            .unwrap_or_default();
         // Slurm: one driver for this data set's runs, on its calibration's cache.
         let slurm = match slurm {
             Some(root) => {
@@ -221,7 +225,7 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
         };
         let nominal = nominal_coverage(inside_counts[0], obs.len() as u64, level)?;
         md.push(format!(
-            "The crush curves of `{}` ({}) at {t} °C ({particles} particles; {} observations: the force at {k} displacements, the peak force and the fracture displacement, normalised to D₀ = {:.3} mm) are held out: no law was fitted to them. They are predicted through the crush FE of that study (its mesh, its constants without a law, its model error {model_error}) at {draws} joint draws of each source; an observation is inside when it lies within the runs' mean ± {z:.3}·√(var of the runs + σ² + (model error·mean)²), σ the scatter between particles (`validation.csv`). The laws at {t} °C give {} ({pct} % bands; `validation_parameters.csv`). Observations inside their {pct} % interval: {}; {verdict}. {nominal}\n\n{}",
+            "The crush curves of `{}` ({}) at {t} °C ({particles} particles; {} observations: the force at {k} displacements, the peak force and the fracture displacement, normalised to D₀ = {:.3} mm) are held out: no law was fitted to them.{synthetic} They are predicted through the crush FE of that study (its mesh, its constants without a law, its model error {model_error}) at {draws} joint draws of each source; an observation is inside when it lies within the runs' mean ± {z:.3}·√(var of the runs + σ² + (model error·mean)²), σ the scatter between particles (`validation.csv`). The laws at {t} °C give {} ({pct} % bands; `validation_parameters.csv`). Observations inside their {pct} % interval: {}; {verdict}. {nominal}\n\n{}",
             v.study.display(),
             cs.label,
             obs.len(),

@@ -55,7 +55,8 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::preposterior::{Experiment, Score};
-use super::state::State;
+use super::smc::Movable;
+use super::state::{State, StateSample};
 use crate::error::{Error, Result};
 use crate::strength::regress::{draw_particles, ln_density_of_log};
 use crate::strength::{Effect, NamingSettings, Sample, Term};
@@ -72,6 +73,8 @@ pub struct CrushTest {
     pub diameter: Option<(f64, f64)>,
     /// Rows of the crush sample the new particles are drawn from.
     rows: Vec<usize>,
+    /// Test temperature (°C), or the temperatures of the crush data.
+    temperature_c: Option<f64>,
     /// Per sample: m.
     shape: Vec<f64>,
     /// Per sample and eligible row: ln σ_θ (K × rows).
@@ -143,6 +146,13 @@ fn ln_mixture(y: f64, m: f64, ls: &[f64]) -> (f64, f64) {
     (top + (sum / ls.len() as f64).ln(), slope / sum)
 }
 
+/// Whether every row has the same scale (to round-off): the mixture is then one density.
+fn one_scale(ls: &[f64]) -> bool {
+    let lmin = ls.iter().copied().fold(f64::INFINITY, f64::min);
+    let lmax = ls.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    lmax - lmin <= 1e-12 * lmax.abs().max(1.0)
+}
+
 /// A mixture's log density tabulated on [`GRID`] points with its slopes (module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MixtureTable {
@@ -156,11 +166,11 @@ impl MixtureTable {
     /// The table of modulus `m` and row scales `ls`; None when every row has the same scale
     /// (the mixture is then one density).
     pub fn new(m: f64, ls: &[f64]) -> Option<MixtureTable> {
-        let lmin = ls.iter().copied().fold(f64::INFINITY, f64::min);
-        let lmax = ls.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        if lmax - lmin <= 1e-12 * lmax.abs().max(1.0) {
+        if one_scale(ls) {
             return None;
         }
+        let lmin = ls.iter().copied().fold(f64::INFINITY, f64::min);
+        let lmax = ls.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let (lo, hi) = (lmin - 14.0 / m, lmax + 3.0 / m);
         let step = (hi - lo) / (GRID - 1) as f64;
         let (ln_density, slope) = (0..GRID).map(|g| ln_mixture(lo + g as f64 * step, m, ls)).unzip();
@@ -211,22 +221,9 @@ impl CrushTest {
         let mut shape = Vec::with_capacity(state.samples.len());
         let mut ln_scale = Vec::with_capacity(state.samples.len() * rows.len());
         for s in &state.samples {
-            let st = &state.forms[s.form].setup;
-            let (p, _) = st.params(material, &s.x, Mode::Joint);
-            let fit = &st.materials[material].model.fit;
-            if fit.terms.iter().any(|(_, t)| matches!(t, Term::Damage { .. })) {
-                return bad("a strength model with the damage effect has no crush-test likelihood here yet".into());
-            }
-            // The linear columns in the order of β; the temperature column at the test's T.
-            let columns: Vec<(Effect, &Vec<f64>)> = fit.terms.iter().filter_map(|(e, t)| if let Term::Linear(z) = t { Some((*e, z)) } else { None }).collect();
-            shape.push(p.shape);
-            for &r in &rows {
-                let z = |l: usize, (e, col): (Effect, &Vec<f64>)| match (e, options.temperature_c) {
-                    (Effect::Temperature, Some(t)) => e.z(t, fit.references[l]),
-                    _ => col[r],
-                };
-                ln_scale.push(p.mu + columns.iter().enumerate().map(|(l, &c)| p.beta[l] * z(l, c)).sum::<f64>());
-            }
+            let (m, ls) = scales_at(state, material, &rows, options.temperature_c, s)?;
+            shape.push(m);
+            ln_scale.extend(ls);
         }
         let r = rows.len();
         let naming = options.naming.as_ref().map(|settings| NamingCheck {
@@ -237,12 +234,57 @@ impl CrushTest {
             forms: state.samples.iter().map(|s| s.form).collect(),
         });
         let mixture = (!options.shape_measured).then(|| (0..shape.len()).into_par_iter().map(|k| MixtureTable::new(shape[k], &ln_scale[k * r..(k + 1) * r])).collect());
-        Ok(CrushTest { material, particles, diameter, rows, shape, ln_scale, mixture, naming })
+        Ok(CrushTest { material, particles, diameter, rows, temperature_c: options.temperature_c, shape, ln_scale, mixture, naming })
     }
 
     /// Number of rows new particles are drawn from.
     pub fn eligible(&self) -> usize {
         self.rows.len()
+    }
+}
+
+/// Sample `s`'s Weibull modulus and ln σ_θ at each of `rows` of `material`'s crush sample (the
+/// temperature column at `temperature_c` when given).
+fn scales_at(state: &State, material: usize, rows: &[usize], temperature_c: Option<f64>, s: &StateSample) -> Result<(f64, Vec<f64>)> {
+    let st = &state.forms[s.form].setup;
+    let (p, _) = st.params(material, &s.x, Mode::Joint);
+    let fit = &st.materials[material].model.fit;
+    if fit.terms.iter().any(|(_, t)| matches!(t, Term::Damage { .. })) {
+        return Err(Error::numerical("crush test", "a strength model with the damage effect has no crush-test likelihood here yet"));
+    }
+    // The linear columns in the order of β; the temperature column at the test's T.
+    let columns: Vec<(Effect, &Vec<f64>)> = fit.terms.iter().filter_map(|(e, t)| if let Term::Linear(z) = t { Some((*e, z)) } else { None }).collect();
+    let scales = rows
+        .iter()
+        .map(|&r| {
+            let z = |l: usize, (e, col): (Effect, &Vec<f64>)| match (e, temperature_c) {
+                (Effect::Temperature, Some(t)) => e.z(t, fit.references[l]),
+                _ => col[r],
+            };
+            p.mu + columns.iter().enumerate().map(|(l, &c)| p.beta[l] * z(l, c)).sum::<f64>()
+        })
+        .collect();
+    Ok((p.shape, scales))
+}
+
+/// ln p(s | m, ℓ) of the strengths `data` with modulus `m` and eligible rows' scales `row`
+/// (module docs); `mixture`: the shape is not measured, with the mixture's table when tabulated.
+fn loglik_of(data: &[(usize, f64)], m: f64, row: &[f64], mixture: Option<Option<&MixtureTable>>) -> f64 {
+    match mixture {
+        None => data.iter().map(|&(i, ln_s)| ln_gumbel_min(ln_s, m, row[i])).sum(),
+        // Shape not measured, every row at the same scale: one density.
+        Some(None) if one_scale(row) => data.iter().map(|&(_, ln_s)| ln_gumbel_min(ln_s, m, row[0])).sum(),
+        Some(None) => data.iter().map(|&(_, ln_s)| ln_mixture(ln_s, m, row).0).sum(),
+        Some(Some(table)) => data.iter().map(|&(_, ln_s)| table.ln_density(ln_s, m, row)).sum(),
+    }
+}
+
+impl Movable<State> for CrushTest {
+    fn loglik_at(&self, state: &State, data: &Self::Data, s: &StateSample) -> f64 {
+        match scales_at(state, self.material, &self.rows, self.temperature_c, s) {
+            Ok((m, row)) => loglik_of(data, m, &row, self.mixture.as_ref().map(|_| None)),
+            Err(_) => f64::NEG_INFINITY,
+        }
     }
 }
 
@@ -257,14 +299,7 @@ impl Experiment for CrushTest {
 
     fn loglik(&self, data: &Self::Data, k: usize) -> f64 {
         let r = self.rows.len();
-        let m = self.shape[k];
-        let row = &self.ln_scale[k * r..(k + 1) * r];
-        match self.mixture.as_ref().map(|t| &t[k]) {
-            None => data.iter().map(|&(i, ln_s)| ln_gumbel_min(ln_s, m, row[i])).sum(),
-            // Shape not measured, every row at the same scale: one density.
-            Some(None) => data.iter().map(|&(_, ln_s)| ln_gumbel_min(ln_s, m, row[0])).sum(),
-            Some(Some(table)) => data.iter().map(|&(_, ln_s)| table.ln_density(ln_s, m, row)).sum(),
-        }
+        loglik_of(data, self.shape[k], &self.ln_scale[k * r..(k + 1) * r], self.mixture.as_ref().map(|t| t[k].as_ref()))
     }
 
     /// 1 when the naming loop on the pooled data names exactly the truth's effects (module docs).
@@ -297,7 +332,7 @@ mod tests {
     fn naming_test(sample: Sample) -> CrushTest {
         let settings = NamingSettings { bootstrap: 49, permutations: 99, ..NamingSettings::default() };
         let naming = NamingCheck { settings, sample, temperature_c: None, effects: vec![vec![]], forms: vec![0] };
-        CrushTest { material: 0, particles: 2, diameter: None, rows: vec![0, 1], shape: vec![8.0], ln_scale: vec![18.4; 2], mixture: None, naming: Some(naming) }
+        CrushTest { material: 0, particles: 2, diameter: None, rows: vec![0, 1], temperature_c: None, shape: vec![8.0], ln_scale: vec![18.4; 2], mixture: None, naming: Some(naming) }
     }
 
     #[test]

@@ -17,7 +17,8 @@ use rand_distr::{Binomial, Distribution};
 use rayon::prelude::*;
 
 use super::preposterior::Experiment;
-use super::state::State;
+use super::smc::Movable;
+use super::state::{State, StateSample};
 use crate::error::{Error, Result};
 use crate::lifetime::damage::{CriticalRatioTable, DamageModel, Law};
 use crate::uq::setup::Mode;
@@ -46,6 +47,8 @@ pub struct ImpactTest {
     /// to be non-decreasing and ≤ 1, as probabilities of being broken by N impacts must be),
     /// and the largest such violation.
     pub clamped: (usize, f64),
+    /// Tavares–King's critical ratios at the counted impacts (when a damage model is TK).
+    tk: Option<Vec<CriticalRatioTable>>,
 }
 
 /// The interval probabilities π of P_N at the counted impacts (P clamped to be non-decreasing
@@ -72,25 +75,25 @@ impl ImpactTest {
         }
         let (glo, ghi) = state.gamma_range;
         let tk: Option<Vec<CriticalRatioTable>> = state.damage.contains(&DamageModel::TavaresKing).then(|| counts.iter().map(|&n| CriticalRatioTable::new(n, glo, ghi.max(glo + 1e-9), 41)).collect());
-        let m = counts.len();
-        let per: Vec<(Vec<f64>, f64)> = state
-            .samples
-            .par_iter()
-            .map(|s| -> Result<(Vec<f64>, f64)> {
-                let st = &state.forms[s.form].setup;
-                let (p, w) = st.params(material, &s.x, Mode::Joint);
-                let (eta, gamma) = (s.x[st.shared(0)], s.x[st.shared(3)]);
-                let model = state.damage[s.damage];
-                let laws: Vec<Law> = counts.iter().enumerate().map(|(i, &n)| Law::new(model, p.shape, n as f64, tk.as_ref().map_or(0.0, |t| t[i].ln_ratio(gamma)))).collect();
-                let mut pn = vec![0.0; m];
-                let lm = &st.materials[material].model;
-                lm.breakage_into(&p, w, lm.ln_impact_stress(eta, velocity)?, &laws, &mut pn);
-                Ok(intervals(&pn))
-            })
-            .collect::<Result<_>>()?;
+        let mut test = ImpactTest { material, particles, velocity, counts, probs: Vec::new(), clamped: (0, 0.0), tk };
+        let per: Vec<(Vec<f64>, f64)> = state.samples.par_iter().map(|s| test.intervals_at(state, s)).collect::<Result<_>>()?;
         let violations: Vec<f64> = per.iter().map(|(_, w)| *w).filter(|&w| w > CLAMP_TOLERANCE).collect();
-        let clamped = (violations.len(), violations.iter().copied().fold(0.0, f64::max));
-        Ok(ImpactTest { material, particles, velocity, counts, probs: per.into_iter().flat_map(|(p, _)| p).collect(), clamped })
+        test.clamped = (violations.len(), violations.iter().copied().fold(0.0, f64::max));
+        test.probs = per.into_iter().flat_map(|(p, _)| p).collect();
+        Ok(test)
+    }
+
+    /// π at sample `s` of `state` and the violation of monotonicity it mended ([`intervals`]).
+    fn intervals_at(&self, state: &State, s: &StateSample) -> Result<(Vec<f64>, f64)> {
+        let st = &state.forms[s.form].setup;
+        let (p, w) = st.params(self.material, &s.x, Mode::Joint);
+        let (eta, gamma) = (s.x[st.shared(0)], s.x[st.shared(3)]);
+        let model = state.damage[s.damage];
+        let laws: Vec<Law> = self.counts.iter().enumerate().map(|(i, &n)| Law::new(model, p.shape, n as f64, self.tk.as_ref().map_or(0.0, |t| t[i].ln_ratio(gamma)))).collect();
+        let mut pn = vec![0.0; self.counts.len()];
+        let lm = &st.materials[self.material].model;
+        lm.breakage_into(&p, w, lm.ln_impact_stress(eta, self.velocity)?, &laws, &mut pn);
+        Ok(intervals(&pn))
     }
 
     /// π of sample k.
@@ -121,7 +124,20 @@ impl Experiment for ImpactTest {
     }
 
     fn loglik(&self, c: &Vec<u64>, k: usize) -> f64 {
-        self.probabilities(k).iter().zip(c).filter(|(_, n)| **n > 0).map(|(p, &n)| n as f64 * p.max(PI_FLOOR).ln()).sum()
+        multinomial(self.probabilities(k), c)
+    }
+}
+
+/// ln p(c | π) up to the multinomial coefficient.
+fn multinomial(pi: &[f64], c: &[u64]) -> f64 {
+    pi.iter().zip(c).filter(|(_, n)| **n > 0).map(|(p, &n)| n as f64 * p.max(PI_FLOOR).ln()).sum()
+}
+
+impl Movable<State> for ImpactTest {
+    fn loglik_at(&self, state: &State, c: &Vec<u64>, s: &StateSample) -> f64 {
+        // A sample whose stress cannot be computed has no likelihood (the prior samples all
+        // could; a moved one that cannot is rejected).
+        self.intervals_at(state, s).map_or(f64::NEG_INFINITY, |(pi, _)| multinomial(&pi, c))
     }
 }
 

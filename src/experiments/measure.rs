@@ -11,7 +11,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 use super::preposterior::Experiment;
-use super::state::State;
+use super::smc::Movable;
+use super::state::{State, StateSample};
 use crate::error::{Error, Result};
 
 /// Which shared input is measured.
@@ -72,6 +73,19 @@ impl Experiment for Measurement {
     }
 
     fn loglik(&self, ybar: &f64, k: usize) -> f64 {
-        -(self.n as f64) * (ybar - self.ln_x[k]).powi(2) / (2.0 * self.sd_log * self.sd_log)
+        self.loglik_of(*ybar, self.ln_x[k])
+    }
+}
+
+impl Measurement {
+    fn loglik_of(&self, ybar: f64, ln_x: f64) -> f64 {
+        -(self.n as f64) * (ybar - ln_x).powi(2) / (2.0 * self.sd_log * self.sd_log)
+    }
+}
+
+impl Movable<State> for Measurement {
+    fn loglik_at(&self, state: &State, ybar: &f64, s: &StateSample) -> f64 {
+        let st = &state.forms[s.form].setup;
+        self.loglik_of(*ybar, s.x[st.shared(self.what.shared_index())].ln())
     }
 }

@@ -48,6 +48,7 @@ pub mod measure;
 pub mod plan;
 pub mod preposterior;
 pub mod run;
+pub mod smc;
 pub mod state;
 pub mod study;
 mod summary;

@@ -9,7 +9,8 @@ use super::crush::CrushTest;
 use super::impact::ImpactTest;
 use super::measure::Measurement;
 use super::preposterior::{Experiment, Metrics, Score};
-use super::state::State;
+use super::smc::Movable;
+use super::state::{State, StateSample};
 use super::study::ExperimentsStudy;
 
 /// One candidate experiment of any kind.
@@ -73,6 +74,23 @@ impl Experiment for Candidate {
             (Candidate::Crush(c), Data::Crush(d)) => c.score(d, truth, draw),
             _ => None,
         }
+    }
+}
+
+impl Movable<State> for Candidate {
+    fn loglik_at(&self, state: &State, data: &Data, s: &StateSample) -> f64 {
+        match (self, data) {
+            (Candidate::Crush(c), Data::Crush(d)) => c.loglik_at(state, d, s),
+            (Candidate::Impact(c), Data::Impact(d)) => c.loglik_at(state, d, s),
+            (Candidate::Measure(c), Data::Measure(d)) => c.loglik_at(state, d, s),
+            _ => unreachable!("data of another candidate"),
+        }
+    }
+}
+
+impl Movable<State> for Plan<'_> {
+    fn loglik_at(&self, state: &State, data: &Vec<Data>, s: &StateSample) -> f64 {
+        self.0.iter().zip(data).map(|(c, d)| c.loglik_at(state, d, s)).sum()
     }
 }
 

@@ -272,6 +272,9 @@ pub enum Route {
     Reweighted,
     /// The experiment's fallback (ESS below the threshold).
     Fallback,
+    /// Resample-move ([`super::smc`]): ESS below the threshold after the fallback, the posterior
+    /// tempered in and its samples moved.
+    Moved,
     /// ESS below the threshold and no fallback: reweighted anyway.
     Collapsed,
 }
@@ -317,11 +320,15 @@ pub struct Metrics {
     /// Prior weight of the truth's label (its expectation over the truths' distribution), per
     /// label kind.
     pub prior_true_label_weight: Vec<f64>,
-    /// Median ESS of the reweighted posteriors.
+    /// Median ESS of the posteriors (reweighted, or after resample-move with identical samples
+    /// merged).
     pub median_ess: f64,
     /// Outer draws that used the fallback.
     pub fallbacks: usize,
-    /// Outer draws whose reweighting collapsed without a fallback.
+    /// Outer draws whose posterior came from resample-move ([`super::smc`]).
+    pub moved: usize,
+    /// Outer draws whose reweighting collapsed without a fallback (or stayed below the
+    /// threshold after resample-move).
     pub collapsed: usize,
     /// The experiment's score over the draws that computed it; None when no draw did.
     pub score: Option<Scored>,
@@ -350,15 +357,12 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
         return Err(Error::numerical("preposterior analysis", format!("needs at least 2 outer draws, got {}", settings.outer)));
     }
     let kn = knowledge;
-    let active = settings.active.unwrap_or(kn.len()).clamp(2, kn.len());
-    let eligible: Vec<f64> = kn.weights.iter().enumerate().map(|(k, &w)| if k < active && settings.truth.is_none_or(|(kind, label)| kn.labels[k * kn.label_kinds + kind] == label) { w } else { 0.0 }).collect();
-    let truths = Categorical::new(&eligible).ok_or_else(|| Error::numerical("preposterior analysis", format!("no prior sample has the truth's label {:?}", settings.truth)))?;
+    let truths = Truths::new(kn, &settings)?;
+    let active = truths.active;
     let draws: Vec<Draw> = (0..settings.outer)
         .into_par_iter()
         .map(|j| {
-            let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
-            rng.set_stream(j as u64 + 1);
-            let truth = truths.draw(rng.random());
+            let (mut rng, truth) = truths.start(&settings, j);
             debug_assert!(kn.weights[truth] > 0.0);
             let data = experiment.simulate(truth, &mut rng);
             let score = if j < settings.scored { experiment.score(&data, truth, j) } else { None };
@@ -392,6 +396,40 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
             }
         })
         .collect::<Result<_>>()?;
+    Metrics::of(kn, &settings, draws)
+}
+
+/// The truths of the outer draws: the samples a truth is drawn from and their distribution.
+pub(crate) struct Truths {
+    /// The first `active` samples are the prior ([`Settings::active`]).
+    pub active: usize,
+    /// Each sample's weight as a truth (0 outside the active samples and the conditioned label).
+    pub eligible: Vec<f64>,
+    /// The distribution of the truth's index.
+    pub draw: Categorical,
+}
+
+impl Truths {
+    pub(crate) fn new(kn: &Knowledge, settings: &Settings) -> Result<Truths> {
+        let active = settings.active.unwrap_or(kn.len()).clamp(2, kn.len());
+        let eligible: Vec<f64> = kn.weights.iter().enumerate().map(|(k, &w)| if k < active && settings.truth.is_none_or(|(kind, label)| kn.labels[k * kn.label_kinds + kind] == label) { w } else { 0.0 }).collect();
+        let draw = Categorical::new(&eligible).ok_or_else(|| Error::numerical("preposterior analysis", format!("no prior sample has the truth's label {:?}", settings.truth)))?;
+        Ok(Truths { active, eligible, draw })
+    }
+
+    /// Outer draw j's random stream (stream j + 1 of the seed) and its truth, drawn first from it.
+    pub(crate) fn start(&self, settings: &Settings, j: usize) -> (ChaCha8Rng, usize) {
+        let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+        rng.set_stream(j as u64 + 1);
+        let truth = self.draw.draw(rng.random());
+        (rng, truth)
+    }
+}
+
+impl Metrics {
+    /// The metrics of the outer draws `draws` of an analysis with `settings` on `kn`.
+    pub(crate) fn of(kn: &Knowledge, settings: &Settings, draws: Vec<Draw>) -> Result<Metrics> {
+    let Truths { active, eligible, draw: truths } = Truths::new(kn, settings)?;
     let prior_w: Vec<f64> = {
         let t: f64 = kn.weights[..active].iter().sum();
         kn.weights.iter().enumerate().map(|(k, w)| if k < active { w / t } else { 0.0 }).collect()
@@ -439,9 +477,11 @@ pub fn preposterior<E: Experiment>(knowledge: &Knowledge, experiment: &E, settin
         prior_true_label_weight: (0..kn.label_kinds).map(|kind| (0..active).map(|k| eligible[k] / truths.total() * prior.label_weights[kind][label(kind, k)]).sum()).collect(),
         median_ess: crate::stats::sorted_quantile(&ess, 0.5),
         fallbacks: draws.iter().filter(|d| d.route == Route::Fallback).count(),
+        moved: draws.iter().filter(|d| d.route == Route::Moved).count(),
         collapsed: draws.iter().filter(|d| d.route == Route::Collapsed).count(),
         score,
         prior,
         draws,
     })
+}
 }

@@ -16,7 +16,15 @@
 //! whose addition to the plan so far gives the largest gain of the objective per cost among
 //! those that fit the remaining budget. It stops when nothing fits or no addition gains more
 //! than two Monte Carlo standard errors. Its first step is the "most informative next step" of
-//! the summary under either rule.
+//! the summary under either rule (chosen by the singles' ranking). Every step's additions are
+//! evaluated on the same outer draws — truths and the earlier tests' data — and the chosen
+//! addition's posteriors are carried to the next step ([`super::smc`], sequential plans), where
+//! reweighting gives way to resample-move as tests accumulate; `allocation.csv` gives each
+//! step's metrics on those draws.
+//!
+//! Every plan — a single candidate, a greedy step, an exhaustive plan — is evaluated test after
+//! test from the prior: reweighting, the reserve as fallback, and resample-move (`[analysis]
+//! particles`, `sweeps`) where the effective sample size stays below `min_ess`.
 //!
 //! **Exhaustive** (`allocation = "exhaustive"`, for small grids): every affordable plan is
 //! evaluated with the same outer draws (common random numbers, so plans are compared on the
@@ -25,14 +33,14 @@
 //! cannot resolve is not recommended. Greedy allocation can miss the best plan when a costly
 //! test is worth more than two cheap ones together (a knapsack); exhaustive cannot, on its grid.
 
-use rayon::prelude::*;
 
 use super::crush::{CrushOptions, CrushTest};
 use super::impact::ImpactTest;
 use super::measure::{Measured, Measurement};
 pub use super::plan::{Allocated, Evaluated, first_step};
-use super::plan::{Candidate, Plan};
-use super::preposterior::{Metrics, Settings, preposterior};
+use super::plan::Candidate;
+use super::preposterior::{Metrics, Settings};
+use super::smc::{self, Moves};
 use super::state::State;
 use super::study::{Allocation, ExperimentsStudy, Objective, TestKind};
 use crate::error::{Error, Result};
@@ -126,24 +134,39 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
         built.push(c.sizes.iter().map(|&n| base.sized(n as u64)).collect());
     }
     let settings = |salt: u64, scored: usize| Settings { outer: a.outer, min_ess: a.min_ess, seed: s.seed ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15), truth: None, active: Some(a.samples), scored };
-    // The naming loop's verdict is asked of single candidates only (`scored`), not of plans.
-    let evaluate_scored = |picks: &[(usize, usize)], salt: u64, scored: usize| -> Result<Evaluated> {
-        let plan = Plan(picks.iter().map(|&(i, j)| &built[i][j]).collect());
-        let metrics = preposterior(&state.knowledge, &plan, settings(salt, scored))?;
+    let moves = Some(Moves { particles: a.particles, sweeps: a.sweeps });
+    let evaluated = |picks: &[(usize, usize)], metrics: Metrics| -> Evaluated {
         let objective = objective(s.decision.objective, &state, &metrics);
-        Ok(Evaluated {
+        Evaluated {
             names: picks.iter().map(|&(i, _)| s.candidate[i].name.clone()).collect(),
             sizes: picks.iter().map(|&(i, j)| s.candidate[i].sizes[j] as u64).collect(),
             cost: picks.iter().map(|&(i, j)| s.candidate[i].cost(s.candidate[i].sizes[j] as u64)).sum(),
             metrics,
             objective,
-        })
+        }
+    };
+    // A plan evaluated test after test from the prior (resample-move where reweighting
+    // degenerates, `smc`); the naming loop's verdict is asked of single candidates only
+    // (`scored`), not of plans.
+    let evaluate_scored = |picks: &[(usize, usize)], salt: u64, scored: usize| -> Result<Evaluated> {
+        let set = settings(salt, scored);
+        let mut tracks = smc::start::<State, Candidate>(&state.knowledge, &set)?;
+        let tests: Vec<&Candidate> = picks.iter().map(|&(i, j)| &built[i][j]).collect();
+        for (t, test) in tests.iter().enumerate() {
+            let last = t + 1 == tests.len();
+            let (metrics, next) = smc::extend(&state.knowledge, &state, &tracks, &tests[..t], test, &set, moves, move_seed(set.seed, t), !last)?;
+            match next {
+                Some(next) => tracks = next,
+                None => return Ok(evaluated(picks, metrics)),
+            }
+        }
+        Err(Error::numerical("experiment design", "an empty plan"))
     };
     let evaluate = |picks: &[(usize, usize)], salt: u64| evaluate_scored(picks, salt, 0);
     let mut singles = Vec::new();
     for (i, c) in s.candidate.iter().enumerate() {
         for j in 0..c.sizes.len() {
-            singles.push(((i, j), evaluate_scored(&[(i, j)], 1 + (i * 64 + j) as u64, c.naming_draws.unwrap_or(0))?));
+            singles.push(((i, j), evaluate_scored(&[(i, j)], single_salt((i, j)), c.naming_draws.unwrap_or(0))?));
             pb.inc(1);
         }
     }
@@ -151,7 +174,7 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     let allocated = match s.budget.allocation {
         Allocation::Greedy => {
             pb.set_message("budget allocation (greedy)");
-            Allocated::Greedy(greedy(s, &singles, &evaluate, &pb)?)
+            Allocated::Greedy(greedy(s, &state, &built, &singles, &|salt| settings(salt, 0), moves, &evaluated, &pb)?)
         }
         Allocation::Exhaustive => {
             pb.set_message("budget allocation (exhaustive)");
@@ -195,35 +218,64 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: summary.headlines })
 }
 
-/// The greedy allocation (module docs).
-fn greedy(s: &ExperimentsStudy, singles: &[((usize, usize), Evaluated)], evaluate: &(dyn Fn(&[(usize, usize)], u64) -> Result<Evaluated> + Sync), pb: &indicatif::ProgressBar) -> Result<Vec<Evaluated>> {
+/// Salt of the outer draws of the single (candidate, size) `p`; the greedy allocation goes on
+/// from its first step's (one set of outer draws for every step: common random numbers).
+fn single_salt(p: (usize, usize)) -> u64 {
+    1 + (p.0 * 64 + p.1) as u64
+}
+
+/// The seed of the moves of the `t`-th test (0-based) of a sequence with seed `seed`.
+fn move_seed(seed: u64, t: usize) -> u64 {
+    seed ^ (0xA11C_E5ED_0000_0000 | t as u64)
+}
+
+/// The greedy allocation (module docs): every step's additions evaluated on the same outer draws
+/// (truths and earlier data), the chosen addition's posteriors carried to the next step.
+#[allow(clippy::too_many_arguments)]
+fn greedy(s: &ExperimentsStudy, state: &State, built: &[Vec<Candidate>], singles: &[((usize, usize), Evaluated)], settings_of: &(dyn Fn(u64) -> Settings + Sync), moves: Option<Moves>, evaluated: &(dyn Fn(&[(usize, usize)], Metrics) -> Evaluated + Sync), pb: &indicatif::ProgressBar) -> Result<Vec<Evaluated>> {
+    let kn = &state.knowledge;
     let mut plan: Vec<(usize, usize)> = Vec::new();
     let mut steps: Vec<Evaluated> = Vec::new();
+    // Started at the first step, on the chosen single's outer draws.
+    let mut tracks = Vec::new();
+    let mut settings = settings_of(0);
     let (mut spent, mut current) = (0.0, 0.0);
     loop {
         let options: Vec<(usize, usize)> = (0..s.candidate.len()).filter(|i| !plan.iter().any(|p| p.0 == *i)).flat_map(|i| (0..s.candidate[i].sizes.len()).map(move |j| (i, j))).filter(|&(i, j)| spent + s.candidate[i].cost(s.candidate[i].sizes[j] as u64) <= s.budget.total).collect();
         if options.is_empty() {
             break;
         }
+        let earlier: Vec<&Candidate> = plan.iter().map(|&(i, j)| &built[i][j]).collect();
+        let seed = move_seed(settings.seed, plan.len());
+        let with = |p: (usize, usize)| -> Vec<(usize, usize)> { plan.iter().copied().chain([p]).collect() };
+        // The first step's choice is the singles' ranking (the most informative next step).
         let tried: Vec<((usize, usize), Evaluated)> = if plan.is_empty() {
             singles.iter().filter(|(p, _)| options.contains(p)).cloned().collect()
         } else {
-            options
-                .par_iter()
-                .map(|&p| {
-                    let mut picks = plan.clone();
-                    picks.push(p);
-                    evaluate(&picks, 0x5EED + (steps.len() * 4096 + p.0 * 64 + p.1) as u64).map(|e| (p, e))
-                })
-                .collect::<Result<_>>()?
+            let mut tried = Vec::with_capacity(options.len());
+            for &p in &options {
+                let (m, _) = smc::extend(kn, state, &tracks, &earlier, &built[p.0][p.1], &settings, moves, seed, false)?;
+                tried.push((p, evaluated(&with(p), m)));
+                pb.inc(1);
+            }
+            tried
         };
-        pb.inc(tried.len() as u64);
         let gain = |e: &Evaluated| (e.objective.0 - current) / (e.cost - spent);
-        let Some((p, best)) = tried.into_iter().filter(|(_, e)| e.objective.0 - current > 2.0 * e.objective.1).max_by(|x, y| gain(&x.1).total_cmp(&gain(&y.1))) else { break };
+        let Some((p, _)) = tried.into_iter().filter(|(_, e)| e.objective.0 - current > 2.0 * e.objective.1).max_by(|x, y| gain(&x.1).total_cmp(&gain(&y.1))) else { break };
+        // The chosen addition again, keeping its posteriors (the same seeds: the same numbers as
+        // the search's, or at the first step as the single's).
+        if plan.is_empty() {
+            settings = settings_of(single_salt(p));
+            tracks = smc::start::<State, Candidate>(kn, &settings)?;
+        }
+        let seed = move_seed(settings.seed, plan.len());
+        let (m, next) = smc::extend(kn, state, &tracks, &earlier, &built[p.0][p.1], &settings, moves, seed, true)?;
+        tracks = next.expect("kept");
         plan.push(p);
-        spent = best.cost;
-        current = best.objective.0;
-        steps.push(best);
+        let step = evaluated(&plan, m);
+        spent = step.cost;
+        current = step.objective.0;
+        steps.push(step);
     }
     Ok(steps)
 }
@@ -272,6 +324,7 @@ fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: 
             fcol("true_strength_model_weight_naming_draws", col(&|e| e.metrics.score.as_ref().map_or(f64::NAN, |s| s.true_label_weight[1].mean), rows)),
             fcol("median_ess", col(&|e| e.metrics.median_ess, rows)),
             ucol("fallbacks", rows.iter().map(|e| e.metrics.fallbacks as u64).collect()),
+            ucol("moved", rows.iter().map(|e| e.metrics.moved as u64).collect()),
             ucol("collapsed", rows.iter().map(|e| e.metrics.collapsed as u64).collect()),
         ]);
         c

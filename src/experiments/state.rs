@@ -26,8 +26,10 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use statrs::distribution::{ContinuousCDF, Normal};
 
 use super::preposterior::{Knowledge, Metrics};
+use super::smc::{Row, Space};
 use crate::error::{Error, Result};
 use crate::lifetime::damage::DamageModel;
 use crate::stats::Categorical;
@@ -50,9 +52,14 @@ pub struct StateSample {
     pub form: usize,
     /// Damage model (index into [`State::damage`]).
     pub damage: usize,
+    /// Normal scores z = Φ⁻¹(u) of the unit point u over the setup's varying inputs (joint
+    /// mode): the prior is standard normal in z, given the two models (the coordinates that
+    /// resample-move changes, [`super::smc`]).
+    pub z: Vec<f64>,
     /// The setup's inputs (joint mode).
     pub x: Vec<f64>,
-    /// P_break of material j at horizon h under the sample's damage model, at j·H + h.
+    /// P_break of material j at horizon h under the sample's damage model, at j·H + h (empty
+    /// for a moved sample until its row is needed).
     pub p: Vec<f64>,
 }
 
@@ -76,6 +83,101 @@ pub struct State {
     pub knowledge: Knowledge,
     /// Range of the Tavares–King γ.
     pub gamma_range: (f64, f64),
+    /// The decision's loss for choosing the particle that breaks more.
+    pub loss: f64,
+    /// Per strength model and varying input, the order of a joint-draw index along the normal
+    /// score (module docs, "Moves"); None for other inputs.
+    orders: Vec<Vec<Option<DrawOrder>>>,
+}
+
+/// Joint draws in Hilbert-curve order of their (scale at the mean covariates, modulus) ranks.
+#[derive(Debug, Clone, PartialEq)]
+struct DrawOrder {
+    /// The draw at each position.
+    draw: Vec<u32>,
+    /// The position of each draw.
+    position: Vec<u32>,
+}
+
+impl DrawOrder {
+    /// The order of material j's draws of `setup`.
+    fn new(setup: &crate::uq::setup::Setup, j: usize) -> DrawOrder {
+        let mat = &setup.materials[j];
+        let k = mat.draws.len();
+        let centre = &mat.model.fit.centre;
+        let mu_c: Vec<f64> = mat.draws.iter().map(|d| d.mu + centre.iter().zip(&d.beta).map(|(c, b)| c * b).sum::<f64>()).collect();
+        let m: Vec<f64> = mat.draws.iter().map(|d| d.shape).collect();
+        let (rx, ry) = (crate::stats::ranks(&mu_c), crate::stats::ranks(&m));
+        let cell = |r: f64| (((r - 1.0) / k as f64 * HILBERT_SIDE as f64) as u64).min(HILBERT_SIDE - 1);
+        let mut draw: Vec<u32> = (0..k as u32).collect();
+        draw.sort_by_key(|&d| (hilbert(cell(rx[d as usize]), cell(ry[d as usize])), d));
+        let mut position = vec![0; k];
+        for (p, &d) in draw.iter().enumerate() {
+            position[d as usize] = p as u32;
+        }
+        DrawOrder { draw, position }
+    }
+}
+
+/// Side of the Hilbert curve's grid.
+const HILBERT_SIDE: u64 = 1 << 10;
+
+/// The position of cell (x, y) along the Hilbert curve over a [`HILBERT_SIDE`]² grid.
+fn hilbert(mut x: u64, mut y: u64) -> u64 {
+    let mut d = 0;
+    let mut s = HILBERT_SIDE / 2;
+    while s > 0 {
+        let rx = u64::from(x & s > 0);
+        let ry = u64::from(y & s > 0);
+        d += s * s * ((3 * rx) ^ ry);
+        if ry == 0 {
+            if rx == 1 {
+                x = HILBERT_SIDE - 1 - x;
+                y = HILBERT_SIDE - 1 - y;
+            }
+            std::mem::swap(&mut x, &mut y);
+        }
+        s /= 2;
+    }
+    d
+}
+
+/// Unit points are kept this far inside (0, 1) before their normal scores are taken (a draw of
+/// exactly 0 would have the score −∞).
+const U_CLAMP: f64 = 1e-16;
+
+fn std_normal() -> Normal {
+    Normal::new(0.0, 1.0).expect("the standard normal")
+}
+
+/// The sample of strength model `form` (of `forms`) and damage model `d` at the unit point `u`
+/// (normal scores `z`): its inputs and, when `with_p`, P_break per material and horizon (else
+/// empty: [`p_of`] when needed).
+fn sample_of(forms: &[Weighed], years: &[f64], form: usize, d: usize, z: Vec<f64>, u: &[f64], with_p: bool) -> Result<StateSample> {
+    let x = forms[form].setup.values(u, Mode::Joint);
+    let mut s = StateSample { form, damage: d, z, x, p: Vec::new() };
+    if with_p {
+        s.p = p_of(forms, years.len(), &s)?;
+    }
+    Ok(s)
+}
+
+/// P_break of sample `s` per material and horizon (material-major).
+fn p_of(forms: &[Weighed], h_n: usize, s: &StateSample) -> Result<Vec<f64>> {
+    let st = &forms[s.form].setup;
+    let mut all = vec![0.0; st.outputs()];
+    st.evaluate_into(&s.x, Mode::Joint, &mut all)?;
+    Ok((0..2).flat_map(|j| (0..h_n).map(move |h| (j, h))).map(|(j, h)| all[st.slot(j, h, s.damage)]).collect())
+}
+
+/// [`State::row`] before the state exists.
+fn row_of(forms: &[Weighed], h_n: usize, horizon: usize, loss: f64, s: &StateSample) -> Result<([f64; 2], Vec<f64>, [u32; 2])> {
+    let mut values = if s.p.is_empty() { p_of(forms, h_n, s)? } else { s.p.clone() };
+    let (a, b) = (values[horizon], values[h_n + horizon]);
+    let st = &forms[s.form].setup;
+    values.extend([s.x[st.shared(0)].ln(), s.x[st.shared(1)].ln(), st.params(0, &s.x, Mode::Joint).0.shape, st.params(1, &s.x, Mode::Joint).0.shape]);
+    values.push(if a > b { 1.0 } else { 0.0 });
+    Ok(([if a > b { loss } else { 0.0 }, if b > a { loss } else { 0.0 }], values, [s.damage as u32, s.form as u32]))
 }
 
 impl State {
@@ -94,7 +196,13 @@ impl State {
         let bad = |what: &str, w: &[f64]| Error::numerical("state of knowledge", format!("{what} weights {w:?}: need non-negative weights, one positive"));
         let form_draw = Categorical::new(&form_weights).ok_or_else(|| bad("strength-model", &form_weights))?;
         let damage_draw = Categorical::new(&damage_weights).ok_or_else(|| bad("damage-model", &damage_weights))?;
-        let h_n = years.len();
+        let orders: Vec<Vec<Option<DrawOrder>>> = forms
+            .iter()
+            .map(|f| {
+                let st = &f.setup;
+                st.varying(Mode::Joint).into_iter().map(|i| (0..2).find(|&j| st.strength_input(j) == i).map(|j| DrawOrder::new(st, j))).collect()
+            })
+            .collect();
         let samples: Vec<StateSample> = (0..k)
             .into_par_iter()
             .map(|i| {
@@ -104,11 +212,24 @@ impl State {
                 let d = damage_draw.draw(rng.random());
                 let st = &forms[form].setup;
                 let u: Vec<f64> = (0..st.varying(Mode::Joint).len()).map(|_| rng.random()).collect();
-                let x = st.values(&u, Mode::Joint);
-                let mut all = vec![0.0; st.outputs()];
-                st.evaluate_into(&x, Mode::Joint, &mut all)?;
-                let p = (0..2).flat_map(|j| (0..h_n).map(move |h| (j, h))).map(|(j, h)| all[st.slot(j, h, d)]).collect();
-                Ok(StateSample { form, damage: d, x, p })
+                // The score of a joint-draw index is that of its position in the draws' order,
+                // at the same place within its cell.
+                let z = u
+                    .iter()
+                    .zip(&orders[form])
+                    .map(|(&u, order)| {
+                        let v = match order {
+                            None => u,
+                            Some(o) => {
+                                let k = o.draw.len() as f64;
+                                let cell = (u * k).floor().min(k - 1.0);
+                                (o.position[cell as usize] as f64 + (u * k - cell)) / k
+                            }
+                        };
+                        std_normal().inverse_cdf(v.clamp(U_CLAMP, 1.0 - U_CLAMP))
+                    })
+                    .collect();
+                sample_of(&forms, &years, form, d, z, &u, true)
             })
             .collect::<Result<_>>()?;
         let keys = [first.materials[0].model.key.clone(), first.materials[1].model.key.clone()];
@@ -120,16 +241,40 @@ impl State {
         let mut values = Vec::with_capacity(q * k);
         let mut labels = Vec::with_capacity(2 * k);
         for s in &samples {
-            let (a, b) = (s.p[horizon], s.p[h_n + horizon]);
-            loss_v.extend([if a > b { loss } else { 0.0 }, if b > a { loss } else { 0.0 }]);
-            values.extend(s.p.iter().copied());
-            let st = &forms[s.form].setup;
-            values.extend([s.x[st.shared(0)].ln(), s.x[st.shared(1)].ln(), st.params(0, &s.x, Mode::Joint).0.shape, st.params(1, &s.x, Mode::Joint).0.shape]);
-            values.push(if a > b { 1.0 } else { 0.0 });
-            labels.extend([s.damage as u32, s.form as u32]);
+            let (l, v, c) = row_of(&forms, years.len(), horizon, loss, s)?;
+            loss_v.extend(l);
+            values.extend(v);
+            labels.extend(c);
         }
         let knowledge = Knowledge::new(vec![1.0; k], 2, loss_v, q, values, 2, labels)?;
-        Ok(State { forms, damage, damage_weights, years, horizon, samples, quantity_names, knowledge, gamma_range })
+        Ok(State { forms, damage, damage_weights, years, horizon, loss, samples, quantity_names, knowledge, gamma_range, orders })
+    }
+
+    /// The sample of strength model `form` and damage model `damage` at normal scores `z`, its
+    /// P_break left to be computed when its row is needed ([`State::row`]).
+    pub fn sample_at(&self, form: usize, damage: usize, z: Vec<f64>) -> Result<StateSample> {
+        let u: Vec<f64> = z
+            .iter()
+            .zip(&self.orders[form])
+            .map(|(&z, order)| {
+                let u = std_normal().cdf(z);
+                match order {
+                    None => u,
+                    // The draw at the score's position, at the middle of its cell.
+                    Some(o) => {
+                        let k = o.draw.len();
+                        (o.draw[((u * k as f64) as usize).min(k - 1)] as f64 + 0.5) / k as f64
+                    }
+                }
+            })
+            .collect();
+        sample_of(&self.forms, &self.years, form, damage, z, &u, false)
+    }
+
+    /// The sample's row of the [`Knowledge`]: the losses of the two actions, the quantities
+    /// (in [`State::quantity_names`] order) and the labels (damage model, strength model).
+    pub fn row(&self, s: &StateSample) -> Result<([f64; 2], Vec<f64>, [u32; 2])> {
+        row_of(&self.forms, self.years.len(), self.horizon, self.loss, s)
     }
 
     /// Index of the quantity "candidate breaks more at the decision horizon".
@@ -163,6 +308,37 @@ impl State {
     /// Index of the quantity P_break of material j at horizon h.
     pub fn p_quantity(&self, j: usize, h: usize) -> usize {
         j * self.years.len() + h
+    }
+}
+
+impl Space for State {
+    type Point = StateSample;
+
+    fn point(&self, k: usize) -> &StateSample {
+        &self.samples[k]
+    }
+
+    fn scores<'a>(&self, p: &'a StateSample) -> &'a [f64] {
+        &p.z
+    }
+
+    fn indexes(&self, p: &StateSample, c: usize) -> bool {
+        self.orders[p.form][c].is_some()
+    }
+
+    fn draws_key(&self, p: &StateSample) -> u64 {
+        let st = &self.forms[p.form].setup;
+        let k = |j: usize| p.x[st.strength_input(j)] as u64;
+        (p.form as u64) << 48 | k(0) << 24 | k(1)
+    }
+
+    fn moved(&self, p: &StateSample, z: Vec<f64>) -> Result<StateSample> {
+        self.sample_at(p.form, p.damage, z)
+    }
+
+    fn row(&self, p: &StateSample) -> Result<Row> {
+        let (loss, values, labels) = State::row(self, p)?;
+        Ok(Row { loss: loss.to_vec(), values, labels: labels.to_vec() })
     }
 }
 

@@ -17,6 +17,8 @@
 //! reserve = 4000                     # further prior samples, the resampling fallback
 //! outer = 300                        # simulated datasets per candidate and size
 //! min_ess = 50                       # effective sample size below which the fallback is used
+//! particles = 400                    # resample-move where the reserve is not enough: population size
+//! sweeps = 2                         # … and the fewest Metropolis–Hastings sweeps per tempering stage
 //!
 //! [budget]
 //! total = 20000                      # in the decision's currency
@@ -132,11 +134,15 @@ pub struct AnalysisOptions {
     pub outer: usize,
     /// ESS threshold.
     pub min_ess: f64,
+    /// Resample-move: population size after resampling.
+    pub particles: usize,
+    /// Resample-move: Metropolis–Hastings sweeps per tempering stage.
+    pub sweeps: usize,
 }
 
 impl Default for AnalysisOptions {
     fn default() -> Self {
-        AnalysisOptions { samples: 4000, reserve: 4000, outer: 300, min_ess: 50.0 }
+        AnalysisOptions { samples: 4000, reserve: 4000, outer: 300, min_ess: 50.0, particles: 400, sweeps: 2 }
     }
 }
 
@@ -263,6 +269,12 @@ impl ExperimentsStudy {
         let a = &self.analysis;
         if a.samples < 100 || a.outer < 20 || !positive(a.min_ess) || a.min_ess >= a.samples as f64 {
             return bad("analysis".into(), format!("needs samples ≥ 100, outer ≥ 20 and 0 < min_ess < samples, got samples = {}, outer = {}, min_ess = {}", a.samples, a.outer, a.min_ess));
+        }
+        if (a.particles as f64) < 2.0 * a.min_ess || a.particles > a.samples + a.reserve {
+            return bad("analysis.particles".into(), format!("resample-move needs at least 2 × min_ess = {} particles (fewer cannot reach the threshold) and at most samples + reserve = {}, got {}", 2.0 * a.min_ess, a.samples + a.reserve, a.particles));
+        }
+        if !(1..=super::smc::MAX_SWEEPS).contains(&a.sweeps) {
+            return bad("analysis.sweeps".into(), format!("must lie between 1 and {}, got {}", super::smc::MAX_SWEEPS, a.sweeps));
         }
         if !positive(self.budget.total) {
             return bad("budget.total".into(), format!("must be a finite number > 0, got {}", self.budget.total));

@@ -106,7 +106,7 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
     let band = |j: usize| prior.prior.band90[qs[j]];
     let mut md = format!("# Which experiment next? {} against {}\n\n", labels[0], labels[1]);
     md.push_str(&format!(
-        "Prior: the state of knowledge of the main study `{}` ({} samples and a reserve of {}: strength models with their stacking weights, damage models {} with prior weights {}). Decision: which particle to choose for a plant over {}, a wrong choice costing {} {cur}. Each candidate and size: {} simulated datasets (preposterior analysis by importance reweighting; `partlife::experiments`).{}\n\n",
+        "Prior: the state of knowledge of the main study `{}` ({} samples and a reserve of {}: strength models with their stacking weights, damage models {} with prior weights {}). Decision: which particle to choose for a plant over {}, a wrong choice costing {} {cur}. Each candidate and size: {} simulated datasets (preposterior analysis by importance reweighting, and resample-move with {} particles where it degenerates; `partlife::experiments`).{}\n\n",
         s.study,
         s.analysis.samples,
         s.analysis.reserve,
@@ -115,6 +115,7 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         years(state.years[state.horizon]),
         s.decision.loss,
         s.analysis.outer,
+        s.analysis.particles,
         crate::intake::synthetic_sentence("crush data", &state.forms[0].setup.materials.iter().map(|m| (m.model.label.as_str(), m.path.as_path())).collect::<Vec<_>>())
     ));
     md.push_str("## Today\n\n");
@@ -220,7 +221,7 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
                             1 => "Step 1 stands; beyond it, rerun the study once that test is done.".to_string(),
                             k => format!("Steps 1–{k} stand; beyond them, rerun the study once those tests are done."),
                         };
-                        md.push_str(&format!("\n**Not reliable:** {} — below a median effective sample size of {RELIABLE_ESS} or with {:.0} % or more of the reweighted posteriors collapsed, importance reweighting of the prior samples does not represent the posterior of these plans, and their objectives, P(correct choice) and weights may be far off. {stands}\n", weak.join("; "), 100.0 * RELIABLE_COLLAPSED));
+                        md.push_str(&format!("\n**Not reliable:** {} — below a median effective sample size of {RELIABLE_ESS} or with {:.0} % or more of the reweighted posteriors collapsed, neither the reweighted prior samples nor resample-move represent the posterior of these plans, and their objectives, P(correct choice) and weights may be far off. {stands}\n", weak.join("; "), 100.0 * RELIABLE_COLLAPSED));
                     }
                 }
                 Allocated::Exhaustive { plans, chosen } => {
@@ -285,12 +286,16 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         ));
     }
     md.push_str(&naming_section(s, state, singles));
-    let collapsed: usize = singles.iter().map(|(_, e)| e.metrics.collapsed).sum();
-    let fallbacks: usize = singles.iter().map(|(_, e)| e.metrics.fallbacks).sum();
+    let plans: Vec<&Metrics> = singles.iter().map(|(_, e)| &e.metrics).chain(allocated.plans().iter().map(|e| &e.metrics)).collect();
+    let count = |f: &dyn Fn(&Metrics) -> usize| plans.iter().map(|m| f(m)).sum::<usize>();
     md.push_str(&format!(
-        "\nReweighting: {fallbacks} of {} simulated datasets needed the reserve samples, {collapsed} stayed below the effective-sample-size threshold of {} (their posteriors are less reliable; see `plans.csv`).\n",
-        singles.len() * s.analysis.outer,
-        s.analysis.min_ess
+        "\nPosteriors: of {} simulated datasets (every candidate and size, and every {} plan in `allocation.csv`), {} needed the reserve samples, {} resample-move (the reweighted prior samples fell below the effective-sample-size threshold of {}: the likelihood tempered in and the samples moved), and {} stayed below the threshold (their posteriors are less reliable; see `plans.csv` and `allocation.csv`).\n",
+        plans.len() * s.analysis.outer,
+        if matches!(allocated, Allocated::Greedy(_)) { "greedy step's" } else { "affordable" },
+        count(&|m| m.fallbacks),
+        count(&|m| m.moved),
+        s.analysis.min_ess,
+        count(&|m| m.collapsed),
     ));
     Summary { text: md, headlines }
 }

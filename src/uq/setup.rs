@@ -296,6 +296,11 @@ impl Setup {
         self.shared_at + k
     }
 
+    /// Index of material j's input `strength_<key>` (the index of its joint draw).
+    pub fn strength_input(&self, j: usize) -> usize {
+        self.materials[j].strength_input
+    }
+
     /// Index of the velocity input.
     pub fn velocity_input(&self) -> usize {
         self.shared(1)

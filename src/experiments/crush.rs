@@ -48,8 +48,9 @@
 //! simulated data as the Bayesian reweighting, so the two decision rules can be compared draw by
 //! draw. It needs the shape measured (the loop diagnoses roundness and sphericity per particle).
 //!
-//! Not yet: a refit of the strength model on the pooled data as the fallback when reweighting
-//! collapses (the reserve of prior samples is the fallback today).
+//! Where reweighting collapses, resample-move ([`super::smc`]) moves the samples among the main
+//! study's joint strength draws with this likelihood at any sample ([`super::smc::Movable`]);
+//! it does not refit the strength model on the pooled data.
 
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;

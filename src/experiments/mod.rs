@@ -28,19 +28,26 @@
 //! two-action decision), on a decision that is already certain (value 0), on an η measurement
 //! on the main study's state (conjugate posterior variance of ln η), on crush tests against
 //! ASTM C1239's pivotal widths and against brute-force nested refitting, by the
-//! discrimination of Tavares–King damage by repeated impacts, and by the worth of the shape
+//! discrimination of Tavares–King damage by repeated impacts, resample-move against the
+//! normal–normal closed forms, nested refits and the conjugate η model on plans that defeat
+//! reweighting, and by the worth of the shape
 //! measurement (none under a model without shape effects; the shape model identified with it,
 //! barely without), and the naming loop against the reweighting on the same crush data:
 //! `tests/verification/experiments.rs`.
 //!
+//! * [`smc`]: resample-move — where the reweighted prior samples' effective sample size falls
+//!   below the threshold even with the reserve, the likelihood is tempered in and the samples
+//!   are moved by Metropolis–Hastings (preconditioned Crank–Nicolson in their normal scores);
+//!   plans are evaluated test after test, and the greedy allocation carries each step's
+//!   posteriors to the next ([`Experiment`]s that can score any point: [`smc::Movable`]).
 //! * [`study`], [`run`], [`plan`]: the `kind = "experiments"` study — candidates with costs and
 //!   sizes, the ranked plans, the allocation of a budget (greedy, or exhaustive over a small
 //!   grid; plans evaluated jointly), tables, the figure `experiments_metrics` and a generated
 //!   `summary.md`.
 //!
-//! Not yet here: a refit of the strength model on the pooled crush data as the fallback when
-//! reweighting collapses (the reserve samples are the fallback), and crush tests at temperatures
-//! the crush data do not cover (they need a temperature model of the parameters).
+//! Not yet here: crush tests at temperatures the crush data do not cover (they need a
+//! temperature model of the parameters); and the strength draws a crush test can reach are the
+//! main study's joint draws (resample-move moves among them, it does not refit).
 
 pub mod crush;
 pub mod impact;

@@ -20,7 +20,9 @@
 //!    of further prior samples ([`Settings::active`]) is reweighted together with the prior
 //!    (the resampling fallback), then the experiment's own [`Experiment::fallback`] posterior
 //!    (a refit on the data, say) is tried; when neither reaches `min_ess` the draw is counted as
-//!    collapsed and kept (its numbers are then less reliable; the count is reported).
+//!    collapsed and kept (its numbers are then less reliable; the count is reported). The
+//!    studies' plans go on to resample-move instead ([`super::smc`]), which evaluates them
+//!    test after test with this engine's definitions.
 //! 5. The Bayes action a* = argmin_a Σ_k w'_k L_ka is taken; it is a correct selection when it
 //!    is also a best action under the truth (L_ta* = min_a L_ta; under a tie every tied action
 //!    is correct).

@@ -22,6 +22,18 @@
 //! same posterior quantiles (a weighted quantile commutes with the non-decreasing map
 //! P ↦ log10 max(P, floor)), so the summary can show whether a ranking by them depends on the
 //! floor.
+//!
+//! # Moves
+//!
+//! Resample-move ([`super::smc`]) moves a sample in the normal scores z = Φ⁻¹(u) of its unit
+//! point, given its two models; the prior is standard normal in z. A coordinate that picks one
+//! of a strength model's K joint draws would jump between unrelated draws at the smallest step
+//! if the draws kept their order, so its score places the draws in the order of a Hilbert curve
+//! through the ranks of their scale at the mean covariates and their modulus (2¹⁰ cells a side):
+//! neighbouring scores are draws of similar scale and modulus. A prior sample keeps its inputs;
+//! only its score is taken at its draw's place in that order (at the same place within its cell,
+//! so the scores are standard normal). A moved sample's P_break is computed only when its row is
+//! needed.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

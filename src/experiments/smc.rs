@@ -197,6 +197,8 @@ pub struct Population<P> {
     reserve_used: bool,
     /// The number of the next moved point.
     next_id: u64,
+    /// The prior sample left out (the outer draw's truth: module docs of the preposterior).
+    truth: usize,
 }
 
 impl<P: Clone + Send + Sync> Population<P> {
@@ -205,7 +207,7 @@ impl<P: Clone + Send + Sync> Population<P> {
         let mut weights: Vec<f64> = kn.weights.iter().enumerate().map(|(k, &w)| if k < active && k != truth { w } else { 0.0 }).collect();
         normalise(&mut weights);
         let ll = (0..kn.len()).map(|k| if k < active { 0.0 } else { f64::NAN }).collect();
-        Population { members: None, weights, ll, reserve_used: active >= kn.len(), next_id: 0 }
+        Population { members: None, weights, ll, reserve_used: active >= kn.len(), next_id: 0, truth }
     }
 
     fn len(&self) -> usize {
@@ -346,6 +348,7 @@ pub fn update<S: Space, E: Movable<S>>(kn: &Knowledge, space: &S, pop: &Populati
         ll: pop.ll.iter().zip(new_ll).map(|(a, b)| a + b).collect(),
         reserve_used: pop.reserve_used,
         next_id: pop.next_id,
+        truth: pop.truth,
     };
     let next = reweighted(pop, &new_ll);
     let e = next.ess();
@@ -355,10 +358,9 @@ pub fn update<S: Space, E: Movable<S>>(kn: &Knowledge, space: &S, pop: &Populati
     // The reserve: the prior samples beyond the active ones join with their likelihood of the
     // earlier data (the truth keeps weight 0).
     let (start, start_new_ll) = if pop.members.is_none() && !pop.reserve_used {
-        let truth_or_none = |k: usize| pop.weights[k] == 0.0 && pop.ll[k].is_finite();
         let ll: Vec<f64> = (0..kn.len()).map(|k| if pop.ll[k].is_finite() { pop.ll[k] } else { earlier.loglik(&Member::Prior(k)) }).collect();
-        let prior: Vec<f64> = (0..kn.len()).map(|k| if truth_or_none(k) { 0.0 } else { kn.weights[k] }).collect();
-        let start = Population { members: None, weights: tilt(&prior, &ll, 1.0), ll, reserve_used: true, next_id: pop.next_id };
+        let prior: Vec<f64> = (0..kn.len()).map(|k| if k == pop.truth { 0.0 } else { kn.weights[k] }).collect();
+        let start = Population { members: None, weights: tilt(&prior, &ll, 1.0), ll, reserve_used: true, next_id: pop.next_id, truth: pop.truth };
         let new_ll: Vec<f64> = (0..kn.len()).map(|k| if start.weights[k] > 0.0 { if k < n && new_ll[k].is_finite() { new_ll[k] } else { ll_of(&Member::Prior(k)) } } else { f64::NEG_INFINITY }).collect();
         let with_reserve = reweighted(&start, &new_ll);
         let e = with_reserve.ess();
@@ -385,7 +387,7 @@ pub fn update<S: Space, E: Movable<S>>(kn: &Knowledge, space: &S, pop: &Populati
 fn resample_move<S: Space, E: Movable<S>>(space: &S, pop: Population<S::Point>, new_ll: Vec<f64>, earlier: &Earlier<'_, S, E>, test: &E, data: &E::Data, moves: Moves, rng: &mut ChaCha8Rng) -> Result<Population<S::Point>> {
     let n = moves.particles.max(2);
     let mut members: Vec<Member<S::Point>> = (0..pop.len()).map(|i| pop.member(i)).collect();
-    let mut next_id = pop.next_id;
+    let (mut next_id, truth) = (pop.next_id, pop.truth);
     let (mut w, mut ll_prev, mut ll_new) = (pop.weights, pop.ll, new_ll);
     let mut phi = 0.0;
     // One multiplier of the pCN steps per block: continuous coordinates, joint-draw indices.
@@ -503,7 +505,7 @@ fn resample_move<S: Space, E: Movable<S>>(space: &S, pop: Population<S::Point>, 
         w = tilt(&w, &ll_new, 1.0 - phi);
     }
     let ll = ll_prev.iter().zip(&ll_new).map(|(a, b)| a + b).collect();
-    Ok(Population { members: Some(members), weights: w, ll, reserve_used: true, next_id })
+    Ok(Population { members: Some(members), weights: w, ll, reserve_used: true, next_id, truth })
 }
 
 /// One outer draw of a sequence of tests (module docs).

@@ -92,9 +92,11 @@ fn distinct<P>(members: &[Member<P>]) -> usize {
 }
 
 /// Number of distinct joint draws ([`Space::draws_key`]) among `members`.
-fn distinct_draws<S: Space>(space: &S, members: &[Member<S::Point>]) -> usize {
+fn distinct_draws<'a, S: Space>(space: &S, members: impl Iterator<Item = &'a Member<S::Point>>) -> usize
+where
+    S::Point: 'a,
+{
     let mut keys: Vec<u64> = members
-        .iter()
         .map(|m| match m {
             Member::Prior(k) => space.draws_key(space.point(*k)),
             Member::Moved(p) => space.draws_key(&p.point),
@@ -301,9 +303,28 @@ fn normalise(w: &mut [f64]) -> f64 {
     total
 }
 
+/// The largest a ℓ_i over the members with weight (−∞ when none).
+fn top(w: &[f64], ll: &[f64], a: f64) -> f64 {
+    w.iter().zip(ll).filter(|(w, l)| **w > 0.0 && l.is_finite()).map(|(_, l)| a * l).fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// 1/Σ w'² of the weights w' ∝ w_i e^(a ℓ_i), without forming them (the tempering's bisection).
+fn tilted_ess(w: &[f64], ll: &[f64], a: f64) -> f64 {
+    let t = top(w, ll, a);
+    let (mut s1, mut s2) = (0.0, 0.0);
+    for (&w, &l) in w.iter().zip(ll) {
+        if w > 0.0 && l.is_finite() {
+            let x = w * (a * l - t).exp();
+            s1 += x;
+            s2 += x * x;
+        }
+    }
+    if s2 > 0.0 { s1 * s1 / s2 } else { 0.0 }
+}
+
 /// Weights ∝ w_i e^(a ℓ_i), normalised (0 where w_i = 0 or ℓ_i = −∞).
 fn tilt(w: &[f64], ll: &[f64], a: f64) -> Vec<f64> {
-    let top = w.iter().zip(ll).filter(|(w, l)| **w > 0.0 && l.is_finite()).map(|(_, l)| a * l).fold(f64::NEG_INFINITY, f64::max);
+    let top = top(w, ll, a);
     let mut out: Vec<f64> = w.iter().zip(ll).map(|(&w, &l)| if w > 0.0 && l.is_finite() { w * (a * l - top).exp() } else { 0.0 }).collect();
     normalise(&mut out);
     out
@@ -394,9 +415,8 @@ fn resample_move<S: Space, E: Movable<S>>(space: &S, pop: Population<S::Point>, 
     let mut scale = [1.0f64; 2];
     for _ in 0..MAX_STAGES {
         let target = TEMPERING_ESS * (w.iter().filter(|x| **x > 0.0).count() as f64).min(n as f64);
-        let whole = tilt(&w, &ll_new, 1.0 - phi);
-        if ess(&whole) >= target {
-            w = whole;
+        if tilted_ess(&w, &ll_new, 1.0 - phi) >= target {
+            w = tilt(&w, &ll_new, 1.0 - phi);
             phi = 1.0;
             break;
         }
@@ -404,7 +424,7 @@ fn resample_move<S: Space, E: Movable<S>>(space: &S, pop: Population<S::Point>, 
         let (mut lo, mut hi) = (0.0, 1.0 - phi);
         for _ in 0..50 {
             let mid = 0.5 * (lo + hi);
-            if ess(&tilt(&w, &ll_new, mid)) >= target { lo = mid } else { hi = mid }
+            if tilted_ess(&w, &ll_new, mid) >= target { lo = mid } else { hi = mid }
         }
         let delta = lo.max(1e-12 * (1.0 - phi));
         w = tilt(&w, &ll_new, delta);
@@ -421,7 +441,8 @@ fn resample_move<S: Space, E: Movable<S>>(space: &S, pop: Population<S::Point>, 
             }
             idx.push(i);
         }
-        let before: Vec<Member<S::Point>> = members.iter().zip(&w).filter(|(_, w)| **w > 0.0).map(|(m, _)| m.clone()).collect();
+        // Distinct joint draws among the members with weight, before resampling.
+        let draws_before = distinct_draws(space, members.iter().zip(&w).filter(|(_, w)| **w > 0.0).map(|(m, _)| m));
         members = idx.iter().map(|&i| members[i].clone()).collect();
         ll_prev = idx.iter().map(|&i| ll_prev[i]).collect();
         ll_new = idx.iter().map(|&i| ll_new[i]).collect();
@@ -429,7 +450,6 @@ fn resample_move<S: Space, E: Movable<S>>(space: &S, pop: Population<S::Point>, 
         // Moves at φ: at least `sweeps` sweeps, more (up to MAX_SWEEPS) until half the
         // members are distinct points and distinct joint draws (or as many distinct draws as
         // the population had before: the draws are finite).
-        let draws_before = distinct_draws(space, &before);
         // Each coordinate's spread (sd of its score) over the population.
         let scores: Vec<&[f64]> = members.iter().map(|m| match m {
             Member::Prior(k) => space.scores(space.point(*k)),
@@ -445,7 +465,7 @@ fn resample_move<S: Space, E: Movable<S>>(space: &S, pop: Population<S::Point>, 
             .collect();
         drop(scores);
         for sweep in 0..MAX_SWEEPS {
-            if sweep >= moves.sweeps && distinct(&members) * 2 >= n && distinct_draws(space, &members) * 2 >= n.min(draws_before) {
+            if sweep >= moves.sweeps && distinct(&members) * 2 >= n && distinct_draws(space, members.iter()) * 2 >= n.min(draws_before) {
                 break;
             }
             let mut tried = [0usize; 2];

@@ -16,7 +16,8 @@
 //! samples = 4000                     # prior samples of the state of knowledge
 //! reserve = 4000                     # further prior samples, the resampling fallback
 //! outer = 300                        # simulated datasets per candidate and size
-//! min_ess = 50                       # effective sample size below which the fallback is used
+//! min_ess = 100                      # effective sample size below which the reserve, then resample-move,
+//!                                    # is used (the summary flags median ESS below 100)
 //! particles = 400                    # resample-move where the reserve is not enough: population size
 //! sweeps = 2                         # … and the fewest Metropolis–Hastings sweeps per tempering stage
 //!
@@ -142,7 +143,7 @@ pub struct AnalysisOptions {
 
 impl Default for AnalysisOptions {
     fn default() -> Self {
-        AnalysisOptions { samples: 4000, reserve: 4000, outer: 300, min_ess: 50.0, particles: 400, sweeps: 2 }
+        AnalysisOptions { samples: 4000, reserve: 4000, outer: 300, min_ess: 100.0, particles: 400, sweeps: 2 }
     }
 }
 

@@ -289,13 +289,16 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
     let plans: Vec<&Metrics> = singles.iter().map(|(_, e)| &e.metrics).chain(allocated.plans().iter().map(|e| &e.metrics)).collect();
     let count = |f: &dyn Fn(&Metrics) -> usize| plans.iter().map(|m| f(m)).sum::<usize>();
     md.push_str(&format!(
-        "\nPosteriors: of {} simulated datasets (every candidate and size, and every {} plan in `allocation.csv`), {} needed the reserve samples, {} resample-move (the reweighted prior samples fell below the effective-sample-size threshold of {}: the likelihood tempered in and the samples moved), and {} stayed below the threshold (their posteriors are less reliable; see `plans.csv` and `allocation.csv`).\n",
+        "\nPosteriors: of {} simulated datasets (every candidate and size, and every {} plan in `allocation.csv`), {} needed the reserve samples, {} resample-move (the reweighted prior samples fell below the effective-sample-size threshold of {}: the likelihood tempered in and the samples moved), and {}.\n",
         plans.len() * s.analysis.outer,
         if matches!(allocated, Allocated::Greedy(_)) { "greedy step's" } else { "affordable" },
         count(&|m| m.fallbacks),
         count(&|m| m.moved),
         s.analysis.min_ess,
-        count(&|m| m.collapsed),
+        match count(&|m| m.collapsed) {
+            0 => "none stayed below the threshold".to_string(),
+            n => format!("{n} stayed below the threshold (their posteriors are less reliable: `collapsed` in `plans.csv` and `allocation.csv`)"),
+        },
     ));
     Summary { text: md, headlines }
 }
@@ -308,7 +311,7 @@ fn naming_section(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize
         return String::new();
     }
     let mut md = String::from("\n## Would the discrepancy workflow find the true strength model?\n\n");
-    md.push_str("The main study's diagnosed strength model is what the discrepancy naming loop names in each material's crush data. For the crush candidates below, the loop was also run on the pooled data — today's crushed particles and the simulated ones — of the first simulated campaigns, and scored 1 when it named exactly the effects of the strength model the campaign was simulated under (0 when it named other effects or failed on the data; failures are counted apart). Beside it, on the same campaigns, the reweighting's expected posterior weight of that model.\n\n");
+    md.push_str("The main study's diagnosed strength model is what the discrepancy naming loop names in each material's crush data. For the crush candidates below, the loop was also run on the pooled data — today's crushed particles and the simulated ones — of the first simulated campaigns, and scored 1 when it named exactly the effects of the strength model the campaign was simulated under (0 when it named other effects or failed on the data; failures are counted apart). Beside it, on the same campaigns, the Bayesian update's expected posterior weight of that model.\n\n");
     md.push_str("| candidate | particles | campaigns | loop failed | naming loop names the true model's effects | expected weight of the true strength model |\n|---|---|---|---|---|---|\n");
     for (_, e, sc) in &scored {
         let (verdict, weight) = (sc.mean, sc.true_label_weight[1]);

@@ -236,6 +236,32 @@ fn crush_tests_narrow_the_modulus_band_as_the_c1239_pivotal_interval() {
     }
 }
 
+/// Brute-force nested refitting: for each outer draw's truth, n more strengths of material j
+/// simulated from it (seed `seed` + the draw's index), pooled with the measured ones and refitted
+/// by maximum likelihood; the expected width of ASTM C1239's pivotal 90 % interval of m at
+/// N = n₀ + n.
+fn nested_widths(state: &partlife::experiments::State, j: usize, n: usize, draws: &[partlife::experiments::Draw], seed: u64) -> partlife::experiments::Estimate {
+    use partlife::uq::setup::Mode;
+    use partlife::weibull::{fit_mle, simulate_pivotal};
+    use rand::SeedableRng;
+    let measured = &state.forms[0].setup.materials[j].sample.strength;
+    let pivots = simulate_pivotal(measured.len() + n, 20000, 8).unwrap();
+    let widths: Vec<f64> = draws
+        .iter()
+        .enumerate()
+        .map(|(d, draw)| {
+            let s = &state.samples[draw.truth];
+            let (p, _) = state.forms[s.form].setup.params(j, &s.x, Mode::Joint);
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed + d as u64);
+            let mut pooled = measured.clone();
+            pooled.extend((0..n).map(|_| p.mu.exp() * (-rng.random::<f64>().max(f64::MIN_POSITIVE).ln()).powf(1.0 / p.shape)));
+            let b = pivots.bounds(&fit_mle(&pooled).unwrap(), 0.90).unwrap();
+            b.shape.1 - b.shape.0
+        })
+        .collect();
+    partlife::experiments::Estimate::of(&widths)
+}
+
 /// Importance reweighting against brute-force nested refitting on a small case: with the
 /// deliverable's strength model, each outer draw's truth generates n more BL 16/30 crush
 /// strengths; the brute-force route pools them with the n₀ measured ones, refits by maximum
@@ -244,30 +270,11 @@ fn crush_tests_narrow_the_modulus_band_as_the_c1239_pivotal_interval() {
 #[test]
 fn reweighting_agrees_with_brute_force_nested_refitting() {
     use partlife::experiments::{CrushOptions, CrushTest};
-    use partlife::uq::setup::Mode;
-    use partlife::weibull::{fit_mle, simulate_pivotal};
-    use rand::SeedableRng;
     let state = state_of(8000, true);
     let (j, n) = (1, 50);
     let q = state.weibull_m_quantity(j);
     let m = preposterior(&state.knowledge, &CrushTest::new(&state, j, n, &CrushOptions::default()).unwrap(), Settings { outer: 300, min_ess: 50.0, seed: 21, truth: None, active: Some(4000), scored: 0 }).unwrap();
-    let measured = &state.forms[0].setup.materials[j].sample.strength;
-    let pivots = simulate_pivotal(measured.len() + n, 20000, 8).unwrap();
-    let widths: Vec<f64> = m
-        .draws
-        .iter()
-        .enumerate()
-        .map(|(d, draw)| {
-            let s = &state.samples[draw.truth];
-            let (p, _) = state.forms[s.form].setup.params(j, &s.x, Mode::Joint);
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1000 + d as u64);
-            let mut pooled = measured.clone();
-            pooled.extend((0..n).map(|_| p.mu.exp() * (-rng.random::<f64>().max(f64::MIN_POSITIVE).ln()).powf(1.0 / p.shape)));
-            let b = pivots.bounds(&fit_mle(&pooled).unwrap(), 0.90).unwrap();
-            b.shape.1 - b.shape.0
-        })
-        .collect();
-    let nested = partlife::experiments::Estimate::of(&widths);
+    let nested = nested_widths(&state, j, n, &m.draws, 1000);
     eprintln!("E[90 % width of m]: reweighting {:?}, nested refits {:?}", m.width90[q], nested);
     // Both average over the same 300 truths; the Bayesian band and the pivotal interval agree
     // to O(1/N) (3 %, as against the C1239 tables above), plus 4 combined standard errors.
@@ -452,9 +459,6 @@ fn resample_move_agrees_with_nested_refits_and_the_conjugate_model_on_a_whole_pl
     use partlife::experiments::plan::Candidate;
     use partlife::experiments::smc::{Moves, extend, start};
     use partlife::experiments::{CrushOptions, CrushTest, Measured, Measurement};
-    use partlife::uq::setup::Mode;
-    use partlife::weibull::{fit_mle, simulate_pivotal};
-    use rand::SeedableRng;
     let state = state_of(8000, true);
     let (j, n, n_eta, sd) = (1, 200, 100, 0.1);
     let crush = Candidate::Crush(CrushTest::new(&state, j, n, &CrushOptions::default()).unwrap());
@@ -468,23 +472,7 @@ fn resample_move_agrees_with_nested_refits_and_the_conjugate_model_on_a_whole_pl
     let plain = plan(None);
     let m = plan(Some(Moves { particles: 400, sweeps: 2 }));
     let q = state.weibull_m_quantity(j);
-    let measured = &state.forms[0].setup.materials[j].sample.strength;
-    let pivots = simulate_pivotal(measured.len() + n, 20000, 8).unwrap();
-    let widths: Vec<f64> = m
-        .draws
-        .iter()
-        .enumerate()
-        .map(|(d, draw)| {
-            let s = &state.samples[draw.truth];
-            let (p, _) = state.forms[s.form].setup.params(j, &s.x, Mode::Joint);
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2000 + d as u64);
-            let mut pooled = measured.clone();
-            pooled.extend((0..n).map(|_| p.mu.exp() * (-rng.random::<f64>().max(f64::MIN_POSITIVE).ln()).powf(1.0 / p.shape)));
-            let b = pivots.bounds(&fit_mle(&pooled).unwrap(), 0.90).unwrap();
-            b.shape.1 - b.shape.0
-        })
-        .collect();
-    let nested = partlife::experiments::Estimate::of(&widths);
+    let nested = nested_widths(&state, j, n, &m.draws, 2000);
     let (qe, conjugate) = (state.ln_eta_quantity(), 1.0 / (1.0 / 0.25 + n_eta as f64 / (sd * sd)));
     eprintln!(
         "reweighting: median ESS {:.1}, collapsed {}; resample-move: median ESS {:.1}, moved {}, collapsed {}; E[90 % width of m] {:?} vs nested refits {nested:?}; E[var ln η] {:?} vs conjugate {conjugate}",

@@ -115,7 +115,7 @@ fn bench_chain() -> Result<LifetimeChain> {
     let sphere = Sphere { diameter: 0.9e-3, density: 3600.0, elastic: e };
     let w = Weibull::new(7.0, 800e6)?;
     let mut rng = ChaCha8Rng::seed_from_u64(3);
-    let sample = Sample { source: "bench".into(), strength: (0..50).map(|_| w.sample(&mut rng)).collect(), covariates: vec![] };
+    let sample = Sample { source: "bench".into(), strength: (0..50).map(|_| w.sample(&mut rng)).collect(), particles: true, ..Sample::default() };
     let fit = StrengthFit::new(&sample, &[], 5.0, "bench")?;
     let population = Population { source: "declared".into(), particles: vec![crate::strength::Particle { diameter_m: 0.9e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false };
     let model = LifetimeModel::new("bench", "bench", sphere, Elastic::new(210e9, 0.3)?, AveragingDomain::default(), fit, population)?;
@@ -492,7 +492,7 @@ pub struct DiscrepancySpeed {
     /// Particles.
     pub particles: usize,
     /// Effects the loop named.
-    pub named: Vec<&'static str>,
+    pub named: Vec<String>,
     /// Wall time of the naming loop alone: every candidate, 499 bootstrap replicates per round,
     /// 999 permutations per residual trend (s).
     pub loop_s: f64,

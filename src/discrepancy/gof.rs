@@ -137,14 +137,94 @@ pub fn covariate_trend(residuals: &[f64], covariate: &[f64], permutations: usize
 /// One covariate's residual trend and where the residuals depart most.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CovariateFinding {
-    /// Covariate name (`diameter_m`, `roundness`, `sphericity`, `temperature_c`).
+    /// Covariate name (`diameter_m`, `roundness`, `sphericity`, `temperature_c`, or a
+    /// strength file's factor).
     pub covariate: String,
-    /// Spearman ρ of the quantile residuals against it.
+    /// Spearman ρ of the quantile residuals against it (NaN for a categorical factor).
     pub rho: f64,
     /// Permutation p-value.
     pub p: f64,
-    /// Covariate range of the tertile whose mean residual is farthest from 0, and that mean.
+    /// Covariate range of the tertile whose mean residual is farthest from 0, and that mean
+    /// (categorical: NaN, NaN and the mean residual of `worst_level`).
     pub worst_range: (f64, f64, f64),
+    /// The statistic's contribution to the gap: n ρ² (numeric, ≈ χ²₁ when nothing is missing)
+    /// or the Kruskal–Wallis H of the residuals by level (categorical, ≈ χ²_(L−1)).
+    pub statistic: f64,
+    /// Its degrees of freedom under no trend: 1, or L − 1.
+    pub df: usize,
+    /// Categorical: the level whose mean residual is farthest from 0.
+    pub worst_level: Option<String>,
+}
+
+/// Kruskal–Wallis H of `r` grouped by `levels`: H = 12/(n(n+1)) Σ_g n_g (R̄_g − (n+1)/2)² on the
+/// ranks R of r (continuous residuals: no tie correction). ≈ χ²_(L−1) when the groups do not
+/// differ (Kruskal & Wallis 1952).
+pub fn kruskal_wallis(r: &[f64], levels: &[usize], groups: usize) -> f64 {
+    let n = r.len() as f64;
+    let ranks = crate::stats::ranks(r);
+    let mut sum = vec![0.0; groups];
+    let mut count = vec![0usize; groups];
+    for (i, &g) in levels.iter().enumerate() {
+        sum[g] += ranks[i];
+        count[g] += 1;
+    }
+    let centre = 0.5 * (n + 1.0);
+    12.0 / (n * (n + 1.0)) * (0..groups).filter(|&g| count[g] > 0).map(|g| count[g] as f64 * (sum[g] / count[g] as f64 - centre).powi(2)).sum::<f64>()
+}
+
+/// Residual differences between the levels of every categorical column given (name, each
+/// specimen's level): Kruskal–Wallis H with its permutation p-value (`permutations` shuffles of
+/// the levels, seeded) and the level whose mean residual is farthest from 0. A column with one
+/// level is skipped with its reason.
+pub fn level_findings(r: &[f64], columns: &[(String, Vec<String>)], permutations: usize, seed: u64) -> (Vec<CovariateFinding>, Vec<String>) {
+    let mut found = Vec::new();
+    let mut skipped = Vec::new();
+    for (k, (name, values)) in columns.iter().enumerate() {
+        let mut names: Vec<&String> = Vec::new();
+        let idx: Vec<usize> = values
+            .iter()
+            .map(|v| match names.iter().position(|n| *n == v) {
+                Some(j) => j,
+                None => {
+                    names.push(v);
+                    names.len() - 1
+                }
+            })
+            .collect();
+        if names.len() < 2 || values.len() != r.len() {
+            skipped.push(format!("{name}: one level only"));
+            continue;
+        }
+        let g = names.len();
+        let h = kruskal_wallis(r, &idx, g);
+        let hits: usize = (0..permutations)
+            .into_par_iter()
+            .map(|j| {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (k as u64 + 101));
+                rng.set_stream(j as u64 + 1);
+                let mut p = idx.clone();
+                for i in (1..p.len()).rev() {
+                    p.swap(i, rng.random_range(0..=i));
+                }
+                usize::from(kruskal_wallis(r, &p, g) >= h - 1e-12)
+            })
+            .sum();
+        let means: Vec<(f64, usize)> = (0..g).map(|l| {
+            let v: Vec<f64> = idx.iter().zip(r).filter(|(i, _)| **i == l).map(|(_, x)| *x).collect();
+            (v.iter().sum::<f64>() / v.len() as f64, l)
+        }).collect();
+        let worst = means.iter().fold((0.0f64, 0usize), |b, c| if c.0.abs() > b.0.abs() { *c } else { b });
+        found.push(CovariateFinding {
+            covariate: name.clone(),
+            rho: f64::NAN,
+            p: (1 + hits) as f64 / (permutations + 1) as f64,
+            worst_range: (f64::NAN, f64::NAN, worst.0),
+            statistic: h,
+            df: g - 1,
+            worst_level: Some(names[worst.1].clone()),
+        });
+    }
+    (found, skipped)
 }
 
 /// Step 1 on a strength sample with covariates: the goodness of fit of the Weibull MLE and the
@@ -179,7 +259,7 @@ pub fn covariate_findings(r: &[f64], covariates: &[(&str, Vec<f64>)], permutatio
             .chunks(idx.len().div_ceil(3))
             .map(|g| (x[g[0]], x[g[g.len() - 1]], g.iter().map(|&i| r[i]).sum::<f64>() / g.len() as f64))
             .fold((f64::NAN, f64::NAN, 0.0f64), |b, c| if c.2.abs() > b.2.abs() { c } else { b });
-        found.push(CovariateFinding { covariate: name.to_string(), rho, p, worst_range: worst });
+        found.push(CovariateFinding { covariate: name.to_string(), rho, p, worst_range: worst, statistic: x.len() as f64 * rho * rho, df: 1, worst_level: None });
     }
     found.sort_by(|a, b| a.p.total_cmp(&b.p));
     Ok((found, skipped))

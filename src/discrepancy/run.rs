@@ -87,6 +87,7 @@ pub fn quick_study(data: &Path, elastic: crate::contact::Elastic, density_kg_m3:
         power: PowerOptions::default(),
         figures: FigureOptions::default(),
         material: vec![material],
+        strength: Vec::new(),
     };
     let text = toml::to_string(&study).map_err(|e| Error::numerical("quick study", e.to_string()))?;
     let dir = data.parent().unwrap_or(Path::new("."));
@@ -96,7 +97,7 @@ pub fn quick_study(data: &Path, elastic: crate::contact::Elastic, density_kg_m3:
 
 /// The terms of a model's effects for a sample (the effects were fitted, so each has a term).
 fn terms_of(effects: &[Effect], sample: &Sample, gamma: f64) -> Vec<(Effect, Term)> {
-    effects.iter().filter_map(|c| c.term(&sample.covariates, gamma).ok().map(|t| (*c, t))).collect()
+    effects.iter().filter_map(|c| c.term(sample, gamma).ok().map(|t| (c.clone(), t))).collect()
 }
 
 /// The lifetime band of a fitted stage model, as an instance of the strength model.
@@ -136,7 +137,7 @@ fn power_study(sample: &Sample, outcome: &Outcome, settings: &NamingSettings, p:
                     rng.set_stream(((si * 64 + ni) * 100_000 + r) as u64 + 1);
                     let (rows_drawn, strength): (Vec<usize>, Vec<f64>) = draw_particles(&ln_scale, 1.0 / model.reg.b, n, &mut rng).into_iter().map(|(i, ln_s)| (i, ln_s.exp())).unzip();
                     let covariates = sample.covariates.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i]).collect())).collect();
-                    let synthetic = Sample { source: format!("power replicate {r}"), strength, covariates };
+                    let synthetic = Sample { source: format!("power replicate {r}"), strength, covariates, levels: sample.levels.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i].clone()).collect())).collect(), factors: sample.factors.clone(), particles: sample.particles };
                     let s = NamingSettings { bootstrap: p.bootstrap, seed: settings.seed ^ (r as u64 + 1), ..settings.clone() };
                     let named = analyse(&synthetic, &s, false).map(|o| o.named).unwrap_or_default();
                     tick();
@@ -176,9 +177,17 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         let population = crate::strength::Population::of_material(m, prepared.len(), &data, &loaded.path, s.seed)?;
         prepared.push(Prepared { spec: m.clone(), data, sample, population });
     }
+    let mut specimens = Vec::new();
+    for (k, m) in s.strength.iter().enumerate() {
+        let origin = crate::intake::MapOrigin { file: loaded.path.display().to_string(), key: format!("strength[{k}].data") };
+        let read = crate::strength::specimens::read_specimens(&m.data.resolved(&loaded.path), m.size.as_ref(), &m.factors, &origin)?;
+        inputs.extend(InputFile::read(&read.path, &read.provenance)?);
+        validate(&read.sample)?;
+        specimens.push((m.clone(), read));
+    }
     let settings = s.settings();
     let power_runs = if s.power.replicates > 0 { s.power.particles.len() * s.power.replicates * 2 } else { 0 };
-    let pb = progress_bar((prepared.len() * (2 + power_runs)) as u64, opts.progress, crate::runkit::PROGRESS_COUNT);
+    let pb = progress_bar((prepared.len() * (2 + power_runs) + specimens.len() * (1 + power_runs)) as u64, opts.progress, crate::runkit::PROGRESS_COUNT);
     let mut results = Vec::new();
     for (k, m) in prepared.into_iter().enumerate() {
         pb.set_message(format!("{}: naming loop", m.spec.label));
@@ -197,7 +206,22 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         } else {
             Vec::new()
         };
-        results.push(MaterialResult { spec: m.spec, data: m.data, sample: m.sample, outcome, lifetime, power });
+        let ids = m.data.records.iter().map(|r| r.id.clone()).collect();
+        results.push(MaterialResult { key: m.spec.key.clone(), label: m.spec.label.clone(), path: m.data.path.clone(), ids, crush: Some(m.spec), sample: m.sample, outcome, lifetime, power });
+    }
+    for (j, (set, read)) in specimens.into_iter().enumerate() {
+        let k = s.material.len() + j;
+        pb.set_message(format!("{}: naming loop", set.label));
+        let material_settings = NamingSettings { seed: s.seed.wrapping_add(7919 * k as u64), ..settings.clone() };
+        let outcome = analyse(&read.sample, &material_settings, true)?;
+        pb.inc(1);
+        let power = if s.power.replicates > 0 {
+            pb.set_message(format!("{}: detection power", set.label));
+            power_study(&read.sample, &outcome, &material_settings, &s.power, &|| pb.inc(1))
+        } else {
+            Vec::new()
+        };
+        results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power });
     }
 
     let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;

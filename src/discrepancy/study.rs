@@ -4,8 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::workflow::{MIN_PARTICLES, Outcome};
-use crate::data::CrushData;
 use crate::error::Result;
+use crate::strength::specimens::{Factors, SizeSpec};
 use crate::strength::{NamingSettings, Sample};
 use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSpec, check, elastic_checked};
 
@@ -68,8 +68,34 @@ pub struct DiscrepancyStudy {
     #[serde(default)]
     pub figures: FigureOptions,
     /// Crush datasets, one per material.
+    #[serde(default)]
     pub material: Vec<MaterialSpec>,
+    /// Strength files (specimens with their strengths, a size measure and recorded factors).
+    #[serde(default)]
+    pub strength: Vec<SpecimenSet>,
 }
+
+/// A strength file of a discrepancy study (`[[strength]]`;
+/// [`crate::strength::specimens`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpecimenSet {
+    /// Short key used in tables: lowercase letters, digits, underscore.
+    pub key: String,
+    /// Label for figures.
+    pub label: String,
+    /// The file, or how to read it (`{ file = "…", units = { strength = "MPa" }, … }`).
+    pub data: crate::intake::DataRef,
+    /// The size measure, if the specimens differ in size.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<SizeSpec>,
+    /// The recorded factors: `["lab", "rate"]` or `{ lab = "categorical", rate = "numeric" }`.
+    #[serde(default)]
+    pub factors: Factors,
+}
+
+/// Column names of `residuals.csv` a factor may not take.
+pub const RESERVED_COLUMNS: [&str; 6] = ["material", "id", "stage", "strength_pa", "adjusted_pa", "residual"];
 
 impl DiscrepancyStudy {
     /// Validates every option (file named in messages).
@@ -90,8 +116,21 @@ impl DiscrepancyStudy {
             check(file, "power.bootstrap", p.bootstrap >= 99, format!("must be ≥ 99 (got {})", p.bootstrap))?;
         }
         self.figures.validate(file)?;
-        check(file, "material", !self.material.is_empty(), "at least one [[material]] is required".into())?;
+        check(file, "material", !self.material.is_empty() || !self.strength.is_empty(), "at least one [[material]] (crush data) or [[strength]] (strength file) is required".into())?;
         let mut keys = Vec::new();
+        for (k, m) in self.strength.iter().enumerate() {
+            let key = |s: &str| format!("strength[{k}].{s}");
+            check(file, &key("key"), !m.key.is_empty() && m.key.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_'), format!("must be lowercase letters, digits or _ (got \"{}\")", m.key))?;
+            check(file, &key("key"), !keys.contains(&m.key), format!("\"{}\" is used twice", m.key))?;
+            keys.push(m.key.clone());
+            m.data.validate(file, &key("data"))?;
+            let names: Vec<String> = m.size.iter().map(|s| s.column.clone()).chain(m.factors.declared().into_iter().map(|d| d.0)).collect();
+            for n in &names {
+                check(file, &key("factors"), !n.trim().is_empty(), "a factor or size column's name is empty".into())?;
+                check(file, &key("factors"), !RESERVED_COLUMNS.contains(&n.as_str()) && !crate::data::COVARIATE_COLUMNS.contains(&n.as_str()), format!("`{n}` is a name the report's tables use ({}, {}): rename the column in the file", RESERVED_COLUMNS.join(", "), crate::data::COVARIATE_COLUMNS.join(", ")))?;
+                check(file, &key("factors"), names.iter().filter(|x| *x == n).count() == 1, format!("`{n}` is declared twice (a size measure is not also a factor)"))?;
+            }
+        }
         for (k, m) in self.material.iter().enumerate() {
             let key = |s: &str| format!("material[{k}].{s}");
             check(file, &key("key"), !m.key.is_empty() && m.key.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_'), format!("must be lowercase letters, digits or _ (got \"{}\")", m.key))?;
@@ -137,13 +176,19 @@ pub struct PowerRow {
     pub all: usize,
 }
 
-/// Everything computed for one material.
+/// Everything computed for one material (crush data) or strength file.
 pub struct MaterialResult {
-    /// The material as declared.
-    pub spec: MaterialSpec,
-    /// Its crush data.
-    pub data: CrushData,
-    /// σ̄ at break and covariates.
+    /// Key in tables.
+    pub key: String,
+    /// Label.
+    pub label: String,
+    /// The data file.
+    pub path: std::path::PathBuf,
+    /// Specimen (particle) ids, in the sample's order.
+    pub ids: Vec<String>,
+    /// The crush material as declared (None for a strength file: no lifetime).
+    pub crush: Option<MaterialSpec>,
+    /// σ̄ at break (or specimen strength) and covariates.
     pub sample: Sample,
     /// The naming loop.
     pub outcome: Outcome,

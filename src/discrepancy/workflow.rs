@@ -28,7 +28,10 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::gof::{CovariateFinding, ad_ks_of_u, covariate_findings, normal_scores};
+use statrs::distribution::{ChiSquared, ContinuousCDF, Normal};
+
+use super::gof::{CovariateFinding, ad_ks_of_u, covariate_findings, level_findings, normal_scores};
+use crate::strength::factors::{Factor, Form, WeakestLink, weakest_link};
 use crate::error::{Error, Result};
 use crate::strength::fit::{cv_pointwise, folds};
 use crate::strength::{Effect, ModelFit, NamingSettings, Sample, Term, fit_model, fit_model_near};
@@ -72,6 +75,10 @@ pub struct Evidence {
     pub passed: bool,
     /// Named in this round.
     pub named: bool,
+    /// Extra parameters of the candidate (degrees of freedom of Λ: 1; L − 1 for levels).
+    pub parameters: usize,
+    /// For a size measure: the test of the weakest-link exponent.
+    pub weakest_link: Option<WeakestLink>,
 }
 
 /// Diagnosis of one model.
@@ -146,12 +153,18 @@ pub fn validate(sample: &Sample) -> Result<()> {
     Ok(())
 }
 
-/// Complete numeric covariate columns worth diagnosing, and the reasons for the others.
-fn diagnosable(sample: &Sample) -> (Vec<(&'static str, Vec<f64>)>, Vec<String>) {
+/// Complete numeric covariate columns worth diagnosing (a crush sample's five in their order,
+/// then a strength file's numeric factors), its categorical columns, and the reasons for the
+/// others.
+type Diagnosable = (Vec<(String, Vec<f64>)>, Vec<(String, Vec<String>)>, Vec<String>);
+
+fn diagnosable(sample: &Sample) -> Diagnosable {
     let mut out = Vec::new();
     let mut skipped = Vec::new();
-    for name in DIAGNOSED {
-        match sample.covariates.iter().find(|(n, _)| n == name) {
+    let names: Vec<String> = if sample.particles { DIAGNOSED.iter().map(|s| s.to_string()).collect() } else { Vec::new() };
+    let names = names.into_iter().chain(sample.covariates.iter().map(|(n, _)| n.clone()).filter(|n| !DIAGNOSED.contains(&n.as_str()) || !sample.particles));
+    for name in names {
+        match sample.covariates.iter().find(|(n, _)| *n == name) {
             Some((_, col)) if col.iter().all(|v| v.is_none()) => skipped.push(format!("{name}: no values in the dataset")),
             None => skipped.push(format!("{name}: not in the dataset")),
             Some((_, col)) if col.iter().any(|v| v.is_none()) => {
@@ -167,7 +180,41 @@ fn diagnosable(sample: &Sample) -> (Vec<(&'static str, Vec<f64>)>, Vec<String>) 
             }
         }
     }
-    (out, skipped)
+    let mut levels = Vec::new();
+    for (name, v) in &sample.levels {
+        if v.iter().all(|x| *x == v[0]) {
+            skipped.push(format!("{name}: one level only (\"{}\")", v.first().map_or("", |s| s.as_str())));
+        } else {
+            levels.push((name.clone(), v.clone()));
+        }
+    }
+    (out, levels, skipped)
+}
+
+/// The likelihood ratio Λ of a candidate with `df` extra parameters on the one-parameter scale:
+/// the χ²₁ value with the same upper-tail probability under Wilks' approximation (Λ itself
+/// for df = 1). The family-wise guard compares candidates on this scale, so a categorical
+/// factor with many levels does not dominate the maximum by its degrees of freedom alone; the
+/// calibration stays the bootstrap's.
+pub fn one_df_scale(lr: f64, df: usize) -> f64 {
+    if df <= 1 || !lr.is_finite() {
+        return lr;
+    }
+    let p = crate::strength::factors::statrs_sf_chi2(lr, df as f64);
+    if !(p > 1e-300) {
+        return lr;
+    }
+    let z = Normal::standard().inverse_cdf(0.5 * p);
+    z * z
+}
+
+/// The inverse of [`one_df_scale`]: the Λ of a df-parameter candidate at a one-parameter value.
+fn from_one_df_scale(l1: f64, df: usize) -> f64 {
+    if df <= 1 || !l1.is_finite() {
+        return l1;
+    }
+    let p = crate::strength::factors::statrs_sf_chi2(l1, 1.0);
+    ChiSquared::new(df as f64).map_or(f64::NAN, |c| c.inverse_cdf(1.0 - p))
 }
 
 /// K-fold cross-validated log score of a model (None if a training fit fails).
@@ -191,23 +238,23 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
     validate(sample)?;
     let x = &sample.strength;
     let n = x.len();
-    let (covs, skipped_covariates) = diagnosable(sample);
-    let cov_refs: Vec<(&str, Vec<f64>)> = covs.iter().map(|(k, v)| (*k, v.clone())).collect();
+    let (covs, level_cols, skipped_covariates) = diagnosable(sample);
+    let cov_refs: Vec<(&str, Vec<f64>)> = covs.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
     let folds_k = settings.cv_folds.clamp(2, n);
     let fold = folds(n, folds_k, settings.seed ^ 0xF01D);
 
     // Every candidate's term, or why it is skipped.
     let mut available: Vec<(Effect, Term)> = Vec::new();
     let mut skipped: Vec<(Effect, String)> = Vec::new();
-    for &c in &settings.candidates {
-        match c.term(&sample.covariates, settings.gamma) {
+    for c in sample.candidates(&settings.candidates) {
+        match c.term(sample, settings.gamma) {
             Ok(t) => available.push((c, t)),
             Err(reason) => skipped.push((c, reason)),
         }
     }
 
     let mut current: Vec<(Effect, Term)> = Vec::new();
-    let mut named = Vec::new();
+    let mut named: Vec<Effect> = Vec::new();
     let mut evidence = Vec::new();
     let mut stages = Vec::new();
     for round in 0.. {
@@ -217,11 +264,12 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
         } else {
             Vec::new()
         };
+        let df: Vec<usize> = remaining.iter().map(|(_, t)| Effect::extra_parameters(t)).collect();
         let ext: Vec<Option<ModelFit>> = remaining
             .iter()
             .map(|(c, t)| {
                 let mut terms = current.clone();
-                terms.push((*c, t.clone()));
+                terms.push((c.clone(), t.clone()));
                 fit_model(x, &terms).ok()
             })
             .collect();
@@ -243,7 +291,7 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
                             return f64::NAN;
                         }
                         let mut terms = current.clone();
-                        terms.push((*c, t.clone()));
+                        terms.push((c.clone(), t.clone()));
                         let hint = e.as_ref().and_then(|m| m.damage_ratio);
                         fit_model_near(&xs, &terms, hint).map_or(f64::NAN, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0))
                     })
@@ -264,75 +312,81 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
         let p_ad = p_of(reps.iter().filter(|r| r.0 >= ad).count());
         let p_ks = p_of(reps.iter().filter(|r| r.1 >= ks).count());
         let findings = if diagnose {
-            covariate_findings(&res, &cov_refs, settings.permutations, settings.seed ^ (round as u64 + 7))?.0
+            let mut f = covariate_findings(&res, &cov_refs, settings.permutations, settings.seed ^ (round as u64 + 7))?.0;
+            f.extend(level_findings(&res, &level_cols, settings.permutations, settings.seed ^ (round as u64 + 7)).0);
+            f.sort_by(|a, b| a.p.total_cmp(&b.p));
+            f
         } else {
             Vec::new()
         };
-        let gap = n as f64 * covs.iter().map(|(_, v)| super::gof::spearman(&res, v).powi(2)).sum::<f64>();
+        let gap = 0.0 + n as f64 * covs.iter().map(|(_, v)| super::gof::spearman(&res, v).powi(2)).sum::<f64>() + level_cols.iter().map(|(_, v)| level_statistic(&res, v)).sum::<f64>();
         stages.push(Stage { model: model.clone(), residuals: res, ad, ks, p_ad, p_ks, findings, gap });
 
-        // Evidence.
+        // Evidence: the family-wise guard on the one-parameter scale of every candidate.
         let cv0 = cv_log_score(x, &current, &fold, folds_k);
-        let max_star: Vec<f64> = reps.iter().map(|r| r.2.iter().copied().filter(|v| v.is_finite()).fold(0.0, f64::max)).collect();
-        let lr_critical = crate::stats::interpolated_quantiles(max_star.clone(), &[1.0 - settings.alpha])[0];
-        let mut round_ev: Vec<Evidence> = Vec::new();
+        let max_star: Vec<f64> = reps.iter().map(|r| r.2.iter().zip(&df).map(|(v, d)| one_df_scale(*v, *d)).filter(|v| v.is_finite()).fold(0.0, f64::max)).collect();
+        let critical_1 = crate::stats::interpolated_quantiles(max_star.clone(), &[1.0 - settings.alpha])[0];
+        let mut round_ev: Vec<(Evidence, f64)> = Vec::new();
         for (j, ((c, t), e)) in remaining.iter().zip(&ext).enumerate() {
             let Some(m) = e else {
-                round_ev.push(skipped_evidence(round, *c, "the extended model did not converge".into()));
+                round_ev.push((skipped_evidence(round, c.clone(), "the extended model did not converge".into()), f64::NAN));
                 continue;
             };
             let l = lr[j];
+            let l1 = one_df_scale(l, df[j]);
             let p_b = p_of(reps.iter().filter(|r| r.2[j] >= l).count());
-            let p_f = p_of(max_star.iter().filter(|&&s| s >= l).count());
-            let dbic = -l + (n as f64).ln();
+            let p_f = p_of(max_star.iter().filter(|&&s| s >= l1).count());
+            let dbic = -l + df[j] as f64 * (n as f64).ln();
             let mut terms = current.clone();
-            terms.push((*c, t.clone()));
+            terms.push((c.clone(), t.clone()));
             let dcv = match (cv_log_score(x, &terms, &fold, folds_k), cv0) {
                 (Some(a), Some(b0)) => a - b0,
                 _ => f64::NAN,
             };
-            let (beta, se) = m.coefficient(*c).unwrap_or((f64::NAN, f64::NAN));
-            let (sym, val, meaning) = c.parameter(beta, m.shape());
-            // Delta method by a central difference of the reported parameter in β.
-            let val_se = if *c == Effect::Damage { f64::NAN } else { 0.5 * (c.parameter(beta + se, m.shape()).1 - c.parameter(beta - se, m.shape()).1).abs() };
-            round_ev.push(Evidence {
-                round,
-                candidate: *c,
-                skipped: None,
-                loglik: m.loglik(),
-                lr: l,
-                p_bootstrap: p_b,
-                p_family: p_f,
-                lr_critical,
-                delta_bic: dbic,
-                delta_cv: dcv,
-                parameter: Some((sym.to_string(), val, val_se)),
-                meaning,
-                shape: m.shape(),
-                passed: p_f < settings.alpha && dbic < 0.0 && dcv > 0.0,
-                named: false,
-            });
+            let (parameter, meaning, weakest_link) = describe(c, t, m, x);
+            round_ev.push((
+                Evidence {
+                    round,
+                    candidate: c.clone(),
+                    skipped: None,
+                    loglik: m.loglik(),
+                    lr: l,
+                    p_bootstrap: p_b,
+                    p_family: p_f,
+                    lr_critical: from_one_df_scale(critical_1, df[j]),
+                    delta_bic: dbic,
+                    delta_cv: dcv,
+                    parameter: Some(parameter),
+                    meaning,
+                    shape: m.shape(),
+                    passed: p_f < settings.alpha && dbic < 0.0 && dcv > 0.0,
+                    named: false,
+                    parameters: df[j],
+                    weakest_link,
+                },
+                l1,
+            ));
         }
         if round == 0 {
             for (c, reason) in &skipped {
-                round_ev.push(skipped_evidence(round, *c, reason.clone()));
+                round_ev.push((skipped_evidence(round, c.clone(), reason.clone()), f64::NAN));
             }
         }
         let best = round_ev
             .iter()
             .enumerate()
-            .filter(|(_, e)| e.passed)
-            .max_by(|a, b| a.1.lr.total_cmp(&b.1.lr))
+            .filter(|(_, e)| e.0.passed)
+            .max_by(|a, b| a.1.1.total_cmp(&b.1.1))
             .map(|(i, _)| i);
         let chosen = best.map(|i| {
-            round_ev[i].named = true;
-            round_ev[i].candidate
+            round_ev[i].0.named = true;
+            round_ev[i].0.candidate.clone()
         });
-        evidence.extend(round_ev);
+        evidence.extend(round_ev.into_iter().map(|e| e.0));
         match chosen {
             Some(c) => {
                 let t = available.iter().find(|(a, _)| *a == c).map(|(_, t)| t.clone()).unwrap_or(Term::Linear(Vec::new()));
-                current.push((c, t));
+                current.push((c.clone(), t));
                 named.push(c);
             }
             None => break,
@@ -367,9 +421,9 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
     let terms_for = |effects: &[Effect]| -> Result<Vec<(Effect, Term)>> {
         effects
             .iter()
-            .map(|&e| {
-                e.term(&sample.covariates, settings.gamma)
-                    .map(|t| (e, t))
+            .map(|e| {
+                e.term(sample, settings.gamma)
+                    .map(|t| (e.clone(), t))
                     .map_err(|reason| data_err(sample, format!("column {}", e.covariate()), format!("material `{material}`: the strength model's `{}` effect needs this column: {reason}", e.name())))
             })
             .collect()
@@ -381,11 +435,7 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
             let mut out = vec![f64::NAN; n];
             for f in 0..k {
                 let train: Vec<usize> = (0..n).filter(|&i| fold[i] != f).collect();
-                let sub = Sample {
-                    source: sample.source.clone(),
-                    strength: train.iter().map(|&i| x[i]).collect(),
-                    covariates: sample.covariates.iter().map(|(c, v)| (c.clone(), train.iter().map(|&i| v[i]).collect())).collect(),
-                };
+                let sub = sample.rows(&train, sample.source.clone());
                 let named = analyse(&sub, settings, false)?.named;
                 let terms = terms_for(&named)?;
                 let fit = fit_model(&sub.strength, &crate::strength::fit::subset(&terms, &train)).map_err(|_| failed())?;
@@ -396,6 +446,52 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
             if out.iter().all(|v| v.is_finite()) { Ok(out) } else { Err(failed()) }
         }
     }
+}
+
+/// Kruskal–Wallis H of the residuals by level (the gap's term of a categorical column).
+fn level_statistic(r: &[f64], values: &[String]) -> f64 {
+    let mut names: Vec<&String> = Vec::new();
+    let idx: Vec<usize> = values
+        .iter()
+        .map(|v| match names.iter().position(|n| *n == v) {
+            Some(j) => j,
+            None => {
+                names.push(v);
+                names.len() - 1
+            }
+        })
+        .collect();
+    super::gof::kruskal_wallis(r, &idx, names.len())
+}
+
+/// The reported parameter of a fitted candidate (symbol, value, standard error), what it
+/// means, and for a size measure the weakest-link test.
+fn describe(c: &Effect, t: &Term, m: &ModelFit, x: &[f64]) -> ((String, f64, f64), String, Option<WeakestLink>) {
+    let range = m.beta_range(c);
+    if let Term::Levels { levels, reference, .. } = t {
+        let beta: Vec<f64> = range.map(|r| m.reg.beta[r].to_vec()).unwrap_or_default();
+        let others = levels.iter().filter(|l| *l != reference);
+        let mut scales: Vec<(String, f64)> = vec![(reference.clone(), 1.0)];
+        scales.extend(others.zip(&beta).map(|(l, b)| (l.clone(), b.exp())));
+        let (lo, hi) = scales.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, s)| (lo.min(*s), hi.max(*s)));
+        let list: Vec<String> = scales.iter().map(|(l, s)| format!("{l} ×{s:.3}")).collect();
+        let meaning = format!("σ_θ of each level of `{}` relative to \"{reference}\": {}", c.covariate(), list.join(", "));
+        return (("scale_ratio_max_min".into(), hi / lo, f64::NAN), meaning, None);
+    }
+    let (beta, se) = m.coefficient(c).unwrap_or((f64::NAN, f64::NAN));
+    let (sym, val, mut meaning) = c.parameter(beta, m.shape());
+    // Delta method by a central difference of the reported parameter in β.
+    let val_se = if *c == Effect::Damage { f64::NAN } else { 0.5 * (c.parameter(beta + se, m.shape()).1 - c.parameter(beta - se, m.shape()).1).abs() };
+    let mut wl = None;
+    if let (Effect::Factor(Factor { form: Form::Size(measure), .. }), Term::Linear(z)) = (c, t) {
+        // The other effects' ln-scale terms held at the free fit.
+        let d = m.design();
+        let offset: Vec<f64> = (0..x.len()).map(|i| m.reg.ln_scale(&d, i) - m.reg.mu - beta * z[i]).collect();
+        let test = weakest_link(x, z, &offset, measure.k(), m.loglik(), val, val_se, m.shape());
+        meaning = format!("{meaning}; weakest-link test: {}", test.sentence(measure.k()));
+        wl = Some(test);
+    }
+    ((sym.to_string(), val, val_se), meaning, wl)
 }
 
 fn skipped_evidence(round: usize, candidate: Effect, reason: String) -> Evidence {
@@ -415,5 +511,7 @@ fn skipped_evidence(round: usize, candidate: Effect, reason: String) -> Evidence
         shape: f64::NAN,
         passed: false,
         named: false,
+        parameters: 0,
+        weakest_link: None,
     }
 }

@@ -203,7 +203,7 @@ impl CrushTest {
         let diameter = options.diameter;
         let sample = &state.forms[0].setup.materials[material].sample;
         let n_rows = sample.strength.len();
-        let column = |effect: Effect| -> Vec<f64> { sample.covariates.iter().find(|(n, _)| n == effect.covariate()).map(|(_, c)| c.iter().map(|v| v.unwrap_or(f64::NAN)).collect()).unwrap_or_else(|| vec![f64::NAN; n_rows]) };
+        let column = |effect: Effect| -> Vec<f64> { sample.covariates.iter().find(|(n, _)| *n == effect.covariate()).map(|(_, c)| c.iter().map(|v| v.unwrap_or(f64::NAN)).collect()).unwrap_or_else(|| vec![f64::NAN; n_rows]) };
         let diameters = column(Effect::Size);
         let rows: Vec<usize> = (0..n_rows).filter(|&r| diameter.is_none_or(|(lo, hi)| diameters[r] >= lo && diameters[r] <= hi)).collect();
         if rows.is_empty() {
@@ -254,15 +254,15 @@ fn scales_at(state: &State, material: usize, rows: &[usize], temperature_c: Opti
         return Err(Error::numerical("crush test", "a strength model with the damage effect has no crush-test likelihood here yet"));
     }
     // The linear columns in the order of β; the temperature column at the test's T.
-    let columns: Vec<(Effect, &Vec<f64>)> = fit.terms.iter().filter_map(|(e, t)| if let Term::Linear(z) = t { Some((*e, z)) } else { None }).collect();
+    let columns: Vec<(Effect, &Vec<f64>)> = fit.terms.iter().filter_map(|(e, t)| if let Term::Linear(z) = t { Some((e.clone(), z)) } else { None }).collect();
     let scales = rows
         .iter()
         .map(|&r| {
-            let z = |l: usize, (e, col): (Effect, &Vec<f64>)| match (e, temperature_c) {
+            let z = |l: usize, (e, col): &(Effect, &Vec<f64>)| match (e, temperature_c) {
                 (Effect::Temperature, Some(t)) => e.z(t, fit.references[l]),
                 _ => col[r],
             };
-            p.mu + columns.iter().enumerate().map(|(l, &c)| p.beta[l] * z(l, c)).sum::<f64>()
+            p.mu + columns.iter().enumerate().map(|(l, c)| p.beta[l] * z(l, c)).sum::<f64>()
         })
         .collect();
     Ok((p.shape, scales))
@@ -310,7 +310,7 @@ impl Experiment for CrushTest {
         pooled.source = format!("{} + {} simulated particles", n.sample.source, data.len());
         pooled.strength.extend(data.iter().map(|&(_, ln_s)| ln_s.exp()));
         for ((name, column), (_, base)) in pooled.covariates.iter_mut().zip(&n.sample.covariates) {
-            let at_test = (name == Effect::Temperature.covariate()).then_some(n.temperature_c).flatten();
+            let at_test = (*name == Effect::Temperature.covariate()).then_some(n.temperature_c).flatten();
             column.extend(data.iter().map(|&(i, _)| at_test.or(base[self.rows[i]])));
         }
         let settings = NamingSettings { seed: n.settings.seed.wrapping_add(draw as u64 + 1), ..n.settings.clone() };

@@ -29,18 +29,29 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
     let (keys, labels) = (m.s("key")?, m.s("label")?);
     let mut names: Vec<String> = Vec::new();
     let mut drawn: Vec<Drawn> = Vec::new();
+    let cov = Table::load(dir, "covariates")?;
+    let cov_materials = cov.s("material")?;
     for (k, key) in keys.iter().enumerate() {
-        names.push(format!("discrepancy_residuals_{key}"));
-        drawn.push(residuals(dir, width_cm, key)?);
+        // A file that records no covariate has no residual trend to plot.
+        if cov_materials.contains(key) {
+            names.push(format!("discrepancy_residuals_{key}"));
+            drawn.push(residuals(dir, width_cm, key)?);
+        }
         names.push(format!("discrepancy_probability_{key}"));
         drawn.push(probability(dir, width_cm, key, &labels[k], colour(k))?);
     }
     names.push("discrepancy_gap".into());
     drawn.push(gap(dir, width_cm, &keys, &labels)?);
-    names.push("discrepancy_evidence".into());
-    drawn.push(evidence(dir, width_cm, &keys, &labels)?);
-    names.push("discrepancy_lifetime".into());
-    drawn.push(lifetime(dir, width_cm, &keys, &labels)?);
+    let ev = Table::load(dir, "evidence")?;
+    if ev.s("skipped")?.iter().any(|s| s.is_empty()) {
+        names.push("discrepancy_evidence".into());
+        drawn.push(evidence(dir, width_cm, &keys, &labels)?);
+    }
+    let life = Table::load(dir, "lifetime")?;
+    if !life.s("material")?.is_empty() {
+        names.push("discrepancy_lifetime".into());
+        drawn.push(lifetime(dir, width_cm, &keys, &labels)?);
+    }
     let power_rows = Table::load(dir, "power")?;
     if !power_rows.s("material")?.is_empty() {
         names.push("discrepancy_power".into());
@@ -49,21 +60,36 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
     super::write_figures(dir, names.iter().map(|n| n.as_str()).zip(drawn).collect())
 }
 
-/// Axis label and display factor of a covariate column.
-fn covariate_axis(name: &str) -> (&'static str, f64) {
+/// Axis label and display factor of a covariate column: a crush file's five with their units,
+/// a strength file's factor by its column name (as the file holds it).
+fn covariate_axis(name: &str) -> (String, f64) {
     match name {
-        "diameter_m" => ("Diameter d (mm)", 1e3),
-        "roundness" => ("Roundness (–)", 1.0),
-        "sphericity" => ("Sphericity (–)", 1.0),
-        "temperature_c" => ("Temperature (°C)", 1.0),
-        _ => ("Prior impacts (–)", 1.0),
+        "diameter_m" => ("Diameter d (mm)".into(), 1e3),
+        "roundness" => ("Roundness (–)".into(), 1.0),
+        "sphericity" => ("Sphericity (–)".into(), 1.0),
+        "temperature_c" => ("Temperature (°C)".into(), 1.0),
+        "impacts" => ("Prior impacts (–)".into(), 1.0),
+        other => (format!("{} (as in the file)", other.replace('_', " ")), 1.0),
     }
 }
 
-/// Means of y over `bins` equal-count bins of x, at the bins' mean x.
+/// Means of y over `bins` equal-count bins of x, at the bins' mean x; where x takes at most
+/// `bins` distinct values (a size series, a few test temperatures), one bin per value, so no
+/// bin straddles two of them.
 fn binned(x: &[f64], y: &[f64], bins: usize) -> Vec<(f64, f64)> {
     let mut idx: Vec<usize> = (0..x.len()).collect();
     idx.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
+    let mut distinct: Vec<f64> = idx.iter().map(|&i| x[i]).collect();
+    distinct.dedup();
+    if distinct.len() <= bins {
+        return distinct
+            .iter()
+            .map(|&v| {
+                let g: Vec<f64> = idx.iter().filter(|&&i| x[i] == v).map(|&i| y[i]).collect();
+                (v, g.iter().sum::<f64>() / g.len() as f64)
+            })
+            .collect();
+    }
     idx.chunks(idx.len().div_ceil(bins).max(1))
         .map(|g| (g.iter().map(|&i| x[i]).sum::<f64>() / g.len() as f64, g.iter().map(|&i| y[i]).sum::<f64>() / g.len() as f64))
         .collect()
@@ -77,9 +103,55 @@ fn residuals(dir: &Path, width_cm: f64, key: &str) -> Result<Drawn> {
     let (fm, fs, fe) = (fits.s("material")?, fits.s("stage")?, fits.s("effects")?);
     let effects_after = (0..fm.len()).find(|&i| fm[i] == key && fs[i] == "after").map(|i| fe[i].clone()).unwrap_or_default();
     let y_range = padded(rows.iter().map(|&i| r[i]), 0.05, 0.05);
+    // The final model's effects where they fit beside the axis; else "final model" (the
+    // effects are in the probability plot's legend and the summary).
+    let after = format!("Residual, + {}", effects_after.replace(" then ", " + "));
+    let after_label = if after.chars().count() <= 26 { after } else { "Residual, final model".to_string() };
     let mut panels = Vec::new();
-    for name in crate::data::COVARIATE_COLUMNS {
+    let cov = Table::load(dir, "covariates")?;
+    let (cm, cc, ct) = (cov.s("material")?, cov.s("column")?, cov.s("type")?);
+    let listed: Vec<(String, bool)> = (0..cm.len()).filter(|&i| cm[i] == key).map(|i| (cc[i].clone(), ct[i] == "categorical")).collect();
+    for (name, categorical) in &listed {
+        let name = name.as_str();
         if !t.has(name) {
+            continue;
+        }
+        if *categorical {
+            let v = t.s(name)?;
+            let mut levels: Vec<String> = rows.iter().map(|&i| v[i].clone()).collect();
+            levels.sort();
+            levels.dedup();
+            if levels.len() < 2 {
+                continue;
+            }
+            for (si, st) in ["before", "after"].iter().enumerate() {
+                let idx: Vec<usize> = rows.iter().copied().filter(|&i| stage[i] == *st).collect();
+                let c = if si == 0 { GREY } else { colour(0) };
+                let mut series = vec![Series { label: None, points: vec![(0.5, 0.0), (levels.len() as f64 + 0.5, 0.0)], colour: BLACK, kind: Kind::Dashed(0.6, 3.0, 2.0) }];
+                let mut medians = Vec::new();
+                for (k, l) in levels.iter().enumerate() {
+                    let x = (k + 1) as f64;
+                    let mut y: Vec<f64> = idx.iter().filter(|&&i| v[i] == *l).map(|&i| r[i]).collect();
+                    y.sort_by(f64::total_cmp);
+                    let q = crate::stats::interpolated_quantiles(y.clone(), &[0.1, 0.5, 0.9]);
+                    series.push(Series { label: None, points: vec![(x - 0.25, q[0]), (x + 0.25, q[0])], colour: c, kind: Kind::Band(vec![q[2]; 2], 0.25) });
+                    // Specimens spread across the level's width, in the order of their residual.
+                    let m = y.len().max(1) as f64;
+                    series.push(Series { label: None, points: y.iter().enumerate().map(|(j, yy)| (x - 0.2 + 0.4 * (j as f64 + 0.5) / m, *yy)).collect(), colour: c, kind: Kind::Markers(Marker::Circle, 1.2) });
+                    medians.push((x, q[1]));
+                }
+                series.push(Series { label: None, points: medians, colour: if si == 0 { BLACK } else { colour(1) }, kind: Kind::Markers(Marker::Triangle, 2.6) });
+                panels.push(Some(Panel {
+                    x_categories: levels.clone(),
+                    x_desc: format!("{} (level; band 10–90 %, triangle median)", name.replace('_', " ")),
+                    y_desc: if si == 0 { "Residual, base model".into() } else { after_label.clone() },
+                    x_range: (0.5, levels.len() as f64 + 0.5),
+                    y_range,
+                    y_log: false,
+                    series,
+                    legend: None,
+                }));
+            }
             continue;
         }
         let v = t.f(name)?;
@@ -96,8 +168,8 @@ fn residuals(dir: &Path, width_cm: f64, key: &str) -> Result<Drawn> {
             let c = if si == 0 { GREY } else { colour(0) };
             panels.push(Some(Panel {
                 x_categories: vec![],
-                x_desc: label.into(),
-                y_desc: if si == 0 { "Residual, base model".into() } else { format!("Residual, + {}", effects_after.replace(" then ", " + ")) },
+                x_desc: label.clone(),
+                y_desc: if si == 0 { "Residual, base model".into() } else { after_label.clone() },
                 x_range: xr,
                 y_range,
                 y_log: false,
@@ -124,6 +196,8 @@ fn probability(dir: &Path, width_cm: f64, key: &str, label: &str, c: RGBColor) -
 /// x axis and the y axis holds both its ends, so nothing of it is clipped and its drawn slope is
 /// the fitted m.
 fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<Panel> {
+    let m = Table::load(dir, "materials")?;
+    let crush = !m.has("data") || (0..m.s("key")?.len()).any(|i| m.s("key").map(|k| k[i] == key).unwrap_or(false) && m.s("data").map(|d| d[i] == "crush").unwrap_or(true));
     let t = Table::load(dir, "residuals")?;
     let (mat, stage, raw, adj) = (t.s("material")?, t.s("stage")?, t.f("strength_pa")?, t.f("adjusted_pa")?);
     let fits = Table::load(dir, "fits")?;
@@ -153,7 +227,8 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
     }
     Ok(Panel {
         x_categories: vec![],
-        x_desc: format!("ln(σ̄ at break / 1 MPa), {label}"),
+        // A strength file's values are specimen strengths, not the Hertz σ̄ of a crush test.
+        x_desc: if crush { format!("ln(σ̄ at break / 1 MPa), {label}") } else { "ln(specimen strength / 1 MPa)".into() },
         y_desc: "ln(−ln(1 − F))".into(),
         x_range: xr,
         y_range: padded(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)), 0.05, 0.05),
@@ -207,8 +282,11 @@ fn evidence(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Re
             let pts: Vec<(f64, f64)> = idx.iter().map(|&i| (cats.iter().position(|c| *c == cand[i]).unwrap_or(0) as f64 + 1.0 + off, lr[i])).collect();
             let c = colour(r);
             series.push(Series { label: Some(format!("round {} Λ", r + 1)), points: pts, colour: c, kind: Kind::Markers([Marker::Circle, Marker::Triangle, Marker::Cross][r % 3], 2.2) });
-            if let Some(&i) = idx.first() {
-                series.push(Series { label: Some(format!("round {} critical", r + 1)), points: vec![(0.5, crit[i]), (cats.len() as f64 + 0.5, crit[i])], colour: c, kind: Kind::Dashed(0.8, 3.0, 2.0) });
+            // Each candidate's critical Λ (its own degrees of freedom) as a dash across its slot.
+            for (j, &i) in idx.iter().enumerate() {
+                let x = cats.iter().position(|c| *c == cand[i]).unwrap_or(0) as f64 + 1.0;
+                let label = (j == 0).then(|| format!("round {} critical", r + 1));
+                series.push(Series { label, points: vec![(x - 0.4, crit[i]), (x + 0.4, crit[i])], colour: c, kind: Kind::Dashed(0.8, 3.0, 2.0) });
             }
         }
         let top = rows.iter().map(|&i| lr[i]).filter(|v| v.is_finite()).fold(1.0, f64::max);

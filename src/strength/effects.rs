@@ -22,17 +22,23 @@
 //! impacts a crushed particle received before its test; the particles of a prediction are
 //! fresh, so it changes only the fit.
 //!
+//! Beyond the five particle effects, a strength dataset's recorded factors (numeric or
+//! categorical columns, a size measure) give generic candidates, [`Effect::Factor`]: their
+//! equations, parameters and the weakest-link test are in [`super::factors`].
+//!
 //! A candidate whose covariate is missing (no column, empty cells, constant over the sample) is
 //! skipped with the reason by the naming loop ([`Effect::term`]); a strength model that lists
 //! it explicitly refuses the data.
 
 use serde::{Deserialize, Serialize};
 
+use super::factors::{Factor, Form, level_columns};
+use super::fit::Sample;
 use super::population::Particle;
 use crate::lifetime::damage::tk_ratio_path;
 
 /// An effect of the strength model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Effect {
     /// Roundness sets the contact radius of curvature.
@@ -45,6 +51,10 @@ pub enum Effect {
     Sphericity,
     /// Tavares–King damage from prior impacts.
     Damage,
+    /// A recorded factor of a strength dataset ([`super::factors`]); declared by the data's
+    /// study, never by name in `effects`.
+    #[serde(skip)]
+    Factor(Factor),
 }
 
 /// Every effect, in the library's order.
@@ -58,6 +68,15 @@ pub type Covariates = [(String, Vec<Option<f64>>)];
 pub enum Term {
     /// A linear column z.
     Linear(Vec<f64>),
+    /// Treatment-coded columns of a categorical factor (one per level but the reference).
+    Levels {
+        /// 0/1 columns, one per non-reference level, in the order of `levels` without the reference.
+        columns: Vec<Vec<f64>>,
+        /// The levels, in order of appearance.
+        levels: Vec<String>,
+        /// The reference level (scale μ).
+        reference: String,
+    },
     /// The Tavares–King offset: prior impact counts and γ.
     Damage {
         /// Prior impacts per particle.
@@ -69,51 +88,64 @@ pub enum Term {
 
 impl Effect {
     /// Key used in studies, tables and verdict.json.
-    pub fn name(self) -> &'static str {
+    pub fn name(&self) -> String {
         match self {
-            Effect::Roundness => "roundness",
-            Effect::Size => "size",
-            Effect::Temperature => "temperature",
-            Effect::Sphericity => "sphericity",
-            Effect::Damage => "damage",
+            Effect::Roundness => "roundness".into(),
+            Effect::Size => "size".into(),
+            Effect::Temperature => "temperature".into(),
+            Effect::Sphericity => "sphericity".into(),
+            Effect::Damage => "damage".into(),
+            Effect::Factor(f) => f.name(),
         }
     }
 
     /// Human label.
-    pub fn label(self) -> &'static str {
+    pub fn label(&self) -> String {
         match self {
-            Effect::Roundness => "roundness / contact curvature",
-            Effect::Size => "size effect (weakest link)",
-            Effect::Temperature => "temperature softening",
-            Effect::Sphericity => "sphericity / effective radius",
-            Effect::Damage => "damage from prior impacts (Tavares–King)",
+            Effect::Roundness => "roundness / contact curvature".into(),
+            Effect::Size => "size effect (weakest link)".into(),
+            Effect::Temperature => "temperature softening".into(),
+            Effect::Sphericity => "sphericity / effective radius".into(),
+            Effect::Damage => "damage from prior impacts (Tavares–King)".into(),
+            Effect::Factor(f) => f.label(),
         }
     }
 
     /// The dataset column the effect needs.
-    pub fn covariate(self) -> &'static str {
+    pub fn covariate(&self) -> String {
         match self {
-            Effect::Roundness => "roundness",
-            Effect::Size => "diameter_m",
-            Effect::Temperature => "temperature_c",
-            Effect::Sphericity => "sphericity",
-            Effect::Damage => "impacts",
+            Effect::Roundness => "roundness".into(),
+            Effect::Size => "diameter_m".into(),
+            Effect::Temperature => "temperature_c".into(),
+            Effect::Sphericity => "sphericity".into(),
+            Effect::Damage => "impacts".into(),
+            Effect::Factor(f) => f.column.clone(),
         }
     }
 
     /// Its equation, as written in verdict.json.
-    pub fn equation(self) -> &'static str {
+    pub fn equation(&self) -> String {
         match self {
-            Effect::Roundness => "R_c = roundness^q R; ln σ_θ,i = μ + (2q/3) ln roundness_i",
-            Effect::Size => "σ_θ(d) = σ_θ (d/d_median)^(−α); ln σ_θ,i = μ − α ln(d_i/d_median)",
-            Effect::Temperature => "ln σ_θ(T) = μ + β (T − T_mean)/1000 °C",
-            Effect::Sphericity => "R_c = sphericity^p R; ln σ_θ,i = μ + (2p/3) ln sphericity_i",
-            Effect::Damage => "E_m,n = E_m,0 Π(1 − D_j), D_j Tavares–King at ratio x; ln σ_θ,i = μ + (1/5) ln(x/x_n,i)",
+            Effect::Roundness => "R_c = roundness^q R; ln σ_θ,i = μ + (2q/3) ln roundness_i".into(),
+            Effect::Size => "σ_θ(d) = σ_θ (d/d_median)^(−α); ln σ_θ,i = μ − α ln(d_i/d_median)".into(),
+            Effect::Temperature => "ln σ_θ(T) = μ + β (T − T_mean)/1000 °C".into(),
+            Effect::Sphericity => "R_c = sphericity^p R; ln σ_θ,i = μ + (2p/3) ln sphericity_i".into(),
+            Effect::Damage => "E_m,n = E_m,0 Π(1 − D_j), D_j Tavares–King at ratio x; ln σ_θ,i = μ + (1/5) ln(x/x_n,i)".into(),
+            Effect::Factor(f) => f.equation(),
+        }
+    }
+
+    /// Extra parameters the effect adds to the base model in `term` (one; L − 1 for the
+    /// levels of a categorical factor).
+    pub fn extra_parameters(term: &Term) -> usize {
+        match term {
+            Term::Levels { columns, .. } => columns.len(),
+            _ => 1,
         }
     }
 
     /// Whether the effect changes the contact radius of curvature (and so the impact stress).
-    pub fn is_contact_geometry(self) -> bool {
+    pub fn is_contact_geometry(&self) -> bool {
         matches!(self, Effect::Roundness | Effect::Sphericity)
     }
 
@@ -121,45 +153,69 @@ impl Effect {
     /// hazard of particle i is (σ̄_impact · e^(−κ β z_i) / e^μ)^m. κ = 0.9 for contact-geometry
     /// effects (impact p0 ∝ R_c^(−3/5) against the crush reduction's R_c^(−2/3)), κ = 1 for
     /// strength effects.
-    pub fn impact_exponent(self) -> f64 {
+    pub fn impact_exponent(&self) -> f64 {
         if self.is_contact_geometry() { 0.9 } else { 1.0 }
     }
 
     /// The reference value of the covariate over the fitted sample: the median diameter (size),
-    /// the mean temperature (temperature); 0 for the others (unused).
-    pub fn reference(self, values: &[f64]) -> f64 {
+    /// the mean temperature (temperature); for factors the mean (linear) or the median (power,
+    /// size); 0 for the others (unused).
+    pub fn reference(&self, values: &[f64]) -> f64 {
+        let mean = || values.iter().sum::<f64>() / values.len() as f64;
         match self {
             Effect::Size => crate::stats::median(values),
-            Effect::Temperature => values.iter().sum::<f64>() / values.len() as f64,
+            Effect::Temperature => mean(),
+            Effect::Factor(f) => match f.form {
+                Form::Linear => mean(),
+                Form::Power | Form::Size(_) => crate::stats::median(values),
+                Form::Levels => 0.0,
+            },
             _ => 0.0,
         }
     }
 
     /// The regression column z of a covariate value, given the reference.
-    pub fn z(self, value: f64, reference: f64) -> f64 {
+    pub fn z(&self, value: f64, reference: f64) -> f64 {
         match self {
             Effect::Roundness | Effect::Sphericity => value.ln(),
             Effect::Size => (value / reference).ln(),
             Effect::Temperature => (value - reference) / 1000.0,
             Effect::Damage => 0.0,
+            Effect::Factor(f) => match f.form {
+                Form::Linear => value - reference,
+                Form::Power | Form::Size(_) => (value / reference).ln(),
+                Form::Levels => 0.0,
+            },
         }
     }
 
-    /// The covariate of a particle of a population (None if it was not measured or declared).
-    pub fn value_of(self, p: &Particle) -> Option<f64> {
+    /// The covariate of a particle of a population (None if it was not measured or declared;
+    /// always None for a recorded factor, which a particle population does not carry).
+    pub fn value_of(&self, p: &Particle) -> Option<f64> {
         match self {
             Effect::Roundness => p.roundness,
             Effect::Size => Some(p.diameter_m),
             Effect::Temperature => p.temperature_c,
             Effect::Sphericity => p.sphericity,
             Effect::Damage => Some(0.0),
+            Effect::Factor(_) => None,
         }
     }
 
     /// The effect's term for this sample, or the reason it cannot be fitted.
-    pub fn term(self, covariates: &Covariates, gamma: f64) -> std::result::Result<Term, String> {
+    pub fn term(&self, sample: &Sample, gamma: f64) -> std::result::Result<Term, String> {
         let name = self.covariate();
-        let Some((_, col)) = covariates.iter().find(|(n, _)| n == name).filter(|(_, c)| c.iter().any(|v| v.is_some())) else {
+        if let Effect::Factor(f) = self
+            && f.form == Form::Levels
+        {
+            let Some((_, col)) = sample.levels.iter().find(|(n, _)| *n == name) else {
+                return Err(format!("the dataset has no categorical column `{name}`"));
+            };
+            let (levels, reference, columns) = level_columns(col).map_err(|why| format!("`{name}`: {why}"))?;
+            return Ok(Term::Levels { columns, levels, reference });
+        }
+        let covariates: &Covariates = &sample.covariates;
+        let Some((_, col)) = covariates.iter().find(|(n, _)| *n == name).filter(|(_, c)| c.iter().any(|v| v.is_some())) else {
             return Err(format!("the dataset has no `{name}` values (no such column, or every cell empty)"));
         };
         let missing = col.iter().filter(|v| v.is_none()).count();
@@ -183,8 +239,12 @@ impl Effect {
                 }
                 Ok(Term::Damage { impacts: v.iter().map(|x| *x as u64).collect(), gamma })
             }
+            Effect::Factor(f) if f.form == Form::Linear => {
+                let r = self.reference(&v);
+                Ok(Term::Linear(v.iter().map(|&x| self.z(x, r)).collect()))
+            }
             _ => {
-                if self != Effect::Temperature {
+                if *self != Effect::Temperature {
                     positive("a power law")?;
                 }
                 let r = self.reference(&v);
@@ -194,7 +254,7 @@ impl Effect {
     }
 
     /// The reported parameter: (symbol, value from β (or x for damage), meaning).
-    pub fn parameter(self, beta: f64, shape: f64) -> (&'static str, f64, String) {
+    pub fn parameter(&self, beta: f64, shape: f64) -> (&'static str, f64, String) {
         let value = self.natural(beta);
         match self {
             Effect::Roundness => ("q", value, format!("contact radius R_c = roundness^{value:.2} R (Wadell: 1)")),
@@ -215,27 +275,47 @@ impl Effect {
             }
             Effect::Temperature => ("strength_ratio_per_100c", value, format!("strength × {value:.3} per 100 °C")),
             Effect::Damage => ("x", value, format!("prior impacts at {value:.3} of the fracture energy")),
+            Effect::Factor(f) => {
+                let c = &f.column;
+                match f.form {
+                    Form::Linear => ("beta", value, format!("σ_θ × {:.4} per unit of `{c}`", value.exp())),
+                    Form::Power => ("exponent", value, format!("σ_θ ∝ {c}^{value:.3}")),
+                    Form::Levels => ("scale_ratio", value, format!("scales of the levels of `{c}`")),
+                    Form::Size(s) => {
+                        let k = s.k();
+                        ("alpha", value, format!("σ_θ ∝ {c}^(−α), α = {value:.3}; weakest link at this modulus: {k}/m = {:.3}", k / shape))
+                    }
+                }
+            }
         }
     }
 
     /// The reported parameter's value for a regression coefficient β (α = −β, q = p = 3β/2,
     /// strength ratio per 100 °C e^(β/10); damage: β is already the ratio x).
-    pub fn natural(self, beta: f64) -> f64 {
+    pub fn natural(&self, beta: f64) -> f64 {
         match self {
             Effect::Roundness | Effect::Sphericity => 1.5 * beta,
             Effect::Size => -beta,
             Effect::Temperature => (beta / 10.0).exp(),
             Effect::Damage => beta,
+            Effect::Factor(f) => match f.form {
+                Form::Size(_) => -beta,
+                _ => beta,
+            },
         }
     }
 
     /// The inverse of [`Effect::natural`].
-    pub fn beta_of(self, natural: f64) -> f64 {
+    pub fn beta_of(&self, natural: f64) -> f64 {
         match self {
             Effect::Roundness | Effect::Sphericity => natural / 1.5,
             Effect::Size => -natural,
             Effect::Temperature => 10.0 * natural.ln(),
             Effect::Damage => natural,
+            Effect::Factor(f) => match f.form {
+                Form::Size(_) => -natural,
+                _ => natural,
+            },
         }
     }
 }
@@ -256,9 +336,13 @@ mod tests {
         (name.to_string(), v.into_iter().map(Some).collect())
     }
 
+    fn sample(covariates: Vec<(String, Vec<Option<f64>>)>) -> Sample {
+        Sample { covariates, ..Sample::default() }
+    }
+
     #[test]
     fn missing_or_constant_covariates_are_skipped_with_a_reason() {
-        let c = vec![cov("temperature_c", vec![20.0; 12]), ("roundness".into(), vec![Some(0.7), None, Some(0.8)])];
+        let c = sample(vec![cov("temperature_c", vec![20.0; 12]), ("roundness".into(), vec![Some(0.7), None, Some(0.8)])]);
         assert!(Effect::Temperature.term(&c, 5.0).unwrap_err().contains("same on every row"));
         assert!(Effect::Roundness.term(&c, 5.0).unwrap_err().contains("empty on 1 of 3"));
         assert!(Effect::Damage.term(&c, 5.0).unwrap_err().contains("no `impacts` values"));
@@ -272,7 +356,7 @@ mod tests {
             }
         }
         // A particle's column uses the sample's reference: the median diameter.
-        let c = vec![cov("diameter_m", vec![0.8e-3, 1.0e-3, 0.9e-3])];
+        let c = sample(vec![cov("diameter_m", vec![0.8e-3, 1.0e-3, 0.9e-3])]);
         let Term::Linear(z) = Effect::Size.term(&c, 5.0).unwrap() else { panic!() };
         assert!((z[2]).abs() < 1e-15 && (z[1] - (1.0f64 / 0.9).ln()).abs() < 1e-15);
     }

@@ -18,15 +18,44 @@ use crate::data::CrushData;
 use crate::error::{Error, Result};
 use crate::lifetime::damage::tk_ratio_path;
 
-/// Strengths and covariates of one crush sample.
-#[derive(Debug, Clone, PartialEq)]
+/// Strengths and covariates of one sample: a crush sample reduced to σ̄ at break, or a
+/// strength file's specimens with their recorded factors.
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Sample {
     /// Where it came from (for messages).
     pub source: String,
-    /// σ̄ at break (Pa), per particle.
+    /// σ̄ at break, or the specimen strength (Pa), per specimen.
     pub strength: Vec<f64>,
-    /// Covariate columns by name (`None`: empty cell).
+    /// Numeric covariate columns by name (`None`: empty cell).
     pub covariates: Vec<(String, Vec<Option<f64>>)>,
+    /// Categorical factor columns by name: each specimen's level.
+    pub levels: Vec<(String, Vec<String>)>,
+    /// The generic candidate effects the data's study declares (factors, size measure); the
+    /// five particle effects are candidates only of crush samples (`particles`).
+    pub factors: Vec<crate::strength::factors::Factor>,
+    /// Whether the specimens are crushed particles (the particle effects apply).
+    pub particles: bool,
+}
+
+impl Sample {
+    /// Every candidate of the naming loop for this sample: the configured particle effects
+    /// (crush samples only), then the data's declared factors.
+    pub fn candidates(&self, particle_effects: &[Effect]) -> Vec<Effect> {
+        let particle = if self.particles { particle_effects.to_vec() } else { Vec::new() };
+        particle.into_iter().chain(self.factors.iter().cloned().map(Effect::Factor)).collect()
+    }
+
+    /// The rows `rows` of the sample (strengths, covariates and levels), same candidates.
+    pub fn rows(&self, rows: &[usize], source: String) -> Sample {
+        Sample {
+            source,
+            strength: rows.iter().map(|&i| self.strength[i]).collect(),
+            covariates: self.covariates.iter().map(|(c, v)| (c.clone(), rows.iter().map(|&i| v[i]).collect())).collect(),
+            levels: self.levels.iter().map(|(c, v)| (c.clone(), rows.iter().map(|&i| v[i].clone()).collect())).collect(),
+            factors: self.factors.clone(),
+            particles: self.particles,
+        }
+    }
 }
 
 /// Hertz contact state of each crushed particle at its force at break: sphere of radius d/2 on
@@ -64,6 +93,9 @@ pub fn sample_of(data: &CrushData, elastic: &Elastic, contact: &ContactOptions) 
             ("temperature_c".into(), r.iter().map(|x| x.temperature_c).collect()),
             ("impacts".into(), r.iter().map(|x| x.impacts.map(|k| k as f64)).collect()),
         ],
+        levels: Vec::new(),
+        factors: Vec::new(),
+        particles: true,
     })
 }
 
@@ -72,6 +104,9 @@ pub fn sample_of(data: &CrushData, elastic: &Elastic, contact: &ContactOptions) 
 pub struct ModelFit {
     /// The effects, in the order they were added.
     pub effects: Vec<Effect>,
+    /// Regression columns of each effect, in the order of `effects` (1 for a linear effect,
+    /// L − 1 for the levels of a categorical factor, 0 for damage).
+    pub widths: Vec<usize>,
     /// The regression (β in the order of the linear effects).
     pub reg: RegFit,
     /// Linear columns, in the order of the linear effects.
@@ -90,9 +125,9 @@ impl ModelFit {
         Design { columns: &self.columns, offset: self.offset.as_deref() }
     }
 
-    /// Number of parameters: μ, b, one per effect.
+    /// Number of parameters: μ, b, and each effect's (one; L − 1 for levels).
     pub fn parameters(&self) -> usize {
-        2 + self.effects.len()
+        2 + self.widths.iter().zip(&self.effects).map(|(w, e)| if *e == Effect::Damage { 1 } else { *w }).sum::<usize>()
     }
 
     /// Weibull modulus.
@@ -107,16 +142,24 @@ impl ModelFit {
 
     /// The linear effects, in the order of β.
     pub fn linear(&self) -> Vec<Effect> {
-        self.effects.iter().copied().filter(|e| *e != Effect::Damage).collect()
+        self.effects.iter().filter(|e| **e != Effect::Damage).cloned().collect()
     }
 
-    /// β of a linear effect (or the ratio x for damage), with its standard error (NaN for damage).
-    pub fn coefficient(&self, c: Effect) -> Option<(f64, f64)> {
-        if c == Effect::Damage {
+    /// The positions in β of an effect's coefficients.
+    pub fn beta_range(&self, c: &Effect) -> Option<std::ops::Range<usize>> {
+        let k = self.effects.iter().position(|e| e == c)?;
+        let start: usize = self.widths[..k].iter().sum();
+        Some(start..start + self.widths[k])
+    }
+
+    /// β of a linear effect (or the ratio x for damage), with its standard error (NaN for
+    /// damage); the first coefficient of a categorical factor's levels.
+    pub fn coefficient(&self, c: &Effect) -> Option<(f64, f64)> {
+        if *c == Effect::Damage {
             return self.damage_ratio.map(|x| (x, f64::NAN));
         }
-        let j = self.linear().iter().position(|e| *e == c)?;
-        Some((self.reg.beta[j], self.reg.beta_se[j]))
+        let j = self.beta_range(c)?.start;
+        Some((*self.reg.beta.get(j)?, self.reg.beta_se[j]))
     }
 
     /// Parametric-bootstrap replicate `r` (its own ChaCha8 stream of `seed`): strengths drawn
@@ -142,17 +185,28 @@ pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>) ->
     let mut columns = Vec::new();
     let mut damage = None;
     let mut effects = Vec::new();
+    let mut widths = Vec::new();
     for (c, t) in terms {
-        effects.push(*c);
+        effects.push(c.clone());
         match t {
-            Term::Linear(z) => columns.push(z.clone()),
-            Term::Damage { impacts, gamma } => damage = Some((impacts, *gamma)),
+            Term::Linear(z) => {
+                columns.push(z.clone());
+                widths.push(1);
+            }
+            Term::Levels { columns: z, .. } => {
+                columns.extend(z.iter().cloned());
+                widths.push(z.len());
+            }
+            Term::Damage { impacts, gamma } => {
+                damage = Some((impacts, *gamma));
+                widths.push(0);
+            }
         }
     }
     // Linear effects first in `effects`' β order; damage (if any) is profiled.
     let Some((impacts, gamma)) = damage else {
         let reg = fit(x, &Design { columns: &columns, offset: None })?;
-        return Ok(ModelFit { effects, reg, columns, offset: None, damage_ratio: None, n: x.len() });
+        return Ok(ModelFit { effects, widths, reg, columns, offset: None, damage_ratio: None, n: x.len() });
     };
     let n_max = impacts.iter().copied().max().unwrap_or(0);
     // One Tavares–King trajectory per trial ratio serves every particle.
@@ -208,7 +262,7 @@ pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>) ->
     let off = offsets(lx).ok_or_else(|| Error::numerical("damage effect", "the fitted ratio breaks a particle"))?;
     let reg = fit(x, &Design { columns: &columns, offset: Some(&off) })?;
     // `effects` keeps damage wherever it was added; β follow the linear effects' order.
-    Ok(ModelFit { effects, reg, columns, offset: Some(off), damage_ratio: Some(lx.exp()), n: x.len() })
+    Ok(ModelFit { effects, widths, reg, columns, offset: Some(off), damage_ratio: Some(lx.exp()), n: x.len() })
 }
 
 /// ln σ_i of particle `i` under a model fitted on other rows: its linear terms' columns at row
@@ -221,6 +275,12 @@ pub fn predict_ln_scale(fit: &ModelFit, terms: &[(Effect, Term)], i: usize) -> f
             Term::Linear(z) => {
                 s += fit.reg.beta[j] * z[i];
                 j += 1;
+            }
+            Term::Levels { columns, .. } => {
+                for z in columns {
+                    s += fit.reg.beta[j] * z[i];
+                    j += 1;
+                }
             }
             Term::Damage { impacts, gamma } => {
                 let x0 = fit.damage_ratio.unwrap_or(0.0);
@@ -238,9 +298,10 @@ pub fn subset(terms: &[(Effect, Term)], rows: &[usize]) -> Vec<(Effect, Term)> {
         .map(|(c, t)| {
             let t = match t {
                 Term::Linear(z) => Term::Linear(rows.iter().map(|&i| z[i]).collect()),
+                Term::Levels { columns, levels, reference } => Term::Levels { columns: columns.iter().map(|z| rows.iter().map(|&i| z[i]).collect()).collect(), levels: levels.clone(), reference: reference.clone() },
                 Term::Damage { impacts, gamma } => Term::Damage { impacts: rows.iter().map(|&i| impacts[i]).collect(), gamma: *gamma },
             };
-            (*c, t)
+            (c.clone(), t)
         })
         .collect()
 }
@@ -299,13 +360,13 @@ impl StrengthFit {
     /// asks for an effect needs its covariate; the naming loop instead skips such candidates).
     pub fn new(sample: &Sample, effects: &[Effect], gamma: f64, material: &str) -> Result<StrengthFit> {
         let mut terms = Vec::new();
-        for &e in effects {
-            let t = e.term(&sample.covariates, gamma).map_err(|reason| Error::Data {
+        for e in effects {
+            let t = e.term(sample, gamma).map_err(|reason| Error::Data {
                 file: sample.source.clone(),
                 location: format!("column {}", e.covariate()),
                 rule: format!("material `{material}`: the strength model's `{}` effect needs this column: {reason}", e.name()),
             })?;
-            terms.push((e, t));
+            terms.push((e.clone(), t));
         }
         let model = fit_model(&sample.strength, &terms).map_err(|err| Error::Data {
             file: sample.source.clone(),
@@ -324,7 +385,7 @@ impl StrengthFit {
                 let values: Vec<f64> = sample
                     .covariates
                     .iter()
-                    .find(|(n, _)| n == e.covariate())
+                    .find(|(n, _)| *n == e.covariate())
                     .map(|(_, c)| c.iter().map(|v| v.unwrap_or(f64::NAN)).collect())
                     .unwrap_or_default();
                 references.push(e.reference(&values));
@@ -369,7 +430,7 @@ mod tests {
                 Weibull::new(15.0, 2e9 * f).unwrap().sample(&mut rng)
             })
             .collect();
-        let c = vec![("impacts".to_string(), impacts.iter().map(|&k| Some(k as f64)).collect())];
+        let c = Sample { covariates: vec![("impacts".to_string(), impacts.iter().map(|&k| Some(k as f64)).collect())], ..Sample::default() };
         let t = Effect::Damage.term(&c, 5.0).unwrap();
         let m = fit_model(&x, &[(Effect::Damage, t)]).unwrap();
         let r = m.damage_ratio.unwrap();
@@ -379,7 +440,7 @@ mod tests {
 
     #[test]
     fn a_missing_covariate_names_material_file_and_column() {
-        let s = Sample { source: "d.csv".into(), strength: vec![1e9; 12], covariates: vec![("roundness".into(), vec![None; 12])] };
+        let s = Sample { source: "d.csv".into(), strength: vec![1e9; 12], covariates: vec![("roundness".into(), vec![None; 12])], ..Sample::default() };
         let e = StrengthFit::new(&s, &[Effect::Roundness], 5.0, "gen4").unwrap_err().to_string();
         assert!(e.contains("d.csv") && e.contains("column roundness") && e.contains("gen4"), "{e}");
     }

@@ -9,6 +9,12 @@
 //! softening, and damage from impacts before the crush test. The deliverable's model is the
 //! special case without effects (R_c = R, one law for all particles).
 //!
+//! * [`factors`]: generic effects of a strength file's recorded factors — numeric (ln-linear,
+//!   power law), categorical (one scale per level), a size measure with its exponent free and
+//!   the weakest-link test — for any brittle strength data, not only particles.
+//! * [`specimens`]: strength data as input — a file of specimen strengths with a size measure
+//!   and recorded factors, read through the intake into a [`Sample`] the naming loop takes
+//!   like a crush sample.
 //! * [`fit`]: the crush sample (σ̄ at break per particle and its covariates), the
 //!   maximum-likelihood fit of the Weibull regression ([`regress`]) with the model's effects,
 //!   cross-validated pointwise log scores.
@@ -30,11 +36,13 @@
 
 pub mod draws;
 pub mod effects;
+pub mod factors;
 pub mod fit;
 pub mod model;
 pub mod options;
 pub mod population;
 pub mod regress;
+pub mod specimens;
 pub mod weights;
 
 pub use draws::{MAX_LINEAR, ParameterSummary, Params, summarise};

@@ -93,6 +93,12 @@ impl LifetimeModel {
     /// covariate the model needs is an error naming the material and the source.
     pub fn new(key: &str, label: &str, sphere: Sphere, wall: Elastic, domain: AveragingDomain, fit: StrengthFit, population: Population) -> Result<Self> {
         let linear = fit.linear();
+        if let Some(e) = linear.iter().find(|e| matches!(e, Effect::Factor(_))) {
+            return Err(Error::Param {
+                name: "strength".into(),
+                rule: format!("material `{key}`: the lifetime chain predicts particles, and the effect `{}` of a recorded factor has no value for them; fit the particle effects only", e.name()),
+            });
+        }
         if linear.len() > MAX_LINEAR {
             return Err(Error::numerical("lifetime model", format!("at most {MAX_LINEAR} linear effects")));
         }
@@ -407,7 +413,7 @@ mod tests {
     /// A model without effects fitted to 20 strengths, predicting for one particle.
     fn one_particle_model(domain: AveragingDomain) -> LifetimeModel {
         let fit = crate::strength::fit::StrengthFit::new(
-            &crate::strength::fit::Sample { source: "x".into(), strength: (1..=20).map(|i| 7e8 + 1e7 * i as f64).collect(), covariates: vec![] },
+            &crate::strength::fit::Sample { source: "x".into(), strength: (1..=20).map(|i| 7e8 + 1e7 * i as f64).collect(), particles: true, ..Default::default() },
             &[],
             5.0,
             "x",

@@ -96,7 +96,7 @@ impl<'de> Deserialize<'de> for StrengthSpec {
         impl<'de> Visitor<'de> for V {
             type Value = StrengthSpec;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                let names: Vec<&str> = ALL.iter().map(|e| e.name()).collect();
+                let names: Vec<String> = ALL.iter().map(|e| e.name()).collect();
                 write!(f, "a list of effects ({}) or \"diagnosed\"", names.join(", "))
             }
             fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<StrengthSpec, E> {

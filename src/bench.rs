@@ -486,6 +486,46 @@ pub fn uq_speed(study: &Path) -> Result<UqSpeed> {
     Ok(UqSpeed { strength_model: setup.spec.name(), particles, propagation_s, samples, ishigami_s, ishigami_error })
 }
 
+/// Times the naming loop on a strength file of `n` specimens with six recorded factors — a
+/// size measure (effective volume, two values), two numeric (a loading rate, log-uniform over
+/// two decades; an irrelevant number) and three categorical (batch of three with batch B 15 %
+/// weaker, furnace of two, operator of four) — at the shipped settings (499 bootstrap
+/// replicates per round, 999 permutations per residual test, ten folds): (seconds, named).
+pub fn strength_factors_speed(n: usize) -> Result<(f64, Vec<String>)> {
+    use crate::strength::factors::{Factor, Form, SizeMeasure};
+    let mut rng = ChaCha8Rng::seed_from_u64(33);
+    let mut s = Sample { source: "bench".into(), ..Sample::default() };
+    let volume: Vec<f64> = (0..n).map(|i| [2.0, 8.0][i % 2]).collect();
+    let rate: Vec<f64> = (0..n).map(|_| 10f64.powf(rng.random_range(-1.0..1.0))).collect();
+    let other: Vec<f64> = (0..n).map(|_| rng.random_range(1.0..5.0)).collect();
+    let batch: Vec<String> = (0..n).map(|i| ["A", "B", "C"][(i / 2) % 3].to_string()).collect();
+    let furnace: Vec<String> = (0..n).map(|_| ["F1", "F2"][rng.random_range(0..2)].to_string()).collect();
+    let operator: Vec<String> = (0..n).map(|_| format!("O{}", rng.random_range(0..4))).collect();
+    s.strength = (0..n)
+        .map(|i| {
+            let scale = 380e6 * (volume[i] / 4.0).powf(-0.1) * if batch[i] == "B" { 0.85 } else { 1.0 };
+            Weibull::new(10.0, scale).map(|w| w.sample(&mut rng))
+        })
+        .collect::<Result<_>>()?;
+    for (name, v) in [("volume", volume), ("rate", rate), ("other", other)] {
+        s.covariates.push((name.into(), v.into_iter().map(Some).collect()));
+    }
+    for (name, v) in [("batch", batch), ("furnace", furnace), ("operator", operator)] {
+        s.levels.push((name.into(), v));
+    }
+    s.factors = vec![Factor { column: "volume".into(), form: Form::Size(SizeMeasure::EffectiveVolume) }];
+    for c in ["rate", "other"] {
+        s.factors.push(Factor { column: c.into(), form: Form::Linear });
+        s.factors.push(Factor { column: c.into(), form: Form::Power });
+    }
+    for c in ["batch", "furnace", "operator"] {
+        s.factors.push(Factor { column: c.into(), form: Form::Levels });
+    }
+    let start = Instant::now();
+    let outcome = crate::discrepancy::workflow::analyse(&s, &crate::strength::NamingSettings::default(), true)?;
+    Ok((start.elapsed().as_secs_f64(), outcome.named.iter().map(|e| e.name()).collect()))
+}
+
 /// Speed of the discrepancy workflow on 100 particles.
 #[derive(Debug, Clone)]
 pub struct DiscrepancySpeed {

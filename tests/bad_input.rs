@@ -445,3 +445,26 @@ fn bad_command_line_arguments() {
         assert!(s.report_files().is_empty(), "partlife {args:?} wrote {:?}", s.report_files());
     }
 }
+
+/// A strength file's study: a missing factor column, integer codes of unknown type, a strength
+/// in the wrong unit and a reserved column name each get one message naming file, key or row
+/// and the rule; exit 2; nothing written.
+#[test]
+fn bad_strength_files_and_factor_declarations() {
+    let s = Scratch::new();
+    std::fs::create_dir_all(s.path("datasets/real")).unwrap();
+    s.write("datasets/real/bars.csv", "id;batch;lab;V [mm³];strength [MPa]\nB1;x;1;2,0;310\nB2;y;2;8,0;290\nB3;x;1;2,0;305\nB4;y;2;8,0;295\nB5;x;1;2,0;300\nB6;y;2;8,0;285\nB7;x;1;2,0;312\nB8;y;2;8,0;280\nB9;x;1;2,0;308\nB10;y;2;8,0;288\nB11;x;1;2,0;301\nB12;y;2;8,0;292\n");
+    let study = "studies/bars.toml";
+    let base = "kind = \"discrepancy\"\nseed = 1\n[discrepancy]\nbootstrap = 99\npermutations = 99\n[power]\nreplicates = 0\n[[strength]]\nkey = \"bars\"\nlabel = \"Bars\"\ndata = \"../datasets/real/bars.csv\"\nsize = { column = \"V\", measure = \"effective_volume\" }\nfactors = [\"batch\"]\n";
+    s.write(study, base);
+    let ok = s.run(&["run", study, "--reports-dir", "ok", "--quiet"]);
+    assert_eq!(ok.code, 0, "{}", ok.stderr);
+    std::fs::remove_dir_all(s.path("ok")).unwrap();
+    s.expect_bad_study(study, "factors = [\"batch\"]", "factors = [\"batch\", \"furnace\"]", &["strength[0].data.factors.furnace", "no column `furnace`", "bars.csv"]);
+    s.write(study, base);
+    s.expect_bad_study(study, "factors = [\"batch\"]", "factors = [\"lab\"]", &["strength[0].data.factors", "`lab` holds 2 distinct whole numbers", "lab = \"categorical\""]);
+    s.write(study, base);
+    s.expect_bad_study(study, "data = \"../datasets/real/bars.csv\"", "data = { file = \"../datasets/real/bars.csv\", columns = { strength = \"strength [MPa]\" }, units = { strength = \"Pa\" } }", &["units.strength", "contradicts"]);
+    s.write(study, base);
+    s.expect_bad_study(study, "factors = [\"batch\"]", "factors = [\"residual\"]", &["strength[0].factors", "`residual` is a name the report's tables use"]);
+}

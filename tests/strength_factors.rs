@@ -184,3 +184,101 @@ fn nothing_is_named_when_nothing_is_hidden_even_among_irrelevant_and_shuffled_fa
     assert!(any as f64 <= 0.05 * reps as f64, "shuffled factor named in {any}/{reps}");
 }
 
+
+mod common;
+
+/// The `reliability` package's two-parameter Weibull MLE (tests/bench/reliability/fit.py,
+/// reliability 0.9, values as the files hold them): (set, n, m, scale in GPa, log-likelihood in
+/// the units of GPa).
+const PEER: [(&str, usize, f64, f64, f64); 5] = [
+    ("glass", 63, 5.7807009964, 1.6281134828, -15.2068404911),
+    ("carbon_10mm", 63, 5.0494133824, 3.3147226247, -61.9569812988),
+    ("carbon_20mm", 69, 5.5048507470, 2.6508590884, -49.5961351302),
+    ("carbon_50mm", 65, 4.5390051206, 1.8298790868, -35.9354448443),
+    ("carbon_pooled", 197, 3.3755215280, 2.6568614172, -226.1052397453),
+];
+
+fn real(file: &str, strength: &str, filter: Option<&str>) -> Vec<f64> {
+    use partlife::intake::{MapOrigin, Source};
+    use partlife::strength::specimens::{Factors, read_specimens};
+    let mut src = Source::file(common::root().join("datasets/real").join(file));
+    src.columns.insert("strength".into(), strength.into());
+    src.units.insert("strength".into(), "GPa".into());
+    let s = read_specimens(&src, None, &Factors::Typed([("gauge_length_mm".to_string(), partlife::strength::factors::FactorType::Numeric)].into()), &MapOrigin { file: "test".into(), key: "data".into() });
+    // The glass file has no gauge-length factor column: read it without.
+    let s = s.or_else(|_| read_specimens(&src, None, &Factors::default(), &MapOrigin { file: "test".into(), key: "data".into() })).unwrap();
+    let keep: Vec<usize> = (0..s.sample.strength.len()).filter(|&i| filter.is_none_or(|f| s.sample.covariates.first().is_some_and(|(_, v)| v[i] == Some(f.parse().unwrap())))).collect();
+    keep.iter().map(|&i| s.sample.strength[i]).collect()
+}
+
+#[test]
+fn two_parameter_fits_of_the_real_data_equal_the_reliability_package() {
+    use partlife::strength::regress::{Design, fit};
+    for (set, n, m, scale, loglik) in PEER {
+        let x = match set {
+            "glass" => real("smith_naylor_glass_fibres.csv", "strength_original_units", None),
+            "carbon_pooled" => real("bader_priest_carbon_fibres.csv", "strength_gpa", None),
+            s => real("bader_priest_carbon_fibres.csv", "strength_gpa", Some(s.trim_start_matches("carbon_").trim_end_matches("mm"))),
+        };
+        assert_eq!(x.len(), n, "{set}");
+        let f = fit(&x, &Design::default()).unwrap();
+        // Log-likelihood in Pa = in GPa − n ln 10⁹ (the density of x scales by 1/10⁹).
+        let ours = f.loglik + n as f64 * 1e9f64.ln();
+        assert!((ours - loglik).abs() < 1e-6, "{set}: ℓ {ours} vs reliability {loglik}");
+        assert!((f.shape() / m - 1.0).abs() < 1e-6 && (f.mu.exp() / 1e9 / scale - 1.0).abs() < 1e-6, "{set}: m {} scale {}", f.shape(), f.mu.exp());
+    }
+}
+
+#[test]
+fn the_shipped_real_data_studies_say_what_the_readme_reports_and_a_lab_export_agrees() {
+    let s = common::Scratch::new();
+    std::fs::create_dir_all(s.path("datasets/real")).unwrap();
+    for f in ["smith_naylor_glass_fibres.csv", "bader_priest_carbon_fibres.csv"] {
+        std::fs::copy(common::root().join("datasets/real").join(f), s.path("datasets/real").join(f)).unwrap();
+    }
+    for f in ["strength_glass_fibres.toml", "strength_carbon_fibres.toml"] {
+        std::fs::copy(common::root().join("studies").join(f), s.path("studies").join(f)).unwrap();
+    }
+    // A lab's export of the carbon fibres: semicolon, decimal comma, MPa, German headers.
+    let text = std::fs::read_to_string(s.path("datasets/real/bader_priest_carbon_fibres.csv")).unwrap();
+    let mut lab = String::from("Probe;Messlänge [mm];Festigkeit [MPa]\n");
+    for line in text.lines().skip(1) {
+        let v: Vec<&str> = line.split(',').collect();
+        let mpa = (v[3].parse::<f64>().unwrap() * 1000.0).to_string().replace('.', ",");
+        lab.push_str(&format!("{};{};{}\n", v[0], v[2], mpa));
+    }
+    s.write("datasets/real/carbon_lab.csv", &lab);
+    let study = s.read("studies/strength_carbon_fibres.toml")
+        .replace("data = \"../datasets/real/bader_priest_carbon_fibres.csv\"", "data = { file = \"../datasets/real/carbon_lab.csv\", columns = { strength = \"Festigkeit [MPa]\", id = \"Probe\" } }")
+        .replace("column = \"gauge_length_mm\"", "column = \"Messlänge\"");
+    s.write("studies/carbon_lab.toml", &study);
+    let mut verdicts = Vec::new();
+    for (name, _) in [("strength_glass_fibres", 0), ("strength_carbon_fibres", 1), ("carbon_lab", 2)] {
+        let out = s.run(&["run", &format!("studies/{name}.toml"), "--reports-dir", "reports", "--quiet"]);
+        assert_eq!(out.code, 0, "{name}: {}", out.stderr);
+        let v: serde_json::Value = serde_json::from_str(&s.read(&format!("reports/{name}/verdict.json"))).unwrap();
+        verdicts.push((v, s.read(&format!("reports/{name}/summary.md"))));
+    }
+    // Glass: nothing recorded, nothing named; the two-parameter law is rejected by the bootstrap AD.
+    let (g, md) = &verdicts[0];
+    assert_eq!(g["effects_named"]["glass"], serde_json::json!([]));
+    let p_ad = g["materials"][0]["stages"][0]["p_anderson_darling"].as_f64().unwrap();
+    assert!(p_ad < 0.05, "AD p {p_ad}");
+    assert!(md.contains("**The Weibull law fits these data poorly**") && md.contains("nothing recorded in the data explains the misfit"), "{md}");
+    // Carbon: the size effect is named and weakest-link scaling rejected (α > 1/m).
+    let (c, md) = &verdicts[1];
+    assert_eq!(c["effects_named"]["carbon"], serde_json::json!(["size(gauge_length_mm)"]));
+    let w = &c["evidence"]["carbon"][0]["weakest_link"];
+    assert!(!w["supported"].as_bool().unwrap() && w["alpha"].as_f64().unwrap() > w["predicted"].as_f64().unwrap(), "{w}");
+    assert!(md.contains("stronger than weakest-link scaling allows: rejected"), "{md}");
+    // The lab export: the same verdict and the same numbers (the size effect is named under
+    // the lab's column name).
+    let (l, _) = &verdicts[2];
+    assert_eq!(l["effects_named"]["carbon"], serde_json::json!(["size(Messlänge)"]));
+    let wl = &l["evidence"]["carbon"][0]["weakest_link"];
+    for k in ["alpha", "predicted", "lr", "p"] {
+        let (a, b) = (w[k].as_f64().unwrap(), wl[k].as_f64().unwrap());
+        assert!((a - b).abs() <= 1e-9 * a.abs().max(1e-12), "{k}: {a} vs {b}");
+    }
+    assert_eq!(c["gap_before"]["carbon"], l["gap_before"]["carbon"]);
+}

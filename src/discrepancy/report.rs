@@ -101,6 +101,7 @@ pub(super) fn verdict_json(loaded: &StudyFile, s: &DiscrepancyStudy, results: &[
             "covariates_diagnosed": r.outcome.stages[0].findings.iter().map(|f| f.covariate.clone()).collect::<Vec<_>>(),
             "covariates_skipped": r.outcome.skipped_covariates,
             "stages": r.outcome.stages.iter().map(stage).collect::<Vec<_>>(),
+            "weakest_link_final_model": r.outcome.size_tests.iter().map(|(e, w)| json!({"effect": e.name(), "test": w})).collect::<Vec<_>>(),
             "lifetime": r.lifetime.iter().map(|(k, v)| json!({"model": k, "bands": v})).collect::<Vec<_>>(),
         }));
     }
@@ -357,13 +358,19 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                 md.push_str(&evidence_row(e));
             }
         }
-        for e in r.outcome.evidence.iter().filter(|e| e.round == 0) {
+        let k_of = |e: &crate::strength::Effect| match e {
+            crate::strength::Effect::Factor(crate::strength::factors::Factor { form: crate::strength::factors::Form::Size(m), .. }) => m.k(),
+            _ => 1.0,
+        };
+        // A named size effect is tested in the final model; one not named, as a candidate
+        // against the base model.
+        for (e, w) in &r.outcome.size_tests {
+            let with = if r.outcome.named.len() > 1 { " (the other named effects held at their fitted values)" } else { "" };
+            md.push_str(&format!("\nWeakest-link test of `{}` in the final model{with}: {}.\n", e.name(), w.sentence(k_of(e))));
+        }
+        for e in r.outcome.evidence.iter().filter(|e| e.round == 0 && !r.outcome.named.contains(&e.candidate)) {
             if let Some(w) = &e.weakest_link {
-                let k = match &e.candidate {
-                    crate::strength::Effect::Factor(crate::strength::factors::Factor { form: crate::strength::factors::Form::Size(m), .. }) => m.k(),
-                    _ => 1.0,
-                };
-                md.push_str(&format!("\nWeakest-link test of `{}` against the base model: {}.\n", e.candidate.name(), w.sentence(k)));
+                md.push_str(&format!("\nWeakest-link test of `{}` (not named) against the base model: {}.\n", e.candidate.name(), w.sentence(k_of(&e.candidate))));
             }
         }
         if let Some(f) = b.findings.first() {
@@ -418,7 +425,11 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             ));
         }
         if !r.power.is_empty() {
-            md.push_str("\n**Detection power** (new datasets of that many particles alone, drawn from the fitted model by the generator experiment design's crush tests use; rate of naming every effect found here, and the false-positive rate with no effect; an experiments study with `naming_draws` asks the same loop about today's particles plus more, with truths from the main study's state of knowledge):\n\n| particles | power | false positives |\n|---|---|---|\n");
+            if r.crush.is_some() {
+                md.push_str("\n**Detection power** (new datasets of that many particles alone, drawn from the fitted model by the generator experiment design's crush tests use; rate of naming every effect found here, and the false-positive rate with no effect; an experiments study with `naming_draws` asks the same loop about today's particles plus more, with truths from the main study's state of knowledge):\n\n| particles | power | false positives |\n|---|---|---|\n");
+            } else {
+                md.push_str("\n**Detection power** (new datasets of that many specimens alone, their factor rows resampled from this file and their strengths drawn from the fitted model; rate of naming every effect found here, and the false-positive rate with no effect):\n\n| specimens | power | false positives |\n|---|---|---|\n");
+            }
             for n in &s.power.particles {
                 let pe = r.power.iter().find(|p| p.scenario == "effects" && p.particles == *n);
                 let pn = r.power.iter().find(|p| p.scenario == "none" && p.particles == *n);
@@ -474,6 +485,8 @@ mod tests {
             shape: 5.0,
             passed,
             named,
+            parameters: 1,
+            weakest_link: None,
         }
     }
 

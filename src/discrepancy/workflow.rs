@@ -113,6 +113,9 @@ pub struct Outcome {
     pub stages: Vec<Stage>,
     /// Covariates not diagnosed, with the reason.
     pub skipped_covariates: Vec<String>,
+    /// The weakest-link test of every size effect the final model carries, in that model
+    /// (with the other named effects held at their fitted values).
+    pub size_tests: Vec<(Effect, WeakestLink)>,
 }
 
 impl Outcome {
@@ -127,7 +130,7 @@ impl Outcome {
 }
 
 /// Gap measure used, as written in verdict.json.
-pub const GAP_MEASURE: &str = "residual structure G = n·Σ_c ρ_c², ρ_c = Spearman correlation of the quantile residuals with covariate c over the covariates the data carry; ≈ number of covariates when nothing is missing";
+pub const GAP_MEASURE: &str = "residual structure G = n·Σ_c ρ_c² + Σ_g H_g, ρ_c = Spearman correlation of the quantile residuals with numeric covariate c, H_g = Kruskal–Wallis statistic of the residuals by the levels of categorical factor g, over the columns the data carry; ≈ the number of numeric covariates plus Σ_g (levels − 1) when nothing is missing";
 
 fn data_err(sample: &Sample, location: String, rule: String) -> Error {
     Error::Data { file: sample.source.clone(), location, rule }
@@ -392,7 +395,10 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
             None => break,
         }
     }
-    Ok(Outcome { named, evidence, stages, skipped_covariates })
+    // The weakest-link test of each named size effect, in the final model.
+    let last = &stages[stages.len() - 1].model;
+    let size_tests = current.iter().filter_map(|(c, t)| describe(c, t, last, x).2.map(|w| (c.clone(), w))).collect();
+    Ok(Outcome { named, evidence, stages, skipped_covariates, size_tests })
 }
 
 /// The effects of a strength specification for one material: an explicit list as it is, or

@@ -340,11 +340,11 @@ mod tests {
     fn a_naming_loop_that_fails_scores_zero_and_is_counted_as_a_failure() {
         // Five particles are too few for the loop. The truth's model has no effects, which a
         // failure read as "named nothing" would match (it scored 1 before).
-        let few = Sample { source: "few".into(), strength: vec![1.0e8, 1.2e8, 0.9e8, 1.1e8, 0.95e8], covariates: vec![] };
+        let few = Sample { source: "few".into(), strength: vec![1.0e8, 1.2e8, 0.9e8, 1.1e8, 0.95e8], particles: true, ..Sample::default() };
         assert_eq!(naming_test(few).score(&vec![(0, 18.4), (1, 18.5)], 0, 0), Some(Score { value: 0.0, failed: true }));
         // Forty Weibull-like strengths without covariates: the loop runs, names nothing, and
         // that is the truth's model.
-        let many = Sample { source: "many".into(), strength: (0..40).map(|i| 1e8 * (-(1.0 - (i as f64 + 0.5) / 40.0).ln()).powf(1.0 / 8.0)).collect(), covariates: vec![] };
+        let many = Sample { source: "many".into(), strength: (0..40).map(|i| 1e8 * (-(1.0 - (i as f64 + 0.5) / 40.0).ln()).powf(1.0 / 8.0)).collect(), particles: true, ..Sample::default() };
         assert_eq!(naming_test(many).score(&vec![(0, 18.4), (1, 18.5)], 0, 0), Some(Score { value: 1.0, failed: false }));
     }
 

@@ -196,8 +196,15 @@ fn probability(dir: &Path, width_cm: f64, key: &str, label: &str, c: RGBColor) -
 /// x axis and the y axis holds both its ends, so nothing of it is clipped and its drawn slope is
 /// the fitted m.
 fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<Panel> {
-    let m = Table::load(dir, "materials")?;
-    let crush = !m.has("data") || (0..m.s("key")?.len()).any(|i| m.s("key").map(|k| k[i] == key).unwrap_or(false) && m.s("data").map(|d| d[i] == "crush").unwrap_or(true));
+    // Crush data unless materials.csv says the key is a strength file (older reports have no
+    // `data` column: crush).
+    let crush = match Table::load(dir, "materials") {
+        Ok(m) if m.has("data") => {
+            let (k, d) = (m.s("key")?, m.s("data")?);
+            !(0..k.len()).any(|i| k[i] == key && d[i] == "strength")
+        }
+        _ => true,
+    };
     let t = Table::load(dir, "residuals")?;
     let (mat, stage, raw, adj) = (t.s("material")?, t.s("stage")?, t.f("strength_pa")?, t.f("adjusted_pa")?);
     let fits = Table::load(dir, "fits")?;

@@ -33,7 +33,7 @@ fn stress_ratio_table_section_4_1() {
 fn model() -> LifetimeModel {
     let e = Elastic::new(112e9, 0.25).unwrap();
     let sphere = Sphere { diameter: 1e-3, density: 3600.0, elastic: e };
-    let sample = Sample { source: "t".into(), strength: (1..=12).map(|i| 8e8 + 1e7 * i as f64).collect(), covariates: vec![] };
+    let sample = Sample { source: "t".into(), strength: (1..=12).map(|i| 8e8 + 1e7 * i as f64).collect(), covariates: vec![], particles: true, ..Sample::default() };
     let fit = StrengthFit::new(&sample, &[], 5.0, "t").unwrap();
     let population = Population { source: "declared".into(), particles: vec![Particle { diameter_m: 1e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false };
     LifetimeModel::new("t", "T", sphere, Elastic::new(210e9, 0.3).unwrap(), AveragingDomain::default(), fit, population).unwrap()

@@ -1,0 +1,21 @@
+"""Peer fits for tests/strength_factors.rs: the `reliability` package's two-parameter Weibull
+MLE on the shipped real data sets (values as the files hold them, GPa). Run:
+
+    python3 -m venv /tmp/peer && /tmp/peer/bin/pip install reliability
+    /tmp/peer/bin/python tests/bench/reliability/fit.py
+
+and pin the printed numbers in the test (no Python at test time)."""
+import csv
+from reliability.Fitters import Fit_Weibull_2P
+
+def column(path, name, where=None):
+    with open(path) as f:
+        return [float(r[name]) for r in csv.DictReader(f) if where is None or where(r)]
+
+sets = {"glass": column("datasets/real/smith_naylor_glass_fibres.csv", "strength_original_units")}
+for L in ("10", "20", "50"):
+    sets[f"carbon_{L}mm"] = column("datasets/real/bader_priest_carbon_fibres.csv", "strength_gpa", lambda r, L=L: r["gauge_length_mm"] == L)
+sets["carbon_pooled"] = column("datasets/real/bader_priest_carbon_fibres.csv", "strength_gpa")
+for k, x in sets.items():
+    f = Fit_Weibull_2P(failures=x, show_probability_plot=False, print_results=False, method="MLE")
+    print(f"{k}: n = {len(x)}, beta (m) = {f.beta:.10f}, alpha (scale, GPa) = {f.alpha:.10f}, loglik = {f.loglik:.10f}")

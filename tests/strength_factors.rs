@@ -282,3 +282,47 @@ fn the_shipped_real_data_studies_say_what_the_readme_reports_and_a_lab_export_ag
     }
     assert_eq!(c["gap_before"]["carbon"], l["gap_before"]["carbon"]);
 }
+
+/// The `reliability` package's two-population fits (Fit_Weibull_Mixture, Fit_Weibull_CR;
+/// tests/bench/reliability/fit.py): (set, law, log-likelihood in GPa units).
+const PEER_FLAWS: [(&str, &str, f64); 4] = [
+    ("glass", "mixture", -11.5659798028),
+    ("glass", "competing_risks", -13.7329572114),
+    ("carbon_pooled", "mixture", -224.3883105484),
+    ("carbon_pooled", "competing_risks", -226.1052400761),
+];
+
+#[test]
+fn two_population_fits_of_the_real_data_against_the_reliability_package() {
+    use partlife::strength::flaws::{Populations, fit};
+    for (set, law, peer) in PEER_FLAWS {
+        let x = match set {
+            "glass" => real("smith_naylor_glass_fibres.csv", "strength_original_units", None),
+            _ => real("bader_priest_carbon_fibres.csv", "strength_gpa", None),
+        };
+        let kind = if law == "mixture" { Populations::Mixture } else { Populations::Competing };
+        let f = fit(kind, &x).unwrap();
+        let ours = f.loglik + x.len() as f64 * 1e9f64.ln();
+        eprintln!("{set} {law}: ours ℓ = {ours:.10} ({:?}), reliability {peer:.10}; p = {:.6}, first = ({:.6e}, {:.6}), second = ({:.6e}, {:.6})", f.identifiable, f.p, f.first.0, f.first.1, f.second.0, f.second.1);
+        // Never below the peer's optimum; equal to 1e-6 where both reach the same one.
+        assert!(ours >= peer - 1e-6, "{set} {law}: ℓ {ours} below reliability's {peer}");
+        match (set, law) {
+            // reliability stops at a local optimum (a 7.5 % weak population, ℓ −11.566); the
+            // higher one is a broad and a narrow population of about equal weight (scipy gives
+            // ℓ −9.13418 at these parameters).
+            ("glass", "mixture") => {
+                assert!(ours - peer > 2.0 && (f.p - 0.45).abs() < 0.01 && f.identifiable.is_ok(), "{f:?}");
+            }
+            // Equal moduli: the two risks are one Weibull law (the two-parameter fit's ℓ), a ridge
+            // reported as not identified; reliability's point on it is 3e-7 lower.
+            ("carbon_pooled", "competing_risks") => {
+                assert!((ours - peer).abs() < 1e-6, "{ours} vs {peer}");
+                assert!(f.identifiable.as_ref().is_err_and(|w| w.contains("same modulus")), "{:?}", f.identifiable);
+            }
+            _ => {
+                assert!((ours - peer).abs() < 1e-6, "{set} {law}: {ours} vs {peer}");
+                assert!(f.identifiable.is_ok(), "{set} {law}: {:?}", f.identifiable);
+            }
+        }
+    }
+}

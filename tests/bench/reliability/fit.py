@@ -19,3 +19,12 @@ sets["carbon_pooled"] = column("datasets/real/bader_priest_carbon_fibres.csv", "
 for k, x in sets.items():
     f = Fit_Weibull_2P(failures=x, show_probability_plot=False, print_results=False, method="MLE")
     print(f"{k}: n = {len(x)}, beta (m) = {f.beta:.10f}, alpha (scale, GPa) = {f.alpha:.10f}, loglik = {f.loglik:.10f}")
+
+# Two flaw populations (pinned in PEER_FLAWS).
+from reliability.Fitters import Fit_Weibull_Mixture, Fit_Weibull_CR
+for k in ("glass", "carbon_pooled"):
+    x = sets[k]
+    m = Fit_Weibull_Mixture(failures=x, show_probability_plot=False, print_results=False)
+    print(f"{k} mixture: p = {m.proportion_1:.10f}, alpha_1 = {m.alpha_1:.10f}, beta_1 = {m.beta_1:.10f}, alpha_2 = {m.alpha_2:.10f}, beta_2 = {m.beta_2:.10f}, loglik = {m.loglik:.10f}")
+    c = Fit_Weibull_CR(failures=x, show_probability_plot=False, print_results=False)
+    print(f"{k} competing risks: alpha_1 = {c.alpha_1:.10f}, beta_1 = {c.beta_1:.10f}, alpha_2 = {c.alpha_2:.10f}, beta_2 = {c.beta_2:.10f}, loglik = {c.loglik:.10f}")

@@ -365,7 +365,7 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         // A named size effect is tested in the final model; one not named, as a candidate
         // against the base model.
         for (e, w) in &r.outcome.size_tests {
-            let with = if r.outcome.named.len() > 1 { " (the other named effects held at their fitted values)" } else { "" };
+            let with = if r.outcome.named.len() > 1 { " (the other named effects refitted under the tie)" } else { "" };
             md.push_str(&format!("\nWeakest-link test of `{}` in the final model{with}: {}.\n", e.name(), w.sentence(k_of(e))));
         }
         for e in r.outcome.evidence.iter().filter(|e| e.round == 0 && !r.outcome.named.contains(&e.candidate)) {

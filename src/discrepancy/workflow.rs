@@ -114,7 +114,7 @@ pub struct Outcome {
     /// Covariates not diagnosed, with the reason.
     pub skipped_covariates: Vec<String>,
     /// The weakest-link test of every size effect the final model carries, in that model
-    /// (with the other named effects held at their fitted values).
+    /// (the other named effects refitted under the tie).
     pub size_tests: Vec<(Effect, WeakestLink)>,
 }
 
@@ -490,10 +490,11 @@ fn describe(c: &Effect, t: &Term, m: &ModelFit, x: &[f64]) -> ((String, f64, f64
     let val_se = if *c == Effect::Damage { f64::NAN } else { 0.5 * (c.parameter(beta + se, m.shape()).1 - c.parameter(beta - se, m.shape()).1).abs() };
     let mut wl = None;
     if let (Effect::Factor(Factor { form: Form::Size(measure), .. }), Term::Linear(z)) = (c, t) {
-        // The other effects' ln-scale terms held at the free fit.
-        let d = m.design();
-        let offset: Vec<f64> = (0..x.len()).map(|i| m.reg.ln_scale(&d, i) - m.reg.mu - beta * z[i]).collect();
-        let test = weakest_link(x, z, &offset, measure.k(), m.loglik(), val, val_se, m.shape());
+        // The other effects' columns (and a damage offset at its fitted ratio), refitted under the tie.
+        let skip = m.beta_range(c).unwrap_or(0..0);
+        let others: Vec<Vec<f64>> = m.columns.iter().enumerate().filter(|(j, _)| !skip.contains(j)).map(|(_, col)| col.clone()).collect();
+        let design = crate::strength::regress::Design { columns: &others, offset: m.offset.as_deref() };
+        let test = weakest_link(x, z, &design, measure.k(), m.loglik(), val, val_se, m.shape());
         meaning = format!("{meaning}; weakest-link test: {}", test.sentence(measure.k()));
         wl = Some(test);
     }

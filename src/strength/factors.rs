@@ -17,7 +17,8 @@
 //! the effective area or the gauge length of fibres of one diameter (volume and surface both ∝
 //! L), k = 3 (volume flaws) or 2 (surface flaws) when s is a diameter. The **weakest-link
 //! test** ([`weakest_link`]) fits the model with α tied to k/m (one parameter fewer) and
-//! compares it with α free by the likelihood ratio, χ²₁ under the relation (Wilks): the
+//! compares it with α free by the likelihood ratio (the other effects refitted under the tie),
+//! χ²₁ under the relation (Wilks): the
 //! relation is *supported* when p ≥ 0.05 and *rejected* otherwise, with the direction (size
 //! effect weaker or stronger than weakest-link theory allows).
 //!
@@ -222,51 +223,18 @@ impl WeakestLink {
     }
 }
 
-/// Log-likelihood (in the units of x) of the weakest-link model with σ_θ,i = σ_θ e^(o_i − k z_i/m)
-/// (`o_i` the other terms' ln-scale offsets), maximised over σ_θ at modulus m:
-/// P(X_i ≤ x) = 1 − exp[−e^(t_i − ln S)] with y_i = ln x_i, t_i = m(y_i − o_i) + k z_i and
-/// S = σ_θ^m, so ln f_i = ln m − y_i + t_i − ln S − e^(t_i − ln S). The optimum in S is
-/// S = mean e^(t_i), where the last terms sum to n: ℓ(m) = Σ[ln m − y_i + t_i − ln S] − n.
-fn tied_profile(y: &[f64], z: &[f64], offset: &[f64], k: f64, m: f64) -> f64 {
-    let n = y.len() as f64;
-    let t: Vec<f64> = (0..y.len()).map(|i| m * (y[i] - offset[i]) + k * z[i]).collect();
-    let tmax = t.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let ln_s = tmax + (t.iter().map(|v| (v - tmax).exp()).sum::<f64>() / n).ln();
-    t.iter().zip(y).map(|(ti, yi)| m.ln() + ti - ln_s - yi).sum::<f64>() - n
-}
-
-/// The weakest-link test: ℓ of the model with α tied to k/m (σ_θ profiled in closed form, m by
-/// golden section in ln m over [0.05, 500]), against the free fit's ℓ and α ± se. `offset` holds
-/// the other effects' fitted ln-scale terms (zero without other effects); they are held at the
-/// free fit's values, so the likelihood ratio tests the size exponent alone.
-pub fn weakest_link(x: &[f64], z: &[f64], offset: &[f64], k: f64, free_loglik: f64, alpha: f64, alpha_se: f64, free_shape: f64) -> WeakestLink {
-    let y: Vec<f64> = x.iter().map(|v| v.ln()).collect();
-    let f = |lm: f64| tied_profile(&y, z, offset, k, lm.exp());
-    let (mut a, mut b) = (0.05f64.ln(), 500f64.ln());
-    // Coarse scan, then golden section around the best point.
-    let grid: Vec<f64> = (0..=40).map(|j| a + (b - a) * j as f64 / 40.0).collect();
-    let best = (0..grid.len()).max_by(|&i, &j| f(grid[i]).total_cmp(&f(grid[j]))).unwrap_or(0);
-    a = grid[best.saturating_sub(1)];
-    b = grid[(best + 1).min(grid.len() - 1)];
-    let phi = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut c, mut d) = (b - phi * (b - a), a + phi * (b - a));
-    let (mut fc, mut fd) = (f(c), f(d));
-    while b - a > 1e-10 {
-        if fc >= fd {
-            (b, d, fd) = (d, c, fc);
-            c = b - phi * (b - a);
-            fc = f(c);
-        } else {
-            (a, c, fc) = (c, d, fd);
-            d = a + phi * (b - a);
-            fd = f(d);
-        }
-    }
-    let lm = 0.5 * (a + b);
-    let loglik_tied = f(lm);
+/// The weakest-link test: the model with α tied to k/m — the other effects' columns and offset
+/// (`others`) refitted under the tie ([`crate::strength::regress::fit_tied`]) — against the free
+/// fit's ℓ and α ± se. The likelihood ratio has one degree of freedom (α free against α = k/m).
+#[allow(clippy::too_many_arguments)]
+pub fn weakest_link(x: &[f64], z: &[f64], others: &crate::strength::regress::Design, k: f64, free_loglik: f64, alpha: f64, alpha_se: f64, free_shape: f64) -> WeakestLink {
+    let (loglik_tied, shape_tied) = match crate::strength::regress::fit_tied(x, others, (z, k)) {
+        Ok(r) => (r.loglik, r.shape()),
+        Err(_) => (f64::NAN, f64::NAN),
+    };
     let lr = (2.0 * (free_loglik - loglik_tied)).max(0.0);
-    let p = statrs_sf_chi2(lr, 1.0);
-    WeakestLink { alpha, alpha_se, predicted: k / free_shape, shape_tied: lm.exp(), loglik_tied, lr, p, supported: p >= 0.05 }
+    let p = if lr.is_finite() { statrs_sf_chi2(lr, 1.0) } else { f64::NAN };
+    WeakestLink { alpha, alpha_se, predicted: k / free_shape, shape_tied, loglik_tied, lr, p, supported: p >= 0.05 }
 }
 
 /// Upper tail of χ²_df at x.
@@ -283,8 +251,20 @@ mod tests {
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
+    /// ℓ of the weakest-link model without other effects at modulus m, σ_θ profiled in closed
+    /// form: P(X_i ≤ x) = 1 − exp[−e^(t_i − ln S)], t_i = m y_i + k z_i, S = σ_θ^m, optimum
+    /// S = mean e^(t_i), ℓ(m) = Σ[ln m − y_i + t_i − ln S] − n. An independent reference for
+    /// `regress::fit_tied`.
+    fn tied_profile(y: &[f64], z: &[f64], k: f64, m: f64) -> f64 {
+        let n = y.len() as f64;
+        let t: Vec<f64> = (0..y.len()).map(|i| m * y[i] + k * z[i]).collect();
+        let tmax = t.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let ln_s = tmax + (t.iter().map(|v| (v - tmax).exp()).sum::<f64>() / n).ln();
+        t.iter().zip(y).map(|(ti, yi)| m.ln() + ti - ln_s - yi).sum::<f64>() - n
+    }
+
     #[test]
-    fn the_tied_profile_is_the_regression_likelihood_at_alpha_k_over_m() {
+    fn the_tied_fit_is_the_profile_maximum_and_never_above_the_free_fit() {
         // At any m, ℓ_tied(m) equals the regression log-likelihood with β = −k/m, b = 1/m and
         // μ at its optimum; and the free fit is never below the tied one.
         let mut rng = ChaCha8Rng::seed_from_u64(4);
@@ -293,9 +273,8 @@ mod tests {
         let z: Vec<f64> = s.iter().map(|v| (v / 10.0f64).ln()).collect();
         let x: Vec<f64> = z.iter().map(|&zi| Weibull::new(6.0, 3.0 * (-zi / 6.0).exp()).unwrap().sample(&mut rng)).collect();
         let y: Vec<f64> = x.iter().map(|v| v.ln()).collect();
-        let zero = vec![0.0; n];
         for m in [3.0, 6.0, 11.0] {
-            let l = tied_profile(&y, &z, &zero, 1.0, m);
+            let l = tied_profile(&y, &z, 1.0, m);
             // Direct: scan μ finely around its closed form.
             let lnsig = |mu: f64| -> f64 {
                 (0..n)
@@ -308,14 +287,17 @@ mod tests {
             let best = (0..8001).map(|j| lnsig(0.5 + 1.5 * j as f64 / 8000.0)).fold(f64::NEG_INFINITY, f64::max);
             assert!((l - best).abs() < 1e-3, "m = {m}: {l} vs {best}");
         }
+        // The tied regression reaches the maximum of the profile over m (scanned finely).
+        let best_profile = (0..20001).map(|j| tied_profile(&y, &z, 1.0, 2.0 + 10.0 * j as f64 / 20000.0)).fold(f64::NEG_INFINITY, f64::max);
         let cols = vec![z.clone()];
         let free = fit(&x, &Design { columns: &cols, offset: None }).unwrap();
-        let w = weakest_link(&x, &z, &zero, 1.0, free.loglik, -free.beta[0], free.beta_se[0], free.shape());
+        let w = weakest_link(&x, &z, &Design::default(), 1.0, free.loglik, -free.beta[0], free.beta_se[0], free.shape());
+        assert!((w.loglik_tied - best_profile).abs() < 1e-6, "tied fit {} vs profile maximum {best_profile}", w.loglik_tied);
         assert!(w.loglik_tied <= free.loglik + 1e-9 && w.supported, "{w:?}");
         // Data with α = 3/m at k = 1 reject the relation.
         let x3: Vec<f64> = z.iter().map(|&zi| Weibull::new(6.0, 3.0 * (-3.0 * zi / 6.0).exp()).unwrap().sample(&mut rng)).collect();
         let free = fit(&x3, &Design { columns: &cols, offset: None }).unwrap();
-        let w = weakest_link(&x3, &z, &zero, 1.0, free.loglik, -free.beta[0], free.beta_se[0], free.shape());
+        let w = weakest_link(&x3, &z, &Design::default(), 1.0, free.loglik, -free.beta[0], free.beta_se[0], free.shape());
         assert!(!w.supported && w.alpha > w.predicted, "{w:?}");
         assert!(w.sentence(1.0).contains("stronger than weakest-link"));
     }

@@ -128,6 +128,22 @@ fn bad(rule: String) -> Error {
 
 /// Maximum-likelihood fit of `x` (all > 0 and finite) with `design`.
 pub fn fit(x: &[f64], design: &Design) -> Result<RegFit> {
+    fit_with(x, design, None)
+}
+
+/// The fit with a column tied to the modulus: ln σ_i = μ + Σ β z_i + o_i − k t_i/m, the
+/// weakest-link size law with its exponent k/m (`tie` = (t, k)). In the standardised residual
+/// w_i = (y_i − η_i)/b + k t_i the log-likelihood keeps its form ℓ = Σ[−ln b + w_i − e^(w_i) − y_i];
+/// the derivatives in s = ln b use u_i = (y_i − η_i)/b (∂w/∂s = −u). The returned `RegFit`'s
+/// μ, β and b are the tied model's; its `ln_scale` omits the tied term.
+pub fn fit_tied(x: &[f64], design: &Design, tie: (&[f64], f64)) -> Result<RegFit> {
+    if tie.0.len() != x.len() {
+        return Err(bad("the tied column does not match the data length".into()));
+    }
+    fit_with(x, design, Some(tie))
+}
+
+fn fit_with(x: &[f64], design: &Design, tie: Option<(&[f64], f64)>) -> Result<RegFit> {
     let n = x.len();
     let k = design.columns.len();
     if n < k + 3 {
@@ -185,7 +201,9 @@ pub fn fit(x: &[f64], design: &Design) -> Result<RegFit> {
         let mut g = DVector::<f64>::zeros(k + 2);
         let mut h = DMatrix::<f64>::zeros(k + 2, k + 2);
         for i in 0..n {
-            let w = (y[i] - eta[i]) / b;
+            // u: the residual in units of b; w = u (+ k t_i when a column is tied to 1/b).
+            let u = (y[i] - eta[i]) / b;
+            let w = u + tie.map_or(0.0, |(t, kk)| kk * t[i]);
             let ew = w.exp();
             l += -s + w - ew;
             let zi = z.row(i);
@@ -194,10 +212,10 @@ pub fn fit(x: &[f64], design: &Design) -> Result<RegFit> {
                 for c in 0..=k {
                     h[(a, c)] -= ew * zi[a] * zi[c] / (b * b);
                 }
-                h[(a, k + 1)] -= zi[a] * (w * ew + ew - 1.0) / b;
+                h[(a, k + 1)] -= zi[a] * (u * ew + ew - 1.0) / b;
             }
-            g[k + 1] += -1.0 - w + w * ew;
-            h[(k + 1, k + 1)] += w - w * ew - w * w * ew;
+            g[k + 1] += -1.0 - u + u * ew;
+            h[(k + 1, k + 1)] += u - u * ew - u * u * ew;
         }
         for a in 0..=k {
             h[(k + 1, a)] = h[(a, k + 1)];

@@ -239,6 +239,10 @@ fn the_shipped_real_data_studies_say_what_the_readme_reports_and_a_lab_export_ag
     for f in ["strength_glass_fibres.toml", "strength_carbon_fibres.toml"] {
         std::fs::copy(common::root().join("studies").join(f), s.path("studies").join(f)).unwrap();
     }
+    // The glass study's two-population candidates refit from seven starts in every bootstrap
+    // replicate: 99 replicates here (499 shipped; the verdicts below hold at both).
+    let glass = s.read("studies/strength_glass_fibres.toml").replace("bootstrap = 499", "bootstrap = 99");
+    s.write("studies/strength_glass_fibres.toml", &glass);
     // A lab's export of the carbon fibres: semicolon, decimal comma, MPa, German headers.
     let text = std::fs::read_to_string(s.path("datasets/real/bader_priest_carbon_fibres.csv")).unwrap();
     let mut lab = String::from("Probe;Messlänge [mm];Festigkeit [MPa]\n");
@@ -265,6 +269,12 @@ fn the_shipped_real_data_studies_say_what_the_readme_reports_and_a_lab_export_ag
     let p_ad = g["materials"][0]["stages"][0]["p_anderson_darling"].as_f64().unwrap();
     assert!(p_ad < 0.05, "AD p {p_ad}");
     assert!(md.contains("**The Weibull law fits these data poorly**") && md.contains("nothing recorded in the data explains the misfit"), "{md}");
+    // Two flaw populations were tried and not named (the mixture comes close: ΔBIC +0.3).
+    let ev = g["evidence"]["glass"].as_array().unwrap();
+    let names: Vec<&str> = ev.iter().map(|e| e["candidate"].as_str().unwrap()).collect();
+    assert_eq!(names, ["mixture", "competing_risks"]);
+    assert!(ev.iter().all(|e| !e["named"].as_bool().unwrap()));
+    assert!(ev[0]["delta_bic"].as_f64().unwrap() > 0.0 && ev[0]["likelihood_ratio"].as_f64().unwrap() > 12.0, "{}", ev[0]);
     // Carbon: the size effect is named and weakest-link scaling rejected (α > 1/m).
     let (c, md) = &verdicts[1];
     assert_eq!(c["effects_named"]["carbon"], serde_json::json!(["size(gauge_length_mm)"]));
@@ -325,4 +335,51 @@ fn two_population_fits_of_the_real_data_against_the_reliability_package() {
             }
         }
     }
+}
+
+/// `n` synthetic specimens with two flaw populations: a fraction `weak` of them from a population
+/// with 0.6 × the scale (m = 12 both), the rest from the main one; or one population when
+/// `weak` = 0. Candidates: the mixture and the competing-risks law.
+fn two_populations(n: usize, weak: f64, rng: &mut ChaCha8Rng) -> Sample {
+    use partlife::strength::flaws::Populations;
+    let strength = (0..n)
+        .map(|_| {
+            let s = if rng.random::<f64>() < weak { 0.6 * 400e6 } else { 400e6 };
+            draw_particles(&[f64::ln(s)], 12.0, 1, rng)[0].1.exp()
+        })
+        .collect();
+    Sample { source: "synthetic".into(), strength, populations: vec![Populations::Mixture, Populations::Competing], ..Sample::default() }
+}
+
+fn population_sweep(reps: usize, seed: u64, weak: f64) -> (usize, usize) {
+    use partlife::strength::flaws::Populations;
+    let (mut mixture, mut any) = (0, 0);
+    for r in 0..reps {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(r as u64 + 1);
+        let s = two_populations(80, weak, &mut rng);
+        let o = analyse(&s, &settings(seed ^ r as u64), false).unwrap();
+        mixture += usize::from(o.named.first() == Some(&Effect::Populations(Populations::Mixture)));
+        any += usize::from(!o.named.is_empty());
+    }
+    eprintln!("two populations, weak fraction {weak}: mixture named {mixture}/{reps}, anything named {any}/{reps}");
+    (mixture, any)
+}
+
+#[test]
+fn a_hidden_weak_flaw_population_is_named_as_a_mixture() {
+    // 80 specimens, 30 % from a population at 0.6 × the scale: fast sibling of the sweep below.
+    let (mixture, _) = population_sweep(2, 33_07, 0.3);
+    assert_eq!(mixture, 2);
+    let (_, any) = population_sweep(2, 33_08, 0.0);
+    assert_eq!(any, 0);
+}
+
+#[test]
+#[ignore = "slow: 40 + 40 naming loops refitting two-population laws in every bootstrap replicate (several minutes on two cores); fast sibling a_hidden_weak_flaw_population_is_named_as_a_mixture"]
+fn a_hidden_weak_flaw_population_is_named_at_90_percent_and_one_population_at_most_5() {
+    let (mixture, _) = population_sweep(40, 33_09, 0.3);
+    assert!(mixture >= 36, "mixture named {mixture}/40");
+    let (_, any) = population_sweep(40, 33_10, 0.0);
+    assert!(any <= 2, "a one-population sample named something in {any}/40");
 }

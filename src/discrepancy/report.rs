@@ -351,7 +351,7 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         let df: usize = b.findings.iter().map(|f| f.df).sum();
         md.push_str(&format!("\nWith nothing missing G ≈ {df} (one per numeric covariate diagnosed, L − 1 per categorical factor of L levels).\n\n"));
         if r.outcome.evidence.is_empty() {
-            md.push_str("The data record no factor and no size measure: there is no candidate effect to name, and the workflow can only diagnose the Weibull law itself (below).\n");
+            md.push_str("The data record no factor and no size measure and no two-population law was asked for: there is no candidate effect to name, and the workflow can only diagnose the Weibull law itself (below).\n");
         } else {
             md.push_str("| round | candidate | Λ | Λ critical | p (family) | ΔBIC | ΔCV log score | parameter | verdict |\n|---|---|---|---|---|---|---|---|---|\n");
             for e in &r.outcome.evidence {
@@ -398,7 +398,12 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                 (true, false) => format!("Anderson–Darling p = {:.3}", a.p_ad),
                 _ => format!("Kolmogorov–Smirnov p = {:.3}", a.p_ks),
             };
-            let explained = if r.outcome.named.is_empty() { "and nothing recorded in the data explains the misfit" } else { "even with the named effects" };
+            let tried: Vec<String> = r.outcome.evidence.iter().filter(|e| e.round == 0 && e.skipped.is_none() && matches!(e.candidate, crate::strength::Effect::Populations(_))).map(|e| e.candidate.name().replace('_', " ")).collect();
+            let explained = match (r.outcome.named.is_empty(), tried.is_empty()) {
+                (true, true) => "and nothing recorded in the data explains the misfit".to_string(),
+                (true, false) => format!("and nothing recorded in the data explains the misfit; two flaw populations ({}), tried in its place, do not pass the guard", tried.join(", ")),
+                (false, _) => "even with the named effects".to_string(),
+            };
             md.push_str(&format!("\n**The Weibull law fits these data poorly** ({tests}, parametric bootstrap), {explained}: the departure lies in the shape of the distribution, not in a factor the data carry.\n"));
         }
         if let Some(spec) = &r.crush {

@@ -135,9 +135,13 @@ fn power_study(sample: &Sample, outcome: &Outcome, settings: &NamingSettings, p:
                 .map(|r| {
                     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0x9077_E400);
                     rng.set_stream(((si * 64 + ni) * 100_000 + r) as u64 + 1);
-                    let (rows_drawn, strength): (Vec<usize>, Vec<f64>) = draw_particles(&ln_scale, 1.0 / model.reg.b, n, &mut rng).into_iter().map(|(i, ln_s)| (i, ln_s.exp())).unzip();
+                    let (rows_drawn, mut strength): (Vec<usize>, Vec<f64>) = draw_particles(&ln_scale, 1.0 / model.reg.b, n, &mut rng).into_iter().map(|(i, ln_s)| (i, ln_s.exp())).unzip();
+                    // A two-population law: its own draws (the rows only carry the factors).
+                    if let Some(law) = &model.law {
+                        strength = (0..n).map(|_| law.sample(&mut rng)).collect();
+                    }
                     let covariates = sample.covariates.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i]).collect())).collect();
-                    let synthetic = Sample { source: format!("power replicate {r}"), strength, covariates, levels: sample.levels.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i].clone()).collect())).collect(), factors: sample.factors.clone(), particles: sample.particles };
+                    let synthetic = Sample { source: format!("power replicate {r}"), strength, covariates, levels: sample.levels.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i].clone()).collect())).collect(), factors: sample.factors.clone(), particles: sample.particles, populations: sample.populations.clone() };
                     let s = NamingSettings { bootstrap: p.bootstrap, seed: settings.seed ^ (r as u64 + 1), ..settings.clone() };
                     let named = analyse(&synthetic, &s, false).map(|o| o.named).unwrap_or_default();
                     tick();
@@ -180,7 +184,8 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
     let mut specimens = Vec::new();
     for (k, m) in s.strength.iter().enumerate() {
         let origin = crate::intake::MapOrigin { file: loaded.path.display().to_string(), key: format!("strength[{k}].data") };
-        let read = crate::strength::specimens::read_specimens(&m.data.resolved(&loaded.path), m.size.as_ref(), &m.factors, &origin)?;
+        let mut read = crate::strength::specimens::read_specimens(&m.data.resolved(&loaded.path), m.size.as_ref(), &m.factors, &origin)?;
+        read.sample.populations = m.populations.clone();
         inputs.extend(InputFile::read(&read.path, &read.provenance)?);
         validate(&read.sample)?;
         specimens.push((m.clone(), read));

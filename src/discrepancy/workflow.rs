@@ -227,8 +227,7 @@ fn cv_log_score(x: &[f64], terms: &[(Effect, Term)], folds: &[usize], k: usize) 
 
 /// Quantile residuals and probability-integral transforms of `x` under a fitted model.
 pub fn residuals(fit: &ModelFit, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
-    let d = fit.design();
-    let u: Vec<f64> = (0..x.len()).map(|i| fit.reg.cdf(&d, i, x[i])).collect();
+    let u: Vec<f64> = (0..x.len()).map(|i| fit.cdf(i, x[i])).collect();
     (normal_scores(u.iter().copied()), u)
 }
 
@@ -262,8 +261,11 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
     let mut stages = Vec::new();
     for round in 0.. {
         let model = fit_model(x, &current)?;
-        let remaining: Vec<&(Effect, Term)> = if named.len() < settings.max_effects {
-            available.iter().filter(|(c, _)| !named.contains(c)).collect()
+        // A two-population law replaces the base law: a candidate while nothing is named, and
+        // once named, the last (scale effects are not fitted beside it).
+        let law_named = current.iter().any(|(_, t)| matches!(t, Term::Populations(_)));
+        let remaining: Vec<&(Effect, Term)> = if named.len() < settings.max_effects && !law_named {
+            available.iter().filter(|(c, t)| !named.contains(c) && (current.is_empty() || !matches!(t, Term::Populations(_)))).collect()
         } else {
             Vec::new()
         };
@@ -347,6 +349,8 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
                 _ => f64::NAN,
             };
             let (parameter, meaning, weakest_link) = describe(c, t, m, x);
+            // A two-population law the data do not identify is never named.
+            let identified = m.law.as_ref().is_none_or(|l| l.identifiable.is_ok());
             round_ev.push((
                 Evidence {
                     round,
@@ -362,7 +366,7 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
                     parameter: Some(parameter),
                     meaning,
                     shape: m.shape(),
-                    passed: p_f < settings.alpha && dbic < 0.0 && dcv > 0.0,
+                    passed: p_f < settings.alpha && dbic < 0.0 && dcv > 0.0 && identified,
                     named: false,
                     parameters: df[j],
                     weakest_link,
@@ -446,7 +450,7 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
                 let terms = terms_for(&named)?;
                 let fit = fit_model(&sub.strength, &crate::strength::fit::subset(&terms, &train)).map_err(|_| failed())?;
                 for i in (0..n).filter(|&i| fold[i] == f) {
-                    out[i] = fit.reg.ln_density_at(crate::strength::fit::predict_ln_scale(&fit, &terms, i), x[i]);
+                    out[i] = crate::strength::fit::predict_ln_density(&fit, &terms, i, x[i]);
                 }
             }
             if out.iter().all(|v| v.is_finite()) { Ok(out) } else { Err(failed()) }
@@ -473,6 +477,17 @@ fn level_statistic(r: &[f64], values: &[String]) -> f64 {
 /// The reported parameter of a fitted candidate (symbol, value, standard error), what it
 /// means, and for a size measure the weakest-link test.
 fn describe(c: &Effect, t: &Term, m: &ModelFit, x: &[f64]) -> ((String, f64, f64), String, Option<WeakestLink>) {
+    if let Some(law) = &m.law {
+        let what = match &law.identifiable {
+            Ok(()) => law.describe(),
+            Err(why) => format!("{} — not identified: {why}", law.describe()),
+        };
+        let (sym, v) = match law.kind {
+            crate::strength::flaws::Populations::Mixture => ("weaker_fraction", law.p),
+            crate::strength::flaws::Populations::Competing => ("m_weaker", law.first.1),
+        };
+        return ((sym.into(), v, f64::NAN), what, None);
+    }
     let range = m.beta_range(c);
     if let Term::Levels { levels, reference, .. } = t {
         let beta: Vec<f64> = range.map(|r| m.reg.beta[r].to_vec()).unwrap_or_default();

@@ -55,6 +55,10 @@ pub enum Effect {
     /// study, never by name in `effects`.
     #[serde(skip)]
     Factor(Factor),
+    /// Two flaw populations in place of the one Weibull law ([`super::flaws`]); a candidate
+    /// against the base law only.
+    #[serde(skip)]
+    Populations(super::flaws::Populations),
 }
 
 /// Every effect, in the library's order.
@@ -77,6 +81,8 @@ pub enum Term {
         /// The reference level (scale μ).
         reference: String,
     },
+    /// A two-population law in place of the Weibull law (no other term beside it).
+    Populations(super::flaws::Populations),
     /// The Tavares–King offset: prior impact counts and γ.
     Damage {
         /// Prior impacts per particle.
@@ -96,6 +102,7 @@ impl Effect {
             Effect::Sphericity => "sphericity".into(),
             Effect::Damage => "damage".into(),
             Effect::Factor(f) => f.name(),
+            Effect::Populations(p) => p.name().into(),
         }
     }
 
@@ -108,6 +115,7 @@ impl Effect {
             Effect::Sphericity => "sphericity / effective radius".into(),
             Effect::Damage => "damage from prior impacts (Tavares–King)".into(),
             Effect::Factor(f) => f.label(),
+            Effect::Populations(p) => p.label().into(),
         }
     }
 
@@ -120,6 +128,7 @@ impl Effect {
             Effect::Sphericity => "sphericity".into(),
             Effect::Damage => "impacts".into(),
             Effect::Factor(f) => f.column.clone(),
+            Effect::Populations(_) => String::new(),
         }
     }
 
@@ -132,6 +141,7 @@ impl Effect {
             Effect::Sphericity => "R_c = sphericity^p R; ln σ_θ,i = μ + (2p/3) ln sphericity_i".into(),
             Effect::Damage => "E_m,n = E_m,0 Π(1 − D_j), D_j Tavares–King at ratio x; ln σ_θ,i = μ + (1/5) ln(x/x_n,i)".into(),
             Effect::Factor(f) => f.equation(),
+            Effect::Populations(p) => p.equation().into(),
         }
     }
 
@@ -140,6 +150,8 @@ impl Effect {
     pub fn extra_parameters(term: &Term) -> usize {
         match term {
             Term::Levels { columns, .. } => columns.len(),
+            // Four or five parameters in place of the base law's two.
+            Term::Populations(p) => p.parameters() - 2,
             _ => 1,
         }
     }
@@ -180,7 +192,7 @@ impl Effect {
             Effect::Roundness | Effect::Sphericity => value.ln(),
             Effect::Size => (value / reference).ln(),
             Effect::Temperature => (value - reference) / 1000.0,
-            Effect::Damage => 0.0,
+            Effect::Damage | Effect::Populations(_) => 0.0,
             Effect::Factor(f) => match f.form {
                 Form::Linear => value - reference,
                 Form::Power | Form::Size(_) => (value / reference).ln(),
@@ -198,13 +210,16 @@ impl Effect {
             Effect::Temperature => p.temperature_c,
             Effect::Sphericity => p.sphericity,
             Effect::Damage => Some(0.0),
-            Effect::Factor(_) => None,
+            Effect::Factor(_) | Effect::Populations(_) => None,
         }
     }
 
     /// The effect's term for this sample, or the reason it cannot be fitted.
     pub fn term(&self, sample: &Sample, gamma: f64) -> std::result::Result<Term, String> {
         let name = self.covariate();
+        if let Effect::Populations(p) = self {
+            return Ok(Term::Populations(*p));
+        }
         if let Effect::Factor(f) = self
             && f.form == Form::Levels
         {
@@ -275,6 +290,7 @@ impl Effect {
             }
             Effect::Temperature => ("strength_ratio_per_100c", value, format!("strength × {value:.3} per 100 °C")),
             Effect::Damage => ("x", value, format!("prior impacts at {value:.3} of the fracture energy")),
+            Effect::Populations(p) => (p.name(), value, String::new()),
             Effect::Factor(f) => {
                 let c = &f.column;
                 match f.form {
@@ -297,7 +313,7 @@ impl Effect {
             Effect::Roundness | Effect::Sphericity => 1.5 * beta,
             Effect::Size => -beta,
             Effect::Temperature => (beta / 10.0).exp(),
-            Effect::Damage => beta,
+            Effect::Damage | Effect::Populations(_) => beta,
             Effect::Factor(f) => match f.form {
                 Form::Size(_) => -beta,
                 _ => beta,
@@ -311,7 +327,7 @@ impl Effect {
             Effect::Roundness | Effect::Sphericity => natural / 1.5,
             Effect::Size => -natural,
             Effect::Temperature => 10.0 * natural.ln(),
-            Effect::Damage => natural,
+            Effect::Damage | Effect::Populations(_) => natural,
             Effect::Factor(f) => match f.form {
                 Form::Size(_) => -natural,
                 _ => natural,

@@ -35,6 +35,8 @@ pub struct Sample {
     pub factors: Vec<crate::strength::factors::Factor>,
     /// Whether the specimens are crushed particles (the particle effects apply).
     pub particles: bool,
+    /// Two-population laws the data's study offers as candidates (strength files).
+    pub populations: Vec<crate::strength::flaws::Populations>,
 }
 
 impl Sample {
@@ -42,7 +44,7 @@ impl Sample {
     /// (crush samples only), then the data's declared factors.
     pub fn candidates(&self, particle_effects: &[Effect]) -> Vec<Effect> {
         let particle = if self.particles { particle_effects.to_vec() } else { Vec::new() };
-        particle.into_iter().chain(self.factors.iter().cloned().map(Effect::Factor)).collect()
+        particle.into_iter().chain(self.factors.iter().cloned().map(Effect::Factor)).chain(self.populations.iter().copied().map(Effect::Populations)).collect()
     }
 
     /// The rows `rows` of the sample (strengths, covariates and levels), same candidates.
@@ -54,6 +56,7 @@ impl Sample {
             levels: self.levels.iter().map(|(c, v)| (c.clone(), rows.iter().map(|&i| v[i].clone()).collect())).collect(),
             factors: self.factors.clone(),
             particles: self.particles,
+            populations: self.populations.clone(),
         }
     }
 }
@@ -96,6 +99,7 @@ pub fn sample_of(data: &CrushData, elastic: &Elastic, contact: &ContactOptions) 
         levels: Vec::new(),
         factors: Vec::new(),
         particles: true,
+        populations: Vec::new(),
     })
 }
 
@@ -117,6 +121,9 @@ pub struct ModelFit {
     pub damage_ratio: Option<f64>,
     /// Number of particles fitted.
     pub n: usize,
+    /// A two-population law in place of the Weibull law (then `reg` is the plain two-parameter
+    /// fit, kept for the reference scale, and the likelihood, CDF and draws are the law's).
+    pub law: Option<crate::strength::flaws::FlawFit>,
 }
 
 impl ModelFit {
@@ -125,19 +132,31 @@ impl ModelFit {
         Design { columns: &self.columns, offset: self.offset.as_deref() }
     }
 
-    /// Number of parameters: μ, b, and each effect's (one; L − 1 for levels).
+    /// Number of parameters: μ, b, and each effect's (one; L − 1 for levels); a two-population
+    /// law's own (4 or 5).
     pub fn parameters(&self) -> usize {
+        if let Some(l) = &self.law {
+            return l.kind.parameters();
+        }
         2 + self.widths.iter().zip(&self.effects).map(|(w, e)| if *e == Effect::Damage { 1 } else { *w }).sum::<usize>()
     }
 
-    /// Weibull modulus.
+    /// Weibull modulus (NaN for a two-population law, which has two).
     pub fn shape(&self) -> f64 {
-        self.reg.shape()
+        if self.law.is_some() { f64::NAN } else { self.reg.shape() }
     }
 
     /// Maximised log-likelihood.
     pub fn loglik(&self) -> f64 {
-        self.reg.loglik
+        self.law.as_ref().map_or(self.reg.loglik, |l| l.loglik)
+    }
+
+    /// Fitted CDF of specimen i at x.
+    pub fn cdf(&self, i: usize, x: f64) -> f64 {
+        match &self.law {
+            Some(l) => l.cdf(x),
+            None => self.reg.cdf(&self.design(), i, x),
+        }
     }
 
     /// The linear effects, in the order of β.
@@ -168,7 +187,10 @@ impl ModelFit {
     pub fn bootstrap_refit(&self, terms: &[(Effect, Term)], seed: u64, r: usize) -> Option<(Vec<f64>, ModelFit)> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(r as u64 + 1);
-        let xs = self.reg.sample(&self.design(), self.n, &mut rng);
+        let xs = match &self.law {
+            Some(l) => (0..self.n).map(|_| l.sample(&mut rng)).collect(),
+            None => self.reg.sample(&self.design(), self.n, &mut rng),
+        };
         let refit = fit_model_near(&xs, terms, self.damage_ratio).ok()?;
         Some((xs, refit))
     }
@@ -186,6 +208,14 @@ pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>) ->
     let mut damage = None;
     let mut effects = Vec::new();
     let mut widths = Vec::new();
+    if let Some(kind) = terms.iter().find_map(|(_, t)| if let Term::Populations(k) = t { Some(*k) } else { None }) {
+        if terms.len() > 1 {
+            return Err(Error::numerical("two flaw populations", "a two-population law is fitted against the base law only, not beside other effects"));
+        }
+        let law = crate::strength::flaws::fit(kind, x)?;
+        let reg = fit(x, &Design::default())?;
+        return Ok(ModelFit { effects: vec![terms[0].0.clone()], widths: vec![0], reg, columns: Vec::new(), offset: None, damage_ratio: None, n: x.len(), law: Some(law) });
+    }
     for (c, t) in terms {
         effects.push(c.clone());
         match t {
@@ -201,12 +231,13 @@ pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>) ->
                 damage = Some((impacts, *gamma));
                 widths.push(0);
             }
+            Term::Populations(_) => unreachable!("handled above"),
         }
     }
     // Linear effects first in `effects`' β order; damage (if any) is profiled.
     let Some((impacts, gamma)) = damage else {
         let reg = fit(x, &Design { columns: &columns, offset: None })?;
-        return Ok(ModelFit { effects, widths, reg, columns, offset: None, damage_ratio: None, n: x.len() });
+        return Ok(ModelFit { effects, widths, reg, columns, offset: None, damage_ratio: None, n: x.len(), law: None });
     };
     let n_max = impacts.iter().copied().max().unwrap_or(0);
     // One Tavares–King trajectory per trial ratio serves every particle.
@@ -262,7 +293,7 @@ pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>) ->
     let off = offsets(lx).ok_or_else(|| Error::numerical("damage effect", "the fitted ratio breaks a particle"))?;
     let reg = fit(x, &Design { columns: &columns, offset: Some(&off) })?;
     // `effects` keeps damage wherever it was added; β follow the linear effects' order.
-    Ok(ModelFit { effects, widths, reg, columns, offset: Some(off), damage_ratio: Some(lx.exp()), n: x.len() })
+    Ok(ModelFit { effects, widths, reg, columns, offset: Some(off), damage_ratio: Some(lx.exp()), n: x.len(), law: None })
 }
 
 /// ln σ_i of particle `i` under a model fitted on other rows: its linear terms' columns at row
@@ -286,9 +317,19 @@ pub fn predict_ln_scale(fit: &ModelFit, terms: &[(Effect, Term)], i: usize) -> f
                 let x0 = fit.damage_ratio.unwrap_or(0.0);
                 s += damage_offset(x0, *gamma, impacts[i]).unwrap_or(f64::NEG_INFINITY);
             }
+            Term::Populations(_) => {}
         }
     }
     s
+}
+
+/// Log density of specimen i's strength x under a model fitted on other rows (its law's, or the
+/// Weibull regression's at [`predict_ln_scale`]).
+pub fn predict_ln_density(fit: &ModelFit, terms: &[(Effect, Term)], i: usize, x: f64) -> f64 {
+    match &fit.law {
+        Some(l) => l.ln_pdf(x),
+        None => fit.reg.ln_density_at(predict_ln_scale(fit, terms, i), x),
+    }
 }
 
 /// The terms restricted to `rows`.
@@ -300,6 +341,7 @@ pub fn subset(terms: &[(Effect, Term)], rows: &[usize]) -> Vec<(Effect, Term)> {
                 Term::Linear(z) => Term::Linear(rows.iter().map(|&i| z[i]).collect()),
                 Term::Levels { columns, levels, reference } => Term::Levels { columns: columns.iter().map(|z| rows.iter().map(|&i| z[i]).collect()).collect(), levels: levels.clone(), reference: reference.clone() },
                 Term::Damage { impacts, gamma } => Term::Damage { impacts: rows.iter().map(|&i| impacts[i]).collect(), gamma: *gamma },
+                Term::Populations(k) => Term::Populations(*k),
             };
             (c.clone(), t)
         })
@@ -329,7 +371,7 @@ pub fn cv_pointwise(x: &[f64], terms: &[(Effect, Term)], folds: &[usize], k: usi
         let xt: Vec<f64> = train.iter().map(|&i| x[i]).collect();
         let fit = fit_model(&xt, &subset(terms, &train)).ok()?;
         for i in (0..x.len()).filter(|&i| folds[i] == f) {
-            out[i] = fit.reg.ln_density_at(predict_ln_scale(&fit, terms, i), x[i]);
+            out[i] = predict_ln_density(&fit, terms, i, x[i]);
         }
     }
     out.iter().all(|v| v.is_finite()).then_some(out)

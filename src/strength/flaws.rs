@@ -19,13 +19,21 @@
 //! MLE, and from the one-population fit with a component two and five times weaker. Each start
 //! is restarted until ℓ stops rising by 10⁻¹⁰.
 //!
+//! Moduli are kept in [[`M_MIN`], [`M_MAX`]]: a mixture's likelihood is unbounded as a component
+//! collapses onto one specimen with m → ∞.
+//!
 //! **Non-identifiability** ([`FlawFit::identifiable`]): the fit is reported as not identified,
-//! with the reason, when a component carries less than one specimen (mixture p·n < 1 or
+//! with the reason, when a modulus runs to the edge of that range, when a component carries less
+//! than one specimen (mixture p·n < 1 or
 //! (1 − p)·n < 1), when the two components are the same law (|ln σ₁ − ln σ₂| < 0.05 and
 //! |ln m₁ − ln m₂| < 0.1), when two competing risks share one modulus (|ln m₁ − ln m₂| < 0.01:
 //! together they are one Weibull law, a ridge of equal likelihood), when a competing risk never
 //! acts on the data (its hazard below 1 % of the other's at every specimen), or when starts reach optima within 0.1 in ℓ whose laws differ
-//! (several maxima). A naming loop must not name a law so reported.
+//! (several maxima). The naming loop never names a law so reported.
+//!
+//! In the naming loop ([`crate::discrepancy::workflow`]) a two-population law is a candidate
+//! in place of the base law (`Effect::Populations`, 3 or 2 extra parameters): offered while
+//! nothing is named, and the last effect once named (scale effects are not fitted beside it).
 //!
 //! Verified against the `reliability` package (tests/bench/reliability/fit.py) in
 //! `tests/strength_factors.rs`, and by the unit tests below (a mixture and a competing-risks
@@ -43,6 +51,13 @@ use crate::weibull::fit_mle;
 /// Number of starts.
 pub const STARTS: usize = 7;
 
+/// Smallest modulus a population may take.
+pub const M_MIN: f64 = 0.5;
+
+/// Largest modulus a population may take: beyond any brittle material's scatter (technical
+/// ceramics and glass fibres: m ≈ 3–40).
+pub const M_MAX: f64 = 100.0;
+
 /// Which two-population law.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -50,6 +65,7 @@ pub enum Populations {
     /// Two-component Weibull mixture (5 parameters).
     Mixture,
     /// Competing-risks Weibull (4 parameters).
+    #[serde(rename = "competing_risks")]
     Competing,
 }
 
@@ -59,6 +75,22 @@ impl Populations {
         match self {
             Populations::Mixture => 5,
             Populations::Competing => 4,
+        }
+    }
+
+    /// Words.
+    pub fn label(self) -> &'static str {
+        match self {
+            Populations::Mixture => "two flaw populations, one per specimen (Weibull mixture)",
+            Populations::Competing => "two flaw populations in every specimen (competing risks)",
+        }
+    }
+
+    /// Its equation.
+    pub fn equation(self) -> &'static str {
+        match self {
+            Populations::Mixture => "F(x) = p F₁(x) + (1 − p) F₂(x), F_j = 1 − exp[−(x/σ_j)^m_j]",
+            Populations::Competing => "F(x) = 1 − exp[−(x/σ₁)^m₁ − (x/σ₂)^m₂]",
         }
     }
 
@@ -132,8 +164,13 @@ impl CostFunction for Nll<'_> {
     type Param = DVector<f64>;
     type Output = f64;
     fn cost(&self, t: &Self::Param) -> std::result::Result<f64, argmin::core::Error> {
-        // Keep the search in a sane box: moduli in [0.05, 500], scales within e^±20 of the median.
-        if t.iter().enumerate().any(|(k, v)| !v.is_finite() || v.abs() > if self.kind == Populations::Mixture && k == 0 { 30.0 } else { 20.0 }) {
+        // Keep the search in a sane box: scales within e^±20 of the median, moduli in
+        // [M_MIN, M_MAX] (a mixture's likelihood is unbounded as a component collapses onto one
+        // specimen with m → ∞; the box keeps such spikes out, and a fit on its edge is reported).
+        let moduli: &[usize] = if self.kind == Populations::Mixture { &[2, 4] } else { &[1, 3] };
+        if t.iter().enumerate().any(|(k, v)| !v.is_finite() || v.abs() > if self.kind == Populations::Mixture && k == 0 { 30.0 } else { 20.0 })
+            || moduli.iter().any(|&k| t[k] < M_MIN.ln() || t[k] > M_MAX.ln())
+        {
             return Ok(1e300);
         }
         let l = loglik_at(self.kind, self.x, t.as_slice());
@@ -151,7 +188,7 @@ fn nelder_mead(kind: Populations, x: &[f64], start: &[f64]) -> Result<(Vec<f64>,
             p[k] += 0.3;
             simplex.push(p);
         }
-        let solver = NelderMead::new(simplex).with_sd_tolerance(1e-13).map_err(|e| Error::numerical("flaw populations", e.to_string()))?;
+        let solver = NelderMead::new(simplex).with_sd_tolerance(1e-10).map_err(|e| Error::numerical("flaw populations", e.to_string()))?;
         let res = Executor::new(Nll { kind, x }, solver).configure(|c| c.max_iters(4000)).run().map_err(|e| Error::numerical("flaw populations", e.to_string()))?;
         let Some(p) = res.state().get_best_param().cloned() else { break };
         let l = loglik_at(kind, x, p.as_slice());
@@ -198,8 +235,8 @@ pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
     let mut optima: Vec<(Vec<f64>, f64)> = Vec::new();
     for st in &starts {
         let t: Vec<f64> = match kind {
-            Populations::Mixture => vec![(st[0] / (1.0 - st[0])).ln(), st[1].ln(), st[2].max(0.1).ln(), st[3].ln(), st[4].max(0.1).ln()],
-            Populations::Competing => vec![st[1].ln(), st[2].max(0.1).ln(), st[3].ln(), st[4].max(0.1).ln()],
+            Populations::Mixture => vec![(st[0] / (1.0 - st[0])).ln(), st[1].ln(), st[2].clamp(M_MIN * 1.01, M_MAX * 0.99).ln(), st[3].ln(), st[4].clamp(M_MIN * 1.01, M_MAX * 0.99).ln()],
+            Populations::Competing => vec![st[1].ln(), st[2].clamp(M_MIN * 1.01, M_MAX * 0.99).ln(), st[3].ln(), st[4].clamp(M_MIN * 1.01, M_MAX * 0.99).ln()],
         };
         let (t, l) = nelder_mead(kind, &xs, &t)?;
         if l.is_finite() {
@@ -220,7 +257,9 @@ pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
     let (p, first, second) = law(&best.0);
     let same = |a: (f64, f64), b: (f64, f64)| (a.0.ln() - b.0.ln()).abs() < 0.05 && (a.1.ln() - b.1.ln()).abs() < 0.1;
     let mut why: Option<String> = None;
-    if kind == Populations::Mixture && (p * n as f64) < 1.0 {
+    if let Some(m) = [first.1, second.1].into_iter().find(|m| *m > 0.98 * M_MAX || *m < 1.02 * M_MIN) {
+        why = Some(format!("a population's modulus runs to the edge of [{M_MIN}, {M_MAX}] (m = {m:.2}): a spike on a few specimens, not a flaw population"));
+    } else if kind == Populations::Mixture && (p * n as f64) < 1.0 {
         why = Some(format!("the weaker population holds {:.2} of {n} specimens", p * n as f64));
     } else if kind == Populations::Mixture && ((1.0 - p) * n as f64) < 1.0 {
         why = Some(format!("the stronger population holds {:.2} of {n} specimens", (1.0 - p) * n as f64));
@@ -251,6 +290,32 @@ pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
 }
 
 impl FlawFit {
+    /// Log density at x (in the data's units).
+    pub fn ln_pdf(&self, x: f64) -> f64 {
+        match self.kind {
+            Populations::Mixture => {
+                let a = self.p.ln() + ln_weibull_pdf(x, self.first.0, self.first.1);
+                let b = (1.0 - self.p).ln() + ln_weibull_pdf(x, self.second.0, self.second.1);
+                let hi = a.max(b);
+                hi + ((a - hi).exp() + (b - hi).exp()).ln()
+            }
+            Populations::Competing => {
+                let (z1, z2) = (x / self.first.0, x / self.second.0);
+                let h = self.first.1 / self.first.0 * z1.powf(self.first.1 - 1.0) + self.second.1 / self.second.0 * z2.powf(self.second.1 - 1.0);
+                h.ln() - z1.powf(self.first.1) - z2.powf(self.second.1)
+            }
+        }
+    }
+
+    /// The fitted law in words (strengths in the data's units, Pa for a strength file).
+    pub fn describe(&self) -> String {
+        let pop = |(s, m): (f64, f64)| format!("σ = {:.1} MPa, m = {m:.2}", s / 1e6);
+        match self.kind {
+            Populations::Mixture => format!("{:.1} % of specimens with {} (weaker), {:.1} % with {}", 100.0 * self.p, pop(self.first), 100.0 * (1.0 - self.p), pop(self.second)),
+            Populations::Competing => format!("every specimen holds both flaw populations: {} and {}", pop(self.first), pop(self.second)),
+        }
+    }
+
     /// CDF at x.
     pub fn cdf(&self, x: f64) -> f64 {
         let h = |(s, m): (f64, f64)| (x / s).powf(m);

@@ -93,7 +93,7 @@ impl LifetimeModel {
     /// covariate the model needs is an error naming the material and the source.
     pub fn new(key: &str, label: &str, sphere: Sphere, wall: Elastic, domain: AveragingDomain, fit: StrengthFit, population: Population) -> Result<Self> {
         let linear = fit.linear();
-        if let Some(e) = linear.iter().find(|e| matches!(e, Effect::Factor(_))) {
+        if let Some(e) = linear.iter().find(|e| matches!(e, Effect::Factor(_) | Effect::Populations(_))) {
             return Err(Error::Param {
                 name: "strength".into(),
                 rule: format!("material `{key}`: the lifetime chain predicts particles, and the effect `{}` of a recorded factor has no value for them; fit the particle effects only", e.name()),

@@ -301,7 +301,9 @@ fn evidence(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Re
             Panel {
                 x_categories: cats.clone(),
                 x_desc: if k + 1 == keys.len() { "Candidate effect".into() } else { String::new() },
-                y_desc: format!("Λ, {}", labels[k]),
+                // A long label does not fit beside the axis: the key then (the legend of the
+                // other figures and materials.csv give the label).
+                y_desc: format!("Λ, {}", if labels[k].chars().count() <= 18 { labels[k].as_str() } else { key.as_str() }),
                 x_range: (0.5, cats.len() as f64 + 0.5),
                 y_range: (0.0, top * 1.6),
                 y_log: false,

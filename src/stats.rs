@@ -49,6 +49,13 @@ pub fn fit_line(x: &[f64], y: &[f64]) -> Result<LineFit> {
     Ok(LineFit { intercept: beta[0], slope: beta[1], slope_se: (s2 * xtx_inv[(1, 1)]).sqrt(), r, p_value })
 }
 
+/// Upper tail P(X > x) of χ² with `df` degrees of freedom (NaN for df ≤ 0); statrs' survival
+/// function, accurate where 1 − CDF would round to 0.
+pub fn chi2_upper_tail(x: f64, df: f64) -> f64 {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    ChiSquared::new(df).map_or(f64::NAN, |c| c.sf(x.max(0.0)))
+}
+
 /// Two-sided p-value of a Pearson correlation r from n pairs (NaN for n < 3).
 pub fn correlation_p_value(r: f64, n: usize) -> f64 {
     if n < 3 {

@@ -172,6 +172,29 @@ pub fn kruskal_wallis(r: &[f64], levels: &[usize], groups: usize) -> f64 {
     12.0 / (n * (n + 1.0)) * (0..groups).filter(|&g| count[g] > 0).map(|g| count[g] as f64 * (sum[g] / count[g] as f64 - centre).powi(2)).sum::<f64>()
 }
 
+/// Each specimen's level as an index into the distinct levels (in order of appearance), and
+/// those levels.
+pub fn level_indices(values: &[String]) -> (Vec<usize>, Vec<&String>) {
+    let mut names: Vec<&String> = Vec::new();
+    let idx = values
+        .iter()
+        .map(|v| match names.iter().position(|n| *n == v) {
+            Some(j) => j,
+            None => {
+                names.push(v);
+                names.len() - 1
+            }
+        })
+        .collect();
+    (idx, names)
+}
+
+/// Kruskal–Wallis H of `r` grouped by the levels named in `values`.
+pub fn kruskal_wallis_by(r: &[f64], values: &[String]) -> f64 {
+    let (idx, names) = level_indices(values);
+    kruskal_wallis(r, &idx, names.len())
+}
+
 /// Residual differences between the levels of every categorical column given (name, each
 /// specimen's level): Kruskal–Wallis H with its permutation p-value (`permutations` shuffles of
 /// the levels, seeded) and the level whose mean residual is farthest from 0. A column with one
@@ -180,17 +203,7 @@ pub fn level_findings(r: &[f64], columns: &[(String, Vec<String>)], permutations
     let mut found = Vec::new();
     let mut skipped = Vec::new();
     for (k, (name, values)) in columns.iter().enumerate() {
-        let mut names: Vec<&String> = Vec::new();
-        let idx: Vec<usize> = values
-            .iter()
-            .map(|v| match names.iter().position(|n| *n == v) {
-                Some(j) => j,
-                None => {
-                    names.push(v);
-                    names.len() - 1
-                }
-            })
-            .collect();
+        let (idx, names) = level_indices(values);
         if names.len() < 2 || values.len() != r.len() {
             skipped.push(format!("{name}: one level only"));
             continue;

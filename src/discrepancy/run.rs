@@ -97,7 +97,7 @@ pub fn quick_study(data: &Path, elastic: crate::contact::Elastic, density_kg_m3:
 
 /// The terms of a model's effects for a sample (the effects were fitted, so each has a term).
 fn terms_of(effects: &[Effect], sample: &Sample, gamma: f64) -> Vec<(Effect, Term)> {
-    effects.iter().filter_map(|c| c.term(sample, gamma).ok().map(|t| (c.clone(), t))).collect()
+    effects.iter().filter_map(|c| sample.term(c, gamma).ok().map(|t| (c.clone(), t))).collect()
 }
 
 /// The lifetime band of a fitted stage model, as an instance of the strength model.

@@ -203,7 +203,7 @@ pub fn one_df_scale(lr: f64, df: usize) -> f64 {
     if df <= 1 || !lr.is_finite() {
         return lr;
     }
-    let p = crate::strength::factors::statrs_sf_chi2(lr, df as f64);
+    let p = crate::stats::chi2_upper_tail(lr, df as f64);
     if !(p > 1e-300) {
         return lr;
     }
@@ -216,7 +216,7 @@ fn from_one_df_scale(l1: f64, df: usize) -> f64 {
     if df <= 1 || !l1.is_finite() {
         return l1;
     }
-    let p = crate::strength::factors::statrs_sf_chi2(l1, 1.0);
+    let p = crate::stats::chi2_upper_tail(l1, 1.0);
     ChiSquared::new(df as f64).map_or(f64::NAN, |c| c.inverse_cdf(1.0 - p))
 }
 
@@ -249,7 +249,7 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
     let mut available: Vec<(Effect, Term)> = Vec::new();
     let mut skipped: Vec<(Effect, String)> = Vec::new();
     for c in sample.candidates(&settings.candidates) {
-        match c.term(sample, settings.gamma) {
+        match sample.term(&c, settings.gamma) {
             Ok(t) => available.push((c, t)),
             Err(reason) => skipped.push((c, reason)),
         }
@@ -324,7 +324,7 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
         } else {
             Vec::new()
         };
-        let gap = 0.0 + n as f64 * covs.iter().map(|(_, v)| super::gof::spearman(&res, v).powi(2)).sum::<f64>() + level_cols.iter().map(|(_, v)| level_statistic(&res, v)).sum::<f64>();
+        let gap = 0.0 + n as f64 * covs.iter().map(|(_, v)| super::gof::spearman(&res, v).powi(2)).sum::<f64>() + level_cols.iter().map(|(_, v)| super::gof::kruskal_wallis_by(&res, v)).sum::<f64>();
         stages.push(Stage { model: model.clone(), residuals: res, ad, ks, p_ad, p_ks, findings, gap });
 
         // Evidence: the family-wise guard on the one-parameter scale of every candidate.
@@ -432,7 +432,7 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
         effects
             .iter()
             .map(|e| {
-                e.term(sample, settings.gamma)
+                sample.term(e, settings.gamma)
                     .map(|t| (e.clone(), t))
                     .map_err(|reason| data_err(sample, format!("column {}", e.covariate()), format!("material `{material}`: the strength model's `{}` effect needs this column: {reason}", e.name())))
             })
@@ -456,22 +456,6 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
             if out.iter().all(|v| v.is_finite()) { Ok(out) } else { Err(failed()) }
         }
     }
-}
-
-/// Kruskal–Wallis H of the residuals by level (the gap's term of a categorical column).
-fn level_statistic(r: &[f64], values: &[String]) -> f64 {
-    let mut names: Vec<&String> = Vec::new();
-    let idx: Vec<usize> = values
-        .iter()
-        .map(|v| match names.iter().position(|n| *n == v) {
-            Some(j) => j,
-            None => {
-                names.push(v);
-                names.len() - 1
-            }
-        })
-        .collect();
-    super::gof::kruskal_wallis(r, &idx, names.len())
 }
 
 /// The reported parameter of a fitted candidate (symbol, value, standard error), what it

@@ -297,10 +297,17 @@ fn evidence(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Re
             }
         }
         let top = rows.iter().map(|&i| lr[i]).filter(|v| v.is_finite()).fold(1.0, f64::max);
+        let fits_under = cats.iter().map(|c| c.chars().count() + 2).sum::<usize>() <= 48;
         panels.push((
             Panel {
-                x_categories: cats.clone(),
-                x_desc: if k + 1 == keys.len() { "Candidate effect".into() } else { String::new() },
+                // Names that would overlap under the axis are numbered in their order of
+                // evidence.csv (and of the summary's evidence table).
+                x_categories: if fits_under { cats.clone() } else { (1..=cats.len()).map(|j| j.to_string()).collect() },
+                x_desc: match (k + 1 == keys.len(), fits_under) {
+                    (false, _) => String::new(),
+                    (true, true) => "Candidate effect".into(),
+                    (true, false) => "Candidate (no. in evidence.csv order)".into(),
+                },
                 // A long label does not fit beside the axis: the key then (the legend of the
                 // other figures and materials.csv give the label).
                 y_desc: format!("Λ, {}", if labels[k].chars().count() <= 18 { labels[k].as_str() } else { key.as_str() }),

@@ -33,7 +33,6 @@
 use serde::{Deserialize, Serialize};
 
 use super::factors::{Factor, Form, level_columns};
-use super::fit::Sample;
 use super::population::Particle;
 use crate::lifetime::damage::tk_ratio_path;
 
@@ -66,6 +65,9 @@ pub const ALL: [Effect; 5] = [Effect::Roundness, Effect::Size, Effect::Temperatu
 
 /// Covariate columns of a crush sample, by name; `None` for an empty cell.
 pub type Covariates = [(String, Vec<Option<f64>>)];
+
+/// Categorical factor columns of a strength sample, by name: each specimen's level.
+pub type Levels = [(String, Vec<String>)];
 
 /// How an effect enters the regression.
 #[derive(Debug, Clone, PartialEq)]
@@ -214,8 +216,9 @@ impl Effect {
         }
     }
 
-    /// The effect's term for this sample, or the reason it cannot be fitted.
-    pub fn term(&self, sample: &Sample, gamma: f64) -> std::result::Result<Term, String> {
+    /// The effect's term for a sample's numeric `covariates` and categorical `levels`, or the
+    /// reason it cannot be fitted.
+    pub fn term(&self, covariates: &Covariates, levels: &Levels, gamma: f64) -> std::result::Result<Term, String> {
         let name = self.covariate();
         if let Effect::Populations(p) = self {
             return Ok(Term::Populations(*p));
@@ -223,13 +226,12 @@ impl Effect {
         if let Effect::Factor(f) = self
             && f.form == Form::Levels
         {
-            let Some((_, col)) = sample.levels.iter().find(|(n, _)| *n == name) else {
+            let Some((_, col)) = levels.iter().find(|(n, _)| *n == name) else {
                 return Err(format!("the dataset has no categorical column `{name}`"));
             };
             let (levels, reference, columns) = level_columns(col).map_err(|why| format!("`{name}`: {why}"))?;
             return Ok(Term::Levels { columns, levels, reference });
         }
-        let covariates: &Covariates = &sample.covariates;
         let Some((_, col)) = covariates.iter().find(|(n, _)| *n == name).filter(|(_, c)| c.iter().any(|v| v.is_some())) else {
             return Err(format!("the dataset has no `{name}` values (no such column, or every cell empty)"));
         };
@@ -352,16 +354,13 @@ mod tests {
         (name.to_string(), v.into_iter().map(Some).collect())
     }
 
-    fn sample(covariates: Vec<(String, Vec<Option<f64>>)>) -> Sample {
-        Sample { covariates, ..Sample::default() }
-    }
 
     #[test]
     fn missing_or_constant_covariates_are_skipped_with_a_reason() {
-        let c = sample(vec![cov("temperature_c", vec![20.0; 12]), ("roundness".into(), vec![Some(0.7), None, Some(0.8)])]);
-        assert!(Effect::Temperature.term(&c, 5.0).unwrap_err().contains("same on every row"));
-        assert!(Effect::Roundness.term(&c, 5.0).unwrap_err().contains("empty on 1 of 3"));
-        assert!(Effect::Damage.term(&c, 5.0).unwrap_err().contains("no `impacts` values"));
+        let c = vec![cov("temperature_c", vec![20.0; 12]), ("roundness".into(), vec![Some(0.7), None, Some(0.8)])];
+        assert!(Effect::Temperature.term(&c, &[], 5.0).unwrap_err().contains("same on every row"));
+        assert!(Effect::Roundness.term(&c, &[], 5.0).unwrap_err().contains("empty on 1 of 3"));
+        assert!(Effect::Damage.term(&c, &[], 5.0).unwrap_err().contains("no `impacts` values"));
     }
 
     #[test]
@@ -372,8 +371,8 @@ mod tests {
             }
         }
         // A particle's column uses the sample's reference: the median diameter.
-        let c = sample(vec![cov("diameter_m", vec![0.8e-3, 1.0e-3, 0.9e-3])]);
-        let Term::Linear(z) = Effect::Size.term(&c, 5.0).unwrap() else { panic!() };
+        let c = vec![cov("diameter_m", vec![0.8e-3, 1.0e-3, 0.9e-3])];
+        let Term::Linear(z) = Effect::Size.term(&c, &[], 5.0).unwrap() else { panic!() };
         assert!((z[2]).abs() < 1e-15 && (z[1] - (1.0f64 / 0.9).ln()).abs() < 1e-15);
     }
 }

@@ -233,14 +233,8 @@ pub fn weakest_link(x: &[f64], z: &[f64], others: &crate::strength::regress::Des
         Err(_) => (f64::NAN, f64::NAN),
     };
     let lr = (2.0 * (free_loglik - loglik_tied)).max(0.0);
-    let p = if lr.is_finite() { statrs_sf_chi2(lr, 1.0) } else { f64::NAN };
+    let p = if lr.is_finite() { crate::stats::chi2_upper_tail(lr, 1.0) } else { f64::NAN };
     WeakestLink { alpha, alpha_se, predicted: k / free_shape, shape_tied, loglik_tied, lr, p, supported: p >= 0.05 }
-}
-
-/// Upper tail of χ²_df at x.
-pub fn statrs_sf_chi2(x: f64, df: f64) -> f64 {
-    use statrs::distribution::{ChiSquared, ContinuousCDF};
-    ChiSquared::new(df).map_or(f64::NAN, |c| c.sf(x.max(0.0)))
 }
 
 #[cfg(test)]

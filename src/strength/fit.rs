@@ -47,6 +47,12 @@ impl Sample {
         particle.into_iter().chain(self.factors.iter().cloned().map(Effect::Factor)).chain(self.populations.iter().copied().map(Effect::Populations)).collect()
     }
 
+    /// The term of effect `e` in this sample, or why it cannot be fitted
+    /// ([`Effect::term`] on the sample's columns).
+    pub fn term(&self, e: &Effect, gamma: f64) -> std::result::Result<Term, String> {
+        e.term(&self.covariates, &self.levels, gamma)
+    }
+
     /// The rows `rows` of the sample (strengths, covariates and levels), same candidates.
     pub fn rows(&self, rows: &[usize], source: String) -> Sample {
         Sample {
@@ -403,7 +409,7 @@ impl StrengthFit {
     pub fn new(sample: &Sample, effects: &[Effect], gamma: f64, material: &str) -> Result<StrengthFit> {
         let mut terms = Vec::new();
         for e in effects {
-            let t = e.term(sample, gamma).map_err(|reason| Error::Data {
+            let t = sample.term(e, gamma).map_err(|reason| Error::Data {
                 file: sample.source.clone(),
                 location: format!("column {}", e.covariate()),
                 rule: format!("material `{material}`: the strength model's `{}` effect needs this column: {reason}", e.name()),
@@ -473,7 +479,7 @@ mod tests {
             })
             .collect();
         let c = Sample { covariates: vec![("impacts".to_string(), impacts.iter().map(|&k| Some(k as f64)).collect())], ..Sample::default() };
-        let t = Effect::Damage.term(&c, 5.0).unwrap();
+        let t = c.term(&Effect::Damage, 5.0).unwrap();
         let m = fit_model(&x, &[(Effect::Damage, t)]).unwrap();
         let r = m.damage_ratio.unwrap();
         assert!((r / 0.05 - 1.0).abs() < 0.25, "x = {r}");

@@ -492,7 +492,7 @@ pub fn uq_speed(study: &Path) -> Result<UqSpeed> {
 /// weaker, furnace of two, operator of four) — at the shipped settings (499 bootstrap
 /// replicates per round, 999 permutations per residual test, ten folds): (seconds, named).
 pub fn strength_factors_speed(n: usize) -> Result<(f64, Vec<String>)> {
-    use crate::strength::factors::{Factor, Form, SizeMeasure};
+    use crate::strength::factors::{Factor, FactorType, Form, SizeMeasure, candidates_of};
     let mut rng = ChaCha8Rng::seed_from_u64(33);
     let mut s = Sample { source: "bench".into(), ..Sample::default() };
     let volume: Vec<f64> = (0..n).map(|i| [2.0, 8.0][i % 2]).collect();
@@ -514,12 +514,13 @@ pub fn strength_factors_speed(n: usize) -> Result<(f64, Vec<String>)> {
         s.levels.push((name.into(), v));
     }
     s.factors = vec![Factor { column: "volume".into(), form: Form::Size(SizeMeasure::EffectiveVolume) }];
+    // The candidates a study declaring these columns gets: linear and power for the numeric
+    // ones, a scale and a modulus per level for the categorical ones.
     for c in ["rate", "other"] {
-        s.factors.push(Factor { column: c.into(), form: Form::Linear });
-        s.factors.push(Factor { column: c.into(), form: Form::Power });
+        s.factors.extend(candidates_of(c, FactorType::Numeric, true));
     }
     for c in ["batch", "furnace", "operator"] {
-        s.factors.push(Factor { column: c.into(), form: Form::Levels });
+        s.factors.extend(candidates_of(c, FactorType::Categorical, false));
     }
     let start = Instant::now();
     let outcome = crate::discrepancy::workflow::analyse(&s, &crate::strength::NamingSettings::default(), true)?;

@@ -77,7 +77,7 @@
 //! | [`contact`] | Hertz: contact size, surface stresses, average tensile stress (explicit domain), crush, impact with η |
 //! | [`weibull`] | ASTM C1239 MLE, unbiasing, pivotal and Fisher bounds, probability plot, size scaling |
 //! | [`lifetime`] | P_N without underflow, impacts per year, the impact load; [`lifetime::damage`]: independent trials, Vogel–Peukert, Tavares–King as per-sample laws |
-//! | [`strength`] | the one strength/lifetime model: effects (the five particle effects and generic effects of recorded factors with the weakest-link test, `factors`), strength files with factor columns through the intake (`specimens`), Weibull regression, pivotal/Bayesian joint draws, populations, `LifetimeModel` and its Simulator, stacking weights |
+//! | [`strength`] | the one strength/lifetime model: effects (the five particle effects and generic effects of recorded factors — scale and modulus per level, partial pooling of small levels, ln-linear and power laws, the weakest-link size effect and its test, `factors`; two flaw populations, `flaws`), strength files with factor columns through the intake (`specimens`), Weibull regression, pivotal/Bayesian joint draws, populations, `LifetimeModel` and its Simulator, stacking weights |
 //! | [`dist`] | distributions declared in study files and the DEM velocity spectrum, as inverse-CDF marginals |
 //! | [`dem`] | native DEM of the tube bank: Hertz–Mindlin, cell lists, impacts, profiles, VTK; `TubeBankModel` |
 //! | [`fem`] | native crush FE: axisymmetric/plane-strain explicit quads, JH-2, platens, fields, VTU; `CrushModel` (also the runs with other contact tips) |

@@ -1,7 +1,9 @@
-//! Generic effects of recorded factors (issue 33, first part): hidden effects named through the
-//! generator, parameters inside their 90 % bands, no false naming with irrelevant or shuffled
-//! factors, and the shipped real data sets (Smith & Naylor glass fibres, Bader & Priest carbon
-//! fibres) against the `reliability` package's two-parameter fits (tests/bench/reliability/).
+//! Generic effects of recorded factors (issue 33): hidden effects named through the generator —
+//! a size effect, a scale per batch, a modulus per batch, a partially pooled batch effect in
+//! batches of 25 … 1 specimens, a loading-rate effect (ln-linear and power law), a weak second
+//! flaw population —, parameters inside their 90 % bands, no false naming with irrelevant or
+//! shuffled factors, and the shipped real data sets (Smith & Naylor glass fibres, Bader & Priest
+//! carbon fibres) against the `reliability` package's fits (tests/bench/reliability/).
 //!
 //! Synthetic specimens: x_i = exp(ln σ_i + ln(−ln U)/m) with the effect in ln σ_i (the crate's
 //! generator, `regress::draw_particles`, one draw per row), m = 8 — a typical ceramic — and
@@ -47,10 +49,15 @@ fn sample(c: &Campaign, effect: impl Fn(usize) -> f64, noise: bool, rng: &mut Ch
 
 /// [`sample`] with the rate declared in the forms `rate_forms` only.
 fn sample_with(c: &Campaign, effect: impl Fn(usize) -> f64, noise: bool, rate_forms: &[Form], rng: &mut ChaCha8Rng) -> Sample {
+    sample_full(c, effect, |_| M, noise, rate_forms, rng)
+}
+
+/// [`sample_with`] with the modulus of each row.
+fn sample_full(c: &Campaign, effect: impl Fn(usize) -> f64, modulus: impl Fn(usize) -> f64, noise: bool, rate_forms: &[Form], rng: &mut ChaCha8Rng) -> Sample {
     let ln_scale: Vec<f64> = (0..N).map(|i| (400e6f64).ln() + effect(i)).collect();
     // One draw per row, in row order: draw_particles picks rows at random, so draw each row's
     // strength from a one-row population.
-    let strength: Vec<f64> = (0..N).map(|i| draw_particles(&ln_scale[i..=i], M, 1, rng)[0].1.exp()).collect();
+    let strength: Vec<f64> = (0..N).map(|i| draw_particles(&ln_scale[i..=i], modulus(i), 1, rng)[0].1.exp()).collect();
     let mut s = Sample { source: "synthetic".into(), strength, ..Sample::default() };
     s.covariates.push(("length".into(), c.length.iter().map(|v| Some(*v)).collect()));
     s.covariates.push(("rate".into(), c.rate.iter().map(|v| Some(*v)).collect()));
@@ -58,6 +65,7 @@ fn sample_with(c: &Campaign, effect: impl Fn(usize) -> f64, noise: bool, rate_fo
     s.factors = vec![
         Factor { column: "length".into(), form: Form::Size(SizeMeasure::GaugeLength) },
         Factor { column: "batch".into(), form: Form::Levels },
+        Factor { column: "batch".into(), form: Form::Moduli },
     ];
     s.factors.extend(rate_forms.iter().map(|f| Factor { column: "rate".into(), form: *f }));
     if noise {
@@ -70,7 +78,8 @@ fn sample_with(c: &Campaign, effect: impl Fn(usize) -> f64, noise: bool, rate_fo
         for (k, v) in c.noise_cat.iter().enumerate() {
             let name = format!("group{k}");
             s.levels.push((name.clone(), v.clone()));
-            s.factors.push(Factor { column: name, form: Form::Levels });
+            s.factors.push(Factor { column: name.clone(), form: Form::Levels });
+            s.factors.push(Factor { column: name, form: Form::Moduli });
         }
     }
     s
@@ -88,12 +97,17 @@ fn sweep(reps: usize, seed: u64, hidden: Option<(&Effect, f64)>, effect: impl Fn
 }
 
 fn sweep_with(reps: usize, seed: u64, hidden: Option<(&Effect, f64)>, effect: impl Fn(&Campaign, usize) -> f64, noise: bool, shuffle_batch: bool, rate_forms: &[Form]) -> (usize, usize, usize) {
+    sweep_full(reps, seed, hidden, effect, |_, _| M, noise, shuffle_batch, rate_forms)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn sweep_full(reps: usize, seed: u64, hidden: Option<(&Effect, f64)>, effect: impl Fn(&Campaign, usize) -> f64, modulus: impl Fn(&Campaign, usize) -> f64, noise: bool, shuffle_batch: bool, rate_forms: &[Form]) -> (usize, usize, usize) {
     let (mut named, mut covered, mut any) = (0, 0, 0);
     for r in 0..reps {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(r as u64 + 1);
         let c = campaign(&mut rng);
-        let mut s = sample_with(&c, |i| effect(&c, i), noise, rate_forms, &mut rng);
+        let mut s = sample_full(&c, |i| effect(&c, i), |i| modulus(&c, i), noise, rate_forms, &mut rng);
         if shuffle_batch {
             let v = &mut s.levels[0].1;
             for i in (1..v.len()).rev() {
@@ -172,9 +186,23 @@ fn a_hidden_batch_effect_is_named_as_levels_and_a_rate_effect_as_linear_or_power
 }
 
 #[test]
+fn a_hidden_modulus_per_batch_is_named_as_moduli() {
+    // Batch B's strengths scatter more (m = 3.5 against 8, same scale): a processing fault that
+    // widens the flaw-size distribution. 30 specimens per batch; the first γ is
+    // ln(b_B/b_A) = ln(8/3.5). (At m = 4 against 8 it is named first in 83 of 100: the
+    // detection limit at this campaign size is a modulus ratio of about 2.3.)
+    let moduli = Effect::Factor(Factor { column: "batch".into(), form: Form::Moduli });
+    let reps = 100;
+    let (named, covered, _) = sweep_full(reps, 33_07, Some((&moduli, (M / 3.5f64).ln())), |_, _| 0.0, |c, i| if c.batch[i] == "B" { 3.5 } else { M }, false, false, &[Form::Linear, Form::Power]);
+    assert!(named as f64 >= 0.9 * reps as f64, "moduli(batch) named {named}/{reps}");
+    assert!(covered as f64 >= 0.85 * named as f64, "batch B's ln(1/m) offset inside its 90 % band in {covered}/{named}");
+}
+
+#[test]
 fn nothing_is_named_when_nothing_is_hidden_even_among_irrelevant_and_shuffled_factors() {
     // Nothing hidden; the declared size, batch and rate plus two numeric and three categorical
-    // irrelevant factors: 13 candidates in all, one family-wise guard.
+    // irrelevant factors: 17 candidates in all (each categorical factor a scale and a modulus
+    // per level), one family-wise guard.
     let reps = 100;
     let (_, _, any) = sweep(reps, 33_05, None, |_, _| 0.0, true, false);
     assert!(any as f64 <= 0.05 * reps as f64, "false naming in {any}/{reps}");
@@ -383,4 +411,75 @@ fn a_hidden_weak_flaw_population_is_named_at_90_percent_and_one_population_at_mo
     assert!(mixture >= 36, "mixture named {mixture}/40");
     let (_, any) = population_sweep(40, 33_10, 0.0);
     assert!(any <= 2, "a one-population sample named something in {any}/40");
+}
+
+/// Batches of uneven size, as a campaign's records often are (90 specimens): two large ones, a
+/// few middling and three of one or two specimens, whose scales can only be partially pooled.
+const UNEVEN: [(&str, usize); 9] = [("K1", 25), ("K2", 20), ("K3", 15), ("K4", 12), ("K5", 8), ("K6", 5), ("K7", 2), ("K8", 2), ("K9", 1)];
+
+/// A sample of 90 specimens in the uneven batches, batch `b`'s ln-scale offset `offset(b)`,
+/// candidates levels(batch) (pooled) and, with `noise`, two irrelevant numeric factors.
+fn uneven_sample(offset: impl Fn(usize) -> f64, noise: bool, rng: &mut ChaCha8Rng) -> Sample {
+    let batch: Vec<usize> = UNEVEN.iter().enumerate().flat_map(|(b, (_, k))| std::iter::repeat_n(b, *k)).collect();
+    let strength: Vec<f64> = batch.iter().map(|&b| draw_particles(&[(400e6f64).ln() + offset(b)], M, 1, rng)[0].1.exp()).collect();
+    let mut s = Sample { source: "synthetic".into(), strength, ..Sample::default() };
+    s.levels.push(("batch".into(), batch.iter().map(|&b| UNEVEN[b].0.to_string()).collect()));
+    s.factors = vec![Factor { column: "batch".into(), form: Form::Levels }];
+    if noise {
+        for k in 0..2 {
+            let name = format!("noise{k}");
+            s.covariates.push((name.clone(), (0..batch.len()).map(|_| Some(rng.random_range(1.0..5.0))).collect()));
+            s.factors.push(Factor { column: name.clone(), form: Form::Linear });
+        }
+    }
+    s
+}
+
+/// Runs `reps` uneven campaigns with the batch offsets `offsets`; returns how often
+/// levels(batch) was named and how often anything was.
+fn uneven_sweep(reps: usize, seed: u64, offsets: [f64; 9]) -> (usize, usize) {
+    let batch = Effect::Factor(Factor { column: "batch".into(), form: Form::Levels });
+    let (mut named, mut any) = (0, 0);
+    for r in 0..reps {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(r as u64 + 1);
+        let s = uneven_sample(|b| offsets[b], true, &mut rng);
+        let o = analyse(&s, &settings(seed ^ r as u64), false).unwrap();
+        named += usize::from(o.named.first() == Some(&batch));
+        any += usize::from(!o.named.is_empty());
+    }
+    eprintln!("uneven batches {offsets:?}: levels(batch) named first {named}/{reps}, anything named {any}/{reps}");
+    (named, any)
+}
+
+/// The batch offsets of the pooled hidden-effect test: a 10 % batch-to-batch scatter of the
+/// scale (sd of the offsets 0.10, ±15 % at the extremes).
+const BATCH_OFFSETS: [f64; 9] = [0.10, -0.12, 0.0, 0.14, -0.15, 0.05, -0.10, 0.12, 0.0];
+
+#[test]
+fn batches_too_small_for_their_own_scale_are_partially_pooled_and_named_when_they_differ() {
+    // Nine batches of 25 … 1 specimens (three of one or two): the scales are partially pooled.
+    // Fast sibling of the 100-campaign sweeps below (40 each here).
+    let reps = 40;
+    let (named, _) = uneven_sweep(reps, 33_10, BATCH_OFFSETS);
+    assert!(named as f64 >= 0.9 * reps as f64, "pooled levels(batch) named {named}/{reps}");
+    let (_, any) = uneven_sweep(reps, 33_11, [0.0; 9]);
+    assert!(any <= 2, "false naming in {any}/{reps}");
+    // What the evidence says of one campaign: the levels pooled, τ and each level's scale.
+    let mut rng = ChaCha8Rng::seed_from_u64(33_12);
+    let s = uneven_sample(|b| BATCH_OFFSETS[b], false, &mut rng);
+    let o = analyse(&s, &settings(1), false).unwrap();
+    let e = &o.evidence[0];
+    assert!(e.meaning.contains("partially pooled") && e.meaning.contains("K9 ×") && e.meaning.contains("(1)"), "{}", e.meaning);
+    assert_eq!(e.parameters, 8, "nominal L − 1");
+}
+
+#[test]
+#[ignore = "slow: 100 + 100 naming loops with the pooled factor's τ searched in every bootstrap refit (about a minute on two cores); fast sibling batches_too_small_for_their_own_scale_are_partially_pooled_and_named_when_they_differ"]
+fn pooled_batches_are_named_at_90_percent_and_falsely_at_most_5() {
+    let reps = 100;
+    let (named, _) = uneven_sweep(reps, 33_10, BATCH_OFFSETS);
+    assert!(named as f64 >= 0.9 * reps as f64, "pooled levels(batch) named {named}/{reps}");
+    let (_, any) = uneven_sweep(reps, 33_11, [0.0; 9]);
+    assert!(any as f64 <= 0.05 * reps as f64, "false naming in {any}/{reps}");
 }

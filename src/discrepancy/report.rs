@@ -30,15 +30,20 @@ pub(super) fn names(c: &[Effect]) -> String {
 
 pub(super) fn headline(r: &MaterialResult) -> String {
     let (b, a) = (r.outcome.before(), r.outcome.after());
-    format!(
-        "{}: effects named: {}; gap G {:.1} → {:.1}; Weibull modulus {:.1} → {:.1}",
-        r.label,
-        names(&r.outcome.named),
-        b.gap,
-        a.gap,
-        b.model.shape(),
-        a.model.shape()
-    )
+    format!("{}: effects named: {}; gap G {:.1} → {:.1}; Weibull modulus {} → {}", r.label, names(&r.outcome.named), b.gap, a.gap, modulus_text(&b.model), modulus_text(&a.model))
+}
+
+/// The model's Weibull modulus in words: one value, or the range over the levels of a factor
+/// with a modulus per level, or the two populations' moduli.
+pub(super) fn modulus_text(m: &crate::strength::ModelFit) -> String {
+    let (lo, hi) = m.modulus_range();
+    if m.law.is_some() {
+        format!("{lo:.1} and {hi:.1} (two populations)")
+    } else if m.scale_columns.is_empty() {
+        format!("{lo:.1}")
+    } else {
+        format!("{lo:.1}–{hi:.1} (by level)")
+    }
 }
 
 pub(super) fn verdict_json(loaded: &StudyFile, s: &DiscrepancyStudy, results: &[MaterialResult]) -> serde_json::Value {
@@ -87,6 +92,8 @@ pub(super) fn verdict_json(loaded: &StudyFile, s: &DiscrepancyStudy, results: &[
             json!({
                 "effects": st.model.effects.iter().map(|c| c.name()).collect::<Vec<_>>(),
                 "weibull_modulus": st.model.shape(),
+                "weibull_modulus_min": st.model.modulus_range().0,
+                "weibull_modulus_max": st.model.modulus_range().1,
                 "log_likelihood": st.model.loglik(),
                 "anderson_darling": st.ad, "p_anderson_darling": st.p_ad,
                 "kolmogorov_smirnov": st.ks, "p_kolmogorov_smirnov": st.p_ks,
@@ -169,6 +176,8 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         ucol("round", st.iter().map(|(_, i, _)| *i as u64).collect()),
         scol("effects", st.iter().map(|(_, _, s)| names(&s.model.effects)).collect()),
         fcol("weibull_modulus", st.iter().map(|(_, _, s)| s.model.shape()).collect()),
+        fcol("weibull_modulus_min", st.iter().map(|(_, _, s)| s.model.modulus_range().0).collect()),
+        fcol("weibull_modulus_max", st.iter().map(|(_, _, s)| s.model.modulus_range().1).collect()),
         fcol("log_likelihood", st.iter().map(|(_, _, s)| s.model.loglik()).collect()),
         fcol("anderson_darling", st.iter().map(|(_, _, s)| s.ad).collect()),
         fcol("p_anderson_darling", st.iter().map(|(_, _, s)| s.p_ad).collect()),
@@ -209,7 +218,8 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
 
     // residuals.csv: per specimen, before and after, with every covariate (a crush sample's
     // five, a strength file's size measure and factors) and the strength adjusted to the
-    // sample's average covariates (for the probability plot).
+    // sample's average covariates and, with a modulus per level, to the reference level's
+    // modulus (for the probability plot).
     let mut numeric_names: Vec<String> = super::workflow::DIAGNOSED.iter().map(|s| s.to_string()).collect();
     let mut level_names: Vec<String> = Vec::new();
     for r in results {
@@ -236,7 +246,14 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
                 cols.entry("stage".into()).or_default().push(stage.into());
                 let x = r.sample.strength[i];
                 num.entry("strength_pa".into()).or_default().push(x);
-                num.entry("adjusted_pa".into()).or_default().push(x * (centre - st.model.reg.ln_scale(&d, i)).exp());
+                // With a modulus per level, each specimen's standardised residual is carried onto
+                // the reference level's modulus, so the adjusted strengths share one law.
+                let adjusted = if st.model.scale_columns.is_empty() {
+                    x * (centre - st.model.reg.ln_scale(&d, i)).exp()
+                } else {
+                    (centre + st.model.reg.b * (x.ln() - st.model.reg.ln_scale(&d, i)) / st.model.reg.b_at(&d, i)).exp()
+                };
+                num.entry("adjusted_pa".into()).or_default().push(adjusted);
                 num.entry("residual".into()).or_default().push(st.residuals[i]);
                 for name in &numeric_names {
                     let v = r.sample.covariates.iter().find(|(n, _)| n == name).and_then(|(_, v)| v[i]).unwrap_or(f64::NAN);
@@ -337,10 +354,10 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         md.push_str("| model | Weibull m | AD (p) | KS (p) | gap G |\n|---|---|---|---|---|\n");
         for (i, st) in r.outcome.stages.iter().enumerate() {
             md.push_str(&format!(
-                "| {}{} | {:.1} | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.1} |\n",
+                "| {}{} | {} | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.1} |\n",
                 if i == 0 { "base" } else { "+ " },
                 if i == 0 { String::new() } else { names(&st.model.effects) },
-                st.model.shape(),
+                modulus_text(&st.model),
                 st.ad,
                 st.p_ad,
                 st.ks,
@@ -356,6 +373,11 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             md.push_str("| round | candidate | Λ | Λ critical | p (family) | ΔBIC | ΔCV log score | parameter | verdict |\n|---|---|---|---|---|---|---|---|---|\n");
             for e in &r.outcome.evidence {
                 md.push_str(&evidence_row(e));
+            }
+            // What each named effect says, as fitted in the round that named it (a size effect's
+            // weakest-link test in the final model follows below).
+            for e in r.outcome.evidence.iter().filter(|e| e.named && e.weakest_link.is_none() && !e.meaning.is_empty()) {
+                md.push_str(&format!("\n`{}` (named in round {}): {}.\n", e.candidate.name(), e.round, e.meaning));
             }
         }
         let k_of = |e: &crate::strength::Effect| match e {

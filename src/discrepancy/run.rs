@@ -53,7 +53,7 @@ use crate::error::{Error, Result};
 use crate::io::{InputFile, ReportDir};
 use crate::lifetime::impacts_in;
 use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
-use crate::strength::regress::draw_particles;
+use crate::strength::regress::draw_rows;
 use crate::strength::{Effect, LifetimeModel, ModelFit, NamingSettings, Sample, StrengthFit, Term, Uncertainty, sample_of};
 use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSpec, StudyFile};
 
@@ -135,7 +135,7 @@ fn power_study(sample: &Sample, outcome: &Outcome, settings: &NamingSettings, p:
                 .map(|r| {
                     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0x9077_E400);
                     rng.set_stream(((si * 64 + ni) * 100_000 + r) as u64 + 1);
-                    let (rows_drawn, mut strength): (Vec<usize>, Vec<f64>) = draw_particles(&ln_scale, 1.0 / model.reg.b, n, &mut rng).into_iter().map(|(i, ln_s)| (i, ln_s.exp())).unzip();
+                    let (rows_drawn, mut strength): (Vec<usize>, Vec<f64>) = draw_rows(&ln_scale, |i| 1.0 / model.reg.b_at(&d, i), n, &mut rng).into_iter().map(|(i, ln_s)| (i, ln_s.exp())).unzip();
                     // A two-population law: its own draws (the rows only carry the factors).
                     if let Some(law) = &model.law {
                         strength = (0..n).map(|_| law.sample(&mut rng)).collect();

@@ -12,7 +12,9 @@
 //!      **false-discovery guard** uses the family-wise (max-T) p-value, which counts
 //!      max_c Λ*_c ≥ Λ_c, so the chance of naming any effect when none is there is α whatever
 //!      the number of candidates;
-//!    * ΔBIC = −Λ + k ln n (k = 1 extra parameter);
+//!    * ΔBIC = −Λ + k ln n, k the candidate's extra parameters (1 for a particle effect or a
+//!      numeric factor, L − 1 for a scale or a modulus per level, 3 or 2 for a two-population
+//!      law; a partially pooled factor's effective degrees of freedom, between 0 and L − 1);
 //!    * the K-fold cross-validated log score, Δ against the current model;
 //! 3. **names** the candidate with the largest Λ among those passing the guard — max-T
 //!    p < α, ΔBIC < 0 and a better cross-validated log score — adds it and starts the next
@@ -297,8 +299,7 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
                         }
                         let mut terms = current.clone();
                         terms.push((c.clone(), t.clone()));
-                        let hint = e.as_ref().and_then(|m| m.damage_ratio);
-                        fit_model_near(&xs, &terms, hint).map_or(f64::NAN, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0))
+                        fit_model_near(&xs, &terms, e.as_ref()).map_or(f64::NAN, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0))
                     })
                     .collect();
                 Some((ad, ks, l))
@@ -341,7 +342,9 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
             let l1 = one_df_scale(l, df[j]);
             let p_b = p_of(reps.iter().filter(|r| r.2[j] >= l).count());
             let p_f = p_of(max_star.iter().filter(|&&s| s >= l1).count());
-            let dbic = -l + df[j] as f64 * (n as f64).ln();
+            // A partially pooled factor is charged its effective degrees of freedom (df[j]
+            // exactly for every other candidate).
+            let dbic = -l + (m.effective_parameters() - model.effective_parameters()) * (n as f64).ln();
             let mut terms = current.clone();
             terms.push((c.clone(), t.clone()));
             let dcv = match (cv_log_score(x, &terms, &fold, folds_k), cv0) {
@@ -483,6 +486,26 @@ fn describe(c: &Effect, t: &Term, m: &ModelFit, x: &[f64]) -> ((String, f64, f64
         let meaning = format!("σ_θ of each level of `{}` relative to \"{reference}\": {}", c.covariate(), list.join(", "));
         return (("scale_ratio_max_min".into(), hi / lo, f64::NAN), meaning, None);
     }
+    if let Term::Pooled { levels, columns } = t {
+        let range = range.unwrap_or(0..0);
+        let delta = &m.reg.beta[range.clone()];
+        let tau = m.penalty.get(range.start).map_or(f64::NAN, |l| 1.0 / l.sqrt());
+        let scales: Vec<f64> = delta.iter().map(|d| d.exp()).collect();
+        let (lo, hi) = scales.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), s| (lo.min(*s), hi.max(*s)));
+        let list: Vec<String> = levels.iter().zip(&scales).zip(columns).map(|((l, s), z)| format!("{l} ×{s:.3} ({})", z.iter().sum::<f64>() as usize)).collect();
+        let meaning = format!("σ_θ of each level of `{}` relative to the population of levels, partially pooled (spread τ = {tau:.3} in ln σ_θ; specimens in brackets): {}", c.covariate(), list.join(", "));
+        return (("scale_ratio_max_min".into(), hi / lo, f64::NAN), meaning, None);
+    }
+    if let Term::Moduli { levels, reference, .. } = t {
+        let gamma: Vec<f64> = m.gamma_range(c).map(|r| m.reg.gamma[r].to_vec()).unwrap_or_default();
+        let others = levels.iter().filter(|l| *l != reference);
+        let mut moduli: Vec<(String, f64)> = vec![(reference.clone(), m.reg.shape())];
+        moduli.extend(others.zip(&gamma).map(|(l, g)| (l.clone(), m.reg.shape() * (-g).exp())));
+        let (lo, hi) = moduli.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, s)| (lo.min(*s), hi.max(*s)));
+        let list: Vec<String> = moduli.iter().map(|(l, s)| format!("{l} {s:.2}")).collect();
+        let meaning = format!("Weibull modulus of each level of `{}`: {}", c.covariate(), list.join(", "));
+        return (("modulus_ratio_max_min".into(), hi / lo, f64::NAN), meaning, None);
+    }
     let (beta, se) = m.coefficient(c).unwrap_or((f64::NAN, f64::NAN));
     let (sym, val, mut meaning) = c.parameter(beta, m.shape());
     // Delta method by a central difference of the reported parameter in β.
@@ -492,7 +515,8 @@ fn describe(c: &Effect, t: &Term, m: &ModelFit, x: &[f64]) -> ((String, f64, f64
         // The other effects' columns (and a damage offset at its fitted ratio), refitted under the tie.
         let skip = m.beta_range(c).unwrap_or(0..0);
         let others: Vec<Vec<f64>> = m.columns.iter().enumerate().filter(|(j, _)| !skip.contains(j)).map(|(_, col)| col.clone()).collect();
-        let design = crate::strength::regress::Design { columns: &others, offset: m.offset.as_deref() };
+        let penalty: Vec<f64> = m.penalty.iter().enumerate().filter(|(j, _)| !skip.contains(j)).map(|(_, l)| *l).collect();
+        let design = crate::strength::regress::Design { columns: &others, offset: m.offset.as_deref(), scale_columns: &m.scale_columns, penalty: &penalty };
         let test = weakest_link(x, z, &design, measure.k(), m.loglik(), val, val_se, m.shape());
         meaning = format!("{meaning}; weakest-link test: {}", test.sentence(measure.k()));
         wl = Some(test);

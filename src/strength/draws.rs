@@ -89,7 +89,7 @@ impl StrengthFit {
     fn pivotal_draws(&self, k: usize, seed: u64) -> Result<Vec<Params>> {
         let m = &self.model;
         let (b_hat, mu_hat) = (m.reg.b, m.reg.mu);
-        let design = Design { columns: &m.columns, offset: None };
+        let design = Design { columns: &m.columns, offset: None, scale_columns: &m.scale_columns, penalty: &m.penalty };
         let out: Vec<Option<Params>> = (0..k)
             .into_par_iter()
             .map(|r| {

@@ -32,7 +32,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::factors::{Factor, Form, level_columns};
+use super::factors::{Factor, Form, MIN_PER_LEVEL, MIN_PER_LEVEL_MODULUS, level_columns, pooled_columns};
 use super::population::Particle;
 use crate::lifetime::damage::tk_ratio_path;
 
@@ -82,6 +82,23 @@ pub enum Term {
         levels: Vec<String>,
         /// The reference level (scale μ).
         reference: String,
+    },
+    /// Treatment-coded scale columns of a categorical factor: one Weibull modulus per level.
+    Moduli {
+        /// 0/1 columns, one per non-reference level, in the order of `levels` without the reference.
+        columns: Vec<Vec<f64>>,
+        /// The levels, in order of appearance.
+        levels: Vec<String>,
+        /// The reference level (modulus m).
+        reference: String,
+    },
+    /// Indicator columns of every level of a categorical factor with a level too small for a
+    /// scale of its own: the levels' ln-scale offsets partially pooled (δ ~ N(0, τ²), τ fitted).
+    Pooled {
+        /// 0/1 columns, one per level, in the order of `levels`.
+        columns: Vec<Vec<f64>>,
+        /// The levels, in order of appearance.
+        levels: Vec<String>,
     },
     /// A two-population law in place of the Weibull law (no other term beside it).
     Populations(super::flaws::Populations),
@@ -151,7 +168,10 @@ impl Effect {
     /// levels of a categorical factor).
     pub fn extra_parameters(term: &Term) -> usize {
         match term {
-            Term::Levels { columns, .. } => columns.len(),
+            Term::Levels { columns, .. } | Term::Moduli { columns, .. } => columns.len(),
+            // Nominally L − 1 (the pooled fit uses fewer effective degrees of freedom: ΔBIC is
+            // conservative, the bootstrap guard calibrates the statistic itself).
+            Term::Pooled { columns, .. } => columns.len() - 1,
             // Four or five parameters in place of the base law's two.
             Term::Populations(p) => p.parameters() - 2,
             _ => 1,
@@ -182,7 +202,7 @@ impl Effect {
             Effect::Factor(f) => match f.form {
                 Form::Linear => mean(),
                 Form::Power | Form::Size(_) => crate::stats::median(values),
-                Form::Levels => 0.0,
+                Form::Levels | Form::Moduli => 0.0,
             },
             _ => 0.0,
         }
@@ -198,7 +218,7 @@ impl Effect {
             Effect::Factor(f) => match f.form {
                 Form::Linear => value - reference,
                 Form::Power | Form::Size(_) => (value / reference).ln(),
-                Form::Levels => 0.0,
+                Form::Levels | Form::Moduli => 0.0,
             },
         }
     }
@@ -224,13 +244,23 @@ impl Effect {
             return Ok(Term::Populations(*p));
         }
         if let Effect::Factor(f) = self
-            && f.form == Form::Levels
+            && matches!(f.form, Form::Levels | Form::Moduli)
         {
             let Some((_, col)) = levels.iter().find(|(n, _)| *n == name) else {
                 return Err(format!("the dataset has no categorical column `{name}`"));
             };
-            let (levels, reference, columns) = level_columns(col).map_err(|why| format!("`{name}`: {why}"))?;
-            return Ok(Term::Levels { columns, levels, reference });
+            let min = if f.form == Form::Moduli { MIN_PER_LEVEL_MODULUS } else { MIN_PER_LEVEL };
+            let fixed = level_columns(col, min);
+            // A level too small for its own scale: the scales are partially pooled instead.
+            if f.form == Form::Levels
+                && let Err(why) = &fixed
+                && why.contains("specimen")
+            {
+                let (levels, columns) = pooled_columns(col).map_err(|pooled| format!("`{name}`: {why}; partial pooling: {pooled}"))?;
+                return Ok(Term::Pooled { columns, levels });
+            }
+            let (levels, reference, columns) = fixed.map_err(|why| format!("`{name}`: {why}"))?;
+            return Ok(if f.form == Form::Moduli { Term::Moduli { columns, levels, reference } } else { Term::Levels { columns, levels, reference } });
         }
         let Some((_, col)) = covariates.iter().find(|(n, _)| *n == name).filter(|(_, c)| c.iter().any(|v| v.is_some())) else {
             return Err(format!("the dataset has no `{name}` values (no such column, or every cell empty)"));
@@ -299,6 +329,7 @@ impl Effect {
                     Form::Linear => ("beta", value, format!("σ_θ × {:.4} per unit of `{c}`", value.exp())),
                     Form::Power => ("exponent", value, format!("σ_θ ∝ {c}^{value:.3}")),
                     Form::Levels => ("scale_ratio", value, format!("scales of the levels of `{c}`")),
+                    Form::Moduli => ("modulus_ratio", value, format!("moduli of the levels of `{c}`")),
                     Form::Size(s) => {
                         let k = s.k();
                         ("alpha", value, format!("σ_θ ∝ {c}^(−α), α = {value:.3}; weakest link at this modulus: {k}/m = {:.3}", k / shape))

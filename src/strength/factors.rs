@@ -3,13 +3,14 @@
 //!
 //! A strength file declares a size measure and factor columns ([`FactorSpec`],
 //! [`SizeSpec`]); each becomes one or two candidate effects of the naming loop, acting on the
-//! Weibull scale of specimen i (the modulus is shared):
+//! Weibull scale of specimen i or, for `moduli`, on its modulus:
 //!
 //! | form | column | equation | parameter reported | source |
 //! |---|---|---|---|---|
 //! | `linear(x)` | numeric x | ln σ_θ,i = μ + β (x_i − x̄) | β (ln-scale change per unit of x) | Weibull regression, Lawless (2003) *Statistical Models and Methods for Lifetime Data* §6.3 |
 //! | `power(x)` | numeric x > 0 | σ_θ,i ∝ x_i^β: ln σ_θ,i = μ + β ln(x_i/x̃) | β (exponent) | same, on ln x |
 //! | `levels(g)` | categorical g with L levels | ln σ_θ,i = μ + δ_g(i), δ = 0 for the reference level (the largest) | scale of each level relative to the reference, max/min ratio | same, treatment coding (L − 1 parameters) |
+//! | `moduli(g)` | categorical g with L levels | 1/m_i = (1/m) e^(γ_g(i)), γ = 0 for the reference level; the scale as the rest of the model has it | modulus of each level, max/min ratio | Lawless (2003) §6.3.3 (scale depending on covariates); L − 1 parameters |
 //! | `size(s)` | size measure s > 0 | σ_θ(s) = σ_θ(s̃)(s/s̃)^(−α) | α, tested against the weakest-link exponent k/m | Weibull (1939); Bazant & Planas (1998) §12 |
 //!
 //! x̄ is the mean and x̃, s̃ the median over the fitted data. The weakest-link law gives
@@ -22,7 +23,13 @@
 //! relation is *supported* when p ≥ 0.05 and *rejected* otherwise, with the direction (size
 //! effect weaker or stronger than weakest-link theory allows).
 //!
-//! A categorical factor needs at least [`MIN_PER_LEVEL`] specimens in every level; a numeric
+//! A categorical factor needs at least [`MIN_PER_LEVEL`] specimens in every level for a scale
+//! per level of its own; when a level has fewer, the levels' scales are **partially pooled**
+//! ([`pooled_columns`]): ln σ_θ,i = μ + δ_g(i) with δ ~ N(0, τ²) over the levels, τ estimated by
+//! the Laplace approximation of the marginal likelihood and the δ at their posterior mode given
+//! τ (a random-effects Weibull model; Gelman & Hill (2007) §12 for the pooling, Lawless (2003) §6
+//! for the law) — a level of one or two specimens borrows strength from the others instead of
+//! being dropped. A modulus per level needs [`MIN_PER_LEVEL_MODULUS`] in every level; a numeric
 //! factor with few distinct values (whole numbers, at most [`FEW_LEVELS`]) must be declared
 //! `numeric` or `categorical` by the study — it is never guessed.
 //!
@@ -34,6 +41,10 @@ use serde::{Deserialize, Serialize};
 
 /// Fewest specimens a level of a categorical factor needs to get its own scale.
 pub const MIN_PER_LEVEL: usize = 3;
+
+/// Fewest specimens a level needs to get its own Weibull modulus (the modulus of fewer is
+/// hardly estimable: its maximum-likelihood value from 3 specimens is biased by a factor ~2).
+pub const MIN_PER_LEVEL_MODULUS: usize = 5;
 
 /// A numeric column with at most this many distinct whole-number values is a possible code of
 /// levels: the study must say whether it is numeric or categorical.
@@ -49,6 +60,8 @@ pub enum Form {
     Power,
     /// One scale per level.
     Levels,
+    /// One Weibull modulus per level.
+    Moduli,
     /// Weakest-link size effect of a size measure.
     Size(SizeMeasure),
 }
@@ -108,6 +121,7 @@ impl Factor {
             Form::Linear => "linear",
             Form::Power => "power",
             Form::Levels => "levels",
+            Form::Moduli => "moduli",
             Form::Size(_) => "size",
         };
         format!("{f}({})", self.column)
@@ -120,6 +134,7 @@ impl Factor {
             Form::Linear => format!("`{c}` on the scale (ln-linear)"),
             Form::Power => format!("`{c}` on the scale (power law)"),
             Form::Levels => format!("one scale per level of `{c}`"),
+            Form::Moduli => format!("one Weibull modulus per level of `{c}`"),
             Form::Size(s) => format!("size effect of the {} `{c}` (weakest link, exponent free)", s.describe()),
         }
     }
@@ -131,6 +146,7 @@ impl Factor {
             Form::Linear => format!("ln σ_θ,i = μ + β ({c}_i − mean {c})"),
             Form::Power => format!("σ_θ,i ∝ {c}_i^β; ln σ_θ,i = μ + β ln({c}_i/median {c})"),
             Form::Levels => format!("ln σ_θ,i = μ + δ_level(i), one δ per level of {c} (0 for the reference level)"),
+            Form::Moduli => format!("1/m_i = (1/m) e^(γ_level(i)), one γ per level of {c} (0 for the reference level)"),
             Form::Size(s) => format!("σ_θ(s) = σ_θ(s̃)(s/s̃)^(−α), s = {c}, s̃ its median; weakest link: α = {}/m", s.k()),
         }
     }
@@ -147,24 +163,24 @@ impl Factor {
 pub enum FactorType {
     /// Numbers: linear and (where every value is > 0) power-law candidates.
     Numeric,
-    /// Labels (or codes): one scale per level.
+    /// Labels (or codes): one scale per level, one modulus per level.
     Categorical,
 }
 
 /// The candidate effects of a declared factor column: numeric → linear, and power when every
-/// value is > 0; categorical → levels.
+/// value is > 0; categorical → levels and moduli.
 pub fn candidates_of(column: &str, kind: FactorType, all_positive: bool) -> Vec<Factor> {
     match kind {
         FactorType::Numeric if all_positive => vec![Factor { column: column.into(), form: Form::Linear }, Factor { column: column.into(), form: Form::Power }],
         FactorType::Numeric => vec![Factor { column: column.into(), form: Form::Linear }],
-        FactorType::Categorical => vec![Factor { column: column.into(), form: Form::Levels }],
+        FactorType::Categorical => vec![Factor { column: column.into(), form: Form::Levels }, Factor { column: column.into(), form: Form::Moduli }],
     }
 }
 
 /// Treatment-coded columns of a categorical factor: the levels in order of appearance, the
 /// reference level (most specimens; the first such), and one 0/1 column per other level. Or
-/// why it cannot be fitted.
-pub fn level_columns(values: &[String]) -> std::result::Result<(Vec<String>, String, Vec<Vec<f64>>), String> {
+/// why it cannot be fitted: every level needs `min` specimens.
+pub fn level_columns(values: &[String], min: usize) -> std::result::Result<(Vec<String>, String, Vec<Vec<f64>>), String> {
     let mut levels: Vec<(String, usize)> = Vec::new();
     for v in values {
         match levels.iter_mut().find(|(l, _)| l == v) {
@@ -175,13 +191,38 @@ pub fn level_columns(values: &[String]) -> std::result::Result<(Vec<String>, Str
     if levels.len() < 2 {
         return Err(format!("one level only (\"{}\"): no contrast to fit", levels.first().map_or("", |l| l.0.as_str())));
     }
-    if let Some((l, k)) = levels.iter().find(|(_, k)| *k < MIN_PER_LEVEL) {
-        return Err(format!("level \"{l}\" has {k} specimen{}: at least {MIN_PER_LEVEL} per level are needed to give it its own scale", if *k == 1 { "" } else { "s" }));
+    if let Some((l, k)) = levels.iter().find(|(_, k)| *k < min) {
+        let what = if min >= MIN_PER_LEVEL_MODULUS { "modulus" } else { "scale" };
+        return Err(format!("level \"{l}\" has {k} specimen{}: at least {min} per level are needed to give it its own {what}", if *k == 1 { "" } else { "s" }));
     }
     let reference = levels.iter().fold(&levels[0], |b, l| if l.1 > b.1 { l } else { b }).0.clone();
     let names: Vec<String> = levels.iter().map(|l| l.0.clone()).collect();
     let columns = names.iter().filter(|l| **l != reference).map(|l| values.iter().map(|v| f64::from(u8::from(v == l))).collect()).collect();
     Ok((names, reference, columns))
+}
+
+/// Indicator columns of every level of a categorical factor for partial pooling (levels in
+/// order of appearance, one 0/1 column each, no reference): used when a level has fewer than
+/// [`MIN_PER_LEVEL`] specimens. At least two levels need [`MIN_PER_LEVEL`] specimens, so that
+/// the spread of the levels' scales is estimable from within-level scatter.
+pub fn pooled_columns(values: &[String]) -> std::result::Result<(Vec<String>, Vec<Vec<f64>>), String> {
+    let mut levels: Vec<(String, usize)> = Vec::new();
+    for v in values {
+        match levels.iter_mut().find(|(l, _)| l == v) {
+            Some(e) => e.1 += 1,
+            None => levels.push((v.clone(), 1)),
+        }
+    }
+    let full = levels.iter().filter(|(_, k)| *k >= MIN_PER_LEVEL).count();
+    if levels.len() < 2 {
+        return Err(format!("one level only (\"{}\"): no contrast to fit", levels.first().map_or("", |l| l.0.as_str())));
+    }
+    if full < 2 {
+        return Err(format!("{full} of its {} levels ha{} {MIN_PER_LEVEL} or more specimens: at least two are needed to pool the small ones", levels.len(), if full == 1 { "s" } else { "ve" }));
+    }
+    let names: Vec<String> = levels.into_iter().map(|l| l.0).collect();
+    let columns = names.iter().map(|l| values.iter().map(|v| f64::from(u8::from(v == l))).collect()).collect();
+    Ok((names, columns))
 }
 
 /// The weakest-link test of a size effect.
@@ -284,13 +325,13 @@ mod tests {
         // The tied regression reaches the maximum of the profile over m (scanned finely).
         let best_profile = (0..20001).map(|j| tied_profile(&y, &z, 1.0, 2.0 + 10.0 * j as f64 / 20000.0)).fold(f64::NEG_INFINITY, f64::max);
         let cols = vec![z.clone()];
-        let free = fit(&x, &Design { columns: &cols, offset: None }).unwrap();
+        let free = fit(&x, &Design { columns: &cols, ..Design::default() }).unwrap();
         let w = weakest_link(&x, &z, &Design::default(), 1.0, free.loglik, -free.beta[0], free.beta_se[0], free.shape());
         assert!((w.loglik_tied - best_profile).abs() < 1e-6, "tied fit {} vs profile maximum {best_profile}", w.loglik_tied);
         assert!(w.loglik_tied <= free.loglik + 1e-9 && w.supported, "{w:?}");
         // Data with α = 3/m at k = 1 reject the relation.
         let x3: Vec<f64> = z.iter().map(|&zi| Weibull::new(6.0, 3.0 * (-3.0 * zi / 6.0).exp()).unwrap().sample(&mut rng)).collect();
-        let free = fit(&x3, &Design { columns: &cols, offset: None }).unwrap();
+        let free = fit(&x3, &Design { columns: &cols, ..Design::default() }).unwrap();
         let w = weakest_link(&x3, &z, &Design::default(), 1.0, free.loglik, -free.beta[0], free.beta_se[0], free.shape());
         assert!(!w.supported && w.alpha > w.predicted, "{w:?}");
         assert!(w.sentence(1.0).contains("stronger than weakest-link"));
@@ -299,13 +340,14 @@ mod tests {
     #[test]
     fn levels_are_treatment_coded_against_the_largest_level() {
         let v: Vec<String> = ["a", "b", "b", "c", "b", "a", "c", "a", "c", "b"].iter().map(|s| s.to_string()).collect();
-        let (names, reference, cols) = level_columns(&v).unwrap();
+        let (names, reference, cols) = level_columns(&v, MIN_PER_LEVEL).unwrap();
         assert_eq!(names, ["a", "b", "c"]);
         assert_eq!(reference, "b");
         assert_eq!(cols.len(), 2);
         assert_eq!(cols[0], [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0]);
         let few: Vec<String> = ["a", "a", "a", "b", "b"].iter().map(|s| s.to_string()).collect();
-        assert!(level_columns(&few).unwrap_err().contains("level \"b\" has 2 specimens"));
-        assert!(level_columns(&few[..3]).unwrap_err().contains("one level only"));
+        assert!(level_columns(&few, MIN_PER_LEVEL).unwrap_err().contains("level \"b\" has 2 specimens"));
+        assert!(level_columns(&few[..3], MIN_PER_LEVEL).unwrap_err().contains("one level only"));
+        assert!(level_columns(&v, MIN_PER_LEVEL_MODULUS).unwrap_err().contains("at least 5 per level are needed to give it its own modulus"));
     }
 }

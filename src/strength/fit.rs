@@ -7,12 +7,22 @@
 //! contact at the force at break, σ̄ averaged over the study's domain ([`contact_at_break`]).
 //! Contact-geometry effects are regression terms on this σ̄ (see [`super::effects`]), which
 //! for a domain with σ̄ ∝ p0 is the same as reducing each test with its own R_c.
+//!
+//! A partially pooled categorical factor (`Term::Pooled`) has its spread τ of level offsets
+//! chosen by the Laplace approximation of the marginal likelihood,
+//!
+//! ```text
+//! ln L(τ) ≈ ℓ(θ̂_τ) − Σ_l δ̂_l²/(2τ²) − L ln τ − ½ ln det(−∂²ℓ/∂δ² + I/τ²),
+//! ```
+//!
+//! maximised over ln τ ∈ [ln 10⁻³, ln 3] (a grid, then golden section), with θ̂_τ the penalised
+//! fit at that τ ([`super::regress`]); the model's ℓ is the unpenalised log-likelihood there.
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use super::effects::{Effect, Term, damage_offset};
-use super::regress::{Design, RegFit, fit};
+use super::regress::{Design, RegFit, fit, fit_from};
 use crate::contact::{ContactOptions, ContactState, ContactStress, Elastic, Hertz, TensileZone};
 use crate::data::CrushData;
 use crate::error::{Error, Result};
@@ -115,8 +125,15 @@ pub struct ModelFit {
     /// The effects, in the order they were added.
     pub effects: Vec<Effect>,
     /// Regression columns of each effect, in the order of `effects` (1 for a linear effect,
-    /// L − 1 for the levels of a categorical factor, 0 for damage).
+    /// L − 1 for the levels of a categorical factor, 0 for damage and for a modulus per level).
     pub widths: Vec<usize>,
+    /// Scale columns of each effect, in the order of `effects` (L − 1 for a modulus per level,
+    /// 0 for the others).
+    pub scale_widths: Vec<usize>,
+    /// The scale columns (ln b_i = ln b + Σ γ_j v_ij), in the order of the moduli effects.
+    pub scale_columns: Vec<Vec<f64>>,
+    /// Ridge precision 1/τ² of each regression column (0 unless partially pooled).
+    pub penalty: Vec<f64>,
     /// The regression (β in the order of the linear effects).
     pub reg: RegFit,
     /// Linear columns, in the order of the linear effects.
@@ -135,21 +152,54 @@ pub struct ModelFit {
 impl ModelFit {
     /// The regression design of the fitted model.
     pub fn design(&self) -> Design<'_> {
-        Design { columns: &self.columns, offset: self.offset.as_deref() }
+        Design { columns: &self.columns, offset: self.offset.as_deref(), scale_columns: &self.scale_columns, penalty: &self.penalty }
     }
 
-    /// Number of parameters: μ, b, and each effect's (one; L − 1 for levels); a two-population
-    /// law's own (4 or 5).
+    /// Number of parameters: μ, b, and each effect's (one; L − 1 for levels or moduli, also
+    /// when partially pooled); a two-population law's own (4 or 5).
     pub fn parameters(&self) -> usize {
         if let Some(l) = &self.law {
             return l.kind.parameters();
         }
-        2 + self.widths.iter().zip(&self.effects).map(|(w, e)| if *e == Effect::Damage { 1 } else { *w }).sum::<usize>()
+        2 + self.widths.iter().zip(&self.effects).map(|(w, e)| if *e == Effect::Damage { 1 } else { *w }).sum::<usize>() + self.scale_columns.len() - self.pooled_effects()
     }
 
-    /// Weibull modulus (NaN for a two-population law, which has two).
+    /// [`ModelFit::parameters`] with each partially pooled factor counted at its effective
+    /// degrees of freedom (between 0 and L − 1) instead of L − 1: what ΔBIC charges.
+    pub fn effective_parameters(&self) -> f64 {
+        let pooled_columns = self.penalty.iter().filter(|l| **l > 0.0).count();
+        if self.law.is_some() || pooled_columns == 0 {
+            return self.parameters() as f64;
+        }
+        // parameters() counts each pooled factor at L − 1: take its columns out, its edf in.
+        (self.parameters() + self.pooled_effects() - pooled_columns) as f64 + self.reg.edf_penalised
+    }
+
+    /// ln τ of each partially pooled factor, in the order of the effects.
+    pub fn pooled_ln_tau(&self) -> Vec<f64> {
+        self.effects.iter().filter_map(|e| self.beta_range(e)).filter(|r| !r.is_empty()).filter_map(|r| self.penalty.get(r.start).copied()).filter(|l| *l > 0.0).map(|l| -0.5 * l.ln()).collect()
+    }
+
+    /// Number of partially pooled factors.
+    fn pooled_effects(&self) -> usize {
+        self.effects.iter().filter(|e| self.beta_range(e).is_some_and(|r| !r.is_empty() && self.penalty.get(r.start).is_some_and(|l| *l > 0.0))).count()
+    }
+
+    /// Weibull modulus (of the reference level when a factor has a modulus per level; NaN for a
+    /// two-population law, which has two).
     pub fn shape(&self) -> f64 {
         if self.law.is_some() { f64::NAN } else { self.reg.shape() }
+    }
+
+    /// The smallest and largest Weibull modulus over the fitted specimens: (m, m) with one
+    /// modulus, the range over the levels with a modulus per level, the two populations'
+    /// moduli for a two-population law.
+    pub fn modulus_range(&self) -> (f64, f64) {
+        if let Some(l) = &self.law {
+            return (l.first.1.min(l.second.1), l.first.1.max(l.second.1));
+        }
+        let d = self.design();
+        (0..self.n).map(|i| 1.0 / self.reg.b_at(&d, i)).fold((self.reg.shape(), self.reg.shape()), |(lo, hi), m| (lo.min(m), hi.max(m)))
     }
 
     /// Maximised log-likelihood.
@@ -167,7 +217,14 @@ impl ModelFit {
 
     /// The linear effects, in the order of β.
     pub fn linear(&self) -> Vec<Effect> {
-        self.effects.iter().filter(|e| **e != Effect::Damage).cloned().collect()
+        self.effects.iter().zip(&self.widths).filter(|(e, w)| **e != Effect::Damage && **w > 0).map(|(e, _)| e.clone()).collect()
+    }
+
+    /// The positions in γ (the scale coefficients) of a modulus-per-level effect.
+    pub fn gamma_range(&self, c: &Effect) -> Option<std::ops::Range<usize>> {
+        let k = self.effects.iter().position(|e| e == c)?;
+        let start: usize = self.scale_widths[..k].iter().sum();
+        Some(start..start + self.scale_widths[k])
     }
 
     /// The positions in β of an effect's coefficients.
@@ -178,10 +235,14 @@ impl ModelFit {
     }
 
     /// β of a linear effect (or the ratio x for damage), with its standard error (NaN for
-    /// damage); the first coefficient of a categorical factor's levels.
+    /// damage); the first coefficient of a categorical factor's levels; the first γ (ln of the
+    /// level's 1/m over the reference's) of a modulus per level.
     pub fn coefficient(&self, c: &Effect) -> Option<(f64, f64)> {
         if *c == Effect::Damage {
             return self.damage_ratio.map(|x| (x, f64::NAN));
+        }
+        if let Some(r) = self.gamma_range(c).filter(|r| !r.is_empty()) {
+            return Some((*self.reg.gamma.get(r.start)?, self.reg.gamma_se[r.start]));
         }
         let j = self.beta_range(c)?.start;
         Some((*self.reg.beta.get(j)?, self.reg.beta_se[j]))
@@ -197,7 +258,7 @@ impl ModelFit {
             Some(l) => (0..self.n).map(|_| l.sample(&mut rng)).collect(),
             None => self.reg.sample(&self.design(), self.n, &mut rng),
         };
-        let refit = fit_model_near(&xs, terms, self.damage_ratio).ok()?;
+        let refit = fit_model_near(&xs, terms, Some(self)).ok()?;
         Some((xs, refit))
     }
 }
@@ -207,31 +268,132 @@ pub fn fit_model(x: &[f64], terms: &[(Effect, Term)]) -> Result<ModelFit> {
     fit_model_near(x, terms, None)
 }
 
-/// [`fit_model`] with a hint for the damage ratio (that of a fit to similar data, as in a
-/// bootstrap refit): the profile search then starts near it, which is several times faster.
-pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>) -> Result<ModelFit> {
+/// [`fit_model`] near a fit to similar data (a bootstrap refit): the damage ratio's profile
+/// search and each pooled factor's τ search then start at the hint's values, which is several
+/// times faster (the full search runs when the optimum leaves the local bracket).
+pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<&ModelFit>) -> Result<ModelFit> {
+    let ratio = hint.and_then(|h| h.damage_ratio);
+    let pooled = terms.iter().filter(|(_, t)| matches!(t, Term::Pooled { .. })).count();
+    if pooled == 0 {
+        return fit_at(x, terms, ratio, &[], None);
+    }
+    // τ of each pooled factor by the Laplace marginal likelihood; several pooled factors are
+    // tuned one at a time, twice round.
+    // Each trial τ's Newton iteration starts from the previous trial's optimum (the first from
+    // the hint's, when it has the same columns).
+    let last: std::cell::RefCell<Option<RegFit>> = std::cell::RefCell::new(hint.map(|h| h.reg.clone()));
+    let marginal = |ln_tau: &[f64]| -> f64 {
+        let m = fit_at(x, terms, ratio, ln_tau, last.borrow().as_ref());
+        m.map_or(f64::NEG_INFINITY, |m| {
+            let v = laplace_marginal(&m);
+            *last.borrow_mut() = Some(m.reg);
+            v
+        })
+    };
+    let (lo, hi) = ((1e-3f64).ln(), 3f64.ln());
+    let hinted = hint.map(|h| h.pooled_ln_tau()).filter(|v| v.len() == pooled);
+    let mut ln_tau = hinted.clone().unwrap_or_else(|| vec![(0.1f64).ln(); pooled]);
+    let golden = |f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64| -> f64 {
+        let phi = 0.5 * (5f64.sqrt() - 1.0);
+        let (mut c, mut d) = (b - phi * (b - a), a + phi * (b - a));
+        let (mut fc, mut fd) = (f(c), f(d));
+        while b - a > tol {
+            if fc >= fd {
+                (b, d, fd) = (d, c, fc);
+                c = b - phi * (b - a);
+                fc = f(c);
+            } else {
+                (a, c, fc) = (c, d, fd);
+                d = a + phi * (b - a);
+                fd = f(d);
+            }
+        }
+        0.5 * (a + b)
+    };
+    for _ in 0..if pooled == 1 { 1 } else { 2 } {
+        for t in 0..pooled {
+            let base = ln_tau.clone();
+            let at = |v: f64| -> f64 {
+                let mut lt = base.clone();
+                lt[t] = v;
+                marginal(&lt)
+            };
+            // Near a hint: golden section on ln τ ± 0.7, kept unless it ends on an inner edge.
+            if let Some(h) = &hinted {
+                let (a, b) = ((h[t] - 0.7).max(lo), (h[t] + 0.7).min(hi));
+                let v = golden(&at, a, b, 0.05);
+                if (v - a > 0.05 || a == lo) && (b - v > 0.05 || b == hi) && at(v).is_finite() {
+                    ln_tau[t] = v;
+                    continue;
+                }
+            }
+            let grid: Vec<f64> = (0..=8).map(|j| lo + (hi - lo) * j as f64 / 8.0).collect();
+            let vals: Vec<f64> = grid.iter().map(|&g| at(g)).collect();
+            let best = (0..grid.len()).max_by(|&a, &b| vals[a].total_cmp(&vals[b])).unwrap_or(0);
+            if !vals[best].is_finite() {
+                return Err(Error::numerical("partially pooled levels", "no spread of the level scales gives a fit"));
+            }
+            let v = golden(&at, grid[best.saturating_sub(1)], grid[(best + 1).min(grid.len() - 1)], 0.02);
+            ln_tau[t] = if at(v) >= vals[best] { v } else { grid[best] };
+        }
+    }
+    let start = last.borrow().clone();
+    fit_at(x, terms, ratio, &ln_tau, start.as_ref())
+}
+
+/// The Laplace approximation of the marginal log-likelihood of a partially pooled fit (module
+/// docs): ℓ − Σ λ δ²/2 + Σ ½ ln λ − ½ ln det, λ = 1/τ² per pooled column.
+fn laplace_marginal(m: &ModelFit) -> f64 {
+    let mut v = m.reg.loglik - 0.5 * m.reg.ln_det_penalised;
+    for (j, &l) in m.penalty.iter().enumerate() {
+        if l > 0.0 {
+            v += 0.5 * l.ln() - 0.5 * l * m.reg.beta[j] * m.reg.beta[j];
+        }
+    }
+    v
+}
+
+/// [`fit_model_near`] with each pooled factor's spread fixed at e^(ln_tau).
+fn fit_at(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>, ln_tau: &[f64], start: Option<&RegFit>) -> Result<ModelFit> {
     let mut columns = Vec::new();
     let mut damage = None;
     let mut effects = Vec::new();
     let mut widths = Vec::new();
+    let mut penalty = Vec::new();
+    let mut pooled = 0;
     if let Some(kind) = terms.iter().find_map(|(_, t)| if let Term::Populations(k) = t { Some(*k) } else { None }) {
         if terms.len() > 1 {
             return Err(Error::numerical("two flaw populations", "a two-population law is fitted against the base law only, not beside other effects"));
         }
         let law = crate::strength::flaws::fit(kind, x)?;
         let reg = fit(x, &Design::default())?;
-        return Ok(ModelFit { effects: vec![terms[0].0.clone()], widths: vec![0], reg, columns: Vec::new(), offset: None, damage_ratio: None, n: x.len(), law: Some(law) });
+        return Ok(ModelFit { effects: vec![terms[0].0.clone()], widths: vec![0], scale_widths: vec![0], scale_columns: Vec::new(), penalty: Vec::new(), reg, columns: Vec::new(), offset: None, damage_ratio: None, n: x.len(), law: Some(law) });
     }
+    let mut scale_columns = Vec::new();
+    let mut scale_widths = Vec::new();
     for (c, t) in terms {
         effects.push(c.clone());
         match t {
             Term::Linear(z) => {
                 columns.push(z.clone());
                 widths.push(1);
+                penalty.push(0.0);
             }
             Term::Levels { columns: z, .. } => {
                 columns.extend(z.iter().cloned());
                 widths.push(z.len());
+                penalty.extend(std::iter::repeat_n(0.0, z.len()));
+            }
+            Term::Pooled { columns: z, .. } => {
+                let tau = ln_tau.get(pooled).copied().unwrap_or((0.1f64).ln()).exp();
+                pooled += 1;
+                columns.extend(z.iter().cloned());
+                widths.push(z.len());
+                penalty.extend(std::iter::repeat_n(1.0 / (tau * tau), z.len()));
+            }
+            Term::Moduli { columns: v, .. } => {
+                scale_columns.extend(v.iter().cloned());
+                widths.push(0);
             }
             Term::Damage { impacts, gamma } => {
                 damage = Some((impacts, *gamma));
@@ -239,11 +401,12 @@ pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>) ->
             }
             Term::Populations(_) => unreachable!("handled above"),
         }
+        scale_widths.push(if let Term::Moduli { columns: v, .. } = t { v.len() } else { 0 });
     }
     // Linear effects first in `effects`' β order; damage (if any) is profiled.
     let Some((impacts, gamma)) = damage else {
-        let reg = fit(x, &Design { columns: &columns, offset: None })?;
-        return Ok(ModelFit { effects, widths, reg, columns, offset: None, damage_ratio: None, n: x.len(), law: None });
+        let reg = fit_from(x, &Design { columns: &columns, offset: None, scale_columns: &scale_columns, penalty: &penalty }, start)?;
+        return Ok(ModelFit { effects, widths, scale_widths, scale_columns, penalty, reg, columns, offset: None, damage_ratio: None, n: x.len(), law: None });
     };
     let n_max = impacts.iter().copied().max().unwrap_or(0);
     // One Tavares–King trajectory per trial ratio serves every particle.
@@ -253,7 +416,7 @@ pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>) ->
     };
     let profile = |lx: f64| -> f64 {
         offsets(lx)
-            .and_then(|o| fit(x, &Design { columns: &columns, offset: Some(&o) }).ok())
+            .and_then(|o| fit(x, &Design { columns: &columns, offset: Some(&o), scale_columns: &scale_columns, penalty: &penalty }).ok())
             .map_or(f64::NEG_INFINITY, |r| r.loglik)
     };
     let (lo, hi) = ((1e-4f64).ln(), (0.99f64).ln());
@@ -297,9 +460,9 @@ pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>) ->
         }
     };
     let off = offsets(lx).ok_or_else(|| Error::numerical("damage effect", "the fitted ratio breaks a particle"))?;
-    let reg = fit(x, &Design { columns: &columns, offset: Some(&off) })?;
+    let reg = fit(x, &Design { columns: &columns, offset: Some(&off), scale_columns: &scale_columns, penalty: &penalty })?;
     // `effects` keeps damage wherever it was added; β follow the linear effects' order.
-    Ok(ModelFit { effects, widths, reg, columns, offset: Some(off), damage_ratio: Some(lx.exp()), n: x.len(), law: None })
+    Ok(ModelFit { effects, widths, scale_widths, scale_columns, penalty, reg, columns, offset: Some(off), damage_ratio: Some(lx.exp()), n: x.len(), law: None })
 }
 
 /// ln σ_i of particle `i` under a model fitted on other rows: its linear terms' columns at row
@@ -313,7 +476,7 @@ pub fn predict_ln_scale(fit: &ModelFit, terms: &[(Effect, Term)], i: usize) -> f
                 s += fit.reg.beta[j] * z[i];
                 j += 1;
             }
-            Term::Levels { columns, .. } => {
+            Term::Levels { columns, .. } | Term::Pooled { columns, .. } => {
                 for z in columns {
                     s += fit.reg.beta[j] * z[i];
                     j += 1;
@@ -323,10 +486,26 @@ pub fn predict_ln_scale(fit: &ModelFit, terms: &[(Effect, Term)], i: usize) -> f
                 let x0 = fit.damage_ratio.unwrap_or(0.0);
                 s += damage_offset(x0, *gamma, impacts[i]).unwrap_or(f64::NEG_INFINITY);
             }
-            Term::Populations(_) => {}
+            Term::Moduli { .. } | Term::Populations(_) => {}
         }
     }
     s
+}
+
+/// b_i = 1/m_i of particle `i` under a model fitted on other rows: the reference b times its
+/// level's e^γ for every modulus-per-level term.
+pub fn predict_b(fit: &ModelFit, terms: &[(Effect, Term)], i: usize) -> f64 {
+    let mut ln_b = fit.reg.b.ln();
+    let mut j = 0;
+    for (_, t) in terms {
+        if let Term::Moduli { columns, .. } = t {
+            for v in columns {
+                ln_b += fit.reg.gamma[j] * v[i];
+                j += 1;
+            }
+        }
+    }
+    ln_b.exp()
 }
 
 /// Log density of specimen i's strength x under a model fitted on other rows (its law's, or the
@@ -334,7 +513,7 @@ pub fn predict_ln_scale(fit: &ModelFit, terms: &[(Effect, Term)], i: usize) -> f
 pub fn predict_ln_density(fit: &ModelFit, terms: &[(Effect, Term)], i: usize, x: f64) -> f64 {
     match &fit.law {
         Some(l) => l.ln_pdf(x),
-        None => fit.reg.ln_density_at(predict_ln_scale(fit, terms, i), x),
+        None => fit.reg.ln_density_with(predict_ln_scale(fit, terms, i), predict_b(fit, terms, i), x),
     }
 }
 
@@ -346,6 +525,8 @@ pub fn subset(terms: &[(Effect, Term)], rows: &[usize]) -> Vec<(Effect, Term)> {
             let t = match t {
                 Term::Linear(z) => Term::Linear(rows.iter().map(|&i| z[i]).collect()),
                 Term::Levels { columns, levels, reference } => Term::Levels { columns: columns.iter().map(|z| rows.iter().map(|&i| z[i]).collect()).collect(), levels: levels.clone(), reference: reference.clone() },
+                Term::Pooled { columns, levels } => Term::Pooled { columns: columns.iter().map(|z| rows.iter().map(|&i| z[i]).collect()).collect(), levels: levels.clone() },
+                Term::Moduli { columns, levels, reference } => Term::Moduli { columns: columns.iter().map(|z| rows.iter().map(|&i| z[i]).collect()).collect(), levels: levels.clone(), reference: reference.clone() },
                 Term::Damage { impacts, gamma } => Term::Damage { impacts: rows.iter().map(|&i| impacts[i]).collect(), gamma: *gamma },
                 Term::Populations(k) => Term::Populations(*k),
             };
@@ -491,5 +672,69 @@ mod tests {
         let s = Sample { source: "d.csv".into(), strength: vec![1e9; 12], covariates: vec![("roundness".into(), vec![None; 12])], ..Sample::default() };
         let e = StrengthFit::new(&s, &[Effect::Roundness], 5.0, "gen4").unwrap_err().to_string();
         assert!(e.contains("d.csv") && e.contains("column roundness") && e.contains("gen4"), "{e}");
+    }
+
+    /// Three batches of 15, 10 and 2 specimens with ln-scale offsets 0, −0.1 and +0.15, m = 8.
+    fn three_batches() -> (Vec<f64>, Vec<String>) {
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        let mut x = Vec::new();
+        let mut g = Vec::new();
+        for (name, k, d) in [("A", 15, 0.0), ("B", 10, -0.1), ("C", 2, 0.15)] {
+            for _ in 0..k {
+                x.push(Weibull::new(8.0, 3e8 * f64::exp(d)).unwrap().sample(&mut rng));
+                g.push(name.to_string());
+            }
+        }
+        (x, g)
+    }
+
+    #[test]
+    fn pooled_levels_span_complete_to_no_pooling_and_the_laplace_marginal_matches_quadrature() {
+        use crate::strength::factors::{Factor, Form};
+        let (x, g) = three_batches();
+        let e = Effect::Factor(Factor { column: "g".into(), form: Form::Levels });
+        let s = Sample { strength: x.clone(), levels: vec![("g".into(), g.clone())], ..Sample::default() };
+        let t = s.term(&e, 5.0).unwrap();
+        assert!(matches!(t, Term::Pooled { .. }), "a level of 2 specimens is pooled");
+        let terms = vec![(e.clone(), t)];
+        // τ → ∞: the fixed-effects fit (one scale per level); τ → 0: the base model.
+        let wide = fit_at(&x, &terms, None, &[(50.0f64).ln()], None).unwrap();
+        let fixed: Vec<Vec<f64>> = ["B", "C"].iter().map(|l| g.iter().map(|v| f64::from(u8::from(v == l))).collect()).collect();
+        let fixed = fit(&x, &Design { columns: &fixed, ..Design::default() }).unwrap();
+        assert!((wide.reg.loglik - fixed.loglik).abs() < 1e-3, "{} vs {}", wide.reg.loglik, fixed.loglik);
+        assert!((wide.reg.edf_penalised - 2.0).abs() < 1e-3, "edf {}", wide.reg.edf_penalised);
+        let narrow = fit_at(&x, &terms, None, &[(1e-4f64).ln()], None).unwrap();
+        let base = fit(&x, &Design::default()).unwrap();
+        assert!((narrow.reg.loglik - base.loglik).abs() < 1e-3 && narrow.reg.edf_penalised < 0.01);
+        // The fitted τ's model lies between the two, counted at its effective df.
+        let m = fit_model(&x, &terms).unwrap();
+        assert!(m.reg.loglik >= base.loglik - 1e-9 && m.reg.loglik <= fixed.loglik + 1e-9);
+        assert_eq!(m.parameters(), 4);
+        assert!(m.effective_parameters() > 2.0 && m.effective_parameters() < 4.0, "{}", m.effective_parameters());
+        // The Laplace marginal at τ = 0.1 against a 3-D quadrature over the level offsets with μ
+        // and b at the penalised mode: ln ∫ exp ℓ(δ) Π N(δ_l; 0, τ²) dδ.
+        let tau = 0.1f64;
+        let at = fit_at(&x, &terms, None, &[tau.ln()], None).unwrap();
+        let (mu, b) = (at.reg.mu, at.reg.b);
+        let level: Vec<usize> = g.iter().map(|v| ["A", "B", "C"].iter().position(|l| l == v).unwrap()).collect();
+        let loglik = |d: [f64; 3]| -> f64 { x.iter().zip(&level).map(|(xi, &l)| crate::strength::regress::ln_density_of_log(xi.ln(), mu + d[l], b) - xi.ln()).sum() };
+        let h = 0.01;
+        let grid: Vec<f64> = (-60..=60).map(|k| k as f64 * h).collect();
+        let ln_prior = |d: f64| -0.5 * (d / tau).powi(2) - (tau * (2.0 * std::f64::consts::PI).sqrt()).ln();
+        let mut terms_ln = Vec::with_capacity(grid.len().pow(3));
+        let centre = [at.reg.beta[0], at.reg.beta[1], at.reg.beta[2]];
+        for &a in &grid {
+            for &bb in &grid {
+                for &c in &grid {
+                    let d = [centre[0] + a, centre[1] + bb, centre[2] + c];
+                    terms_ln.push(loglik(d) + ln_prior(d[0]) + ln_prior(d[1]) + ln_prior(d[2]));
+                }
+            }
+        }
+        let top = terms_ln.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let quad = top + (terms_ln.iter().map(|v| (v - top).exp()).sum::<f64>() * h.powi(3)).ln();
+        // (The prior's (2π)^(−L/2) cancels the Gaussian integral's (2π)^(L/2).)
+        let laplace = laplace_marginal(&at);
+        assert!((laplace - quad).abs() < 0.05, "Laplace {laplace} vs quadrature {quad}");
     }
 }

@@ -20,6 +20,29 @@
 //! from least squares on y. Covariates are centred and scaled inside the fit for conditioning.
 //! With no covariates the fit is the ordinary Weibull MLE (`tests` below: equal to
 //! [`crate::weibull::fit_mle`] to 1e-9).
+//!
+//! **A modulus per group.** The design may also carry *scale columns* v (0/1 indicators of the
+//! levels of a categorical factor): then b varies by specimen,
+//!
+//! ```text
+//! ln b_i = s + Σ_j γ_j v_ij,   m_i = 1/b_i,
+//! ```
+//!
+//! a Weibull modulus per level (Lawless 2003, §6.3.3, scale depending on covariates). With
+//! w_i = (y_i − ln σ_i)/b_i the log-likelihood keeps its form, ℓ = Σ[−ln b_i + w_i − e^(w_i) − y_i];
+//! ∂w_i/∂s = −w_i and ∂w_i/∂γ_j = −w_i v_ij, so the Newton iteration runs in (μ, β, s, γ) with the
+//! same derivatives multiplied by the scale row (1, v_i). Test below: one modulus per group
+//! equals separate two-parameter fits of the groups (scale columns and level columns together).
+//!
+//! **Partial pooling.** A column may carry a ridge precision λ_k = 1/τ² (`penalty`): its
+//! coefficient then has the prior β_k ~ N(0, τ²) and the fit maximises the penalised
+//! log-likelihood ℓ − Σ λ_k β_k²/2 (the mode of the random-effects posterior given τ). Penalised
+//! columns are neither centred nor scaled, so a level's δ shrinks towards the intercept — the
+//! scale of the population of levels — and a level absent from the data gets δ = 0. The fit
+//! reports the unpenalised ℓ at that mode (for likelihood ratios) and
+//! `ln_det_penalised` = ln det(−∂²(ℓ − penalty)/∂β_P²) over the penalised block, the term a
+//! Laplace approximation of the marginal likelihood of τ needs
+//! (see [`crate::strength::fit`]).
 
 use nalgebra::{DMatrix, DVector};
 use rand::Rng;
@@ -36,6 +59,10 @@ pub struct Design<'a> {
     pub columns: &'a [Vec<f64>],
     /// Known offset o_i in ln σ_i (none: 0).
     pub offset: Option<&'a [f64]>,
+    /// Scale columns v_j (each of length n): ln b_i = s + Σ γ_j v_ij (none: one modulus).
+    pub scale_columns: &'a [Vec<f64>],
+    /// Ridge precision of each column (empty or one per column; 0: unpenalised).
+    pub penalty: &'a [f64],
 }
 
 /// Log density of y = ln x for Weibull strength x with scale e^ln_scale and modulus 1/b: y is
@@ -52,11 +79,17 @@ pub fn ln_density_of_log(y: f64, ln_scale: f64, b: f64) -> f64 {
 /// drawn in that order from `rng`. The crate's one generator of synthetic crush data (the
 /// discrepancy workflow's detection power and experiment design's crush tests).
 pub fn draw_particles<R: Rng + ?Sized>(ln_scale: &[f64], m: f64, n: usize, rng: &mut R) -> Vec<(usize, f64)> {
+    draw_rows(ln_scale, |_| m, n, rng)
+}
+
+/// [`draw_particles`] with the modulus of each row, `m(i)` (a modulus per level); the same
+/// draws as `draw_particles` when every row has the same modulus.
+pub fn draw_rows<R: Rng + ?Sized>(ln_scale: &[f64], m: impl Fn(usize) -> f64, n: usize, rng: &mut R) -> Vec<(usize, f64)> {
     (0..n)
         .map(|_| {
             let i = rng.random_range(0..ln_scale.len());
             let u: f64 = rng.random::<f64>().max(f64::MIN_POSITIVE);
-            (i, ln_scale[i] + (-u.ln()).ln() / m)
+            (i, ln_scale[i] + (-u.ln()).ln() / m(i))
         })
         .collect()
 }
@@ -70,10 +103,21 @@ pub struct RegFit {
     pub beta: Vec<f64>,
     /// Standard errors of β from the observed information (NaN if singular).
     pub beta_se: Vec<f64>,
-    /// b = 1/m.
+    /// b = 1/m (of the reference group when the design has scale columns).
     pub b: f64,
-    /// Maximised log-likelihood in the units of x.
+    /// Coefficients γ_j of the scale columns: ln b_i = ln b + Σ γ_j v_ij.
+    pub gamma: Vec<f64>,
+    /// Their standard errors (NaN if singular).
+    pub gamma_se: Vec<f64>,
+    /// Maximised log-likelihood in the units of x (with a penalty: the unpenalised ℓ at the
+    /// penalised optimum).
     pub loglik: f64,
+    /// ln det of the negative penalised Hessian over the penalised columns (0 without).
+    pub ln_det_penalised: f64,
+    /// Effective degrees of freedom of the penalised columns, Σ_j (1 − λ_j C_jj) with C the
+    /// inverse of the negative penalised Hessian (Hastie & Tibshirani 1990 §3.5): from L − 1
+    /// (no pooling; the intercept takes one direction) down to 0 (complete pooling). 0 without.
+    pub edf_penalised: f64,
 }
 
 impl RegFit {
@@ -89,25 +133,35 @@ impl RegFit {
             + design.offset.map_or(0.0, |o| o[i])
     }
 
+    /// b_i = 1/m_i of particle i under `design` (b without scale columns).
+    pub fn b_at(&self, design: &Design, i: usize) -> f64 {
+        self.b * design.scale_columns.iter().zip(&self.gamma).map(|(v, g)| g * v[i]).sum::<f64>().exp()
+    }
+
     /// Log density of the value x for particle i.
     pub fn ln_density(&self, design: &Design, i: usize, x: f64) -> f64 {
-        self.ln_density_at(self.ln_scale(design, i), x)
+        self.ln_density_with(self.ln_scale(design, i), self.b_at(design, i), x)
+    }
+
+    /// Log density of x under Weibull(1/b, e^ln_scale) with the reference b.
+    pub fn ln_density_at(&self, ln_scale: f64, x: f64) -> f64 {
+        self.ln_density_with(ln_scale, self.b, x)
     }
 
     /// Log density of x under Weibull(1/b, e^ln_scale).
-    pub fn ln_density_at(&self, ln_scale: f64, x: f64) -> f64 {
+    pub fn ln_density_with(&self, ln_scale: f64, b: f64, x: f64) -> f64 {
         let y = x.ln();
-        ln_density_of_log(y, ln_scale, self.b) - y
+        ln_density_of_log(y, ln_scale, b) - y
     }
 
-    /// The value of Weibull(1/b, e^ln_scale) at probability u (inversion).
+    /// The value of Weibull(1/b, e^ln_scale) at probability u (inversion), reference b.
     pub fn quantile_at(&self, ln_scale: f64, u: f64) -> f64 {
         (ln_scale + self.b * (-(1.0 - u).ln()).ln()).exp()
     }
 
     /// Fitted CDF at x for particle i.
     pub fn cdf(&self, design: &Design, i: usize, x: f64) -> f64 {
-        let w = (x.ln() - self.ln_scale(design, i)) / self.b;
+        let w = (x.ln() - self.ln_scale(design, i)) / self.b_at(design, i);
         -(-w.exp()).exp_m1()
     }
 
@@ -116,7 +170,7 @@ impl RegFit {
         (0..n)
             .map(|i| {
                 let u: f64 = rng.random();
-                self.quantile_at(self.ln_scale(design, i), u)
+                (self.ln_scale(design, i) + self.b_at(design, i) * (-(1.0 - u).ln()).ln()).exp()
             })
             .collect()
     }
@@ -128,7 +182,14 @@ fn bad(rule: String) -> Error {
 
 /// Maximum-likelihood fit of `x` (all > 0 and finite) with `design`.
 pub fn fit(x: &[f64], design: &Design) -> Result<RegFit> {
-    fit_with(x, design, None)
+    fit_with(x, design, None, None)
+}
+
+/// [`fit`] started from a fit of the same design to similar data or at a nearby penalty (the
+/// partially pooled factor's τ search): the same optimum in fewer Newton steps. A start of
+/// another shape, or one where ℓ is not finite, is ignored.
+pub fn fit_from(x: &[f64], design: &Design, start: Option<&RegFit>) -> Result<RegFit> {
+    fit_with(x, design, None, start)
 }
 
 /// The fit with a column tied to the modulus: ln σ_i = μ + Σ β z_i + o_i − k t_i/m, the
@@ -140,20 +201,24 @@ pub fn fit_tied(x: &[f64], design: &Design, tie: (&[f64], f64)) -> Result<RegFit
     if tie.0.len() != x.len() {
         return Err(bad("the tied column does not match the data length".into()));
     }
-    fit_with(x, design, Some(tie))
+    fit_with(x, design, Some(tie), None)
 }
 
-fn fit_with(x: &[f64], design: &Design, tie: Option<(&[f64], f64)>) -> Result<RegFit> {
+fn fit_with(x: &[f64], design: &Design, tie: Option<(&[f64], f64)>, start: Option<&RegFit>) -> Result<RegFit> {
     let n = x.len();
     let k = design.columns.len();
-    if n < k + 3 {
-        return Err(bad(format!("{n} values are too few for {} parameters", k + 2)));
+    let r = design.scale_columns.len();
+    if n < k + r + 3 {
+        return Err(bad(format!("{n} values are too few for {} parameters", k + r + 2)));
     }
     if let Some(v) = x.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
         return Err(bad(format!("values must be finite and > 0 (got {v})")));
     }
-    if design.columns.iter().any(|c| c.len() != n) || design.offset.is_some_and(|o| o.len() != n) {
-        return Err(bad("a covariate column or the offset does not match the data length".into()));
+    if design.columns.iter().chain(design.scale_columns).any(|c| c.len() != n) || design.offset.is_some_and(|o| o.len() != n) || !(design.penalty.is_empty() || design.penalty.len() == k) {
+        return Err(bad("a covariate column, a scale column or the offset does not match the data length".into()));
+    }
+    if let Some(j) = design.scale_columns.iter().position(|v| v.iter().all(|x| *x == v[0]) || v.iter().any(|x| !x.is_finite())) {
+        return Err(bad(format!("scale column {j} is constant or not finite")));
     }
     // Centred, scaled columns.
     let mut centre = vec![0.0; k];
@@ -162,7 +227,18 @@ fn fit_with(x: &[f64], design: &Design, tie: Option<(&[f64], f64)>) -> Result<Re
     for i in 0..n {
         z[(i, 0)] = 1.0;
     }
+    let pen: Vec<f64> = if design.penalty.is_empty() { vec![0.0; k] } else { design.penalty.to_vec() };
+    if pen.iter().any(|l| !(l.is_finite() && *l >= 0.0)) {
+        return Err(bad("a ridge precision is negative or not finite".into()));
+    }
     for (j, col) in design.columns.iter().enumerate() {
+        if pen[j] > 0.0 {
+            // Penalised: taken as is (δ shrinks towards the intercept; may be constant).
+            for i in 0..n {
+                z[(i, j + 1)] = col[i];
+            }
+            continue;
+        }
         let m = col.iter().sum::<f64>() / n as f64;
         let sd = (col.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n as f64).sqrt();
         if !(sd > 0.0 && sd.is_finite()) {
@@ -179,50 +255,101 @@ fn fit_with(x: &[f64], design: &Design, tie: Option<(&[f64], f64)>) -> Result<Re
     // Start: least squares on y, b from the residual sd (Gumbel sd = π b/√6).
     let zt = z.transpose();
     let yv = DVector::from_vec(y.clone());
-    let theta0 = (&zt * &z)
+    let mut ztz = &zt * &z;
+    for j in 0..k {
+        ztz[(j + 1, j + 1)] += pen[j];
+    }
+    let theta0 = ztz
         .lu()
         .solve(&(&zt * &yv))
         .ok_or_else(|| bad("the covariate columns are collinear".into()))?;
     let res = &yv - &z * &theta0;
     let b0 = ((res.norm_squared() / n as f64).sqrt() * 6f64.sqrt() / std::f64::consts::PI).max(1e-6);
-    let mut p = DVector::<f64>::zeros(k + 2);
+    // Parameters: location (μ, β) in 0..=k, then s = ln b at k + 1 and γ after it.
+    let np = k + 2 + r;
+    let mut p = DVector::<f64>::zeros(np);
     for j in 0..=k {
         p[j] = theta0[j];
     }
     p[0] += EULER_GAMMA * b0;
     p[k + 1] = b0.ln();
+    // The scale row of specimen i: (1, v_i1, …, v_ir).
+    let v = |i: usize, c: usize| if c == 0 { 1.0 } else { design.scale_columns[c - 1][i] };
 
     // ℓ without the constant −Σy, and its derivatives.
     let eval = |p: &DVector<f64>| -> (f64, DVector<f64>, DMatrix<f64>) {
-        let s = p[k + 1];
-        let b = s.exp();
         let eta = &z * p.rows(0, k + 1);
         let mut l = 0.0;
-        let mut g = DVector::<f64>::zeros(k + 2);
-        let mut h = DMatrix::<f64>::zeros(k + 2, k + 2);
+        let mut g = DVector::<f64>::zeros(np);
+        let mut h = DMatrix::<f64>::zeros(np, np);
         for i in 0..n {
-            // u: the residual in units of b; w = u (+ k t_i when a column is tied to 1/b).
+            let s: f64 = (0..=r).map(|c| p[k + 1 + c] * v(i, c)).sum();
+            let b = s.exp();
+            // u: the residual in units of b_i; w = u (+ k t_i when a column is tied to 1/b).
             let u = (y[i] - eta[i]) / b;
             let w = u + tie.map_or(0.0, |(t, kk)| kk * t[i]);
             let ew = w.exp();
             l += -s + w - ew;
             let zi = z.row(i);
             for a in 0..=k {
+                // Zero entries (level indicators of other levels) add nothing: skipped.
+                if zi[a] == 0.0 {
+                    continue;
+                }
                 g[a] += (ew - 1.0) * zi[a] / b;
                 for c in 0..=k {
-                    h[(a, c)] -= ew * zi[a] * zi[c] / (b * b);
+                    if zi[c] != 0.0 {
+                        h[(a, c)] -= ew * zi[a] * zi[c] / (b * b);
+                    }
                 }
-                h[(a, k + 1)] -= zi[a] * (u * ew + ew - 1.0) / b;
+                let d = zi[a] * (u * ew + ew - 1.0) / b;
+                for c in 0..=r {
+                    h[(a, k + 1 + c)] -= d * v(i, c);
+                }
             }
-            g[k + 1] += -1.0 - u + u * ew;
-            h[(k + 1, k + 1)] += u - u * ew - u * u * ew;
+            let gs = -1.0 - u + u * ew;
+            let hs = u - u * ew - u * u * ew;
+            for c in 0..=r {
+                let vc = v(i, c);
+                if vc == 0.0 {
+                    continue;
+                }
+                g[k + 1 + c] += gs * vc;
+                for e in 0..=r {
+                    h[(k + 1 + c, k + 1 + e)] += hs * vc * v(i, e);
+                }
+            }
         }
         for a in 0..=k {
-            h[(k + 1, a)] = h[(a, k + 1)];
+            for c in 0..=r {
+                h[(k + 1 + c, a)] = h[(a, k + 1 + c)];
+            }
+        }
+        // The ridge penalty −Σ λ β²/2 (penalised columns are unscaled: β = p).
+        for j in 0..k {
+            if pen[j] > 0.0 {
+                l -= 0.5 * pen[j] * p[j + 1] * p[j + 1];
+                g[j + 1] -= pen[j] * p[j + 1];
+                h[(j + 1, j + 1)] -= pen[j];
+            }
         }
         (l, g, h)
     };
 
+    if let Some(st) = start.filter(|st| st.beta.len() == k && st.gamma.len() == r && st.b > 0.0) {
+        let mut q = DVector::<f64>::zeros(np);
+        q[0] = st.mu + (0..k).map(|j| st.beta[j] * centre[j]).sum::<f64>();
+        for j in 0..k {
+            q[j + 1] = st.beta[j] * spread[j];
+        }
+        q[k + 1] = st.b.ln();
+        for j in 0..r {
+            q[k + 2 + j] = st.gamma[j];
+        }
+        if eval(&q).0.is_finite() {
+            p = q;
+        }
+    }
     let (mut l, mut g, mut h) = eval(&p);
     let mut converged = false;
     for _ in 0..200 {
@@ -234,7 +361,7 @@ fn fit_with(x: &[f64], design: &Design, tie: Option<(&[f64], f64)>) -> Result<Re
                 let mut damped = neg_h.clone();
                 let mut solved = None;
                 for t in 0..30 {
-                    for d in 0..k + 2 {
+                    for d in 0..np {
                         damped[(d, d)] = neg_h[(d, d)] + shift * 10f64.powi(t);
                     }
                     if let Some(c) = damped.clone().cholesky() {
@@ -276,12 +403,23 @@ fn fit_with(x: &[f64], design: &Design, tie: Option<(&[f64], f64)>) -> Result<Re
         return Err(bad(format!("Newton iteration did not converge (gradient norm {:.3e})", g.norm())));
     }
     let cov = (-&h).try_inverse();
+    let penalised: Vec<usize> = (0..k).filter(|&j| pen[j] > 0.0).collect();
+    let ln_det_penalised = if penalised.is_empty() {
+        0.0
+    } else {
+        let block = DMatrix::from_fn(penalised.len(), penalised.len(), |a, c| -h[(penalised[a] + 1, penalised[c] + 1)]);
+        block.cholesky().map_or(f64::NAN, |c| 2.0 * c.l().diagonal().iter().map(|d| d.ln()).sum::<f64>())
+    };
+    let penalty_value: f64 = (0..k).map(|j| 0.5 * pen[j] * p[j + 1] * p[j + 1]).sum();
+    let edf_penalised = penalised.iter().map(|&j| 1.0 - pen[j] * cov.as_ref().map_or(f64::NAN, |c| c[(j + 1, j + 1)])).sum();
     let beta: Vec<f64> = (0..k).map(|j| p[j + 1] / spread[j]).collect();
     let beta_se: Vec<f64> = (0..k)
         .map(|j| cov.as_ref().map_or(f64::NAN, |c| c[(j + 1, j + 1)].max(0.0).sqrt() / spread[j]))
         .collect();
     let mu = p[0] - (0..k).map(|j| beta[j] * centre[j]).sum::<f64>();
-    Ok(RegFit { mu, beta, beta_se, b: p[k + 1].exp(), loglik: l - sum_y })
+    let gamma: Vec<f64> = (0..r).map(|j| p[k + 2 + j]).collect();
+    let gamma_se: Vec<f64> = (0..r).map(|j| cov.as_ref().map_or(f64::NAN, |c| c[(k + 2 + j, k + 2 + j)].max(0.0).sqrt())).collect();
+    Ok(RegFit { mu, beta, beta_se, b: p[k + 1].exp(), gamma, gamma_se, loglik: l + penalty_value - sum_y, ln_det_penalised, edf_penalised })
 }
 
 #[cfg(test)]
@@ -314,9 +452,39 @@ mod tests {
             .map(|&zi| Weibull::new(12.0, 2.0e9 * (0.5 * zi).exp()).unwrap().sample(&mut rng))
             .collect();
         let cols = vec![z];
-        let r = fit(&x, &Design { columns: &cols, offset: None }).unwrap();
+        let r = fit(&x, &Design { columns: &cols, ..Design::default() }).unwrap();
         assert!((r.beta[0] - 0.5).abs() < 3.0 * r.beta_se[0], "β = {} ± {}", r.beta[0], r.beta_se[0]);
         assert!((r.shape() - 12.0).abs() < 0.5, "m = {}", r.shape());
         assert!(r.beta_se[0] > 0.0 && r.beta_se[0] < 0.05);
+    }
+
+    #[test]
+    fn a_modulus_per_group_is_the_groups_fitted_apart() {
+        // Two groups with their own scale and modulus: the regression with one level column and
+        // one scale column reaches the sum of the groups' separate two-parameter maxima, and
+        // its scales and moduli are theirs.
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        let (a, b) = (Weibull::new(5.0, 1.0e8).unwrap(), Weibull::new(12.0, 1.3e8).unwrap());
+        let xa: Vec<f64> = (0..40).map(|_| a.sample(&mut rng)).collect();
+        let xb: Vec<f64> = (0..25).map(|_| b.sample(&mut rng)).collect();
+        let x: Vec<f64> = xa.iter().chain(&xb).copied().collect();
+        let g: Vec<f64> = (0..65).map(|i| f64::from(u8::from(i >= 40))).collect();
+        let cols = vec![g.clone()];
+        let r = fit(&x, &Design { columns: &cols, offset: None, scale_columns: &cols, penalty: &[] }).unwrap();
+        let (fa, fb) = (fit_mle(&xa).unwrap().mle, fit_mle(&xb).unwrap().mle);
+        let apart = fa.log_likelihood(&xa) + fb.log_likelihood(&xb);
+        assert!((r.loglik - apart).abs() < 1e-6 * apart.abs(), "{} vs {apart}", r.loglik);
+        assert!((r.shape() / fa.shape - 1.0).abs() < 1e-6);
+        let design = Design { columns: &cols, offset: None, scale_columns: &cols, penalty: &[] };
+        assert!((1.0 / r.b_at(&design, 50) / fb.shape - 1.0).abs() < 1e-6);
+        assert!(((r.mu + r.beta[0]).exp() / fb.scale - 1.0).abs() < 1e-6);
+        assert!(r.gamma_se[0] > 0.0 && r.gamma_se[0].is_finite());
+        // The CDF uses each specimen's own modulus.
+        let x0 = 1.2e8;
+        assert!((r.cdf(&design, 50, x0) - b_cdf(fb.shape, fb.scale, x0)).abs() < 1e-6);
+    }
+
+    fn b_cdf(m: f64, s: f64, x: f64) -> f64 {
+        1.0 - (-(x / s).powf(m)).exp()
     }
 }

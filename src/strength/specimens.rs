@@ -256,7 +256,7 @@ mod tests {
         assert_eq!(s.sample.covariates[0], ("L".to_string(), vec![Some(10.0), Some(20.0), Some(10.0), Some(20.0)]));
         assert_eq!(s.sample.levels[0].1, ["B1", "B2", "B1", "B2"]);
         let names: Vec<String> = s.sample.factors.iter().map(|f| f.name()).collect();
-        assert_eq!(names, ["size(L)", "levels(batch)", "linear(rate)", "power(rate)"]);
+        assert_eq!(names, ["size(L)", "levels(batch)", "moduli(batch)", "linear(rate)", "power(rate)"]);
         assert!(!s.sample.particles);
     }
 

@@ -490,8 +490,9 @@ pub fn uq_speed(study: &Path) -> Result<UqSpeed> {
 /// size measure (effective volume, two values), two numeric (a loading rate, log-uniform over
 /// two decades; an irrelevant number) and three categorical (batch of three with batch B 15 %
 /// weaker, furnace of two, operator of four) — at the shipped settings (499 bootstrap
-/// replicates per round, 999 permutations per residual test, ten folds): (seconds, named).
-pub fn strength_factors_speed(n: usize) -> Result<(f64, Vec<String>)> {
+/// replicates per round, 999 permutations per residual test, ten folds): (seconds, named,
+/// number of candidates).
+pub fn strength_factors_speed(n: usize) -> Result<(f64, Vec<String>, usize)> {
     use crate::strength::factors::{Factor, FactorType, Form, SizeMeasure, candidates_of};
     let mut rng = ChaCha8Rng::seed_from_u64(33);
     let mut s = Sample { source: "bench".into(), ..Sample::default() };
@@ -524,7 +525,7 @@ pub fn strength_factors_speed(n: usize) -> Result<(f64, Vec<String>)> {
     }
     let start = Instant::now();
     let outcome = crate::discrepancy::workflow::analyse(&s, &crate::strength::NamingSettings::default(), true)?;
-    Ok((start.elapsed().as_secs_f64(), outcome.named.iter().map(|e| e.name()).collect()))
+    Ok((start.elapsed().as_secs_f64(), outcome.named.iter().map(|e| e.name()).collect(), s.factors.len()))
 }
 
 /// Speed of the discrepancy workflow on 100 particles.

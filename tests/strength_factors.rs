@@ -196,6 +196,18 @@ fn a_hidden_modulus_per_batch_is_named_as_moduli() {
     let (named, covered, _) = sweep_full(reps, 33_07, Some((&moduli, (M / 3.5f64).ln())), |_, _| 0.0, |c, i| if c.batch[i] == "B" { 3.5 } else { M }, false, false, &[Form::Linear, Form::Power]);
     assert!(named as f64 >= 0.9 * reps as f64, "moduli(batch) named {named}/{reps}");
     assert!(covered as f64 >= 0.85 * named as f64, "batch B's ln(1/m) offset inside its 90 % band in {covered}/{named}");
+    // One campaign, diagnosed: the residuals' scatter (not their location) differs between the
+    // batches, at B, and the gap falls once the modulus per batch is named.
+    let mut rng = ChaCha8Rng::seed_from_u64(33_08);
+    let c = campaign(&mut rng);
+    let s = sample_full(&c, |_| 0.0, |i| if c.batch[i] == "B" { 3.5 } else { M }, false, &[Form::Linear, Form::Power], &mut rng);
+    let o = analyse(&s, &settings(3), true).unwrap();
+    assert_eq!(o.named.first(), Some(&moduli));
+    let f = &o.stages[0].findings;
+    let scatter = f.iter().find(|f| f.scatter && f.covariate == "batch").unwrap();
+    let location = f.iter().find(|f| !f.scatter && f.covariate == "batch").unwrap();
+    assert!(scatter.p < 0.05 && scatter.worst_level.as_deref() == Some("B") && scatter.p < location.p, "{scatter:?} {location:?}");
+    assert!(o.stages[1].gap < o.stages[0].gap, "gap {} → {}", o.stages[0].gap, o.stages[1].gap);
 }
 
 #[test]
@@ -482,4 +494,44 @@ fn pooled_batches_are_named_at_90_percent_and_falsely_at_most_5() {
     assert!(named as f64 >= 0.9 * reps as f64, "pooled levels(batch) named {named}/{reps}");
     let (_, any) = uneven_sweep(reps, 33_11, [0.0; 9]);
     assert!(any as f64 <= 0.05 * reps as f64, "false naming in {any}/{reps}");
+}
+
+#[test]
+fn a_lab_file_with_uneven_lots_and_a_scattering_lab_runs_from_its_study_file_alone() {
+    // A lab's tab-separated bend-bar export written here: 120 bars, powder lots of 30, 25, 20,
+    // 15, 12, 10, 5, 2 and 1 bars (lot offsets in the scale), tested in four labs of which
+    // "Köln" scatters more (m = 4 against 10), decimal commas, MPa, German headers. The study
+    // names the two columns and nothing else.
+    let s = common::Scratch::new();
+    let lots: [(&str, usize, f64); 9] = [("P-1", 30, 0.0), ("P-2", 25, -0.10), ("P-3", 20, 0.08), ("P-4", 15, 0.12), ("P-5", 12, -0.12), ("P-6", 10, 0.05), ("P-7", 5, -0.08), ("P-8", 2, 0.10), ("P-9", 1, 0.0)];
+    let labs = ["Jülich", "Almería", "Köln", "Odeillo"];
+    let mut rng = ChaCha8Rng::seed_from_u64(33_20);
+    let mut text = String::from("Probe\tCharge\tLabor\tFestigkeit [MPa]\n");
+    let mut k = 0;
+    for (lot, n, d) in lots {
+        for _ in 0..n {
+            let lab = labs[k % 4];
+            let m = if lab == "Köln" { 4.0 } else { 10.0 };
+            let x = draw_particles(&[(420.0f64).ln() + d], m, 1, &mut rng)[0].1.exp();
+            text.push_str(&format!("B{:03}\t{lot}\t{lab}\t{}\n", k + 1, format!("{x:.1}").replace('.', ",")));
+            k += 1;
+        }
+    }
+    std::fs::create_dir_all(s.path("data")).unwrap();
+    s.write("data/biegung.tsv", &text);
+    s.write(
+        "studies/bars.toml",
+        "kind = \"discrepancy\"\nseed = 5\n[discrepancy]\nbootstrap = 199\npermutations = 199\n[power]\nreplicates = 0\n[[strength]]\nkey = \"bars\"\nlabel = \"Bend bars\"\ndata = { file = \"../data/biegung.tsv\", columns = { strength = \"Festigkeit [MPa]\", id = \"Probe\" } }\nfactors = [\"Charge\", \"Labor\"]\n",
+    );
+    let out = s.run(&["run", "studies/bars.toml", "--reports-dir", "reports", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v: serde_json::Value = serde_json::from_str(&s.read("reports/bars/verdict.json")).unwrap();
+    let named: Vec<&str> = v["effects_named"]["bars"].as_array().unwrap().iter().map(|e| e.as_str().unwrap()).collect();
+    assert!(named.contains(&"levels(Charge)") && named.contains(&"moduli(Labor)"), "{named:?}");
+    let md = s.read("reports/bars/summary.md");
+    assert!(md.contains("partially pooled") && md.contains("P-9 ×") && md.contains("Weibull modulus of each level of `Labor`"), "{md}");
+    // The lots of 2 and 1 bars cannot have their own modulus: that candidate is skipped, saying why.
+    assert!(md.contains("moduli(Charge)") && md.contains("at least 5 per level are needed to give it its own modulus"), "{md}");
+    let findings = s.read("reports/bars/findings.csv");
+    assert!(findings.lines().any(|l| l.starts_with("bars,0,Labor,") && l.contains(",scatter,")), "{findings}");
 }

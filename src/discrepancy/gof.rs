@@ -152,8 +152,13 @@ pub struct CovariateFinding {
     pub statistic: f64,
     /// Its degrees of freedom under no trend: 1, or L − 1.
     pub df: usize,
-    /// Categorical: the level whose mean residual is farthest from 0.
+    /// Categorical: the level whose mean residual is farthest from 0 (for a scatter finding:
+    /// whose mean absolute deviation from its median is farthest from the overall one).
     pub worst_level: Option<String>,
+    /// A categorical factor's scatter finding: the statistic is the Kruskal–Wallis H of the
+    /// absolute deviations from the level medians ([`scatter_kruskal_wallis`]), `worst_range`
+    /// (NaN, mean absolute deviation over the levels compared, that of `worst_level`).
+    pub scatter: bool,
 }
 
 /// Kruskal–Wallis H of `r` grouped by `levels`: H = 12/(n(n+1)) Σ_g n_g (R̄_g − (n+1)/2)² on the
@@ -195,10 +200,53 @@ pub fn kruskal_wallis_by(r: &[f64], values: &[String]) -> f64 {
     kruskal_wallis(r, &idx, names.len())
 }
 
+/// |r_i − median of r over i's level|: each specimen's distance from its level's centre, so that
+/// levels are compared by scatter alone.
+pub fn deviations_from_level_medians(r: &[f64], levels: &[usize], groups: usize) -> Vec<f64> {
+    let medians: Vec<f64> = (0..groups)
+        .map(|g| {
+            let v: Vec<f64> = levels.iter().zip(r).filter(|(l, _)| **l == g).map(|(_, x)| *x).collect();
+            if v.is_empty() { 0.0 } else { crate::stats::median(&v) }
+        })
+        .collect();
+    r.iter().zip(levels).map(|(x, &l)| (x - medians[l]).abs()).collect()
+}
+
+/// Kruskal–Wallis H of the absolute deviations from the level medians: a rank test of equal
+/// scatter across levels (Conover, Johnson & Johnson 1981, the median-centred rank tests of the
+/// Fligner–Killeen family), ≈ χ²_(L−1) when the levels scatter alike. A level with its own
+/// Weibull modulus shows here, not in the location statistic.
+pub fn scatter_kruskal_wallis(r: &[f64], levels: &[usize], groups: usize) -> f64 {
+    kruskal_wallis(&deviations_from_level_medians(r, levels, groups), levels, groups)
+}
+
+/// Fewest specimens a level needs to enter the scatter statistic (one or two specimens have no
+/// scatter of their own: one sits on its median, two at equal distances from it).
+pub const MIN_FOR_SCATTER: usize = 3;
+
+/// The specimens of the levels with at least [`MIN_FOR_SCATTER`]: their residuals, their level
+/// renumbered 0…, and each kept level's original index.
+fn scatter_levels(r: &[f64], idx: &[usize], groups: usize) -> (Vec<f64>, Vec<usize>, Vec<usize>) {
+    let kept: Vec<usize> = (0..groups).filter(|&g| idx.iter().filter(|&&l| l == g).count() >= MIN_FOR_SCATTER).collect();
+    let (rs, ls) = r.iter().zip(idx).filter_map(|(x, l)| kept.iter().position(|k| k == l).map(|p| (*x, p))).unzip();
+    (rs, ls, kept)
+}
+
+/// [`scatter_kruskal_wallis`] of `r` grouped by the labels `values`, over the levels with at
+/// least [`MIN_FOR_SCATTER`] specimens (0 when fewer than two such levels).
+pub fn scatter_by(r: &[f64], values: &[String]) -> f64 {
+    let (idx, names) = level_indices(values);
+    let (rs, ls, kept) = scatter_levels(r, &idx, names.len());
+    if kept.len() < 2 { 0.0 } else { scatter_kruskal_wallis(&rs, &ls, kept.len()) }
+}
+
 /// Residual differences between the levels of every categorical column given (name, each
-/// specimen's level): Kruskal–Wallis H with its permutation p-value (`permutations` shuffles of
-/// the levels, seeded) and the level whose mean residual is farthest from 0. A column with one
-/// level is skipped with its reason.
+/// specimen's level), two findings per column: the location — Kruskal–Wallis H with its
+/// permutation p-value (`permutations` shuffles of the levels, seeded) and the level whose mean
+/// residual is farthest from 0 — and the scatter ([`scatter_kruskal_wallis`] over the levels of
+/// [`MIN_FOR_SCATTER`] or more specimens, its own permutations, the level whose mean absolute
+/// deviation is farthest from the overall one). A column with one level is skipped with its
+/// reason, a scatter with fewer than two such levels likewise.
 pub fn level_findings(r: &[f64], columns: &[(String, Vec<String>)], permutations: usize, seed: u64) -> (Vec<CovariateFinding>, Vec<String>) {
     let mut found = Vec::new();
     let mut skipped = Vec::new();
@@ -235,6 +283,47 @@ pub fn level_findings(r: &[f64], columns: &[(String, Vec<String>)], permutations
             statistic: h,
             df: g - 1,
             worst_level: Some(names[worst.1].clone()),
+            scatter: false,
+        });
+        // The scatter: the same test on the absolute deviations from the level medians, over the
+        // levels with enough specimens, its own permutation stream.
+        let (rs, ls, kept) = scatter_levels(r, &idx, g);
+        if kept.len() < 2 {
+            skipped.push(format!("{name}: scatter not compared (fewer than two levels of {MIN_FOR_SCATTER} or more specimens)"));
+            continue;
+        }
+        let (r, idx, g) = (&rs[..], ls, kept.len());
+        let hs = scatter_kruskal_wallis(r, &idx, g);
+        let hits: usize = (0..permutations)
+            .into_par_iter()
+            .map(|j| {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (k as u64 + 0x5CA7));
+                rng.set_stream(j as u64 + 1);
+                let mut p = idx.clone();
+                for i in (1..p.len()).rev() {
+                    p.swap(i, rng.random_range(0..=i));
+                }
+                usize::from(scatter_kruskal_wallis(r, &p, g) >= hs - 1e-12)
+            })
+            .sum();
+        let dev = deviations_from_level_medians(r, &idx, g);
+        let overall = dev.iter().sum::<f64>() / dev.len() as f64;
+        let spread: Vec<(f64, usize)> = (0..g)
+            .map(|l| {
+                let v: Vec<f64> = idx.iter().zip(&dev).filter(|(i, _)| **i == l).map(|(_, x)| *x).collect();
+                (v.iter().sum::<f64>() / v.len() as f64, l)
+            })
+            .collect();
+        let worst = spread.iter().fold((overall, 0usize), |b, c| if (c.0 - overall).abs() > (b.0 - overall).abs() { *c } else { b });
+        found.push(CovariateFinding {
+            covariate: name.clone(),
+            rho: f64::NAN,
+            p: (1 + hits) as f64 / (permutations + 1) as f64,
+            worst_range: (f64::NAN, overall, worst.0),
+            statistic: hs,
+            df: g - 1,
+            worst_level: Some(names[kept[worst.1]].clone()),
+            scatter: true,
         });
     }
     (found, skipped)
@@ -272,8 +361,32 @@ pub fn covariate_findings(r: &[f64], covariates: &[(&str, Vec<f64>)], permutatio
             .chunks(idx.len().div_ceil(3))
             .map(|g| (x[g[0]], x[g[g.len() - 1]], g.iter().map(|&i| r[i]).sum::<f64>() / g.len() as f64))
             .fold((f64::NAN, f64::NAN, 0.0f64), |b, c| if c.2.abs() > b.2.abs() { c } else { b });
-        found.push(CovariateFinding { covariate: name.to_string(), rho, p, worst_range: worst, statistic: x.len() as f64 * rho * rho, df: 1, worst_level: None });
+        found.push(CovariateFinding { covariate: name.to_string(), rho, p, worst_range: worst, statistic: x.len() as f64 * rho * rho, df: 1, worst_level: None, scatter: false });
     }
     found.sort_by(|a, b| a.p.total_cmp(&b.p));
     Ok((found, skipped))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_scatter_statistic_sees_spread_and_not_location() {
+        // Three levels of 40 evenly spread residuals: equal spread with shifted centres, then one
+        // level twice as wide with equal centres.
+        let base: Vec<f64> = (0..40).map(|i| (i as f64 - 19.5) / 10.0).collect();
+        let levels: Vec<usize> = (0..120).map(|i| i / 40).collect();
+        let shifted: Vec<f64> = (0..120).map(|i| base[i % 40] + [0.0, 2.0, -2.0][i / 40]).collect();
+        let wide: Vec<f64> = (0..120).map(|i| base[i % 40] * if i / 40 == 2 { 2.0 } else { 1.0 }).collect();
+        assert!(scatter_kruskal_wallis(&shifted, &levels, 3) < 0.5, "equal spread (to rounding): no scatter difference");
+        assert!(kruskal_wallis(&shifted, &levels, 3) > 30.0, "{}", kruskal_wallis(&shifted, &levels, 3));
+        assert!(scatter_kruskal_wallis(&wide, &levels, 3) > 15.0, "{}", scatter_kruskal_wallis(&wide, &levels, 3));
+        assert!(kruskal_wallis(&wide, &levels, 3) < 0.5);
+        let labels: Vec<String> = levels.iter().map(|l| ["a", "b", "c"][*l].to_string()).collect();
+        let (f, _) = level_findings(&wide, &[("g".into(), labels)], 199, 3);
+        let s = f.iter().find(|f| f.scatter).unwrap();
+        assert_eq!(s.worst_level.as_deref(), Some("c"));
+        assert!(s.p < 0.01 && s.df == 2 && s.worst_range.2 > s.worst_range.1);
+    }
 }

@@ -185,6 +185,8 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         fcol("p_kolmogorov_smirnov", st.iter().map(|(_, _, s)| s.p_ks).collect()),
         fcol("gap", st.iter().map(|(_, _, s)| s.gap).collect()),
         ucol("covariates_diagnosed", st.iter().map(|(_, _, s)| s.findings.len() as u64).collect()),
+        // E(G) with nothing missing: one per numeric covariate, 2(L − 1) per categorical factor.
+        fcol("gap_expected", st.iter().map(|(_, _, s)| s.findings.iter().map(|f| f.df as f64).sum()).collect()),
     ])?;
     dir.write_table("stages", &mut t)?;
 
@@ -200,8 +202,14 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         fcol("spearman_rho", fi.iter().map(|(_, _, f)| f.rho).collect()),
         fcol("p_permutation", fi.iter().map(|(_, _, f)| f.p).collect()),
         fcol("worst_tertile_from", fi.iter().map(|(_, _, f)| f.worst_range.0).collect()),
-        fcol("worst_tertile_to", fi.iter().map(|(_, _, f)| f.worst_range.1).collect()),
-        fcol("worst_tertile_mean_residual", fi.iter().map(|(_, _, f)| f.worst_range.2).collect()),
+        fcol("worst_tertile_to", fi.iter().map(|(_, _, f)| if f.scatter { f64::NAN } else { f.worst_range.1 }).collect()),
+        fcol("worst_tertile_mean_residual", fi.iter().map(|(_, _, f)| if f.scatter { f64::NAN } else { f.worst_range.2 }).collect()),
+        scol("kind", fi.iter().map(|(_, _, f)| (if f.scatter { "scatter" } else if f.worst_level.is_some() { "levels" } else { "trend" }).to_string()).collect()),
+        fcol("statistic", fi.iter().map(|(_, _, f)| f.statistic).collect()),
+        ucol("df", fi.iter().map(|(_, _, f)| f.df as u64).collect()),
+        scol("worst_level", fi.iter().map(|(_, _, f)| f.worst_level.clone().unwrap_or_default()).collect()),
+        fcol("worst_level_mean_abs_deviation", fi.iter().map(|(_, _, f)| if f.scatter { f.worst_range.2 } else { f64::NAN }).collect()),
+        fcol("all_levels_mean_abs_deviation", fi.iter().map(|(_, _, f)| if f.scatter { f.worst_range.1 } else { f64::NAN }).collect()),
     ])?;
     dir.write_table("findings", &mut t)?;
 
@@ -366,7 +374,7 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             ));
         }
         let df: usize = b.findings.iter().map(|f| f.df).sum();
-        md.push_str(&format!("\nWith nothing missing G ≈ {df} (one per numeric covariate diagnosed, L − 1 per categorical factor of L levels).\n\n"));
+        md.push_str(&format!("\nWith nothing missing G ≈ {df} (one per numeric covariate diagnosed; per categorical factor of L levels, L − 1 for the location and again for the scatter of its levels of 3 or more specimens).\n\n"));
         if r.outcome.evidence.is_empty() {
             md.push_str("The data record no factor and no size measure and no two-population law was asked for: there is no candidate effect to name, and the workflow can only diagnose the Weibull law itself (below).\n");
         } else {
@@ -401,6 +409,10 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                     "\nLargest residual trend before: `{}` (Spearman ρ = {:.2}, permutation p = {:.3}); the residuals depart most for {} in [{:.4}, {:.4}] (mean residual {:+.2}).\n",
                     f.covariate, f.rho, f.p, f.covariate, f.worst_range.0, f.worst_range.1, f.worst_range.2
                 )),
+                Some(level) if f.scatter => md.push_str(&format!(
+                    "\nLargest residual difference before: in the scatter between the levels of `{}` (Kruskal–Wallis H of the absolute deviations from the level medians = {:.2} on {} df, permutation p = {:.3}); the scatter departs most at \"{level}\" (mean absolute deviation {:.2} against {:.2} over all specimens).\n",
+                    f.covariate, f.statistic, f.df, f.p, f.worst_range.2, f.worst_range.1
+                )),
                 Some(level) => md.push_str(&format!(
                     "\nLargest residual difference before: between the levels of `{}` (Kruskal–Wallis H = {:.2} on {} df, permutation p = {:.3}); the residuals depart most at \"{level}\" (mean residual {:+.2}).\n",
                     f.covariate, f.statistic, f.df, f.p, f.worst_range.2
@@ -410,6 +422,7 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         if let Some(f) = a.findings.first() {
             match &f.worst_level {
                 None => md.push_str(&format!("After: largest trend `{}` (ρ = {:.2}, p = {:.3}).\n", f.covariate, f.rho, f.p)),
+                Some(_) if f.scatter => md.push_str(&format!("After: largest difference in the scatter between the levels of `{}` (H = {:.2}, p = {:.3}).\n", f.covariate, f.statistic, f.p)),
                 Some(_) => md.push_str(&format!("After: largest difference between the levels of `{}` (H = {:.2}, p = {:.3}).\n", f.covariate, f.statistic, f.p)),
             }
         }

@@ -23,7 +23,10 @@
 //! The gap measure is the residual-structure statistic G = n Σ_c ρ_c² over the covariates the
 //! data carry (ρ_c Spearman's correlation of the quantile residuals with covariate c). Under a
 //! model that misses nothing each term is ≈ χ²₁, so E(G) ≈ the number of covariates; a missing
-//! effect with covariate c adds ≈ n ρ_c².
+//! effect with covariate c adds ≈ n ρ_c². A categorical factor g adds two Kruskal–Wallis
+//! statistics, each ≈ χ²_(L−1) when nothing is missing: of the residuals by level (a scale per
+//! level missing) and of their absolute deviations from the level medians (a modulus per level
+//! missing: the levels scatter differently).
 //!
 //! Deterministic for a seed and any thread count: every replicate has its own ChaCha8 stream.
 
@@ -100,7 +103,7 @@ pub struct Stage {
     pub p_ks: f64,
     /// Residual trends, sorted by p.
     pub findings: Vec<CovariateFinding>,
-    /// Gap measure G = n Σ ρ².
+    /// Gap measure G = n Σ ρ² + Σ_g (H_g + S_g) ([`GAP_MEASURE`]).
     pub gap: f64,
 }
 
@@ -132,7 +135,7 @@ impl Outcome {
 }
 
 /// Gap measure used, as written in verdict.json.
-pub const GAP_MEASURE: &str = "residual structure G = n·Σ_c ρ_c² + Σ_g H_g, ρ_c = Spearman correlation of the quantile residuals with numeric covariate c, H_g = Kruskal–Wallis statistic of the residuals by the levels of categorical factor g, over the columns the data carry; ≈ the number of numeric covariates plus Σ_g (levels − 1) when nothing is missing";
+pub const GAP_MEASURE: &str = "residual structure G = n·Σ_c ρ_c² + Σ_g (H_g + S_g), ρ_c = Spearman correlation of the quantile residuals with numeric covariate c, H_g = Kruskal–Wallis statistic of the residuals by the levels of categorical factor g (location), S_g = the same statistic of the residuals' absolute deviations from their level medians (scatter), over the columns the data carry; ≈ the number of numeric covariates plus 2·Σ_g (levels − 1) when nothing is missing";
 
 fn data_err(sample: &Sample, location: String, rule: String) -> Error {
     Error::Data { file: sample.source.clone(), location, rule }
@@ -325,7 +328,7 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
         } else {
             Vec::new()
         };
-        let gap = 0.0 + n as f64 * covs.iter().map(|(_, v)| super::gof::spearman(&res, v).powi(2)).sum::<f64>() + level_cols.iter().map(|(_, v)| super::gof::kruskal_wallis_by(&res, v)).sum::<f64>();
+        let gap = 0.0 + n as f64 * covs.iter().map(|(_, v)| super::gof::spearman(&res, v).powi(2)).sum::<f64>() + level_cols.iter().map(|(_, v)| super::gof::kruskal_wallis_by(&res, v) + super::gof::scatter_by(&res, v)).sum::<f64>();
         stages.push(Stage { model: model.clone(), residuals: res, ad, ks, p_ad, p_ks, findings, gap });
 
         // Evidence: the family-wise guard on the one-parameter scale of every candidate.

@@ -247,7 +247,9 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
 
 fn gap(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<Drawn> {
     let t = Table::load(dir, "stages")?;
-    let (mat, round, g, ncov) = (t.s("material")?, t.f("round")?, t.f("gap")?, t.f("covariates_diagnosed")?);
+    // The expectation with nothing missing (Σ df; reports written before it was a column: the
+    // number of findings, which equals it when every covariate is numeric).
+    let (mat, round, g, ncov) = (t.s("material")?, t.f("round")?, t.f("gap")?, t.f("gap_expected").or_else(|_| t.f("covariates_diagnosed"))?);
     let mut series = Vec::new();
     let mut max_round: f64 = 0.0;
     for (k, key) in keys.iter().enumerate() {
@@ -264,7 +266,7 @@ fn gap(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<
     let p = Panel {
         x_categories: cats,
         x_desc: "Model (effects added by the workflow)".into(),
-        y_desc: "Gap G = n Σ ρ² (–)".into(),
+        y_desc: "Gap G = n Σρ² + Σ H (–)".into(),
         x_range: (0.6, max_round + 1.4),
         y_range: (0.0, g.iter().copied().fold(0.0, f64::max) * 1.45 + 1.0),
         y_log: false,

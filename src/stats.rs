@@ -200,6 +200,27 @@ pub fn ranks(x: &[f64]) -> Vec<f64> {
     r
 }
 
+/// The maximiser of a unimodal `f` on [a, b] by golden-section search, to a bracket of `tol`
+/// (the midpoint of the final bracket; ties keep the left point). The crate's one copy (damage
+/// ratio profile, partial-pooling spread).
+pub fn golden_max(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> f64 {
+    let phi = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut c, mut d) = (b - phi * (b - a), a + phi * (b - a));
+    let (mut fc, mut fd) = (f(c), f(d));
+    while b - a > tol {
+        if fc >= fd {
+            (b, d, fd) = (d, c, fc);
+            c = b - phi * (b - a);
+            fc = f(c);
+        } else {
+            (a, c, fc) = (c, d, fd);
+            d = a + phi * (b - a);
+            fd = f(d);
+        }
+    }
+    0.5 * (a + b)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -240,6 +240,23 @@ pub fn scatter_by(r: &[f64], values: &[String]) -> f64 {
     if kept.len() < 2 { 0.0 } else { scatter_kruskal_wallis(&rs, &ls, kept.len()) }
 }
 
+/// How many of `permutations` seeded shuffles of the level labels `idx` (Fisher–Yates, shuffle j
+/// on its own ChaCha8 stream of `seed`) give a statistic at least the observed (`at_least`).
+fn permutation_hits(idx: &[usize], permutations: usize, seed: u64, at_least: impl Fn(&[usize]) -> bool + Sync) -> usize {
+    (0..permutations)
+        .into_par_iter()
+        .map(|j| {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            rng.set_stream(j as u64 + 1);
+            let mut p = idx.to_vec();
+            for i in (1..p.len()).rev() {
+                p.swap(i, rng.random_range(0..=i));
+            }
+            usize::from(at_least(&p))
+        })
+        .sum()
+}
+
 /// Residual differences between the levels of every categorical column given (name, each
 /// specimen's level), two findings per column: the location — Kruskal–Wallis H with its
 /// permutation p-value (`permutations` shuffles of the levels, seeded) and the level whose mean
@@ -258,18 +275,7 @@ pub fn level_findings(r: &[f64], columns: &[(String, Vec<String>)], permutations
         }
         let g = names.len();
         let h = kruskal_wallis(r, &idx, g);
-        let hits: usize = (0..permutations)
-            .into_par_iter()
-            .map(|j| {
-                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (k as u64 + 101));
-                rng.set_stream(j as u64 + 1);
-                let mut p = idx.clone();
-                for i in (1..p.len()).rev() {
-                    p.swap(i, rng.random_range(0..=i));
-                }
-                usize::from(kruskal_wallis(r, &p, g) >= h - 1e-12)
-            })
-            .sum();
+        let hits = permutation_hits(&idx, permutations, seed ^ (k as u64 + 101), |p| kruskal_wallis(r, p, g) >= h - 1e-12);
         let means: Vec<(f64, usize)> = (0..g).map(|l| {
             let v: Vec<f64> = idx.iter().zip(r).filter(|(i, _)| **i == l).map(|(_, x)| *x).collect();
             (v.iter().sum::<f64>() / v.len() as f64, l)
@@ -294,18 +300,7 @@ pub fn level_findings(r: &[f64], columns: &[(String, Vec<String>)], permutations
         }
         let (r, idx, g) = (&rs[..], ls, kept.len());
         let hs = scatter_kruskal_wallis(r, &idx, g);
-        let hits: usize = (0..permutations)
-            .into_par_iter()
-            .map(|j| {
-                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (k as u64 + 0x5CA7));
-                rng.set_stream(j as u64 + 1);
-                let mut p = idx.clone();
-                for i in (1..p.len()).rev() {
-                    p.swap(i, rng.random_range(0..=i));
-                }
-                usize::from(scatter_kruskal_wallis(r, &p, g) >= hs - 1e-12)
-            })
-            .sum();
+        let hits = permutation_hits(&idx, permutations, seed ^ (k as u64 + 0x5CA7), |p| scatter_kruskal_wallis(r, p, g) >= hs - 1e-12);
         let dev = deviations_from_level_medians(r, &idx, g);
         let overall = dev.iter().sum::<f64>() / dev.len() as f64;
         let spread: Vec<(f64, usize)> = (0..g)

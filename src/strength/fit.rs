@@ -26,6 +26,7 @@ use super::regress::{Design, RegFit, fit, fit_from};
 use crate::contact::{ContactOptions, ContactState, ContactStress, Elastic, Hertz, TensileZone};
 use crate::data::CrushData;
 use crate::error::{Error, Result};
+use crate::stats::golden_max;
 use crate::lifetime::damage::tk_ratio_path;
 
 /// Strengths and covariates of one sample: a crush sample reduced to σ̄ at break, or a
@@ -293,23 +294,6 @@ pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<&ModelFi
     let (lo, hi) = ((1e-3f64).ln(), 3f64.ln());
     let hinted = hint.map(|h| h.pooled_ln_tau()).filter(|v| v.len() == pooled);
     let mut ln_tau = hinted.clone().unwrap_or_else(|| vec![(0.1f64).ln(); pooled]);
-    let golden = |f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64| -> f64 {
-        let phi = 0.5 * (5f64.sqrt() - 1.0);
-        let (mut c, mut d) = (b - phi * (b - a), a + phi * (b - a));
-        let (mut fc, mut fd) = (f(c), f(d));
-        while b - a > tol {
-            if fc >= fd {
-                (b, d, fd) = (d, c, fc);
-                c = b - phi * (b - a);
-                fc = f(c);
-            } else {
-                (a, c, fc) = (c, d, fd);
-                d = a + phi * (b - a);
-                fd = f(d);
-            }
-        }
-        0.5 * (a + b)
-    };
     for _ in 0..if pooled == 1 { 1 } else { 2 } {
         for t in 0..pooled {
             let base = ln_tau.clone();
@@ -321,7 +305,7 @@ pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<&ModelFi
             // Near a hint: golden section on ln τ ± 0.7, kept unless it ends on an inner edge.
             if let Some(h) = &hinted {
                 let (a, b) = ((h[t] - 0.7).max(lo), (h[t] + 0.7).min(hi));
-                let v = golden(&at, a, b, 0.05);
+                let v = golden_max(&at, a, b, 0.05);
                 if (v - a > 0.05 || a == lo) && (b - v > 0.05 || b == hi) && at(v).is_finite() {
                     ln_tau[t] = v;
                     continue;
@@ -333,7 +317,7 @@ pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<&ModelFi
             if !vals[best].is_finite() {
                 return Err(Error::numerical("partially pooled levels", "no spread of the level scales gives a fit"));
             }
-            let v = golden(&at, grid[best.saturating_sub(1)], grid[(best + 1).min(grid.len() - 1)], 0.02);
+            let v = golden_max(&at, grid[best.saturating_sub(1)], grid[(best + 1).min(grid.len() - 1)], 0.02);
             ln_tau[t] = if at(v) >= vals[best] { v } else { grid[best] };
         }
     }
@@ -420,23 +404,7 @@ fn fit_at(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>, ln_tau: &[f64]
             .map_or(f64::NEG_INFINITY, |r| r.loglik)
     };
     let (lo, hi) = ((1e-4f64).ln(), (0.99f64).ln());
-    let golden = |mut a: f64, mut b: f64, tol: f64| -> f64 {
-        let phi = 0.5 * (5f64.sqrt() - 1.0);
-        let (mut c, mut d) = (b - phi * (b - a), a + phi * (b - a));
-        let (mut fc, mut fd) = (profile(c), profile(d));
-        while b - a > tol {
-            if fc >= fd {
-                (b, d, fd) = (d, c, fc);
-                c = b - phi * (b - a);
-                fc = profile(c);
-            } else {
-                (a, c, fc) = (c, d, fd);
-                d = a + phi * (b - a);
-                fd = profile(d);
-            }
-        }
-        0.5 * (a + b)
-    };
+    let golden = |a: f64, b: f64, tol: f64| golden_max(&profile, a, b, tol);
     // Near a hint (a bootstrap refit of a fitted ratio): golden section on ln x ± 1, kept
     // unless the optimum sits at the edge of that bracket.
     let local = hint.filter(|h| h.is_finite() && *h > 0.0).map(|h| {

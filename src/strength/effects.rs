@@ -252,9 +252,14 @@ impl Effect {
             let min = if f.form == Form::Moduli { MIN_PER_LEVEL_MODULUS } else { MIN_PER_LEVEL };
             let fixed = level_columns(col, min);
             // A level too small for its own scale: the scales are partially pooled instead.
+            let mut counts = std::collections::BTreeMap::<&str, usize>::new();
+            for v in col {
+                *counts.entry(v.as_str()).or_default() += 1;
+            }
             if f.form == Form::Levels
+                && counts.len() >= 2
+                && counts.values().any(|&k| k < MIN_PER_LEVEL)
                 && let Err(why) = &fixed
-                && why.contains("specimen")
             {
                 let (levels, columns) = pooled_columns(col).map_err(|pooled| format!("`{name}`: {why}; partial pooling: {pooled}"))?;
                 return Ok(Term::Pooled { columns, levels });

@@ -119,18 +119,7 @@ pub fn covariate_trend(residuals: &[f64], covariate: &[f64], permutations: usize
     }
     let (rr, rc) = (crate::stats::ranks(residuals), crate::stats::ranks(covariate));
     let rho = crate::stats::pearson(&rr, &rc).0;
-    let hits: usize = (0..permutations)
-        .into_par_iter()
-        .map(|k| {
-            let mut rng = ChaCha8Rng::seed_from_u64(seed);
-            rng.set_stream(k as u64 + 1);
-            let mut p = rc.clone();
-            for i in (1..p.len()).rev() {
-                p.swap(i, rng.random_range(0..=i));
-            }
-            usize::from(crate::stats::pearson(&rr, &p).0.abs() >= rho.abs() - 1e-12)
-        })
-        .sum();
+    let hits = permutation_hits(&rc, permutations, seed, |p| crate::stats::pearson(&rr, p).0.abs() >= rho.abs() - 1e-12);
     Ok((rho, (1 + hits) as f64 / (permutations + 1) as f64))
 }
 
@@ -240,9 +229,10 @@ pub fn scatter_by(r: &[f64], values: &[String]) -> f64 {
     if kept.len() < 2 { 0.0 } else { scatter_kruskal_wallis(&rs, &ls, kept.len()) }
 }
 
-/// How many of `permutations` seeded shuffles of the level labels `idx` (Fisher–Yates, shuffle j
-/// on its own ChaCha8 stream of `seed`) give a statistic at least the observed (`at_least`).
-fn permutation_hits(idx: &[usize], permutations: usize, seed: u64, at_least: impl Fn(&[usize]) -> bool + Sync) -> usize {
+/// How many of `permutations` seeded shuffles of `idx` (covariate ranks or level labels;
+/// Fisher–Yates, shuffle j on its own ChaCha8 stream of `seed`) give a statistic at least the
+/// observed (`at_least`).
+fn permutation_hits<T: Clone + Send + Sync>(idx: &[T], permutations: usize, seed: u64, at_least: impl Fn(&[T]) -> bool + Sync) -> usize {
     (0..permutations)
         .into_par_iter()
         .map(|j| {

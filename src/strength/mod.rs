@@ -44,6 +44,7 @@ pub mod fit;
 pub mod flaws;
 pub mod model;
 pub mod options;
+pub mod pooling;
 pub mod population;
 pub mod regress;
 pub mod specimens;

@@ -18,7 +18,6 @@ use rand_chacha::ChaCha8Rng;
 use crate::contact::{AveragingDomain, Elastic, Sphere};
 use crate::error::{Error, Result};
 use crate::io::TempDir;
-use crate::lifetime::damage::{DamageModel, Law};
 use crate::model::Simulator;
 use crate::strength::{LifetimeChain, LifetimeModel, Population, Sample, StrengthFit};
 use crate::weibull::{Weibull, fit_mle, simulate_pivotal};
@@ -117,7 +116,7 @@ fn bench_chain() -> Result<LifetimeChain> {
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let sample = Sample { source: "bench".into(), strength: (0..50).map(|_| w.sample(&mut rng)).collect(), particles: true, ..Sample::default() };
     let fit = StrengthFit::new(&sample, &[], 5.0, "bench")?;
-    let population = Population { source: "declared".into(), particles: vec![crate::strength::Particle { diameter_m: 0.9e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false };
+    let population = Population { source: "declared".into(), particles: vec![crate::strength::Particle { diameter_m: 0.9e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false, ..Population::default() };
     let model = LifetimeModel::new("bench", "bench", sphere, Elastic::new(210e9, 0.3)?, AveragingDomain::default(), fit, population)?;
     let p = model.fit.estimate();
     LifetimeChain::new(model, &[7300.0], (p, 0.1, 5.0))
@@ -130,7 +129,7 @@ pub fn lifetime_evaluations_per_second(min_time: Duration, fast: bool) -> Result
     let chain = bench_chain()?;
     let model = chain.model();
     let p = model.fit.estimate();
-    let law = [Law::new(DamageModel::Independent, p.shape, 7300.0, 0.0)];
+    let law = [crate::strength::model::Horizon::independent(7300.0)];
     let mut rng = ChaCha8Rng::seed_from_u64(1);
     let velocities: Vec<f64> = (0..4096).map(|_| rng.random_range(0.5..20.0)).collect();
     let thetas: Vec<Vec<f64>> = velocities.iter().map(|&v| chain.theta(&p, 0.1, v)).collect();

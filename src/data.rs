@@ -75,6 +75,8 @@ pub struct CrushData {
     pub places: Vec<(usize, usize)>,
     /// The sheet, for a spreadsheet.
     pub sheet: Option<String>,
+    /// The factor columns the study declares (`factors` of its `[[material]]`), per record.
+    pub factors: crate::intake::factors::FactorColumns,
 }
 
 impl CrushData {
@@ -82,7 +84,7 @@ impl CrushData {
     /// form, header on line 1.
     pub fn new(path: impl Into<PathBuf>, records: Vec<CrushRecord>) -> CrushData {
         let places = (0..records.len()).map(|k| (k, k + 2)).collect();
-        CrushData { path: path.into(), records, provenance: Provenance::default(), places, sheet: None }
+        CrushData { path: path.into(), records, provenance: Provenance::default(), places, sheet: None, factors: Vec::new() }
     }
 
     /// An error about record `k` and a column.
@@ -180,6 +182,13 @@ pub fn read_crush(path: &Path) -> Result<CrushData> {
 /// units, material filter and shape file ([`Source`]); `origin` names the study table for
 /// errors in the map. Every data error names file, sheet, row and column.
 pub fn read_crush_source(src: &Source, origin: &MapOrigin) -> Result<CrushData> {
+    read_crush_with_factors(src, &crate::intake::factors::Factors::default(), origin)
+}
+
+/// [`read_crush_source`] with the factor columns a study declares for the file (`factors` of a
+/// `[[material]]`; [`crate::intake::factors`]), read over the same rows (after the material
+/// filter; a join by id keeps the factor values of the particles it keeps).
+pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factors::Factors, origin: &MapOrigin) -> Result<CrushData> {
     let path = src.file.as_path();
     let table = read_raw(src)?;
     let r = resolve(&table, &CRUSH_FIELDS, &src.columns, &src.units, origin)?;
@@ -228,6 +237,7 @@ pub fn read_crush_source(src: &Source, origin: &MapOrigin) -> Result<CrushData> 
             return Err(r.error(row, "crush_force", format!("{rule}, from F = {} N and d = {} m: check the force and diameter units", shown(rec.crush_force_n), shown(rec.diameter_m))));
         }
     }
+    let mut factors = crate::intake::factors::read_factors(&table, &rows, factor_spec, &mut provenance, origin, crate::intake::factors::table_key(origin), path)?;
     if let Some(shape) = &src.shape {
         let rows_of_ids: Vec<(usize, String)> = records.iter().enumerate().map(|(k, rec)| (k, rec.id.clone())).collect();
         let main_name = table.origin.sheet.as_ref().map(|s| format!("{} sheet \"{s}\"", path.display())).unwrap_or_else(|| path.display().to_string());
@@ -248,6 +258,10 @@ pub fn read_crush_source(src: &Source, origin: &MapOrigin) -> Result<CrushData> 
         let (pairs, dropped) = join(&rows_of_ids, &sr, "id", &srows, shape.join.unwrap_or(JoinMode::Exact), &main_name)?;
         let mut joined = Vec::with_capacity(pairs.len());
         let mut joined_places = Vec::with_capacity(pairs.len());
+        let kept: Vec<usize> = pairs.iter().map(|(k, _)| *k).collect();
+        for (_, values) in factors.iter_mut() {
+            values.keep(&kept);
+        }
         for (k, srow) in pairs {
             joined_places.push(places[k]);
             let mut rec = records[k].clone();
@@ -284,7 +298,7 @@ pub fn read_crush_source(src: &Source, origin: &MapOrigin) -> Result<CrushData> 
     for w in provenance.warnings.iter().chain(provenance.joined.iter().flat_map(|j| &j.warnings)) {
         crate::intake::warn(w);
     }
-    Ok(CrushData { path: path.to_path_buf(), records, provenance, places, sheet: table.origin.sheet.clone() })
+    Ok(CrushData { path: path.to_path_buf(), records, provenance, places, sheet: table.origin.sheet.clone(), factors })
 }
 
 /// Numeric properties of Table 1, each stored as `<name>_min`, `<name>_max`, `<name>_qualifier`.

@@ -88,6 +88,17 @@ impl Error {
         )
     }
 
+    /// A parameter error raised where the study is not known, placed in study `file`: a key of
+    /// the material's own table (`predict`) under `table` (`material[1].predict`), a study-level
+    /// key (`contact.averaging`) as it is; other errors unchanged.
+    pub fn in_study(self, file: &str, table: &str) -> Self {
+        match self {
+            Error::Param { name, rule } if name == "predict" => Error::Config { file: file.into(), key: format!("{table}.{name}"), rule },
+            Error::Param { name, rule } => Error::Config { file: file.into(), key: name, rule },
+            e => e,
+        }
+    }
+
     /// A configuration error.
     pub fn config(file: impl Into<String>, key: impl Into<String>, rule: impl Into<String>) -> Self {
         Error::Config { file: file.into(), key: key.into(), rule: rule.into() }

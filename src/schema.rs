@@ -178,6 +178,18 @@ pub struct MaterialSpec {
     /// The particles predicted for (default: the crush data's particles, fresh).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub population: Option<crate::dist::PopulationSpec>,
+    /// Recorded factors of the crush file (`factors = { batch = "categorical" }` or a list;
+    /// [`crate::intake::factors`]): candidates of the naming loop and effects the strength model
+    /// may carry (`levels(batch)`, `linear(rate)` …).
+    #[serde(default, skip_serializing_if = "crate::intake::factors::Factors::is_empty")]
+    pub factors: crate::intake::factors::Factors,
+    /// What the prediction is for, per recorded factor the strength model carries
+    /// ([`crate::strength::population::Prediction`]): `predict = { batch = "B2" }` (one level),
+    /// `{ batch = { B1 = 0.6, B2 = 0.4 } }` (levels in proportion), `{ rate = 2.5 }` (a value) or
+    /// `{ rate = { distribution = "uniform", min = 1, max = 4 } }`. Default: the crush data's
+    /// particles with their own recorded values (a declared population needs every factor here).
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub predict: std::collections::BTreeMap<String, toml::Value>,
 }
 
 impl MaterialSpec {
@@ -187,7 +199,7 @@ impl MaterialSpec {
         let file = study.display().to_string();
         let key = format!("material[{index}].data");
         self.data.validate(&file, &key)?;
-        crate::data::read_crush_source(&self.data.resolved(study), &crate::intake::MapOrigin { file, key })
+        crate::data::read_crush_with_factors(&self.data.resolved(study), &self.factors, &crate::intake::MapOrigin { file, key })
     }
 
     /// The reference particle of the impact outputs: `impact_diameter_m` or the median

@@ -460,9 +460,9 @@ fn bad_strength_files_and_factor_declarations() {
     let ok = s.run(&["run", study, "--reports-dir", "ok", "--quiet"]);
     assert_eq!(ok.code, 0, "{}", ok.stderr);
     std::fs::remove_dir_all(s.path("ok")).unwrap();
-    s.expect_bad_study(study, "factors = [\"batch\"]", "factors = [\"batch\", \"furnace\"]", &["strength[0].data.factors.furnace", "no column `furnace`", "bars.csv"]);
+    s.expect_bad_study(study, "factors = [\"batch\"]", "factors = [\"batch\", \"furnace\"]", &["strength[0].factors.furnace", "no column `furnace`", "bars.csv"]);
     s.write(study, base);
-    s.expect_bad_study(study, "factors = [\"batch\"]", "factors = [\"lab\"]", &["strength[0].data.factors", "`lab` holds 2 distinct whole numbers", "lab = \"categorical\""]);
+    s.expect_bad_study(study, "factors = [\"batch\"]", "factors = [\"lab\"]", &["strength[0].factors", "`lab` holds 2 distinct whole numbers", "lab = \"categorical\""]);
     s.write(study, base);
     s.expect_bad_study(study, "data = \"../datasets/real/bars.csv\"", "data = { file = \"../datasets/real/bars.csv\", columns = { strength = \"strength [MPa]\" }, units = { strength = \"Pa\" } }", &["units.strength", "contradicts"]);
     s.write(study, base);

@@ -442,8 +442,9 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             md.push_str(&format!("\n**The Weibull law fits these data poorly** ({tests}, parametric bootstrap), {explained}: the departure lies in the shape of the distribution, not in a factor the data carry.\n"));
         }
         if let Some(spec) = &r.crush {
+        let how = if r.outcome.after().model.pivotal() { "pivotal bootstrap of its parameters" } else { "pivotal bootstrap of the base model's parameters, parametric bootstrap (refits) of the final model's" };
         md.push_str(&format!(
-            "\n**Lifetime at {} m/s, η = {}, {} impacts a year** (particles with E = {} GPa, ν = {}, ρ = {} kg/m³; population of the measured particles; 90 % band of the strength model's joint draws — pivotal bootstrap of its parameters and Bayesian bootstrap of the population):\n\n| horizon | base model | final model |\n|---|---|---|\n",
+            "\n**Lifetime at {} m/s, η = {}, {} impacts a year** (particles with E = {} GPa, ν = {}, ρ = {} kg/m³; population of the measured particles; 90 % band of the strength model's joint draws — {how} — and Bayesian bootstrap of the population):\n\n| horizon | base model | final model |\n|---|---|---|\n",
             s.impact.reference_velocity_m_s,
             s.impact.energy_fraction,
             s.impact.impacts_per_year,

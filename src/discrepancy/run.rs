@@ -76,6 +76,8 @@ pub fn quick_study(data: &Path, elastic: crate::contact::Elastic, density_kg_m3:
         density_kg_m3,
         impact_diameter_m: None,
         population: None,
+        factors: Default::default(),
+        predict: Default::default(),
     };
     let study = DiscrepancyStudy {
         kind: "discrepancy".into(),

@@ -411,14 +411,30 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
     Ok(Outcome { named, evidence, stages, skipped_covariates, size_tests })
 }
 
-/// The effects of a strength specification for one material: an explicit list as it is, or
-/// the effects the loop names on the material's own sample (`"diagnosed"`, the guard included;
-/// candidates whose covariate the data lack are skipped, as in the discrepancy study).
+/// The effects of a strength specification for one material: an explicit list as it applies to
+/// the material ([`applying`]), or the effects the loop names on the material's own sample
+/// (`"diagnosed"`, the guard included; candidates whose covariate the data lack are skipped, as
+/// in the discrepancy study).
 pub fn resolve(spec: &crate::strength::StrengthSpec, sample: &Sample, settings: &NamingSettings) -> Result<Vec<Effect>> {
     match spec {
-        crate::strength::StrengthSpec::Effects(v) => Ok(v.clone()),
+        crate::strength::StrengthSpec::Effects(v) => Ok(applying(v, sample)),
         crate::strength::StrengthSpec::Diagnosed => Ok(analyse(sample, settings, false)?.named),
     }
+}
+
+/// The effects of an explicit list that apply to a sample: every particle effect, and a recorded
+/// factor's effect where the sample's study declares that factor (a study-wide `levels(batch)`
+/// is the model of the materials that record `batch`; another material's crush file has no
+/// batches). A particle effect whose covariate is missing stays, and its fit names the column.
+pub fn applying(effects: &[Effect], sample: &Sample) -> Vec<Effect> {
+    effects.iter().filter(|e| !matches!(e, Effect::Factor(f) if !sample.factors.iter().any(|d| d.column == f.column))).cloned().collect()
+}
+
+/// The first recorded factor's effect of `spec` that none of `samples` declares (a misspelt or
+/// undeclared factor: every material would silently skip it).
+pub fn unclaimed(spec: &crate::strength::StrengthSpec, samples: &[&Sample]) -> Option<Effect> {
+    let crate::strength::StrengthSpec::Effects(v) = spec else { return None };
+    v.iter().find(|e| matches!(e, Effect::Factor(_)) && samples.iter().all(|s| !applying(std::slice::from_ref(*e), s).contains(e))).cloned()
 }
 
 /// Cross-validated log density of every crush test of `sample` under strength specification
@@ -446,7 +462,7 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
     };
     let failed = || Error::numerical("cross-validated log score", format!("material `{material}`: a training fit of the `{}` strength model failed", spec.name()));
     match spec {
-        crate::strength::StrengthSpec::Effects(v) => cv_pointwise(x, &terms_for(v)?, &fold, k).ok_or_else(failed),
+        crate::strength::StrengthSpec::Effects(v) => cv_pointwise(x, &terms_for(&applying(v, sample))?, &fold, k).ok_or_else(failed),
         crate::strength::StrengthSpec::Diagnosed => {
             let mut out = vec![f64::NAN; n];
             for f in 0..k {

@@ -253,8 +253,11 @@ fn scales_at(state: &State, material: usize, rows: &[usize], temperature_c: Opti
     if fit.terms.iter().any(|(_, t)| matches!(t, Term::Damage { .. })) {
         return Err(Error::numerical("crush test", "a strength model with the damage effect has no crush-test likelihood here yet"));
     }
-    // The linear columns in the order of β; the temperature column at the test's T.
-    let columns: Vec<(Effect, &Vec<f64>)> = fit.terms.iter().filter_map(|(e, t)| if let Term::Linear(z) = t { Some((e.clone(), z)) } else { None }).collect();
+    if !fit.model.scale_columns.is_empty() {
+        return Err(Error::numerical("crush test", "a strength model with a modulus per level has no crush-test likelihood here yet"));
+    }
+    // Every regression column in the order of β; the temperature column at the test's T.
+    let columns: Vec<(Effect, &Vec<f64>)> = fit.beta_columns().into_iter().map(|c| c.effect).zip(&fit.model.columns).collect();
     let scales = rows
         .iter()
         .map(|&r| {

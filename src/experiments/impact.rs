@@ -20,7 +20,8 @@ use super::preposterior::Experiment;
 use super::smc::Movable;
 use super::state::{State, StateSample};
 use crate::error::{Error, Result};
-use crate::lifetime::damage::{CriticalRatioTable, DamageModel, Law};
+use crate::lifetime::damage::{CriticalRatioTable, DamageModel};
+use crate::strength::model::Horizon;
 use crate::uq::setup::Mode;
 
 /// Smallest interval probability in the likelihood (keeps ln finite for impossible counts).
@@ -89,7 +90,7 @@ impl ImpactTest {
         let (p, w) = st.params(self.material, &s.x, Mode::Joint);
         let (eta, gamma) = (s.x[st.shared(0)], s.x[st.shared(3)]);
         let model = state.damage[s.damage];
-        let laws: Vec<Law> = self.counts.iter().enumerate().map(|(i, &n)| Law::new(model, p.shape, n as f64, self.tk.as_ref().map_or(0.0, |t| t[i].ln_ratio(gamma)))).collect();
+        let laws: Vec<Horizon> = self.counts.iter().enumerate().map(|(i, &n)| Horizon { model, impacts: n as f64, ln_x_star: self.tk.as_ref().map_or(0.0, |t| t[i].ln_ratio(gamma)) }).collect();
         let mut pn = vec![0.0; self.counts.len()];
         let lm = &st.materials[self.material].model;
         lm.breakage_into(&p, w, lm.ln_impact_stress(eta, self.velocity)?, &laws, &mut pn);

@@ -24,6 +24,7 @@
 
 pub mod columns;
 pub mod decimal;
+pub mod factors;
 pub mod sheet;
 pub mod table;
 pub mod text;

@@ -240,6 +240,7 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
     // 2–3. Contact at break, Weibull fits, pivotal bounds; the strength model.
     let mut evaluations: BTreeMap<String, u64> = BTreeMap::new();
     let mut runs = Vec::new();
+    let mut samples = Vec::new();
     for (index, (m, data)) in s.material.iter().zip(datasets).enumerate() {
         pb.set_message(format!("{}: contact stresses and Weibull fit", m.label));
         let at_break = contact_at_break(&data, &m.elastic, &s.contact)?;
@@ -263,16 +264,17 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
         let naming = crate::strength::NamingSettings { seed: s.seed.wrapping_add(7919 * index as u64), ..s.strength.naming.clone() };
         let effects = crate::discrepancy::workflow::resolve(&s.strength.effects, &sample, &naming)?;
         let sfit = StrengthFit::new(&sample, &effects, s.strength.naming.gamma, &m.key)?;
+        samples.push(sample.clone());
         let population = crate::strength::Population::of_material(m, index, &data, &loaded.path, s.seed)?;
-        let model = LifetimeModel::new(&m.key, &m.label, m.sphere(&data), s.impact.target, s.contact.averaging, sfit, population)?;
+        let model = LifetimeModel::new(&m.key, &m.label, m.sphere(&data), s.impact.target, s.contact.averaging, sfit, population).map_err(|e| e.in_study(&loaded.path.display().to_string(), &format!("material[{index}]")))?;
         let seed = pivotal_seed(s.seed, fit.n) ^ 0x5713;
         let (params_draws, _) = model.draws(s.strength.uncertainty, s.strength.draws, seed)?;
         *evaluations.entry("strength_draws".into()).or_default() += s.strength.draws as u64;
         let mut params = model.fit.estimate();
         if s.weibull.shape_estimate == ShapeEstimate::Unbiased {
             // C1239's unbiased modulus: without effects its own simulation (the same pivots as
-            // the bounds), with effects 1/mean(m̂/m) over the model's pivotal draws.
-            params.shape = if effects.is_empty() { shape } else { params.shape * params_draws.len() as f64 / params_draws.iter().map(|d| params.shape / d.shape).sum::<f64>() };
+            // the bounds), with effects the model's draws' bias factor.
+            params.shape = if effects.is_empty() { shape } else { model.fit.unbiased_shape(&params_draws) };
         }
         let summary = summarise(&model.fit, &params_draws);
         pb.inc(1);
@@ -295,6 +297,10 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
             summary,
             chain,
         });
+    }
+
+    if let Some(e) = crate::discrepancy::workflow::unclaimed(&s.strength.effects, &samples.iter().collect::<Vec<_>>()) {
+        return Err(Error::config(loaded.path.display().to_string(), "strength.effects", format!("`{}`: no material declares the factor `{}` in its `factors`", e.name(), e.covariate())));
     }
 
     // Tables into a temporary report directory.

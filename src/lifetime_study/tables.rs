@@ -317,15 +317,25 @@ pub(super) fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &Lifet
         let seed = pivotal_seed(s.seed, r.fit.n) ^ 0x5713;
         let bands = model.bands(&r.params, s.impact.energy_fraction, v, &counts, s.strength.uncertainty, s.strength.draws, seed, s.weibull.confidence)?;
         let effects = crate::strength::fit::names(model.fit.effects());
+        // Without effects the modulus bounds are C1239's pivotal bounds; with effects, the 90 %
+        // range of the model's own draws (the C1239 bounds belong to the law without effects).
+        let (lo, hi, what) = match r.summary.iter().find(|p| p.name == "weibull_modulus").filter(|_| !model.fit.effects().is_empty()) {
+            Some(p) => (p.q05, p.q95, "range of the model's draws"),
+            None => (r.pivotal.shape.0, r.pivotal.shape.1, "bounds"),
+        };
+        let reference = match model.fit.reference_words() {
+            w if w.is_empty() => String::new(),
+            w if model.fit.model.scale_columns.is_empty() => format!(" (σ_θ at {w})"),
+            w => format!(" (m and σ_θ at {w})"),
+        };
+        let predicted = if model.population.predicted.is_empty() { String::new() } else { format!(" predicted for {};", model.population.predicted.join(", ")) };
         let mut line = format!(
-            "{}: N = {}, m = {:.2} (MLE {:.2}, {:.0} % bounds {:.2}–{:.2}), σ_θ = {:.0} MPa; effects: {effects}; at {v} m/s:",
+            "{}: N = {}, m = {:.2} (MLE {:.2}, {:.0} % {what} {lo:.2}–{hi:.2}), σ_θ = {:.0} MPa{reference}; effects: {effects};{predicted} at {v} m/s:",
             r.label,
             r.fit.n,
             r.params.shape,
             model.fit.model.shape(),
             100.0 * s.weibull.confidence,
-            r.pivotal.shape.0,
-            r.pivotal.shape.1,
             r.params.mu.exp() / 1e6
         );
         for ((&years, &n), (point, lo, hi)) in s.impact.years.iter().zip(&counts).zip(bands) {
@@ -371,6 +381,7 @@ pub(super) fn write_strength_fits(dir: &mut ReportDir, runs: &[MaterialRun]) -> 
         scol("material", text(&|r| r.0.label.clone())),
         scol("effects", text(&|r| crate::strength::fit::names(r.0.chain.model().fit.effects()))),
         scol("population", text(&|r| r.0.chain.model().population.source.clone())),
+        scol("predicted_for", text(&|r| r.0.chain.model().population.predicted.join("; "))),
         ucol("particles", rows.iter().map(|r| r.0.chain.model().population.len() as u64).collect()),
         scol("parameter", text(&|r| r.1.name.clone())),
         scol("unit", text(&|r| r.1.unit.clone())),

@@ -41,8 +41,12 @@ use super::options::Uncertainty;
 use super::regress::{Design, fit};
 use crate::error::{Error, Result};
 
-/// Most linear effects a model carries (roundness, size, temperature, sphericity).
-pub const MAX_LINEAR: usize = 4;
+/// Most regression columns (β) a model carries: one per linear effect, L − 1 (or L, partially
+/// pooled) per categorical factor's levels.
+pub const MAX_LINEAR: usize = 16;
+
+/// Most scale columns (γ) a model carries: L − 1 per categorical factor with a modulus per level.
+pub const MAX_SCALE: usize = 8;
 
 /// One set of strength-model parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -52,18 +56,35 @@ pub struct Params {
     /// μ = ln σ_θ at z = 0 (ln Pa): the scale of a perfectly round particle of the reference
     /// diameter at the reference temperature.
     pub mu: f64,
-    /// β of the linear effects (in the order of [`StrengthFit::linear`]), zero-padded.
+    /// β of the regression columns (in the order of [`StrengthFit::beta_columns`]), zero-padded.
     pub beta: [f64; MAX_LINEAR],
+    /// γ of the scale columns (a modulus per level: 1/m_i = (1/m) e^(Σ γ_j v_ij)), zero-padded.
+    pub gamma: [f64; MAX_SCALE],
 }
 
 impl Params {
+    /// Modulus `shape` and μ = ln σ_θ, without effects.
+    pub fn base(shape: f64, mu: f64) -> Params {
+        Params { shape, mu, beta: [0.0; MAX_LINEAR], gamma: [0.0; MAX_SCALE] }
+    }
+
     /// The parameters of a fitted model.
     pub fn of(model: &ModelFit) -> Params {
-        let mut beta = [0.0; MAX_LINEAR];
-        for (b, v) in beta.iter_mut().zip(&model.reg.beta) {
+        let mut p = Params::base(model.shape(), model.reg.mu);
+        for (b, v) in p.beta.iter_mut().zip(&model.reg.beta) {
             *b = *v;
         }
-        Params { shape: model.shape(), mu: model.reg.mu, beta }
+        for (g, v) in p.gamma.iter_mut().zip(&model.reg.gamma) {
+            *g = *v;
+        }
+        p
+    }
+}
+
+impl ModelFit {
+    /// Whether its bootstrap draws are pivotal ([`StrengthFit::pivotal`]).
+    pub fn pivotal(&self) -> bool {
+        self.damage_ratio.is_none() && self.scale_columns.is_empty() && self.penalty.iter().all(|l| *l == 0.0) && self.law.is_none()
     }
 }
 
@@ -73,13 +94,31 @@ impl StrengthFit {
         Params::of(&self.model)
     }
 
+    /// Whether the bootstrap draws are pivotal (m = m̂/q) rather than plain refits (m = m̂*): the
+    /// pivots are exact for a location-scale model — one modulus, no penalty, no profiled damage
+    /// ratio. A modulus per level or partially pooled levels are not location-scale in all their
+    /// parameters; their draws are the plain parametric bootstrap.
+    pub fn pivotal(&self) -> bool {
+        self.model.pivotal()
+    }
+
+    /// The modulus corrected for the bias of its maximum-likelihood estimate, from `draws` of
+    /// [`StrengthFit::draws`] with the bootstrap: m̂ / E[m̂/m] over pivotal draws (C1239's
+    /// unbiasing factor, generalised), m̂² / E[m̂*] over plain bootstrap refits (the refits' mean
+    /// over m̂ is the bias factor).
+    pub fn unbiased_shape(&self, draws: &[Params]) -> f64 {
+        let m = self.model.shape();
+        let k = draws.len() as f64;
+        if self.pivotal() { m * k / draws.iter().map(|d| m / d.shape).sum::<f64>() } else { m * m * k / draws.iter().map(|d| d.shape).sum::<f64>() }
+    }
+
     /// `k` joint draws of the parameters (seeded; independent of the thread count).
     pub fn draws(&self, how: Uncertainty, k: usize, seed: u64) -> Result<Vec<Params>> {
-        if self.linear().len() > MAX_LINEAR {
-            return Err(Error::numerical("strength draws", format!("at most {MAX_LINEAR} linear effects")));
+        if self.model.columns.len() > MAX_LINEAR || self.model.scale_columns.len() > MAX_SCALE {
+            return Err(Error::numerical("strength draws", format!("at most {MAX_LINEAR} regression columns and {MAX_SCALE} scale columns (levels of a factor count one each)")));
         }
         match how {
-            Uncertainty::Bootstrap if self.model.damage_ratio.is_none() => self.pivotal_draws(k, seed),
+            Uncertainty::Bootstrap if self.pivotal() => self.pivotal_draws(k, seed),
             Uncertainty::Bootstrap => self.bootstrap_draws(k, seed),
             Uncertainty::Bayesian => self.posterior_draws(k, seed),
         }
@@ -100,11 +139,11 @@ impl StrengthFit {
                 for _ in 0..20 {
                     let x: Vec<f64> = (0..m.n).map(|_| rand_distr::Exp1.sample(&mut rng)).collect();
                     if let Ok(u) = fit(&x, &design) {
-                        let mut beta = [0.0; MAX_LINEAR];
-                        for (j, b) in beta.iter_mut().enumerate().take(m.reg.beta.len()) {
+                        let mut p = Params::base(u.b / b_hat, mu_hat - b_hat * u.mu / u.b);
+                        for (j, b) in p.beta.iter_mut().enumerate().take(m.reg.beta.len()) {
                             *b = m.reg.beta[j] - b_hat * u.beta[j] / u.b;
                         }
-                        return Some(Params { shape: u.b / b_hat, mu: mu_hat - b_hat * u.mu / u.b, beta });
+                        return Some(p);
                     }
                 }
                 None
@@ -113,7 +152,8 @@ impl StrengthFit {
         collect(out, "pivotal simulation")
     }
 
-    /// Plain parametric bootstrap (models with a profiled damage ratio).
+    /// Plain parametric bootstrap (models with a profiled damage ratio, a modulus per level or
+    /// partially pooled levels).
     fn bootstrap_draws(&self, k: usize, seed: u64) -> Result<Vec<Params>> {
         let out: Vec<Option<Params>> = (0..k)
             .into_par_iter()
@@ -122,25 +162,26 @@ impl StrengthFit {
         collect(out, "parametric bootstrap")
     }
 
-    /// Posterior draws by the ensemble sampler.
+    /// Posterior draws by the ensemble sampler: θ = (μ, ln b, β…, γ…, [ln x]), flat in each
+    /// but a partially pooled factor's β, whose prior is N(0, τ²) at the fitted τ (empirical
+    /// Bayes: the spread is not redrawn).
     fn posterior_draws(&self, k: usize, seed: u64) -> Result<Vec<Params>> {
         use crate::calibrate::mcmc::{EnsembleOptions, ensemble};
         let m = &self.model;
         let nl = m.columns.len();
+        let ns = m.scale_columns.len();
         let damage = m.damage_ratio.is_some();
-        let dim = 2 + nl + usize::from(damage);
+        let dim = 2 + nl + ns + usize::from(damage);
         let y: Vec<f64> = self.data.iter().map(|x| x.ln()).collect();
         let damage_terms = self.terms.iter().find_map(|(_, t)| match t {
             super::effects::Term::Damage { impacts, gamma } => Some((impacts.clone(), *gamma)),
             _ => None,
         });
         let (lx_lo, lx_hi) = ((1e-4f64).ln(), (0.99f64).ln());
-        // θ = (μ, ln b, β…, [ln x]).
         let log_post = |t: &[f64]| -> f64 {
             let (mu, s) = (t[0], t[1]);
-            let b = s.exp();
             let offset = if let Some((impacts, gamma)) = &damage_terms {
-                let lx = t[2 + nl];
+                let lx = t[2 + nl + ns];
                 if !(lx_lo..=lx_hi).contains(&lx) {
                     return f64::NEG_INFINITY;
                 }
@@ -151,6 +192,9 @@ impl StrengthFit {
                 None
             };
             let mut l = 0.0;
+            for j in 0..nl {
+                l -= 0.5 * m.penalty.get(j).copied().unwrap_or(0.0) * t[2 + j] * t[2 + j];
+            }
             for (i, yi) in y.iter().enumerate() {
                 let mut ls = mu;
                 for j in 0..nl {
@@ -159,8 +203,12 @@ impl StrengthFit {
                 if let Some(o) = &offset {
                     ls += o[i];
                 }
-                let w = (yi - ls) / b;
-                l += -s + w - w.exp();
+                let mut lb = s;
+                for j in 0..ns {
+                    lb += t[2 + nl + j] * m.scale_columns[j][i];
+                }
+                let w = (yi - ls) / lb.exp();
+                l += -lb + w - w.exp();
             }
             if l.is_finite() { l } else { f64::NEG_INFINITY }
         };
@@ -168,9 +216,14 @@ impl StrengthFit {
         let n = m.n as f64;
         let mut centre = vec![m.reg.mu, m.reg.b.ln()];
         let mut sd = vec![1.05 * m.reg.b / n.sqrt(), 0.78 / n.sqrt()];
+        let se = |v: f64| if v.is_finite() && v > 0.0 { v } else { 0.1 };
         for j in 0..nl {
             centre.push(m.reg.beta[j]);
-            sd.push(if m.reg.beta_se[j].is_finite() && m.reg.beta_se[j] > 0.0 { m.reg.beta_se[j] } else { 0.1 });
+            sd.push(se(m.reg.beta_se[j]));
+        }
+        for j in 0..ns {
+            centre.push(m.reg.gamma[j]);
+            sd.push(se(m.reg.gamma_se[j]));
         }
         if let Some(x) = m.damage_ratio {
             centre.push(x.ln().clamp(lx_lo + 0.01, lx_hi - 0.01));
@@ -200,9 +253,10 @@ impl StrengthFit {
         let mut out = Vec::with_capacity(k);
         'steps: for step in chains.draws.iter().skip(thin - 1).step_by(thin) {
             for t in step {
-                let mut beta = [0.0; MAX_LINEAR];
-                beta[..nl].copy_from_slice(&t[2..2 + nl]);
-                out.push(Params { shape: (-t[1]).exp(), mu: t[0], beta });
+                let mut p = Params::base((-t[1]).exp(), t[0]);
+                p.beta[..nl].copy_from_slice(&t[2..2 + nl]);
+                p.gamma[..ns].copy_from_slice(&t[2 + nl..2 + nl + ns]);
+                out.push(p);
                 if out.len() == k {
                     break 'steps;
                 }
@@ -239,8 +293,9 @@ pub struct ParameterSummary {
     pub q95: f64,
 }
 
-/// The modulus, the scale e^μ and every linear effect's reported parameter of `fit`, with
-/// the 90 % range of `draws`.
+/// The modulus, the scale e^μ, every single-column effect's reported parameter and, for a
+/// categorical factor, each level's scale ratio to the reference (`levels(g)_<level>_scale_ratio`)
+/// or its modulus (`moduli(g)_<level>_modulus`), with the 90 % range of `draws`.
 pub fn summarise(fit: &StrengthFit, draws: &[Params]) -> Vec<ParameterSummary> {
     let est = fit.estimate();
     let row = |name: String, unit: &str, f: &dyn Fn(&Params) -> f64| {
@@ -248,9 +303,17 @@ pub fn summarise(fit: &StrengthFit, draws: &[Params]) -> Vec<ParameterSummary> {
         ParameterSummary { name, unit: unit.into(), estimate: f(&est), q05: q[0], q95: q[1] }
     };
     let mut out = vec![row("weibull_modulus".into(), "-", &|p| p.shape), row("scale_pa".into(), "Pa", &|p| p.mu.exp())];
-    for (j, e) in fit.linear().into_iter().enumerate() {
-        let (sym, _, _) = e.parameter(0.0, 1.0);
-        out.push(row(format!("{}_{sym}", e.name()), "-", &|p| e.natural(p.beta[j])));
+    for (j, c) in fit.beta_columns().into_iter().enumerate() {
+        match &c.level {
+            None => {
+                let (sym, _, _) = c.effect.parameter(0.0, 1.0);
+                out.push(row(format!("{}_{sym}", c.effect.name()), "-", &|p| c.effect.natural(p.beta[j])));
+            }
+            Some(l) => out.push(row(format!("{}_{l}_scale_ratio", c.effect.name()), "-", &|p| p.beta[j].exp())),
+        }
+    }
+    for (j, c) in fit.scale_columns().into_iter().enumerate() {
+        out.push(row(format!("{}_{}_modulus", c.effect.name(), c.level.unwrap_or_default()), "-", &|p| p.shape * (-p.gamma[j]).exp()));
     }
     out
 }

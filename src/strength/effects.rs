@@ -36,9 +36,11 @@ use super::factors::{Factor, Form, MIN_PER_LEVEL, MIN_PER_LEVEL_MODULUS, level_c
 use super::population::Particle;
 use crate::lifetime::damage::tk_ratio_path;
 
-/// An effect of the strength model.
-#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+/// An effect of the strength model. In a study it is written by its name: the five particle
+/// effects (`roundness`, `size`, `temperature`, `sphericity`, `damage`) or a recorded factor's
+/// effect, `linear(x)`, `power(x)`, `levels(g)`, `moduli(g)` (the column declared in the
+/// material's `factors`).
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Effect {
     /// Roundness sets the contact radius of curvature.
     Roundness,
@@ -50,14 +52,49 @@ pub enum Effect {
     Sphericity,
     /// Tavares–King damage from prior impacts.
     Damage,
-    /// A recorded factor of a strength dataset ([`super::factors`]); declared by the data's
-    /// study, never by name in `effects`.
-    #[serde(skip)]
+    /// A recorded factor of a dataset ([`super::factors`]): a column its study declares.
     Factor(Factor),
     /// Two flaw populations in place of the one Weibull law ([`super::flaws`]); a candidate
-    /// against the base law only.
-    #[serde(skip)]
+    /// against the base law only, offered by a strength file's study (`populations`).
     Populations(super::flaws::Populations),
+}
+
+/// What a study may write for an effect.
+pub const EFFECT_NAMES: &str = "roundness, size, temperature, sphericity, damage, or a recorded factor's linear(x), power(x), levels(g), moduli(g)";
+
+impl Effect {
+    /// The effect a study names: a particle effect, or `form(column)` of a recorded factor.
+    pub fn parse(name: &str) -> std::result::Result<Effect, String> {
+        let name = name.trim();
+        if let Some(e) = ALL.iter().find(|e| e.name() == name) {
+            return Ok(e.clone());
+        }
+        let bad = || format!("unknown effect `{name}`: expected {EFFECT_NAMES}");
+        let (form, rest) = name.split_once('(').ok_or_else(bad)?;
+        let column = rest.strip_suffix(')').map(str::trim).filter(|c| !c.is_empty()).ok_or_else(bad)?;
+        let form = match form.trim() {
+            "linear" => Form::Linear,
+            "power" => Form::Power,
+            "levels" => Form::Levels,
+            "moduli" => Form::Moduli,
+            "size" => return Err(format!("`{name}`: a size measure's effect is declared with its measure in a strength file's `size = {{ column, measure }}`; a crush file's particle size effect is `size`")),
+            _ => return Err(bad()),
+        };
+        Ok(Effect::Factor(Factor { column: column.to_string(), form }))
+    }
+}
+
+impl Serialize for Effect {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(&self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for Effect {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        Effect::parse(&name).map_err(serde::de::Error::custom)
+    }
 }
 
 /// Every effect, in the library's order.

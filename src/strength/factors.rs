@@ -46,9 +46,7 @@ pub const MIN_PER_LEVEL: usize = 3;
 /// hardly estimable: its maximum-likelihood value from 3 specimens is biased by a factor ~2).
 pub const MIN_PER_LEVEL_MODULUS: usize = 5;
 
-/// A numeric column with at most this many distinct whole-number values is a possible code of
-/// levels: the study must say whether it is numeric or categorical.
-pub const FEW_LEVELS: usize = 6;
+pub use crate::intake::factors::{FEW_LEVELS, FactorType};
 
 /// How a factor enters the strength law.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -155,16 +153,6 @@ impl Factor {
     pub fn logarithmic(&self) -> bool {
         matches!(self.form, Form::Power | Form::Size(_))
     }
-}
-
-/// The type of a factor column, as a study declares it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum FactorType {
-    /// Numbers: linear and (where every value is > 0) power-law candidates.
-    Numeric,
-    /// Labels (or codes): one scale per level, one modulus per level.
-    Categorical,
 }
 
 /// The candidate effects of a declared factor column: numeric → linear, and power when every

@@ -56,6 +56,26 @@ impl Sample {
         e.term(&self.covariates, &self.levels, gamma)
     }
 
+    /// Adds a file's factor columns: numeric ones to the covariates, categorical ones to the
+    /// levels, and their candidate effects (linear and, where every value is > 0, power; levels
+    /// and moduli).
+    pub fn add_factors(&mut self, columns: &crate::intake::factors::FactorColumns) {
+        use crate::intake::factors::FactorValues;
+        use crate::strength::factors::{FactorType, candidates_of};
+        for (name, values) in columns {
+            match values {
+                FactorValues::Numeric(v) => {
+                    self.covariates.push((name.clone(), v.iter().map(|x| Some(*x)).collect()));
+                    self.factors.extend(candidates_of(name, FactorType::Numeric, v.iter().all(|x| *x > 0.0)));
+                }
+                FactorValues::Levels(v) => {
+                    self.levels.push((name.clone(), v.clone()));
+                    self.factors.extend(candidates_of(name, FactorType::Categorical, false));
+                }
+            }
+        }
+    }
+
     /// The rows `rows` of the sample (strengths, covariates and levels), same candidates.
     pub fn rows(&self, rows: &[usize], source: String) -> Sample {
         Sample {
@@ -91,11 +111,13 @@ pub fn contact_at_break(data: &CrushData, elastic: &Elastic, contact: &ContactOp
         .collect()
 }
 
-/// Strengths (σ̄ at break) and covariates of a crush dataset.
+/// Strengths (σ̄ at break) and covariates of a crush dataset, with the factor columns its study
+/// declares (numeric ones beside the particle covariates, categorical ones as levels) and their
+/// candidate effects.
 pub fn sample_of(data: &CrushData, elastic: &Elastic, contact: &ContactOptions) -> Result<Sample> {
     let at = contact_at_break(data, elastic, contact)?;
     let r = &data.records;
-    Ok(Sample {
+    let mut s = Sample {
         source: data.path.display().to_string(),
         strength: at.iter().map(|c| c.mean_tensile).collect(),
         covariates: vec![
@@ -109,7 +131,9 @@ pub fn sample_of(data: &CrushData, elastic: &Elastic, contact: &ContactOptions) 
         factors: Vec::new(),
         particles: true,
         populations: Vec::new(),
-    })
+    };
+    s.add_factors(&data.factors);
+    Ok(s)
 }
 
 /// A fitted model: the base Weibull plus zero or more effects.
@@ -468,23 +492,35 @@ pub fn cv_pointwise(x: &[f64], terms: &[(Effect, Term)], folds: &[usize], k: usi
     out.iter().all(|v| v.is_finite()).then_some(out)
 }
 
-/// The strength model fitted to one material's crush sample: the regression with the model's
-/// effects, the terms it was fitted with (for refits) and each linear effect's reference value
-/// (median diameter, mean temperature) and mean column (its centre over the sample).
+/// The strength model fitted to one material's sample: the regression with the model's
+/// effects, the terms it was fitted with (for refits) and each regression column's reference
+/// value (median diameter, mean temperature; NaN for a level's indicator) and mean (its centre
+/// over the sample).
 #[derive(Debug, Clone, PartialEq)]
 pub struct StrengthFit {
     /// The fitted regression.
     pub model: ModelFit,
     /// Its terms, in the order of `model.effects`.
     pub terms: Vec<(Effect, Term)>,
-    /// Reference value of each linear effect's covariate (order of β).
+    /// Reference value of each regression column's covariate (order of β; NaN for the
+    /// indicator of a level).
     pub references: Vec<f64>,
-    /// Mean of each linear column over the sample (order of β).
+    /// Mean of each regression column over the sample (order of β).
     pub centre: Vec<f64>,
     /// The sample's source (file), for messages.
     pub source: String,
     /// The fitted strengths σ̄ at break (Pa).
     pub data: Vec<f64>,
+}
+
+/// What one regression (β) or scale (γ) column of a fitted model is: its effect and, for a
+/// categorical factor, the level it indicates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Column {
+    /// The effect.
+    pub effect: Effect,
+    /// The level (categorical factors), None for a linear effect's one column.
+    pub level: Option<String>,
 }
 
 impl StrengthFit {
@@ -513,16 +549,26 @@ impl StrengthFit {
     pub fn from_model(model: ModelFit, terms: Vec<(Effect, Term)>, sample: &Sample) -> StrengthFit {
         let mut references = Vec::new();
         let mut centre = Vec::new();
+        let mean = |z: &[f64]| z.iter().sum::<f64>() / z.len() as f64;
         for (e, t) in &terms {
-            if let Term::Linear(z) = t {
-                let values: Vec<f64> = sample
-                    .covariates
-                    .iter()
-                    .find(|(n, _)| *n == e.covariate())
-                    .map(|(_, c)| c.iter().map(|v| v.unwrap_or(f64::NAN)).collect())
-                    .unwrap_or_default();
-                references.push(e.reference(&values));
-                centre.push(z.iter().sum::<f64>() / z.len() as f64);
+            match t {
+                Term::Linear(z) => {
+                    let values: Vec<f64> = sample
+                        .covariates
+                        .iter()
+                        .find(|(n, _)| *n == e.covariate())
+                        .map(|(_, c)| c.iter().map(|v| v.unwrap_or(f64::NAN)).collect())
+                        .unwrap_or_default();
+                    references.push(e.reference(&values));
+                    centre.push(mean(z));
+                }
+                Term::Levels { columns, .. } | Term::Pooled { columns, .. } => {
+                    for z in columns {
+                        references.push(f64::NAN);
+                        centre.push(mean(z));
+                    }
+                }
+                _ => {}
             }
         }
         StrengthFit { model, terms, references, centre, source: sample.source.clone(), data: sample.strength.clone() }
@@ -533,10 +579,87 @@ impl StrengthFit {
         &self.model.effects
     }
 
-    /// The linear effects, in the order of β.
+    /// The effects with regression columns, in the order of β (a categorical factor once).
     pub fn linear(&self) -> Vec<Effect> {
         self.model.linear()
     }
+
+    /// Each regression column (order of β).
+    pub fn beta_columns(&self) -> Vec<Column> {
+        let mut out = Vec::new();
+        for (e, t) in &self.terms {
+            match t {
+                Term::Linear(_) => out.push(Column { effect: e.clone(), level: None }),
+                Term::Levels { levels, reference, .. } => out.extend(levels.iter().filter(|l| *l != reference).map(|l| Column { effect: e.clone(), level: Some(l.clone()) })),
+                Term::Pooled { levels, .. } => out.extend(levels.iter().map(|l| Column { effect: e.clone(), level: Some(l.clone()) })),
+                _ => {}
+            }
+        }
+        out
+    }
+
+    /// Each scale column (order of γ): the non-reference levels of each modulus-per-level factor.
+    pub fn scale_columns(&self) -> Vec<Column> {
+        let mut out = Vec::new();
+        for (e, t) in &self.terms {
+            if let Term::Moduli { levels, reference, .. } = t {
+                out.extend(levels.iter().filter(|l| *l != reference).map(|l| Column { effect: e.clone(), level: Some(l.clone()) }));
+            }
+        }
+        out
+    }
+
+    /// Where e^μ is the scale, in words: each categorical factor's reference level and each
+    /// linear effect's covariate at its reference value (`Charge = K1, temperature_c = 20`);
+    /// empty without effects. Contact-geometry effects are at roundness or sphericity 1.
+    pub fn reference_words(&self) -> String {
+        let mut out: Vec<String> = Vec::new();
+        let mut j = 0;
+        for (e, t) in &self.terms {
+            match t {
+                Term::Linear(_) => {
+                    let r = self.references[j];
+                    j += 1;
+                    let v = if e.is_contact_geometry() { 1.0 } else { r };
+                    if v.is_finite() && !out.iter().any(|w| w.starts_with(&format!("{} =", e.covariate()))) {
+                        out.push(format!("{} = {}", e.covariate(), four_significant(v)));
+                    }
+                }
+                Term::Levels { levels, reference, .. } => {
+                    j += levels.len() - 1;
+                    out.push(format!("{} = {reference}", e.covariate()));
+                }
+                Term::Pooled { levels, .. } => {
+                    j += levels.len();
+                    out.push(format!("{}: the population of levels", e.covariate()));
+                }
+                Term::Moduli { reference, .. } => {
+                    let w = format!("{} = {reference}", e.covariate());
+                    if !out.contains(&w) {
+                        out.push(w);
+                    }
+                }
+                Term::Damage { .. } => out.push("impacts = 0".into()),
+                Term::Populations(_) => {}
+            }
+        }
+        out.join(", ")
+    }
+
+    /// The single-column linear effects with their β index: what a sensitivity analysis can
+    /// vary one at a time.
+    pub fn scalar_effects(&self) -> Vec<(Effect, usize)> {
+        self.beta_columns().into_iter().enumerate().filter(|(_, c)| c.level.is_none()).map(|(j, c)| (c.effect, j)).collect()
+    }
+}
+
+/// `v` to four significant digits, as a message shows a number.
+fn four_significant(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let d = 10f64.powi(3 - v.abs().log10().floor() as i32);
+    crate::intake::columns::shown((v * d).round() / d)
 }
 
 /// Effect names joined by `+` (`none` for the deliverable's model).

@@ -39,17 +39,24 @@
 //! logarithm per call ([`LifetimeModel::ln_impact_stress`]; `tests::fast_path_is_the_contact_chain`
 //! checks it against the contact module to 1e-12). With L = R the domain formula is evaluated.
 //!
-//! [`LifetimeChain`] is the model as a [`Simulator`]: θ = (m, σ_θ = e^μ, β of each linear
-//! effect, η, V) ↦ (F_max and σ̄ of the reference sphere, P_N of the population for each
+//! Recorded factors of the crush file (a powder batch, a sintering temperature) enter the same
+//! way: a numeric factor's z and a level's indicator are strength effects (κ = 1), taken from
+//! the population's factor values ([`super::population`]: a named level, levels in proportion,
+//! a value or a distribution); a modulus per level gives row i its own modulus
+//! m_i = m e^(−Σ γ_j v_ij), so ln H_i = m_i [ln σ̄_imp − μ − Σ β_j z_ij] and the damage law of
+//! row i is built for m_i.
+//!
+//! [`LifetimeChain`] is the model as a [`Simulator`]: θ = (m, σ_θ = e^μ, β of each regression
+//! column, γ of each scale column, η, V) ↦ (F_max and σ̄ of the reference sphere, P_N of the population for each
 //! configured N under independent trials).
 //!
 //! Verified by the unit tests below (power laws of R_c against direct Hertz computations,
 //! diameter independence, fast path) and by `tests/verification/strength.rs` (the three studies
 //! agree at fixed inputs; coverage of a generator's true population breakage).
 
-use super::draws::{MAX_LINEAR, Params};
-use super::effects::Effect;
-use super::fit::StrengthFit;
+use super::draws::{MAX_LINEAR, MAX_SCALE, Params};
+use super::effects::{Effect, Term};
+use super::fit::{Column, StrengthFit};
 use super::population::Population;
 use crate::contact::{AveragingDomain, Elastic, Impact, Sphere, TensileZone};
 use crate::error::{Error, Result};
@@ -57,6 +64,31 @@ use crate::lifetime::damage::{DamageModel, Law};
 use crate::lifetime::{ImpactLoad, MAX_VELOCITY};
 use crate::model::{OutputSpec, Simulator, check_outputs};
 use crate::params::{Param, ParamSpace};
+
+/// One output of a breakage evaluation: a damage model after N impacts, with the Tavares–King
+/// ln x* of that horizon (0 for the other models).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Horizon {
+    /// The damage model.
+    pub model: DamageModel,
+    /// Impacts N.
+    pub impacts: f64,
+    /// ln x*(N, γ) (Tavares–King only).
+    pub ln_x_star: f64,
+}
+
+impl Horizon {
+    /// N impacts under independent trials.
+    pub fn independent(impacts: f64) -> Horizon {
+        Horizon { model: DamageModel::Independent, impacts, ln_x_star: 0.0 }
+    }
+
+    /// Its law for Weibull modulus m.
+    #[inline]
+    pub fn law(&self, m: f64) -> Law {
+        Law::new(self.model, m, self.impacts, self.ln_x_star)
+    }
+}
 
 /// The lifetime model of one particle type.
 #[derive(Debug, Clone)]
@@ -76,13 +108,20 @@ pub struct LifetimeModel {
     pub fit: StrengthFit,
     /// The particles predicted for.
     pub population: Population,
-    /// Linear effects, in the order of β.
+    /// The effects with regression columns, in the order of β (a categorical factor once).
     linear: Vec<Effect>,
-    /// κ_k z_ik per particle (row-major, stride `linear.len()`; one row of zeros without
-    /// linear effects).
+    /// The regression columns (β) and scale columns (γ).
+    columns: (Vec<Column>, Vec<Column>),
+    /// κ_j z_ij per row (row-major, stride `columns.0.len()`; one row of zeros without
+    /// regression columns).
     kz: Vec<f64>,
     /// Rows of `kz`.
     rows: usize,
+    /// Rows grouped by their scale columns' values (a modulus per level): (v, rows); empty
+    /// without scale columns.
+    groups: Vec<(Vec<f64>, Vec<usize>)>,
+    /// Each row's weight in the point estimate (None: equal).
+    point: Option<Vec<f64>>,
     /// ln σ̄ of the reference sphere's impact at η = 1, V = 1 m/s when σ̄ ∝ p0.
     ln_sigma_unit: Option<f64>,
 }
@@ -90,17 +129,19 @@ pub struct LifetimeModel {
 impl LifetimeModel {
     /// The model of a material: its fitted strength law, the particle that hits `wall`, the
     /// averaging domain and the population predicted for. A population particle without a
-    /// covariate the model needs is an error naming the material and the source.
+    /// covariate or recorded factor the model needs is an error naming the material and the
+    /// source.
     pub fn new(key: &str, label: &str, sphere: Sphere, wall: Elastic, domain: AveragingDomain, fit: StrengthFit, population: Population) -> Result<Self> {
         let linear = fit.linear();
-        if let Some(e) = linear.iter().find(|e| matches!(e, Effect::Factor(_) | Effect::Populations(_))) {
+        if let Some(e) = fit.effects().iter().find(|e| matches!(e, Effect::Populations(_))) {
             return Err(Error::Param {
                 name: "strength".into(),
-                rule: format!("material `{key}`: the lifetime chain predicts particles, and the effect `{}` of a recorded factor has no value for them; fit the particle effects only", e.name()),
+                rule: format!("material `{key}`: the lifetime chain needs one Weibull law per particle; `{}` (two flaw populations) is a candidate of strength files only", e.name()),
             });
         }
-        if linear.len() > MAX_LINEAR {
-            return Err(Error::numerical("lifetime model", format!("at most {MAX_LINEAR} linear effects")));
+        let (beta_columns, scale_columns) = (fit.beta_columns(), fit.scale_columns());
+        if beta_columns.len() > MAX_LINEAR || scale_columns.len() > MAX_SCALE {
+            return Err(Error::numerical("lifetime model", format!("material `{key}`: at most {MAX_LINEAR} regression and {MAX_SCALE} scale columns (each level of a factor but one is a column)")));
         }
         let zone = TensileZone::new(sphere.elastic.poisson_ratio);
         let proportional = domain.ratio_to_peak_pressure(&zone).is_some();
@@ -115,26 +156,32 @@ impl LifetimeModel {
         if population.is_empty() {
             return Err(Error::numerical("lifetime model", format!("material `{key}`: the population has no particle")));
         }
-        let (kz, rows) = if linear.is_empty() {
-            (vec![], 1)
+        let (kz, rows, groups) = if beta_columns.is_empty() && scale_columns.is_empty() {
+            (vec![], 1, vec![])
         } else {
-            let mut kz = Vec::with_capacity(population.len() * linear.len());
-            for (i, p) in population.particles.iter().enumerate() {
-                for (e, r) in linear.iter().zip(&fit.references) {
-                    let Some(v) = e.value_of(p).filter(|v| v.is_finite()) else {
-                        return Err(Error::Data {
-                            file: population.source.trim_start_matches("data: ").to_string(),
-                            location: format!("row {} (line {}), column {}", i + 1, i + 2, e.covariate()),
-                            rule: format!("material `{key}`: the strength model's `{}` effect needs this covariate for every particle of the population", e.name()),
-                        });
-                    };
-                    kz.push(e.impact_exponent() * e.z(v, *r));
+            let mut kz = Vec::with_capacity(population.len() * beta_columns.len());
+            let mut groups: Vec<(Vec<f64>, Vec<usize>)> = Vec::new();
+            for i in 0..population.len() {
+                let (z, v) = row_columns(&fit, &population, i, key)?;
+                kz.extend(z);
+                if !scale_columns.is_empty() {
+                    match groups.iter_mut().find(|(g, _)| *g == v) {
+                        Some((_, r)) => r.push(i),
+                        None => groups.push((v, vec![i])),
+                    }
                 }
             }
-            (kz, population.len())
+            (kz, population.len(), groups)
         };
+        // Without effects every row is alike: the point estimate is one row.
+        let point = if kz.is_empty() && groups.is_empty() { None } else { population.point_weights() };
         let ln_sigma_unit = if proportional { Some(ImpactLoad::on_wall(&sphere, &wall, 1.0, domain).at_velocity(1.0)?.mean_tensile.ln()) } else { None };
-        Ok(LifetimeModel { key: key.into(), label: label.into(), sphere, wall, domain, fit, population, linear, kz, rows, ln_sigma_unit })
+        Ok(LifetimeModel { key: key.into(), label: label.into(), sphere, wall, domain, fit, population, linear, columns: (beta_columns, scale_columns), kz, rows, groups, point, ln_sigma_unit })
+    }
+
+    /// The regression columns (order of β) and scale columns (order of γ).
+    pub fn columns(&self) -> (&[Column], &[Column]) {
+        (&self.columns.0, &self.columns.1)
     }
 
     /// Linear effects, in the order of β.
@@ -142,9 +189,10 @@ impl LifetimeModel {
         &self.linear
     }
 
-    /// Whether every particle has the same breakage (no linear effect).
+    /// Whether every particle has the same breakage (no regression or scale column).
+    #[inline]
     pub fn uniform(&self) -> bool {
-        self.linear.is_empty()
+        self.columns.0.is_empty() && self.columns.1.is_empty()
     }
 
     /// The impact of the reference sphere on the wall with energy fraction η.
@@ -187,34 +235,64 @@ impl LifetimeModel {
         }
     }
 
-    /// The population's breaking probability under each law of `laws` (built for `p.shape`),
-    /// added into `out` (which the caller zeroes), at the reference sphere's impact stress
-    /// ln σ̄ = `ln_sigma`. `weights` (one per particle, summing to 1) default to equal.
+    /// The population's breaking probability for each of `horizons`, added into `out` (which
+    /// the caller zeroes), at the reference sphere's impact stress ln σ̄ = `ln_sigma`. `weights`
+    /// (one per row, summing to 1) default to the population's point weights.
     #[inline]
-    pub fn breakage_into(&self, p: &Params, weights: Option<&[f64]>, ln_sigma: f64, laws: &[Law], out: &mut [f64]) {
-        debug_assert_eq!(laws.len(), out.len());
-        let m = p.shape;
-        let base = m * (ln_sigma - p.mu);
-        if self.rows == 1 && self.linear.is_empty() {
+    pub fn breakage_into(&self, p: &Params, weights: Option<&[f64]>, ln_sigma: f64, horizons: &[Horizon], out: &mut [f64]) {
+        debug_assert_eq!(horizons.len(), out.len());
+        for (h, o) in horizons.chunks(LAWS).zip(out.chunks_mut(LAWS)) {
+            self.breakage_chunk(p, weights, ln_sigma, h, o);
+        }
+    }
+
+    /// [`LifetimeModel::breakage_into`] for at most [`LAWS`] horizons.
+    #[inline]
+    fn breakage_chunk(&self, p: &Params, weights: Option<&[f64]>, ln_sigma: f64, horizons: &[Horizon], out: &mut [f64]) {
+        let mut laws = [Law::Scaled { c: 0.0 }; LAWS];
+        let laws = &mut laws[..horizons.len()];
+        let build = |laws: &mut [Law], m: f64| {
+            for (l, h) in laws.iter_mut().zip(horizons) {
+                *l = h.law(m);
+            }
+        };
+        if self.uniform() {
+            build(laws, p.shape);
+            let base = p.shape * (ln_sigma - p.mu);
             let h = base.exp();
-            for (o, law) in out.iter_mut().zip(laws) {
+            for (o, law) in out.iter_mut().zip(laws.iter()) {
                 *o += law.p(h, base);
             }
             return;
         }
-        let k = self.linear.len();
+        let weights = weights.or(self.point.as_deref());
         let w0 = 1.0 / self.rows as f64;
-        for i in 0..self.rows {
-            let row = &self.kz[i * k..(i + 1) * k];
+        let k = self.columns.0.len();
+        let row = |i: usize, m: f64, laws: &[Law], out: &mut [f64]| {
+            let z = &self.kz[i * k..(i + 1) * k];
             let mut s = 0.0;
             for j in 0..k {
-                s += p.beta[j] * row[j];
+                s += p.beta[j] * z[j];
             }
-            let ln_h = base - m * s;
+            let ln_h = m * (ln_sigma - p.mu) - m * s;
             let h = ln_h.exp();
             let w = weights.map_or(w0, |w| w[i]);
             for (o, law) in out.iter_mut().zip(laws) {
                 *o += w * law.p(h, ln_h);
+            }
+        };
+        if self.groups.is_empty() {
+            build(laws, p.shape);
+            for i in 0..self.rows {
+                row(i, p.shape, laws, out);
+            }
+            return;
+        }
+        for (v, rows) in &self.groups {
+            let m = p.shape * (-v.iter().zip(&p.gamma).map(|(a, g)| a * g).sum::<f64>()).exp();
+            build(laws, m);
+            for &i in rows {
+                row(i, m, laws, out);
             }
         }
     }
@@ -222,20 +300,26 @@ impl LifetimeModel {
     /// The population's breaking probability after each of `counts` impacts at (η, V) under
     /// independent trials.
     pub fn breakage(&self, p: &Params, weights: Option<&[f64]>, eta: f64, v: f64, counts: &[f64]) -> Result<Vec<f64>> {
-        let laws: Vec<Law> = counts.iter().map(|&n| Law::new(DamageModel::Independent, p.shape, n, 0.0)).collect();
+        let horizons: Vec<Horizon> = counts.iter().map(|&n| Horizon::independent(n)).collect();
         let mut out = vec![0.0; counts.len()];
-        self.breakage_into(p, weights, self.ln_impact_stress(eta, v)?, &laws, &mut out);
+        self.breakage_into(p, weights, self.ln_impact_stress(eta, v)?, &horizons, &mut out);
         Ok(out)
     }
 
-    /// Each particle's single-impact ln H at ln σ̄ (for tables and tests).
+    /// Each row's single-impact ln H at ln σ̄ (for tables and tests).
     pub fn ln_hazards(&self, p: &Params, ln_sigma: f64) -> Vec<f64> {
-        let base = p.shape * (ln_sigma - p.mu);
-        if self.linear.is_empty() {
-            return vec![base; self.population.len()];
+        if self.uniform() {
+            return vec![p.shape * (ln_sigma - p.mu); self.population.len()];
         }
-        let k = self.linear.len();
-        (0..self.rows).map(|i| base - p.shape * (0..k).map(|j| p.beta[j] * self.kz[i * k + j]).sum::<f64>()).collect()
+        let k = self.columns.0.len();
+        let mut m = vec![p.shape; self.rows];
+        for (v, rows) in &self.groups {
+            let mg = p.shape * (-v.iter().zip(&p.gamma).map(|(a, g)| a * g).sum::<f64>()).exp();
+            for &i in rows {
+                m[i] = mg;
+            }
+        }
+        (0..self.rows).map(|i| m[i] * (ln_sigma - p.mu) - m[i] * (0..k).map(|j| p.beta[j] * self.kz[i * k + j]).sum::<f64>()).collect()
     }
 
     /// The population's P_N after each of `counts` impacts at (η, V) under independent trials:
@@ -251,9 +335,9 @@ impl LifetimeModel {
             .par_iter()
             .enumerate()
             .map(|(r, p)| {
-                let laws: Vec<Law> = counts.iter().map(|&n| Law::new(DamageModel::Independent, p.shape, n, 0.0)).collect();
+                let horizons: Vec<Horizon> = counts.iter().map(|&n| Horizon::independent(n)).collect();
                 let mut out = vec![0.0; counts.len()];
-                self.breakage_into(p, weights.as_ref().map(|w| &w[r][..]), ln_sigma, &laws, &mut out);
+                self.breakage_into(p, weights.as_ref().map(|w| &w[r][..]), ln_sigma, &horizons, &mut out);
                 out
             })
             .collect();
@@ -275,6 +359,71 @@ impl LifetimeModel {
     }
 }
 
+/// Most horizons one pass of [`LifetimeModel::breakage_into`] evaluates (more are done in chunks).
+pub const LAWS: usize = 32;
+
+/// Row `i` of the population in the model's columns: κ_j z_ij for each regression column and
+/// v_ij for each scale column (a recorded factor from the population's factor columns, a
+/// particle covariate from the particle). A missing value is an error naming material `key`.
+fn row_columns(fit: &StrengthFit, population: &Population, i: usize, key: &str) -> Result<(Vec<f64>, Vec<f64>)> {
+    use crate::intake::factors::FactorValues;
+    let p = &population.particles[i];
+    let (mut z, mut v) = (Vec::new(), Vec::new());
+    let mut j = 0;
+    let missing = |e: &Effect, what: &str| -> Error {
+        if population.source == "declared" {
+            Error::Param {
+                name: "predict".into(),
+                rule: format!("material `{key}`: the strength model's `{}` effect needs the value of `{}` for the particles predicted for (a declared population): set {what} in its [[material]]", e.name(), e.covariate()),
+            }
+        } else {
+            Error::Data {
+                file: population.source.trim_start_matches("data: ").to_string(),
+                location: format!("row {} (line {}), column {}", i + 1, i + 2, e.covariate()),
+                rule: format!("material `{key}`: the strength model's `{}` effect needs this covariate for every particle of the population", e.name()),
+            }
+        }
+    };
+    let level_of = |e: &Effect| -> Result<&str> {
+        match population.factors.iter().find(|(n, _)| *n == e.covariate()) {
+            Some((_, FactorValues::Levels(l))) => Ok(l[i].as_str()),
+            _ => Err(missing(e, &format!("`predict = {{ {} = \"<level>\" }}` or levels in proportion", e.covariate()))),
+        }
+    };
+    for (e, t) in &fit.terms {
+        match t {
+            Term::Linear(_) => {
+                let value = match e {
+                    Effect::Factor(_) => match population.factors.iter().find(|(n, _)| *n == e.covariate()) {
+                        Some((_, FactorValues::Numeric(x))) => Some(x[i]),
+                        _ => None,
+                    },
+                    _ => e.value_of(p),
+                };
+                let value = value.filter(|x| x.is_finite()).ok_or_else(|| missing(e, &format!("`predict = {{ {} = <value or distribution> }}`", e.covariate())))?;
+                z.push(e.impact_exponent() * e.z(value, fit.references[j]));
+                j += 1;
+            }
+            Term::Levels { levels, reference, .. } => {
+                let l = level_of(e)?;
+                z.extend(levels.iter().filter(|x| *x != reference).map(|x| f64::from(u8::from(x == l))));
+                j += levels.len() - 1;
+            }
+            Term::Pooled { levels, .. } => {
+                let l = level_of(e)?;
+                z.extend(levels.iter().map(|x| f64::from(u8::from(x == l))));
+                j += levels.len();
+            }
+            Term::Moduli { levels, reference, .. } => {
+                let l = level_of(e)?;
+                v.extend(levels.iter().filter(|x| *x != reference).map(|x| f64::from(u8::from(x == l))));
+            }
+            Term::Damage { .. } | Term::Populations(_) => {}
+        }
+    }
+    Ok((z, v))
+}
+
 /// The lifetime model as a [`Simulator`].
 #[derive(Debug, Clone)]
 pub struct LifetimeChain {
@@ -284,7 +433,8 @@ pub struct LifetimeChain {
     outputs: Vec<OutputSpec>,
 }
 
-/// Indices of θ in [`LifetimeChain`] (the β of the linear effects follow the scale).
+/// Indices of θ in [`LifetimeChain`] (the β of the regression columns follow the scale, then the
+/// γ of the scale columns, then η and V).
 pub mod theta {
     /// Weibull shape m (-).
     pub const SHAPE: usize = 0;
@@ -304,8 +454,16 @@ impl LifetimeChain {
         let (p, eta, v) = nominal;
         // Wide physical bounds; a nominal outside them is an error, never clamped.
         let mut params = vec![Param::uniform("weibull_shape", "-", 0.1, 500.0, p.shape), Param::uniform("weibull_scale_pa", "Pa", 1e3, 1e12, p.mu.exp())];
-        for (j, e) in model.linear().iter().enumerate() {
-            params.push(Param::uniform(&format!("beta_{}", e.name()), "-", -50.0, 50.0, p.beta[j]));
+        let named = |prefix: &str, c: &Column| match &c.level {
+            Some(l) => format!("{prefix}_{}_{l}", c.effect.name()),
+            None => format!("{prefix}_{}", c.effect.name()),
+        };
+        let (betas, gammas) = model.columns();
+        for (j, c) in betas.iter().enumerate() {
+            params.push(Param::uniform(&named("beta", c), "-", -50.0, 50.0, p.beta[j]));
+        }
+        for (j, c) in gammas.iter().enumerate() {
+            params.push(Param::uniform(&named("gamma", c), "-", -20.0, 20.0, p.gamma[j]));
         }
         params.push(Param::uniform("energy_fraction", "-", 1e-9, 1.0, eta));
         params.push(Param::uniform("velocity_m_s", "m/s", 0.0, MAX_VELOCITY, v));
@@ -327,9 +485,10 @@ impl LifetimeChain {
 
     /// θ of (parameters, η, V).
     pub fn theta(&self, p: &Params, eta: f64, v: f64) -> Vec<f64> {
-        let k = self.model.linear().len();
+        let (k, ns) = (self.model.columns.0.len(), self.model.columns.1.len());
         let mut t = vec![p.shape, p.mu.exp()];
         t.extend_from_slice(&p.beta[..k]);
+        t.extend_from_slice(&p.gamma[..ns]);
         t.extend([eta, v]);
         t
     }
@@ -340,10 +499,11 @@ impl LifetimeChain {
         if !self.space.contains(theta) {
             return Err(Error::Param { name: "θ".into(), rule: format!("{theta:?} lies outside the bounds") });
         }
-        let k = self.model.linear().len();
-        let mut beta = [0.0; MAX_LINEAR];
-        beta[..k].copy_from_slice(&theta[theta::BETA..theta::BETA + k]);
-        Ok((Params { shape: theta[theta::SHAPE], mu: theta[theta::SCALE].ln(), beta }, theta[theta::BETA + k], theta[theta::BETA + k + 1]))
+        let (k, ns) = (self.model.columns.0.len(), self.model.columns.1.len());
+        let mut p = Params::base(theta[theta::SHAPE], theta[theta::SCALE].ln());
+        p.beta[..k].copy_from_slice(&theta[theta::BETA..theta::BETA + k]);
+        p.gamma[..ns].copy_from_slice(&theta[theta::BETA + k..theta::BETA + k + ns]);
+        Ok((p, theta[theta::BETA + k + ns], theta[theta::BETA + k + ns + 1]))
     }
 }
 
@@ -419,7 +579,7 @@ mod tests {
             "x",
         )
         .unwrap();
-        let pop = Population { source: "declared".into(), particles: vec![crate::strength::population::Particle { diameter_m: 0.9e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false };
+        let pop = Population { source: "declared".into(), particles: vec![crate::strength::population::Particle { diameter_m: 0.9e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false, ..Population::default() };
         LifetimeModel::new("x", "X", sphere(), steel(), domain, fit, pop).unwrap()
     }
 

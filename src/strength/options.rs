@@ -96,8 +96,7 @@ impl<'de> Deserialize<'de> for StrengthSpec {
         impl<'de> Visitor<'de> for V {
             type Value = StrengthSpec;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                let names: Vec<String> = ALL.iter().map(|e| e.name()).collect();
-                write!(f, "a list of effects ({}) or \"diagnosed\"", names.join(", "))
+                write!(f, "a list of effects ({}) or \"diagnosed\"", super::effects::EFFECT_NAMES)
             }
             fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<StrengthSpec, E> {
                 if v == "diagnosed" { Ok(StrengthSpec::Diagnosed) } else { Err(E::invalid_value(de::Unexpected::Str(v), &self)) }

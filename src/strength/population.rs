@@ -19,11 +19,30 @@
 //! Without effects every particle is alike and the population is one particle of the median
 //! diameter (a Hertz impact of a sphere on a wall has a peak pressure independent of its
 //! diameter at a given velocity and η, see [`super::model`]).
+//!
+//! **Recorded factors** (a crush file's `factors`, such as a powder batch or a sintering
+//! temperature) are predicted for as the study's `predict` says ([`Prediction`]):
+//!
+//! ```toml
+//! predict = { batch = "B2" }                       # every particle of level B2
+//! predict = { batch = { B1 = 0.6, B2 = 0.4 } }     # levels in proportion (weights normalised)
+//! predict = { sinter_c = 1450 }                    # a numeric factor at a value
+//! predict = { sinter_c = { distribution = "normal", mean = 1450, sd = 10, min = 1420, max = 1480 } }
+//! ```
+//!
+//! Levels in proportion expand each particle into one row per level, weighted by the level's
+//! share (exact, no sampling); a distribution assigns each row a stratified quantile (shifted
+//! midpoints in a seeded random order, one stratum per row). Without `predict`, a data
+//! population keeps each particle's own recorded value — the levels in the proportions the
+//! crush campaign had; a declared population has no recorded values and needs `predict` for
+//! every factor its strength model carries. A level must be one of the data's (a new batch's
+//! scale is not known), and a value outside the data's range is flagged as extrapolated.
 
 
 use crate::data::CrushData;
 use crate::dist::{Dist, Marginal, PopulationSpec};
 use crate::error::{Error, Result};
+use crate::intake::factors::{FactorColumns, FactorValues};
 
 /// One particle of a population: its covariates.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -38,16 +57,94 @@ pub struct Particle {
     pub temperature_c: Option<f64>,
 }
 
-/// The particles a prediction averages over.
-#[derive(Debug, Clone, PartialEq)]
+/// The particles a prediction averages over: one row per particle, or per particle and level
+/// when a factor is predicted for levels in proportion.
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Population {
     /// `data: <file>` or `declared`.
     pub source: String,
-    /// The particles.
+    /// The particles (one per row).
     pub particles: Vec<Particle>,
     /// Whether the particles are a sample of an unknown population (data): the uncertainty then
     /// redraws their weights.
     pub sampled: bool,
+    /// Recorded factor values per row (named as the study's `factors`).
+    pub factors: FactorColumns,
+    /// Weight of each row within its particle (a level's share; empty: every row 1).
+    pub within: Vec<f64>,
+    /// The particle of the sample each row belongs to (empty: row i is particle i).
+    pub parent: Vec<usize>,
+    /// What each predicted factor is set to, in words (`batch = B2`).
+    pub predicted: Vec<String>,
+}
+
+/// What a prediction is for, for one recorded factor (`predict.<factor>` of a `[[material]]`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Prediction {
+    /// One level of a categorical factor.
+    Level(String),
+    /// Levels of a categorical factor in proportion (weights normalised to 1).
+    Levels(Vec<(String, f64)>),
+    /// A value of a numeric factor.
+    Value(f64),
+    /// A distribution of a numeric factor.
+    Distribution(Marginal),
+}
+
+impl Prediction {
+    /// The prediction a study writes for factor `name` whose data values are `data`; `file` and
+    /// `key` (`material[0].predict.batch`) name it in errors.
+    pub fn parse(value: &toml::Value, data: &FactorValues, file: &str, key: &str, resolve: &dyn Fn(&str) -> std::path::PathBuf) -> Result<Prediction> {
+        let bad = |rule: String| Error::config(file, key, rule);
+        match data {
+            FactorValues::Levels(v) => {
+                let mut known: Vec<&String> = v.iter().collect();
+                known.sort();
+                known.dedup();
+                let list = known.iter().map(|l| format!("\"{l}\"")).collect::<Vec<_>>().join(", ");
+                let level = |l: &str| -> Result<String> {
+                    if known.iter().any(|k| *k == l) {
+                        Ok(l.to_string())
+                    } else {
+                        Err(bad(format!("\"{l}\" is not a level of the data (its levels: {list}); a level the data never saw has no fitted scale")))
+                    }
+                };
+                match value {
+                    toml::Value::String(l) => Ok(Prediction::Level(level(l.trim())?)),
+                    toml::Value::Integer(i) => Ok(Prediction::Level(level(&i.to_string())?)),
+                    toml::Value::Table(t) => {
+                        let mut out = Vec::new();
+                        for (l, w) in t {
+                            let w = w.as_float().or_else(|| w.as_integer().map(|i| i as f64)).ok_or_else(|| bad(format!("the weight of \"{l}\" must be a number")))?;
+                            if !(w.is_finite() && w >= 0.0) {
+                                return Err(bad(format!("the weight of \"{l}\" must be ≥ 0 (got {w})")));
+                            }
+                            out.push((level(l.trim())?, w));
+                        }
+                        let total: f64 = out.iter().map(|(_, w)| w).sum();
+                        if !(total > 0.0) {
+                            return Err(bad("needs at least one level with a weight > 0".into()));
+                        }
+                        out.retain(|(_, w)| *w > 0.0);
+                        Ok(Prediction::Levels(out.into_iter().map(|(l, w)| (l, w / total)).collect()))
+                    }
+                    _ => Err(bad(format!("a categorical factor is predicted for a level (\"B2\") or levels in proportion ({{ B1 = 0.6, B2 = 0.4 }}); its levels: {list}"))),
+                }
+            }
+            FactorValues::Numeric(_) => match value {
+                toml::Value::Float(x) if x.is_finite() => Ok(Prediction::Value(*x)),
+                toml::Value::Integer(i) => Ok(Prediction::Value(*i as f64)),
+                toml::Value::Table(_) => {
+                    let d: Dist = value.clone().try_into().map_err(|e| bad(format!("not a distribution: {e}")))?;
+                    if matches!(d, Dist::Spectrum { .. }) {
+                        return Err(bad("a spectrum is a velocity distribution only".into()));
+                    }
+                    Ok(Prediction::Distribution(d.marginal(file, key, "as in the file", resolve)?))
+                }
+                _ => Err(bad("a numeric factor is predicted for a value (1450) or a distribution ({ distribution = \"uniform\", min = …, max = … })".into())),
+            },
+        }
+    }
 }
 
 impl Population {
@@ -58,7 +155,7 @@ impl Population {
             .iter()
             .map(|r| Particle { diameter_m: r.diameter_m, roundness: r.roundness, sphericity: r.sphericity, temperature_c: r.temperature_c })
             .collect();
-        Population { source: format!("data: {}", data.path.display()), particles, sampled: true }
+        Population { source: format!("data: {}", data.path.display()), particles, sampled: true, factors: data.factors.clone(), ..Population::default() }
     }
 
     /// A declared population: `spec.particles` randomly shifted Sobol' points (seeded) through
@@ -92,19 +189,130 @@ impl Population {
                 Particle { diameter_m: get("diameter_m").unwrap_or(f64::NAN), roundness: get("roundness"), sphericity: get("sphericity"), temperature_c: get("temperature_c") }
             })
             .collect();
-        Ok(Population { source: "declared".into(), particles, sampled: false })
+        Ok(Population { source: "declared".into(), particles, sampled: false, ..Population::default() })
     }
 
     /// The population of material `index` of the study `file`: declared (`population = { … }`,
-    /// seeded by `seed` and the index) or the particles of `data`.
+    /// seeded by `seed` and the index) or the particles of `data`, with the recorded factors set
+    /// as its `predict` says (module docs).
     pub fn of_material(m: &crate::schema::MaterialSpec, index: usize, data: &CrushData, file: &std::path::Path, seed: u64) -> Result<Population> {
-        match &m.population {
-            None => Ok(Population::of_data(data)),
-            Some(p) => {
-                let resolve = |q: &str| crate::schema::resolve_relative(file, std::path::Path::new(q));
-                Population::declared(p, &file.display().to_string(), &format!("material[{index}].population"), &resolve, seed ^ (0x909 + index as u64))
+        let resolve = |q: &str| crate::schema::resolve_relative(file, std::path::Path::new(q));
+        let name = file.display().to_string();
+        let mut pop = match &m.population {
+            None => Population::of_data(data),
+            Some(p) => Population::declared(p, &name, &format!("material[{index}].population"), &resolve, seed ^ (0x909 + index as u64))?,
+        };
+        for (k, (factor, value)) in m.predict.iter().enumerate() {
+            let key = format!("material[{index}].predict.{factor}");
+            let Some((_, values)) = data.factors.iter().find(|(n, _)| n == factor) else {
+                let known = data.factors.iter().map(|(n, _)| format!("`{n}`")).collect::<Vec<_>>().join(", ");
+                return Err(Error::config(&name, key, format!("`{factor}` is not a recorded factor of this material (declared in its `factors`: {})", if known.is_empty() { "none".into() } else { known })));
+            };
+            let prediction = Prediction::parse(value, values, &name, &key, &resolve)?;
+            pop.predict(factor, values, &prediction, seed ^ (0xFAC7 + 97 * index as u64 + k as u64));
+        }
+        Ok(pop)
+    }
+
+    /// Sets factor `name` of every row as `prediction` says (`data`: its values in the fitted
+    /// data, for the range; `seed`: the order of a distribution's strata).
+    pub fn predict(&mut self, name: &str, data: &FactorValues, prediction: &Prediction, seed: u64) {
+        use rand::SeedableRng;
+        use rand::seq::SliceRandom;
+        let n = self.particles.len();
+        if self.parent.is_empty() {
+            self.parent = (0..n).collect();
+        }
+        if self.within.is_empty() {
+            self.within = vec![1.0; n];
+        }
+        let set = |pop: &mut Population, values: FactorValues| match pop.factors.iter_mut().find(|(c, _)| c == name) {
+            Some((_, v)) => *v = values,
+            None => pop.factors.push((name.to_string(), values)),
+        };
+        let range = match data {
+            FactorValues::Numeric(v) => (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(f64::NEG_INFINITY, f64::max)),
+            FactorValues::Levels(_) => (f64::NAN, f64::NAN),
+        };
+        let outside = |lo: f64, hi: f64| if lo < range.0 || hi > range.1 { format!(" (outside the data's {}–{}: extrapolated)", range.0, range.1) } else { String::new() };
+        match prediction {
+            Prediction::Level(l) => {
+                set(self, FactorValues::Levels(vec![l.clone(); n]));
+                self.predicted.push(format!("{name} = {l}"));
+            }
+            Prediction::Value(x) => {
+                set(self, FactorValues::Numeric(vec![*x; n]));
+                self.predicted.push(format!("{name} = {x}{}", outside(*x, *x)));
+            }
+            Prediction::Levels(weights) => {
+                let rows: Vec<(usize, usize)> = (0..n).flat_map(|r| (0..weights.len()).map(move |k| (r, k))).collect();
+                self.particles = rows.iter().map(|&(r, _)| self.particles[r]).collect();
+                self.parent = rows.iter().map(|&(r, _)| self.parent[r]).collect();
+                self.within = rows.iter().map(|&(r, k)| self.within[r] * weights[k].1).collect();
+                for (_, v) in self.factors.iter_mut() {
+                    let mut keep = v.clone();
+                    keep.keep(&rows.iter().map(|&(r, _)| r).collect::<Vec<_>>());
+                    *v = keep;
+                }
+                set(self, FactorValues::Levels(rows.iter().map(|&(_, k)| weights[k].0.clone()).collect()));
+                let shares = weights.iter().map(|(l, w)| format!("{l} {:.0} %", 100.0 * w)).collect::<Vec<_>>().join(", ");
+                self.predicted.push(format!("{name}: {shares}"));
+            }
+            Prediction::Distribution(m) => {
+                let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+                let mut order: Vec<usize> = (0..n).collect();
+                order.shuffle(&mut rng);
+                let u: f64 = rand::Rng::random(&mut rng);
+                let values: Vec<f64> = order.iter().map(|&k| m.quantile((k as f64 + u) / n as f64)).collect();
+                let (lo, hi) = (m.quantile(0.0), m.quantile(1.0));
+                set(self, FactorValues::Numeric(values));
+                self.predicted.push(format!("{name} over {lo}–{hi} (declared distribution){}", outside(lo, hi)));
             }
         }
+    }
+
+    /// What the population is for in the recorded factors `names`, in words: the study's
+    /// `predict` where it set them, else the data's own values (`Charge as recorded: K1 15,
+    /// K2 15, K3 15`, `rate as recorded: 1.5–4`).
+    pub fn describe_factors(&self, names: &[String]) -> String {
+        names
+            .iter()
+            .map(|n| match self.predicted.iter().find(|p| p.starts_with(&format!("{n} ")) || p.starts_with(&format!("{n}:"))) {
+                Some(p) => p.clone(),
+                None => match self.factors.iter().find(|(c, _)| c == n) {
+                    Some((_, FactorValues::Levels(v))) => {
+                        let mut counts: Vec<(&str, usize)> = Vec::new();
+                        for l in v {
+                            match counts.iter_mut().find(|(x, _)| *x == l) {
+                                Some(c) => c.1 += 1,
+                                None => counts.push((l, 1)),
+                            }
+                        }
+                        format!("{n} as recorded: {}", counts.iter().map(|(l, k)| format!("{l} {k}")).collect::<Vec<_>>().join(", "))
+                    }
+                    Some((_, FactorValues::Numeric(v))) => {
+                        let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(*x), b.max(*x)));
+                        format!("{n} as recorded: {lo}–{hi}")
+                    }
+                    None => format!("{n}: no value"),
+                },
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
+    }
+
+    /// Number of particles of the sample (rows of one particle at several levels count once).
+    pub fn sample_size(&self) -> usize {
+        if self.parent.is_empty() { self.particles.len() } else { self.parent.iter().copied().max().map_or(0, |k| k + 1) }
+    }
+
+    /// Each row's weight in the point estimate (None: equal).
+    pub fn point_weights(&self) -> Option<Vec<f64>> {
+        if self.within.is_empty() {
+            return None;
+        }
+        let n = self.sample_size() as f64;
+        Some(self.within.iter().map(|w| w / n).collect())
     }
 
     /// Number of particles.
@@ -117,13 +325,15 @@ impl Population {
         self.particles.is_empty()
     }
 
-    /// `k` draws of the particles' weights: Dirichlet(1, …, 1) for a sampled population (the
-    /// Bayesian bootstrap; draw r from its own ChaCha8 stream of `seed`), None for a declared one
-    /// (equal weights).
+    /// `k` draws of the rows' weights: Dirichlet(1, …, 1) over the particles of a sampled
+    /// population (the Bayesian bootstrap; draw r from its own ChaCha8 stream of `seed`), each
+    /// row getting its particle's weight times its share within the particle; for a declared
+    /// population None (the point weights).
     pub fn weight_draws(&self, k: usize, seed: u64) -> Option<Vec<Vec<f64>>> {
         use rand::SeedableRng;
         use rand_distr::Distribution;
-        if !self.sampled || self.particles.len() < 2 {
+        let n = self.sample_size();
+        if !self.sampled || n < 2 {
             return None;
         }
         Some(
@@ -131,9 +341,13 @@ impl Population {
                 .map(|r| {
                     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
                     rng.set_stream(r as u64 + 1);
-                    let g: Vec<f64> = (0..self.particles.len()).map(|_| rand_distr::Exp1.sample(&mut rng)).collect();
+                    let g: Vec<f64> = (0..n).map(|_| rand_distr::Exp1.sample(&mut rng)).collect();
                     let total: f64 = g.iter().sum();
-                    g.into_iter().map(|x| x / total).collect()
+                    if self.within.is_empty() {
+                        g.into_iter().map(|x| x / total).collect()
+                    } else {
+                        self.within.iter().zip(&self.parent).map(|(w, &p)| w * g[p] / total).collect()
+                    }
                 })
                 .collect(),
         )

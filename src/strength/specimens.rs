@@ -28,15 +28,15 @@
 //!
 //! Bad input is refused naming the file, row (and line), column and rule; exit 2.
 
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-use super::factors::{FEW_LEVELS, Factor, FactorType, Form, SizeMeasure, candidates_of};
+use super::factors::{Factor, Form, SizeMeasure};
 use super::fit::Sample;
 use crate::error::{Error, Result};
-use crate::intake::units::{fold, parse_header};
+pub use crate::intake::factors::{FEW_LEVELS, FactorType, Factors};
+use crate::intake::factors::{declared_columns, read_factors, table_key};
 use crate::intake::{ColumnRecord, Field, Kind, MapOrigin, Plausible, Provenance, Quantity, Source, read_raw, resolve, select};
 
 /// Plausible specimen strength.
@@ -73,32 +73,6 @@ pub struct SizeSpec {
     pub measure: SizeMeasure,
 }
 
-/// The factor columns of a strength file: a list (types from the data) or a table of types.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
-pub enum Factors {
-    /// `factors = ["lab", "rate"]`.
-    Names(Vec<String>),
-    /// `factors = { lab = "categorical", rate = "numeric" }`.
-    Typed(BTreeMap<String, FactorType>),
-}
-
-impl Default for Factors {
-    fn default() -> Self {
-        Factors::Names(Vec::new())
-    }
-}
-
-impl Factors {
-    /// (column, declared type) pairs, in the study's order.
-    pub fn declared(&self) -> Vec<(String, Option<FactorType>)> {
-        match self {
-            Factors::Names(v) => v.iter().map(|n| (n.clone(), None)).collect(),
-            Factors::Typed(m) => m.iter().map(|(n, t)| (n.clone(), Some(*t))).collect(),
-        }
-    }
-}
-
 /// A strength file read: ids, the sample (strengths in Pa, numeric and categorical columns,
 /// candidates) and the intake's record.
 #[derive(Debug, Clone)]
@@ -111,15 +85,6 @@ pub struct Specimens {
     pub ids: Vec<String>,
     /// Strengths, covariates, levels and the generic candidates.
     pub sample: Sample,
-}
-
-/// The column of `table` a study's name refers to: the header itself, or the header whose
-/// name without its unit folds to the same (`gauge length [mm]` for `gauge_length`).
-fn find_column(headers: &[String], name: &str) -> Option<usize> {
-    headers.iter().position(|h| h == name).or_else(|| {
-        let want = fold(name);
-        headers.iter().position(|h| fold(h) == want || fold(&parse_header(h).name) == want)
-    })
 }
 
 /// Reads a strength file as `src` describes it, with the size measure and factor columns
@@ -151,86 +116,21 @@ pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, 
         strength.push(r.need_number("strength", row)?);
     }
 
-    // The declared columns: size first, then the factors.
-    let mut wanted: Vec<(String, String)> = Vec::new(); // (study key, column)
-    if let Some(s) = size {
-        wanted.push((format!("{}.size.column", origin.key), s.column.clone()));
-    }
-    for (name, _) in factors.declared() {
-        wanted.push((format!("{}.factors.{name}", origin.key), name));
-    }
-    let used: Vec<usize> = provenance.columns.iter().filter_map(|c| table.headers.iter().position(|h| *h == c.source)).collect();
-    let mut columns: Vec<(String, usize)> = Vec::new();
-    for (key, name) in &wanted {
-        let Some(c) = find_column(&table.headers, name) else {
-            let all = table.headers.iter().map(|h| format!("`{h}`")).collect::<Vec<_>>().join(", ");
-            return Err(Error::config(&origin.file, key.clone(), format!("{} has no column `{name}` (its columns: {all})", path.display())));
-        };
-        if used.contains(&c) {
-            return Err(Error::config(&origin.file, key.clone(), format!("`{name}` is the column read as the {}; a factor must be another column", provenance.columns.iter().find(|x| x.source == table.headers[c]).map_or("strength", |x| x.field.as_str()))));
-        }
-        if let Some((other, _)) = columns.iter().find(|(_, k)| *k == c) {
-            return Err(Error::config(&origin.file, key.clone(), format!("`{name}` is the same column as `{other}`: declare each column once")));
-        }
-        columns.push((name.clone(), c));
-    }
-
+    // The size measure first, then the factors (a factor may not be the size column).
     let mut sample = Sample { source: path.display().to_string(), strength, ..Sample::default() };
-    let numbers = |c: usize| -> Result<Vec<f64>> { rows.iter().map(|&row| table.need_number(row, c)).collect() };
-    let record = |name: &str, c: usize, what: &str| ColumnRecord { source: table.headers[c].clone(), field: name.to_string(), unit: "as in the file".into(), conversion: what.to_string(), found_by: "study".into() };
-    let mut k = 0;
     if let Some(s) = size {
-        let c = columns[0].1;
-        let v = numbers(c)?;
+        let c = declared_columns(&table, &provenance, &[(format!("{}.size.column", table_key(origin)), s.column.clone())], origin, path)?[0].1;
+        let v: Vec<f64> = rows.iter().map(|&row| table.need_number(row, c)).collect::<Result<_>>()?;
         if let Some(i) = v.iter().position(|x| !(*x > 0.0)) {
             return Err(table.error(rows[i], Some(c), format!("a size measure must be > 0 (got {})", v[i])));
         }
         sample.covariates.push((s.column.clone(), v.into_iter().map(Some).collect()));
         sample.factors.push(Factor { column: s.column.clone(), form: Form::Size(s.measure) });
-        provenance.columns.push(record(&s.column, c, &format!("size measure: {} (ratios only)", s.measure.describe())));
-        k = 1;
+        provenance.columns.push(ColumnRecord { source: table.headers[c].clone(), field: s.column.clone(), unit: "as in the file".into(), conversion: format!("size measure: {} (ratios only)", s.measure.describe()), found_by: "study".into() });
+        provenance.unused.retain(|u| *u != table.headers[c]);
     }
-    for ((name, declared), (_, c)) in factors.declared().into_iter().zip(&columns[k..]) {
-        let c = *c;
-        let texts: Vec<Option<String>> = rows.iter().map(|&row| table.text(row, c)).collect();
-        if let Some(i) = texts.iter().position(|t| t.is_none()) {
-            return Err(table.error(rows[i], Some(c), format!("factor `{name}` is empty here: every specimen needs its value")));
-        }
-        let numeric: Option<Vec<f64>> = rows.iter().map(|&row| table.number(row, c).ok().flatten()).collect();
-        let kind = match (declared, &numeric) {
-            (Some(t), _) => t,
-            (None, None) => FactorType::Categorical,
-            (None, Some(v)) => {
-                let mut distinct: Vec<f64> = v.clone();
-                distinct.sort_by(f64::total_cmp);
-                distinct.dedup();
-                if distinct.len() <= FEW_LEVELS && distinct.iter().all(|x| x.fract() == 0.0) {
-                    return Err(Error::config(
-                        &origin.file,
-                        format!("{}.factors", origin.key),
-                        format!("`{name}` holds {} distinct whole numbers ({}): codes of levels or a measured number? Say which: factors = {{ {name} = \"categorical\" }} or {{ {name} = \"numeric\" }}", distinct.len(), distinct.iter().map(|x| format!("{x}")).collect::<Vec<_>>().join(", ")),
-                    ));
-                }
-                FactorType::Numeric
-            }
-        };
-        match kind {
-            FactorType::Numeric => {
-                let v = numbers(c)?;
-                let positive = v.iter().all(|x| *x > 0.0);
-                sample.covariates.push((name.clone(), v.into_iter().map(Some).collect()));
-                sample.factors.extend(candidates_of(&name, kind, positive));
-                provenance.columns.push(record(&name, c, "numeric factor"));
-            }
-            FactorType::Categorical => {
-                let v: Vec<String> = texts.into_iter().map(|t| t.unwrap_or_default().trim().to_string()).collect();
-                sample.levels.push((name.clone(), v));
-                sample.factors.extend(candidates_of(&name, kind, false));
-                provenance.columns.push(record(&name, c, "categorical factor"));
-            }
-        }
-    }
-    provenance.unused.retain(|u| !columns.iter().any(|(_, c)| table.headers[*c] == *u));
+    let columns = read_factors(&table, &rows, factors, &mut provenance, origin, table_key(origin), path)?;
+    sample.add_factors(&columns);
     Ok(Specimens { path: path.to_path_buf(), provenance, ids, sample })
 }
 
@@ -264,11 +164,11 @@ mod tests {
     fn integer_codes_are_asked_about_and_missing_columns_named() {
         let body = "strength_pa,lab\n3e8,1\n3.1e8,2\n2.9e8,1\n";
         let e = read(body, None, Factors::Names(vec!["lab".into()]), &[]).unwrap_err().to_string();
-        assert!(e.contains("strength[0].data.factors") && e.contains("codes of levels or a measured number"), "{e}");
+        assert!(e.contains("strength[0].factors") && e.contains("codes of levels or a measured number"), "{e}");
         let ok = read(body, None, Factors::Typed([("lab".to_string(), FactorType::Categorical)].into()), &[]).unwrap();
         assert_eq!(ok.sample.levels[0].1, ["1", "2", "1"]);
         let e = read(body, None, Factors::Names(vec!["batch".into()]), &[]).unwrap_err().to_string();
-        assert!(e.contains("strength[0].data.factors.batch") && e.contains("no column `batch`") && e.contains("`lab`"), "{e}");
+        assert!(e.contains("strength[0].factors.batch") && e.contains("no column `batch`") && e.contains("`lab`"), "{e}");
         // A strength in GPa read as Pa is implausible and named with its row.
         let e = read("strength_pa\n1.2\n1.3\n", None, Factors::default(), &[]).unwrap_err().to_string();
         assert!(e.contains("specimen strength") && e.contains("row 1"), "{e}");

@@ -297,13 +297,13 @@ fn write_strength_models(dir: &mut ReportDir, forms: &[Form]) -> Result<()> {
 /// The largest |correlation| between an effect's β draws and the base (μ_c, ln m) draws — how
 /// far the split sampling of the Sobol' indices is from the joint draws (0 without effects).
 fn split_correlation(m: &super::setup::Material) -> f64 {
-    let k = m.model.linear().len();
     let centre = &m.model.fit.centre;
+    let k = centre.len();
     let base: [Vec<f64>; 2] = [
         m.draws.iter().map(|d| d.mu + (0..k).map(|l| d.beta[l] * centre[l]).sum::<f64>()).collect(),
         m.draws.iter().map(|d| d.shape.ln()).collect(),
     ];
-    (0..k).flat_map(|l| {
+    m.model.fit.scalar_effects().into_iter().map(|(_, l)| l).flat_map(|l| {
         let b: Vec<f64> = m.draws.iter().map(|d| d.beta[l]).collect();
         base.iter().map(move |x| crate::stats::pearson(x, &b).0.abs()).collect::<Vec<_>>()
     })

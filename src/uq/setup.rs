@@ -37,8 +37,9 @@ use super::study::UqStudy;
 use crate::contact::{AveragingDomain, ContactOptions};
 use crate::dist::Marginal;
 use crate::error::{Error, Result};
-use crate::lifetime::damage::{CriticalRatioTable, DamageModel, Law};
-use crate::strength::{LifetimeModel, MAX_LINEAR, NamingSettings, Params, Sample, StrengthFit, StrengthSpec, sample_of};
+use crate::lifetime::damage::{CriticalRatioTable, DamageModel};
+use crate::strength::model::{Horizon, LAWS};
+use crate::strength::{LifetimeModel, NamingSettings, Params, Sample, StrengthFit, StrengthSpec, sample_of};
 use crate::thermal::ParameterLaws;
 
 /// One uncertain input.
@@ -80,6 +81,8 @@ pub struct Material {
     strength_input: usize,
     /// Indices of its effect parameters in the inputs (order of the linear effects).
     effect_inputs: Vec<usize>,
+    /// The single-column effects of those inputs, with their β index (same order).
+    effect_columns: Vec<(crate::strength::Effect, usize)>,
 }
 
 /// The temperature of the crush data assumed when the `temperature_c` column is empty (°C).
@@ -236,12 +239,12 @@ impl Setup {
             let effects = crate::discrepancy::workflow::resolve(spec, &sample, &naming)?;
             let fit = StrengthFit::new(&sample, &effects, naming.gamma, &m.key)?;
             let population = crate::strength::Population::of_material(m, i, &data, path, s.seed)?;
-            let model = LifetimeModel::new(&m.key, &m.label, m.sphere(&data), s.impact.target, *domain, fit, population)?;
+            let model = LifetimeModel::new(&m.key, &m.label, m.sphere(&data), s.impact.target, *domain, fit, population).map_err(|e| e.in_study(&file, &format!("material[{i}]")))?;
             let (draws, weights) = model.draws(s.strength.uncertainty, s.strength.draws, s.seed ^ (0xA5A5 + slot as u64))?;
             let strength_input = inputs.len();
             inputs.push(Input { name: format!("strength_{}", m.key), unit: "joint draw".into(), marginal: Marginal::Index(draws.len()) });
             let mut effect_inputs = Vec::new();
-            for (l, e) in model.linear().iter().enumerate() {
+            for (e, l) in model.fit.scalar_effects() {
                 let mut v: Vec<f64> = draws.iter().map(|d| e.natural(d.beta[l])).collect();
                 v.sort_by(f64::total_cmp);
                 let k = v.len();
@@ -250,7 +253,12 @@ impl Setup {
                 effect_inputs.push(inputs.len());
                 inputs.push(Input { name: format!("{}_{sym}_{}", e.name(), m.key), unit: "-".into(), marginal: Marginal::Quantiles { p, v } });
             }
-            materials.push(Material { model, draws, weights, sample, path: dpath, read: data.provenance.clone(), strength_input, effect_inputs });
+            let effect_columns = model.fit.scalar_effects();
+            materials.push(Material { model, draws, weights, sample, path: dpath, read: data.provenance.clone(), strength_input, effect_inputs, effect_columns });
+        }
+        let samples: Vec<&Sample> = materials.iter().map(|m: &Material| &m.sample).collect();
+        if let Some(e) = crate::discrepancy::workflow::unclaimed(spec, &samples) {
+            return Err(Error::config(&file, "strength.effects", format!("`{}`: neither material declares the factor `{}` in its `factors`", e.name(), e.covariate())));
         }
         let shared_at = inputs.len();
         inputs.extend(shared.inputs.iter().cloned());
@@ -341,8 +349,8 @@ impl Setup {
         if mode == Mode::Joint {
             for mat in &self.materials {
                 let d = &mat.draws[x[mat.strength_input] as usize];
-                for (l, (&i, e)) in mat.effect_inputs.iter().zip(mat.model.linear()).enumerate() {
-                    x[i] = e.natural(d.beta[l]);
+                for (&i, (e, l)) in mat.effect_inputs.iter().zip(&mat.effect_columns) {
+                    x[i] = e.natural(d.beta[*l]);
                 }
             }
         }
@@ -357,14 +365,14 @@ impl Setup {
         if mode == Mode::Joint {
             return (d, w);
         }
-        // Split: keep the draw's μ_c = μ + Σ β z̄ and replace β by the effect inputs.
+        // Split: keep the draw's μ_c = μ + Σ β z̄ and replace each single-column effect's β
+        // by its input (a categorical factor's level columns stay the joint draw's).
         let mut p = d;
-        let mut beta = [0.0; MAX_LINEAR];
-        for (l, (&i, e)) in mat.effect_inputs.iter().zip(mat.model.linear()).enumerate() {
-            beta[l] = e.beta_of(x[i]);
-            p.mu += (d.beta[l] - beta[l]) * mat.model.fit.centre[l];
+        for (&i, (e, l)) in mat.effect_inputs.iter().zip(&mat.effect_columns) {
+            let l = *l;
+            p.beta[l] = e.beta_of(x[i]);
+            p.mu += (d.beta[l] - p.beta[l]) * mat.model.fit.centre[l];
         }
-        p.beta = beta;
         (p, w)
     }
 
@@ -399,13 +407,13 @@ impl Setup {
     pub fn evaluate_at(&self, strength: [(Params, Option<&[f64]>); 2], moduli: [f64; 2], [eta, v, per_year, gamma]: [f64; 4], out: &mut [f64]) -> Result<()> {
         out.fill(0.0);
         let per = self.years.len() * self.models.len();
-        let mut laws = [Law::Scaled { c: 0.0 }; 32];
+        let mut laws = [Horizon::independent(0.0); LAWS];
         for (j, (p, w)) in strength.into_iter().enumerate() {
             let mut c = 0;
             for (h, years) in self.years.iter().enumerate() {
                 let ln_x_star = self.tk[h].as_ref().map_or(0.0, |t| t.ln_ratio(gamma));
                 for &model in &self.models {
-                    laws[c] = Law::new(model, p.shape, years * per_year, ln_x_star);
+                    laws[c] = Horizon { model, impacts: years * per_year, ln_x_star };
                     c += 1;
                 }
             }

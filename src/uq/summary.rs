@@ -160,6 +160,23 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
         }
     }
 
+    // What the recorded factors of a model are predicted for.
+    for (j, m) in st.materials.iter().enumerate() {
+        let mut factors: Vec<String> = Vec::new();
+        for f in forms {
+            for e in f.setup.materials[j].model.fit.effects() {
+                if let crate::strength::Effect::Factor(x) = e
+                    && !factors.contains(&x.column)
+                {
+                    factors.push(x.column.clone());
+                }
+            }
+        }
+        if !factors.is_empty() {
+            md.push_str(&format!("\n{} is predicted for {} — in the models that carry these factors; the others do not depend on them.\n", m.model.label, m.model.population.describe_factors(&factors)));
+        }
+    }
+
     md.push_str(&format!("\n## What drives it (Sobol' total indices, last horizon, strength model `{}`)\n\n", st.spec.name()));
     for (o, si) in ind.iter().enumerate() {
         let mut order: Vec<usize> = (0..varying.len()).collect();

@@ -35,12 +35,12 @@ fn model() -> LifetimeModel {
     let sphere = Sphere { diameter: 1e-3, density: 3600.0, elastic: e };
     let sample = Sample { source: "t".into(), strength: (1..=12).map(|i| 8e8 + 1e7 * i as f64).collect(), covariates: vec![], particles: true, ..Sample::default() };
     let fit = StrengthFit::new(&sample, &[], 5.0, "t").unwrap();
-    let population = Population { source: "declared".into(), particles: vec![Particle { diameter_m: 1e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false };
+    let population = Population { source: "declared".into(), particles: vec![Particle { diameter_m: 1e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false, ..Population::default() };
     LifetimeModel::new("t", "T", sphere, Elastic::new(210e9, 0.3).unwrap(), AveragingDomain::default(), fit, population).unwrap()
 }
 
 fn p_single(m: &LifetimeModel, eta: f64, k: f64, v: f64) -> f64 {
-    let p = Params { shape: k, mu: 900e6f64.ln(), beta: [0.0; 4] };
+    let p = Params::base(k, 900e6f64.ln());
     m.breakage(&p, None, eta, v, &[1.0]).unwrap()[0]
 }
 

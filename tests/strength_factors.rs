@@ -535,3 +535,115 @@ fn a_lab_file_with_uneven_lots_and_a_scattering_lab_runs_from_its_study_file_alo
     let findings = s.read("reports/bars/findings.csv");
     assert!(findings.lines().any(|l| l.starts_with("bars,0,Labor,") && l.contains(",scatter,")), "{findings}");
 }
+
+/// The Jahanmir (1996) silicon nitride bars (`datasets/real/`, values read as MPa): all 480 or one
+/// batch's 240 strengths (Pa).
+fn jahanmir(batch: Option<&str>) -> Vec<f64> {
+    use partlife::intake::{MapOrigin, Source};
+    use partlife::strength::factors::FactorType;
+    use partlife::strength::specimens::{Factors, read_specimens};
+    let mut src = Source::file(common::root().join("datasets/real/jahanmir_silicon_nitride_bend_bars.csv"));
+    src.columns.insert("strength".into(), "strength_original_units".into());
+    src.units.insert("strength".into(), "MPa".into());
+    let s = read_specimens(&src, None, &Factors::Typed([("batch".to_string(), FactorType::Categorical)].into()), &MapOrigin { file: "test".into(), key: "data".into() }).unwrap();
+    let levels = &s.sample.levels[0].1;
+    (0..levels.len()).filter(|&i| batch.is_none_or(|b| levels[i] == b)).map(|i| s.sample.strength[i]).collect()
+}
+
+/// The `reliability` package on the Jahanmir bars (tests/bench/reliability/fit.py; original units):
+/// two-parameter fits (set, n, m, scale, ℓ) and its mixture and competing-risks ℓ.
+const PEER_JAHANMIR: [(&str, usize, f64, f64, f64); 3] = [
+    ("all", 480, 10.0676399646, 682.6511127286, -2746.9904924711),
+    ("1", 240, 14.0396658684, 715.7666014840, -1318.6577709147),
+    ("2", 240, 9.7884258609, 639.1252312052, -1348.3423766034),
+];
+const PEER_JAHANMIR_FLAWS: [(&str, f64); 2] = [("mixture", -2747.0064693345), ("competing_risks", -2746.9904926052)];
+
+#[test]
+fn fits_of_the_jahanmir_bars_against_the_reliability_package() {
+    use partlife::strength::flaws::{Populations, fit as fit_law};
+    use partlife::strength::regress::{Design, fit};
+    // ℓ in Pa = ℓ in MPa − n ln 10⁶.
+    let in_mpa = |l: f64, n: usize| l + n as f64 * 1e6f64.ln();
+    for (set, n, m, scale, loglik) in PEER_JAHANMIR {
+        let x = jahanmir(if set == "all" { None } else { Some(set) });
+        assert_eq!(x.len(), n, "{set}");
+        let f = fit(&x, &Design::default()).unwrap();
+        assert!((in_mpa(f.loglik, n) - loglik).abs() < 1e-6, "{set}: ℓ {} vs {loglik}", in_mpa(f.loglik, n));
+        assert!((f.shape() / m - 1.0).abs() < 1e-6 && (f.mu.exp() / 1e6 / scale - 1.0).abs() < 1e-6, "{set}: m {} scale {}", f.shape(), f.mu.exp());
+    }
+    let x = jahanmir(None);
+    for (law, peer) in PEER_JAHANMIR_FLAWS {
+        let f = fit_law(if law == "mixture" { Populations::Mixture } else { Populations::Competing }, &x).unwrap();
+        let ours = in_mpa(f.loglik, x.len());
+        eprintln!("jahanmir {law}: ours ℓ = {ours:.10} ({:?}), reliability {peer:.10}; p = {:.6}, first = ({:.6e}, {:.6}), second = ({:.6e}, {:.6})", f.identifiable, f.p, f.first.0, f.first.1, f.second.0, f.second.1);
+        assert!(ours >= peer - 1e-6, "{law}: ℓ {ours} below reliability's {peer}");
+        if law == "mixture" {
+            // reliability's mixture collapses onto one population (p = 10⁻⁴, ℓ below even the
+            // two-parameter fit's); the bimodal bars (two batches) have a far higher optimum.
+            assert!(ours - peer > 10.0 && f.identifiable.is_ok(), "{f:?}");
+        } else {
+            // reliability's second risk never acts (scale 9·10⁴): its optimum is the
+            // two-parameter fit. Ours is 0.40 higher with a second risk of modulus at the bound
+            // 100 cutting off the strongest bars — a spike, reported as not identified.
+            assert!(ours - peer > 0.3 && ours - peer < 1.0, "{ours} vs {peer}");
+            assert!(f.identifiable.as_ref().is_err_and(|w| w.contains("edge")), "{:?}", f.identifiable);
+        }
+    }
+}
+
+/// The shipped Jahanmir study (at 99 bootstrap replicates and without the two-population
+/// candidates, which cost two minutes here; the README reports the shipped run) and a lab's
+/// export of the same bars: the batch's scale and then its modulus are named, the final model is
+/// the two batches fitted apart (reliability's ℓ and moduli), no laboratory or machining factor
+/// passes the guard, and the Weibull law still fits poorly.
+#[test]
+fn the_jahanmir_study_names_the_batch_and_a_lab_export_agrees() {
+    let s = common::Scratch::new();
+    std::fs::create_dir_all(s.path("datasets/real")).unwrap();
+    std::fs::copy(common::root().join("datasets/real/jahanmir_silicon_nitride_bend_bars.csv"), s.path("datasets/real/jahanmir_silicon_nitride_bend_bars.csv")).unwrap();
+    let study = std::fs::read_to_string(common::root().join("studies/strength_ceramic_jahanmir.toml")).unwrap();
+    let fast = common::edited(&study, &[("bootstrap = 499", "bootstrap = 99"), ("permutations = 999", "permutations = 199"), ("populations = [\"mixture\", \"competing_risks\"]", "")]);
+    s.write("studies/jahanmir.toml", &fast);
+    // The lab's export: semicolon, decimal comma, German headers, strength in GPa.
+    let text = s.read("datasets/real/jahanmir_silicon_nitride_bend_bars.csv");
+    let mut lab = String::from("Probe;Labor;Charge;Tischvorschub;Zustellung;Körnung;Biegefestigkeit [GPa]\n");
+    for line in text.lines().skip(1) {
+        let v: Vec<&str> = line.split(',').collect();
+        let gpa = format!("{}", v[7].parse::<f64>().unwrap() / 1000.0).replace('.', ",");
+        lab.push_str(&format!("{};L{};{};{};{};{};{gpa}\n", v[0], v[2], v[3], v[4], v[5], v[6]));
+    }
+    s.write("datasets/real/jahanmir_lab.csv", &lab);
+    let lab_study = common::edited(
+        &fast,
+        &[
+            ("data = { file = \"../datasets/real/jahanmir_silicon_nitride_bend_bars.csv\", columns = { strength = \"strength_original_units\" }, units = { strength = \"MPa\" } }", "data = { file = \"../datasets/real/jahanmir_lab.csv\", columns = { strength = \"Biegefestigkeit [GPa]\", id = \"Probe\" } }"),
+            ("factors = { lab = \"categorical\", batch = \"categorical\", table_speed = \"categorical\", down_feed_rate = \"categorical\", wheel_grit = \"categorical\" }", "factors = { Labor = \"categorical\", Charge = \"categorical\", Tischvorschub = \"categorical\", Zustellung = \"categorical\", \"Körnung\" = \"categorical\" }"),
+        ],
+    );
+    s.write("studies/jahanmir_lab.toml", &lab_study);
+    let mut runs = Vec::new();
+    for name in ["jahanmir", "jahanmir_lab"] {
+        let out = s.run(&["run", &format!("studies/{name}.toml"), "--quiet"]);
+        assert_eq!(out.code, 0, "{name}: {}", out.stderr);
+        let v: serde_json::Value = serde_json::from_str(&s.read(&format!("reports/{name}/verdict.json"))).unwrap();
+        runs.push((v, s.read(&format!("reports/{name}/summary.md"))));
+    }
+    let (v, md) = &runs[0];
+    assert_eq!(v["effects_named"]["si3n4"], serde_json::json!(["levels(batch)", "moduli(batch)"]));
+    let last = v["materials"][0]["stages"].as_array().unwrap().last().unwrap().clone();
+    // The final model is the batches fitted apart: ℓ (Pa) = Σ reliability's per-batch ℓ − n ln 10⁶.
+    let want = PEER_JAHANMIR[1].4 + PEER_JAHANMIR[2].4 - 480.0 * 1e6f64.ln();
+    assert!((last["log_likelihood"].as_f64().unwrap() - want).abs() < 1e-5, "{last}");
+    assert!((last["weibull_modulus_max"].as_f64().unwrap() / PEER_JAHANMIR[1].2 - 1.0).abs() < 1e-6 && (last["weibull_modulus_min"].as_f64().unwrap() / PEER_JAHANMIR[2].2 - 1.0).abs() < 1e-6, "{last}");
+    assert!(last["p_anderson_darling"].as_f64().unwrap() < 0.05, "{last}");
+    assert!(md.contains("**The Weibull law fits these data poorly**") && md.contains("even with the named effects"), "{md}");
+    assert!(md.contains("Weibull modulus of each level of `batch`: 1 14.04, 2 9.79"), "{md}");
+    // The lab export: the same verdict under its own names, the same final ℓ (the strengths in
+    // GPa: ℓ differs by n ln 10³).
+    let (l, _) = &runs[1];
+    assert_eq!(l["effects_named"]["si3n4"], serde_json::json!(["levels(Charge)", "moduli(Charge)"]));
+    let ll = l["materials"][0]["stages"].as_array().unwrap().last().unwrap()["log_likelihood"].as_f64().unwrap();
+    assert!((ll - last["log_likelihood"].as_f64().unwrap()).abs() < 1e-6, "{ll} vs {}", last["log_likelihood"]);
+    assert_eq!(v["gap_before"]["si3n4"], l["gap_before"]["si3n4"]);
+}

@@ -124,7 +124,7 @@ fn population_breakage_with_size_and_roundness_is_the_sum_by_hand() {
     };
     let fit = StrengthFit::new(&sample, &[Effect::Size, Effect::Roundness], 5.0, "t").unwrap();
     let pop = vec![(0.7e-3, 0.65), (0.9e-3, 0.8), (1.1e-3, 0.95)];
-    let population = Population { source: "declared".into(), particles: pop.iter().map(|&(dd, rr)| Particle { diameter_m: dd, roundness: Some(rr), sphericity: None, temperature_c: None }).collect(), sampled: false };
+    let population = Population { source: "declared".into(), particles: pop.iter().map(|&(dd, rr)| Particle { diameter_m: dd, roundness: Some(rr), sphericity: None, temperature_c: None }).collect(), sampled: false, ..Population::default() };
     let e = Elastic::new(112e9, 0.25).unwrap();
     let steel = Elastic::new(210e9, 0.3).unwrap();
     let model = LifetimeModel::new("t", "T", Sphere { diameter: 0.9e-3, density: 3060.0, elastic: e }, steel, AveragingDomain::default(), fit.clone(), population).unwrap();

@@ -102,7 +102,7 @@ fn sweep_with(reps: usize, seed: u64, hidden: Option<(&Effect, f64)>, effect: im
 
 #[allow(clippy::too_many_arguments)]
 fn sweep_full(reps: usize, seed: u64, hidden: Option<(&Effect, f64)>, effect: impl Fn(&Campaign, usize) -> f64, modulus: impl Fn(&Campaign, usize) -> f64, noise: bool, shuffle_batch: bool, rate_forms: &[Form]) -> (usize, usize, usize) {
-    let (mut named, mut covered, mut any) = (0, 0, 0);
+    let (mut named, mut covered, mut any, mut wald, mut profile) = (0, 0, 0, 0, 0);
     for r in 0..reps {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(r as u64 + 1);
@@ -120,12 +120,25 @@ fn sweep_full(reps: usize, seed: u64, hidden: Option<(&Effect, f64)>, effect: im
             if o.named.first() == Some(e) {
                 named += 1;
                 // The model of the round that named it (a later round may add a second effect).
-                let (b, se) = o.stages[1].model.coefficient(e).unwrap();
-                covered += usize::from((b - beta).abs() <= 1.645 * se);
+                // Its exact 90 % band from the pivotal simulation (the band the report gives a
+                // named effect; the Wald band b ± 1.645 se and the profile-likelihood interval,
+                // both large-sample, undercover the power law's exponent at n = 90: 84.6 % and
+                // 84.9 %); for a categorical factor the Wald band of the first level's offset.
+                let m = &o.stages[1].model;
+                let (b, se) = m.coefficient(e).unwrap();
+                wald += usize::from((b - beta).abs() <= 1.645 * se);
+                let band = m.profile_band(&s.strength, e, 0.90).map(|p| (p, m.pivotal_band(e, 0.90, 999, seed ^ r as u64).unwrap()));
+                if let Some(((plo, phi), _)) = band {
+                    profile += usize::from(plo <= beta && beta <= phi);
+                }
+                covered += usize::from(match band {
+                    Some((_, (lo, hi))) => lo <= beta && beta <= hi,
+                    None => (b - beta).abs() <= 1.645 * se,
+                });
             }
         }
     }
-    eprintln!("hidden {:?}: named first {named}/{reps}, inside the 90 % band {covered}/{named}, anything named {any}/{reps}", hidden.map(|h| h.0.name()));
+    eprintln!("hidden {:?}: named first {named}/{reps}, inside the 90 % band {covered}/{named} (Wald {wald}, profile likelihood {profile}), anything named {any}/{reps}", hidden.map(|h| h.0.name()));
     (named, covered, any)
 }
 
@@ -170,14 +183,14 @@ fn a_hidden_batch_effect_is_named_as_levels_and_a_rate_effect_as_linear_or_power
     let power = Effect::Factor(Factor { column: "rate".into(), form: Form::Power });
     let (named, _, _) = sweep(reps, 33_03, Some((&power, 0.0625)), |c, i| 0.0625 * c.rate[i].ln(), false, false);
     assert!(named as f64 >= 0.9 * reps as f64, "power(rate) named {named}/{reps}");
-    // Its band, over 300 campaigns with the rate declared as a power law only (the first 100
-    // alone cover in 79 of 99: the coverage needs the larger sweep to be judged; with linear and
-    // power both candidates the first 100 cover in 73 of 91).
-    // MISSED BAR (issue 33 asks ≥ 85 %): the Wald band of the exponent covers in 253 of 299
-    // (84.6 %) here, and in 353 of 400 (88 %) over other seeds; a profile-likelihood band is the
-    // remedy (issue note). This guards the reached level, not the bar.
+    // Its band, over 300 campaigns with the rate declared as a power law only (100 are too few
+    // to judge a coverage near the bar): the exact pivotal band the report gives a named effect
+    // covers in 257 of 299 (86 %; the remaining shortfall from 90 % is the selection — the
+    // exponent is judged where it was named first, which favours campaigns that overestimate
+    // it). The large-sample bands miss the bar here: Wald 253 (84.6 %), profile likelihood 254
+    // (84.9 %).
     let (named, covered, _) = sweep_with(300, 33_03, Some((&power, 0.0625)), |c, i| 0.0625 * c.rate[i].ln(), false, false, &[Form::Power]);
-    assert!(covered as f64 >= 0.84 * named as f64, "exponent inside its 90 % band in {covered}/{named}");
+    assert!(covered as f64 >= 0.85 * named as f64, "exponent inside its 90 % band in {covered}/{named}");
     // ln σ linear in the rate (0.04 per unit over 0.1…10; at 0.03 it is named first in 89 of 100).
     let linear = Effect::Factor(Factor { column: "rate".into(), form: Form::Linear });
     let (named, covered, _) = sweep(reps, 33_04, Some((&linear, 0.04)), |c, i| 0.04 * c.rate[i], false, false);
@@ -582,6 +595,8 @@ fn fits_of_the_jahanmir_bars_against_the_reliability_package() {
             // reliability's mixture collapses onto one population (p = 10⁻⁴, ℓ below even the
             // two-parameter fit's); the bimodal bars (two batches) have a far higher optimum.
             assert!(ours - peer > 10.0 && f.identifiable.is_ok(), "{f:?}");
+            // The README's figures: ℓ −2728.881, 24 % of the bars in the weaker population.
+            assert!((ours + 2728.8807).abs() < 1e-3 && (f.p - 0.2408).abs() < 1e-3, "{ours} {}", f.p);
         } else {
             // reliability's second risk never acts (scale 9·10⁴): its optimum is the
             // two-parameter fit. Ours is 0.40 higher with a second risk of modulus at the bound
@@ -639,6 +654,15 @@ fn the_jahanmir_study_names_the_batch_and_a_lab_export_agrees() {
     assert!(last["p_anderson_darling"].as_f64().unwrap() < 0.05, "{last}");
     assert!(md.contains("**The Weibull law fits these data poorly**") && md.contains("even with the named effects"), "{md}");
     assert!(md.contains("Weibull modulus of each level of `batch`: 1 14.04, 2 9.79"), "{md}");
+    assert!(md.contains("σ_θ of each level of `batch` relative to \"1\": 1 ×1.000, 2 ×0.905"), "{md}");
+    // The numbers the README reports that do not depend on the bootstrap count: Λ and ΔBIC of
+    // the named candidates, the gap before and after.
+    let ev = v["evidence"]["si3n4"].as_array().unwrap();
+    let at = |round: u64, name: &str| ev.iter().find(|e| e["round"].as_u64() == Some(round) && e["candidate"] == name).unwrap().clone();
+    let (batch, moduli) = (at(0, "levels(batch)"), at(1, "moduli(batch)"));
+    assert!((batch["likelihood_ratio"].as_f64().unwrap() - 132.73).abs() < 0.005 && (batch["delta_bic"].as_f64().unwrap() + 126.55).abs() < 0.005, "{batch}");
+    assert!((moduli["likelihood_ratio"].as_f64().unwrap() - 27.26).abs() < 0.005, "{moduli}");
+    assert!((v["gap_before"]["si3n4"].as_f64().unwrap() - 194.3).abs() < 0.05 && (v["gap_after"]["si3n4"].as_f64().unwrap() - 53.9).abs() < 0.05, "{}", v["gap_after"]);
     // The lab export: the same verdict under its own names, the same final ℓ (the strengths in
     // GPa: ℓ differs by n ln 10³).
     let (l, _) = &runs[1];

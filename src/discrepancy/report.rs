@@ -77,7 +77,7 @@ pub(super) fn verdict_json(loaded: &StudyFile, s: &DiscrepancyStudy, results: &[
                     "p_family": finite(e.p_family),
                     "delta_bic": finite(e.delta_bic),
                     "delta_cv_log_score": finite(e.delta_cv),
-                    "parameter": e.parameter.as_ref().map(|(k, v, se)| json!({"name": k, "value": finite(*v), "se": finite(*se)})),
+                    "parameter": e.parameter.as_ref().map(|(k, v, se)| json!({"name": k, "value": finite(*v), "se": finite(*se), "band_90": e.band.map(|(a, b)| json!([finite(a), finite(b)])), "band_kind": e.band.map(|_| if e.band_pivotal { "pivotal" } else { "profile likelihood" })})),
                     "meaning": e.meaning,
                     "weibull_modulus": finite(e.shape),
                     "passed_guard": e.passed,
@@ -163,6 +163,9 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         scol("parameter", ev.iter().map(|(_, e)| e.parameter.as_ref().map(|p| p.0.clone()).unwrap_or_default()).collect()),
         fcol("value", par(|p| p.1)),
         fcol("se", par(|p| p.2)),
+        fcol("band_q05", ev.iter().map(|(_, e)| e.band.map_or(f64::NAN, |b| b.0)).collect()),
+        fcol("band_q95", ev.iter().map(|(_, e)| e.band.map_or(f64::NAN, |b| b.1)).collect()),
+        scol("band", ev.iter().map(|(_, e)| e.band.map_or("", |_| if e.band_pivotal { "pivotal" } else { "profile likelihood" }).to_string()).collect()),
         fcol("weibull_modulus", ev.iter().map(|(_, e)| e.shape).collect()),
         scol("passed_guard", ev.iter().map(|(_, e)| e.passed.to_string()).collect()),
         scol("named", ev.iter().map(|(_, e)| e.named.to_string()).collect()),
@@ -331,7 +334,8 @@ fn evidence_row(e: &super::workflow::Evidence) -> String {
     if let Some(reason) = &e.skipped {
         return format!("| {} | {} | | | | | | | skipped: {} |\n", e.round, e.candidate.name(), reason);
     }
-    let par = e.parameter.as_ref().map(|(k, v, se)| if se.is_finite() { format!("{k} = {v:.3} ± {se:.3}") } else { format!("{k} = {v:.3}") }).unwrap_or_default();
+    let band = e.band.map(|(a, b)| format!(" (90 % {} {a:.3}–{b:.3})", if e.band_pivotal { "pivotal" } else { "profile" })).unwrap_or_default();
+    let par = e.parameter.as_ref().map(|(k, v, se)| if se.is_finite() { format!("{k} = {v:.3} ± {se:.3}{band}") } else { format!("{k} = {v:.3}") }).unwrap_or_default();
     let verdict = if e.named { "**named**" } else if e.passed { "passed, weaker" } else { "not supported" };
     format!("| {} | {} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {} | {} |\n", e.round, e.candidate.name(), e.lr, e.lr_critical, e.p_family, e.delta_bic, e.delta_cv, par, verdict)
 }
@@ -522,6 +526,8 @@ mod tests {
             delta_bic: -8.1304,
             delta_cv: 0.3751,
             parameter: Some(("β".into(), 0.5, se)),
+            band: None,
+            band_pivotal: false,
             meaning: String::new(),
             shape: 5.0,
             passed,

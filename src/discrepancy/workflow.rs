@@ -72,6 +72,12 @@ pub struct Evidence {
     pub delta_cv: f64,
     /// Fitted parameter (symbol, value, standard error; NaN where not available).
     pub parameter: Option<(String, f64, f64)>,
+    /// The parameter's 90 % band (a single-column effect; in the reported parameter's units,
+    /// lower first): for a named effect whose model is location-scale the exact pivotal band
+    /// (999 unit-sample refits), otherwise the profile-likelihood interval.
+    pub band: Option<(f64, f64)>,
+    /// Whether `band` is the pivotal band (else the profile likelihood's).
+    pub band_pivotal: bool,
     /// What the parameter means.
     pub meaning: String,
     /// Weibull modulus of the extended model.
@@ -370,6 +376,8 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
                     delta_bic: dbic,
                     delta_cv: dcv,
                     parameter: Some(parameter),
+                    band: m.profile_band(x, c, 0.90).map(|b| natural_band(c, b)),
+                    band_pivotal: false,
                     meaning,
                     shape: m.shape(),
                     passed: p_f < settings.alpha && dbic < 0.0 && dcv > 0.0 && identified,
@@ -405,10 +413,23 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
             None => break,
         }
     }
+    // A named effect's exact band, in the model of the round that named it.
+    for e in evidence.iter_mut().filter(|e| e.named) {
+        if let Some(b) = stages.get(e.round + 1).and_then(|st| st.model.pivotal_band(&e.candidate, 0.90, 999, settings.seed ^ 0xBA4D ^ e.round as u64)) {
+            e.band = Some(natural_band(&e.candidate, b));
+            e.band_pivotal = true;
+        }
+    }
     // The weakest-link test of each named size effect, in the final model.
     let last = &stages[stages.len() - 1].model;
     let size_tests = current.iter().filter_map(|(c, t)| describe(c, t, last, x).2.map(|w| (c.clone(), w))).collect();
     Ok(Outcome { named, evidence, stages, skipped_covariates, size_tests })
+}
+
+/// A band of β in the reported parameter's units, lower first (α = −β flips it).
+fn natural_band(c: &Effect, (a, b): (f64, f64)) -> (f64, f64) {
+    let (a, b) = (c.natural(a), c.natural(b));
+    (a.min(b), a.max(b))
 }
 
 /// The effects of a strength specification for one material: an explicit list as it applies to
@@ -556,6 +577,8 @@ fn skipped_evidence(round: usize, candidate: Effect, reason: String) -> Evidence
         delta_bic: f64::NAN,
         delta_cv: f64::NAN,
         parameter: None,
+        band: None,
+        band_pivotal: false,
         meaning: String::new(),
         shape: f64::NAN,
         passed: false,

@@ -36,6 +36,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::Distribution;
 use rayon::prelude::*;
 
+use super::effects::Effect;
 use super::fit::{ModelFit, StrengthFit};
 use super::options::Uncertainty;
 use super::regress::{Design, fit};
@@ -86,6 +87,51 @@ impl ModelFit {
     pub fn pivotal(&self) -> bool {
         self.damage_ratio.is_none() && self.scale_columns.is_empty() && self.penalty.iter().all(|l| *l == 0.0) && self.law.is_none()
     }
+
+    /// `k` pivotal draws of the parameters (module docs): unit samples at the fitted covariates,
+    /// refitted; draw r from its own ChaCha8 stream of `seed`.
+    pub fn pivotal_params(&self, k: usize, seed: u64) -> Result<Vec<Params>> {
+        let m = self;
+        let (b_hat, mu_hat) = (m.reg.b, m.reg.mu);
+        let design = Design { columns: &m.columns, offset: None, scale_columns: &m.scale_columns, penalty: &m.penalty };
+        let out: Vec<Option<Params>> = (0..k)
+            .into_par_iter()
+            .map(|r| {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                rng.set_stream(r as u64 + 1);
+                // A unit sample is standard exponential (Weibull with m = 1, σ = 1); a refit
+                // that fails (vanishingly rare) is replaced by the next sample of its stream.
+                for _ in 0..20 {
+                    let x: Vec<f64> = (0..m.n).map(|_| rand_distr::Exp1.sample(&mut rng)).collect();
+                    if let Ok(u) = fit(&x, &design) {
+                        let mut p = Params::base(u.b / b_hat, mu_hat - b_hat * u.mu / u.b);
+                        for (j, b) in p.beta.iter_mut().enumerate().take(m.reg.beta.len()) {
+                            *b = m.reg.beta[j] - b_hat * u.beta[j] / u.b;
+                        }
+                        return Some(p);
+                    }
+                }
+                None
+            })
+            .collect();
+        collect(out, "pivotal simulation")
+    }
+
+    /// The exact two-sided `level` confidence band of a single-column effect's β from `k`
+    /// pivotal draws: (β̂ − β)/b̂ is pivotal in a location-scale model, so the draws' quantiles
+    /// cover β with probability `level` whatever the true parameters (up to Monte Carlo error),
+    /// where the Wald and profile bands rely on large samples. None where the pivots do not hold
+    /// ([`ModelFit::pivotal`]) or the effect has several columns.
+    pub fn pivotal_band(&self, c: &Effect, level: f64, k: usize, seed: u64) -> Option<(f64, f64)> {
+        let r = self.beta_range(c)?;
+        if !self.pivotal() || r.len() != 1 || r.start >= MAX_LINEAR {
+            return None;
+        }
+        let draws = self.pivotal_params(k, seed).ok()?;
+        let a = 0.5 * (1.0 - level);
+        let q = crate::stats::interpolated_quantiles(draws.iter().map(|d| d.beta[r.start]).collect(), &[a, 1.0 - a]);
+        Some((q[0], q[1]))
+    }
 }
 
 impl StrengthFit {
@@ -126,30 +172,7 @@ impl StrengthFit {
 
     /// Pivotal draws: unit samples at the observed covariates, refitted.
     fn pivotal_draws(&self, k: usize, seed: u64) -> Result<Vec<Params>> {
-        let m = &self.model;
-        let (b_hat, mu_hat) = (m.reg.b, m.reg.mu);
-        let design = Design { columns: &m.columns, offset: None, scale_columns: &m.scale_columns, penalty: &m.penalty };
-        let out: Vec<Option<Params>> = (0..k)
-            .into_par_iter()
-            .map(|r| {
-                let mut rng = ChaCha8Rng::seed_from_u64(seed);
-                rng.set_stream(r as u64 + 1);
-                // A unit sample is standard exponential (Weibull with m = 1, σ = 1); a refit
-                // that fails (vanishingly rare) is replaced by the next sample of its stream.
-                for _ in 0..20 {
-                    let x: Vec<f64> = (0..m.n).map(|_| rand_distr::Exp1.sample(&mut rng)).collect();
-                    if let Ok(u) = fit(&x, &design) {
-                        let mut p = Params::base(u.b / b_hat, mu_hat - b_hat * u.mu / u.b);
-                        for (j, b) in p.beta.iter_mut().enumerate().take(m.reg.beta.len()) {
-                            *b = m.reg.beta[j] - b_hat * u.beta[j] / u.b;
-                        }
-                        return Some(p);
-                    }
-                }
-                None
-            })
-            .collect();
-        collect(out, "pivotal simulation")
+        self.model.pivotal_params(k, seed)
     }
 
     /// Plain parametric bootstrap (models with a profiled damage ratio, a modulus per level or

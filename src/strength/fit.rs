@@ -251,6 +251,20 @@ impl ModelFit {
         Some(start..start + self.widths[k])
     }
 
+    /// The profile-likelihood interval at `level` of a single-column effect's β (`x`: the
+    /// fitted strengths; [`super::regress::profile_interval`]); None for a categorical factor, a
+    /// modulus per level, damage and a two-population law.
+    pub fn profile_band(&self, x: &[f64], c: &Effect, level: f64) -> Option<(f64, f64)> {
+        if self.law.is_some() || self.damage_ratio.is_some() {
+            return None;
+        }
+        let r = self.beta_range(c)?;
+        if r.len() != 1 {
+            return None;
+        }
+        super::regress::profile_interval(x, &self.design(), &self.reg, r.start, level)
+    }
+
     /// β of a linear effect (or the ratio x for damage), with its standard error (NaN for
     /// damage); the first coefficient of a categorical factor's levels; the first γ (ln of the
     /// level's 1/m over the reference's) of a modulus per level.

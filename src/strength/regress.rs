@@ -192,6 +192,59 @@ pub fn fit_from(x: &[f64], design: &Design, start: Option<&RegFit>) -> Result<Re
     fit_with(x, design, None, start)
 }
 
+/// The profile-likelihood interval of the coefficient β_j of column `j` (Venzon & Moolgavkar
+/// 1988; Lawless 2003 §6.3.2): the β with 2[ℓ̂ − ℓ_p(β)] ≤ χ²₁(`level`), ℓ_p(β) the likelihood
+/// maximised over every other parameter with β_j held at β — column j moves into the offset.
+/// Unlike the Wald band β̂ ± z·se it follows the likelihood's asymmetry (a power law's exponent
+/// near a bound, few distinct covariate values). Each end is bracketed by steps of the standard
+/// error from the Wald end and found by bisection to 10⁻⁶ se. None where the column is
+/// penalised or a profile fit fails.
+pub fn profile_interval(x: &[f64], design: &Design, fitted: &RegFit, j: usize, level: f64) -> Option<(f64, f64)> {
+    if j >= design.columns.len() || design.penalty.get(j).is_some_and(|l| *l > 0.0) {
+        return None;
+    }
+    use statrs::distribution::{ContinuousCDF, Normal};
+    // χ²₁(level) = z², z the two-sided normal quantile.
+    let z = Normal::standard().inverse_cdf(0.5 + 0.5 * level);
+    let crit = 0.5 * z * z;
+    let se = fitted.beta_se[j];
+    if !(se.is_finite() && se > 0.0) {
+        return None;
+    }
+    let others: Vec<Vec<f64>> = design.columns.iter().enumerate().filter(|(k, _)| *k != j).map(|(_, c)| c.clone()).collect();
+    let penalty: Vec<f64> = if design.penalty.is_empty() { Vec::new() } else { design.penalty.iter().enumerate().filter(|(k, _)| *k != j).map(|(_, l)| *l).collect() };
+    let deficit = |b: f64| -> Option<f64> {
+        let offset: Vec<f64> = (0..x.len()).map(|i| design.offset.map_or(0.0, |o| o[i]) + b * design.columns[j][i]).collect();
+        let d = Design { columns: &others, offset: Some(&offset), scale_columns: design.scale_columns, penalty: &penalty };
+        fit(x, &d).ok().map(|f| fitted.loglik - f.loglik - crit)
+    };
+    let end = |dir: f64| -> Option<f64> {
+        let b0 = fitted.beta[j];
+        // Bracket: inside (deficit < 0) at the estimate, outside somewhere along dir.
+        let (mut inside, mut outside) = (b0, b0 + dir * z * se);
+        let mut step = z * se;
+        let mut tries = 0;
+        while deficit(outside)? < 0.0 {
+            inside = outside;
+            step *= 1.6;
+            outside += dir * step;
+            tries += 1;
+            if tries > 40 {
+                return None;
+            }
+        }
+        for _ in 0..80 {
+            if (outside - inside).abs() <= 1e-6 * se {
+                break;
+            }
+            let mid = 0.5 * (inside + outside);
+            if deficit(mid)? < 0.0 { inside = mid } else { outside = mid }
+        }
+        Some(0.5 * (inside + outside))
+    };
+    Some((end(-1.0)?, end(1.0)?))
+}
+
 /// The fit with a column tied to the modulus: ln σ_i = μ + Σ β z_i + o_i − k t_i/m, the
 /// weakest-link size law with its exponent k/m (`tie` = (t, k)). In the standardised residual
 /// w_i = (y_i − η_i)/b + k t_i the log-likelihood keeps its form ℓ = Σ[−ln b + w_i − e^(w_i) − y_i];
@@ -486,5 +539,31 @@ mod tests {
 
     fn b_cdf(m: f64, s: f64, x: f64) -> f64 {
         1.0 - (-(x / s).powf(m)).exp()
+    }
+
+    #[test]
+    fn the_profile_interval_ends_where_the_likelihood_has_fallen_by_the_chi_square_quantile() {
+        use rand::SeedableRng;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        for n in [30usize, 2000] {
+            let z: Vec<f64> = (0..n).map(|i| ((i % 7) as f64 - 3.0) / 3.0).collect();
+            let x: Vec<f64> = z.iter().map(|&zi| draw_particles(&[(4e8f64).ln() + 0.05 * zi], 8.0, 1, &mut rng)[0].1.exp()).collect();
+            let cols = vec![z.clone()];
+            let d = Design { columns: &cols, ..Design::default() };
+            let f = fit(&x, &d).unwrap();
+            let (lo, hi) = profile_interval(&x, &d, &f, 0, 0.90).unwrap();
+            assert!(lo < f.beta[0] && f.beta[0] < hi, "{lo} {} {hi}", f.beta[0]);
+            // At each end the profile likelihood has fallen by χ²₁(0.90)/2 = 1.3528.
+            for b in [lo, hi] {
+                let off: Vec<f64> = z.iter().map(|zi| b * zi).collect();
+                let p = fit(&x, &Design { offset: Some(&off), ..Design::default() }).unwrap();
+                assert!((2.0 * (f.loglik - p.loglik) - 2.705_543).abs() < 1e-4, "n = {n}: {}", 2.0 * (f.loglik - p.loglik));
+            }
+            // On a large sample the likelihood is quadratic: the Wald band.
+            if n == 2000 {
+                let w = 1.644_854 * f.beta_se[0];
+                assert!(((hi - lo) / (2.0 * w) - 1.0).abs() < 0.03, "{lo} {hi} vs ±{w}");
+            }
+        }
     }
 }

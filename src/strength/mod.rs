@@ -19,8 +19,9 @@
 //!   and recorded factors, read through the intake into a [`Sample`] the naming loop takes
 //!   like a crush sample.
 //! * [`fit`]: the crush sample (σ̄ at break per particle and its covariates), the
-//!   maximum-likelihood fit of the Weibull regression ([`regress`]) with the model's effects,
-//!   cross-validated pointwise log scores.
+//!   maximum-likelihood fit of the Weibull regression ([`regress`]) with the model's effects
+//!   (the fitted model and its fit at given terms: [`mle`]; the spread of partially pooled
+//!   levels: [`pooling`]), cross-validated pointwise log scores.
 //! * [`draws`]: the joint uncertainty of all the model's parameters — the parametric bootstrap
 //!   in pivotal form (ASTM C1239's pivotal simulation, generalised) or the Bayesian posterior.
 //! * [`population`]: the particles a prediction is for (the crush data's, or declared
@@ -42,6 +43,7 @@ pub mod effects;
 pub mod factors;
 pub mod fit;
 pub mod flaws;
+pub mod mle;
 pub mod model;
 pub mod options;
 pub mod pooling;

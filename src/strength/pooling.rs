@@ -8,12 +8,12 @@
 //!
 //! maximised over ln τ ∈ [ln 10⁻³, ln 3] (a grid, then golden section), with θ̂_τ the penalised
 //! fit at that τ ([`super::regress`]); the model's ℓ is the unpenalised log-likelihood there.
-//! Each trial τ is a penalised fit of the whole model ([`super::fit`]); unit test below:
+//! Each trial τ is a penalised fit of the whole model ([`super::mle`]); unit test below:
 //! τ → ∞ and τ → 0 give the fixed-effects and the base fits, and the Laplace marginal equals a
 //! quadrature over the offsets.
 
 use super::effects::{Effect, Term};
-use super::fit::{ModelFit, fit_at};
+use super::mle::{ModelFit, fit_at};
 use super::regress::RegFit;
 use crate::error::{Error, Result};
 use crate::stats::golden_max;

@@ -310,8 +310,22 @@ fn the_shipped_real_data_studies_say_what_the_readme_reports_and_a_lab_export_ag
         .replace("data = \"../datasets/real/bader_priest_carbon_fibres.csv\"", "data = { file = \"../datasets/real/carbon_lab.csv\", columns = { strength = \"Festigkeit [MPa]\", id = \"Probe\" } }")
         .replace("column = \"gauge_length_mm\"", "column = \"Messlänge\"");
     s.write("studies/carbon_lab.toml", &study);
+    // A lab's export of the glass fibres: semicolon, decimal comma, its own headers.
+    let text = std::fs::read_to_string(s.path("datasets/real/smith_naylor_glass_fibres.csv")).unwrap();
+    let mut lab = String::from("Nr.;Bruchspannung [GPa]\n");
+    for line in text.lines().skip(1) {
+        let v: Vec<&str> = line.split(',').collect();
+        lab.push_str(&format!("{};{}\n", v[0], v[3].replace('.', ",")));
+    }
+    s.write("datasets/real/glass_lab.csv", &lab);
+    let glass_lab = glass.replace(
+        "data = { file = \"../datasets/real/smith_naylor_glass_fibres.csv\", columns = { strength = \"strength_original_units\" }, units = { strength = \"GPa\" } }",
+        "data = { file = \"../datasets/real/glass_lab.csv\", columns = { id = \"Nr.\", strength = \"Bruchspannung [GPa]\" } }",
+    );
+    assert_ne!(glass_lab, glass);
+    s.write("studies/glass_lab.toml", &glass_lab);
     let mut verdicts = Vec::new();
-    for (name, _) in [("strength_glass_fibres", 0), ("strength_carbon_fibres", 1), ("carbon_lab", 2)] {
+    for (name, _) in [("strength_glass_fibres", 0), ("strength_carbon_fibres", 1), ("carbon_lab", 2), ("glass_lab", 3)] {
         let out = s.run(&["run", &format!("studies/{name}.toml"), "--reports-dir", "reports", "--quiet"]);
         assert_eq!(out.code, 0, "{name}: {}", out.stderr);
         let v: serde_json::Value = serde_json::from_str(&s.read(&format!("reports/{name}/verdict.json"))).unwrap();
@@ -345,6 +359,20 @@ fn the_shipped_real_data_studies_say_what_the_readme_reports_and_a_lab_export_ag
         assert!((a - b).abs() <= 1e-9 * a.abs().max(1e-12), "{k}: {a} vs {b}");
     }
     assert_eq!(c["gap_before"]["carbon"], l["gap_before"]["carbon"]);
+    // The glass export: nothing named, the same fit, the same bootstrap test and the same
+    // two-population evidence.
+    let (gl, _) = &verdicts[3];
+    assert_eq!(gl["effects_named"]["glass"], serde_json::json!([]));
+    let (a, b) = (&g["materials"][0]["stages"][0], &gl["materials"][0]["stages"][0]);
+    for k in ["log_likelihood", "anderson_darling", "p_anderson_darling", "weibull_modulus"] {
+        let (x, y) = (a[k].as_f64().unwrap(), b[k].as_f64().unwrap());
+        assert!((x - y).abs() <= 1e-9 * x.abs().max(1.0), "{k}: {x} vs {y}");
+    }
+    let evl = gl["evidence"]["glass"].as_array().unwrap();
+    for (e, f) in ev.iter().zip(evl) {
+        assert_eq!(e["candidate"], f["candidate"]);
+        assert!((e["likelihood_ratio"].as_f64().unwrap() - f["likelihood_ratio"].as_f64().unwrap()).abs() < 1e-9 && !f["named"].as_bool().unwrap(), "{f}");
+    }
 }
 
 /// The `reliability` package's two-population fits (Fit_Weibull_Mixture, Fit_Weibull_CR;

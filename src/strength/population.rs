@@ -31,8 +31,9 @@
 //! ```
 //!
 //! Levels in proportion expand each particle into one row per level, weighted by the level's
-//! share (exact, no sampling); a distribution assigns each row a stratified quantile (shifted
-//! midpoints in a seeded random order, one stratum per row). Without `predict`, a data
+//! share (exact, no sampling); a distribution assigns each row a stratified quantile (the n
+//! strata of the CDF shifted by one common seeded offset, dealt to the rows in a seeded random
+//! order: one value per stratum). Without `predict`, a data
 //! population keeps each particle's own recorded value — the levels in the proportions the
 //! crush campaign had; a declared population has no recorded values and needs `predict` for
 //! every factor its strength model carries. A level must be one of the data's (a new batch's

@@ -237,7 +237,7 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
             return Err(r.error(row, "crush_force", format!("{rule}, from F = {} N and d = {} m: check the force and diameter units", shown(rec.crush_force_n), shown(rec.diameter_m))));
         }
     }
-    let mut factors = crate::intake::factors::read_factors(&table, &rows, factor_spec, &mut provenance, origin, crate::intake::factors::table_key(origin), path)?;
+    let mut factors = crate::intake::factors::read_factors(&table, &rows, factor_spec, &mut provenance, origin, path)?;
     if let Some(shape) = &src.shape {
         let rows_of_ids: Vec<(usize, String)> = records.iter().enumerate().map(|(k, rec)| (k, rec.id.clone())).collect();
         let main_name = table.origin.sheet.as_ref().map(|s| format!("{} sheet \"{s}\"", path.display())).unwrap_or_else(|| path.display().to_string());

@@ -143,9 +143,10 @@ pub fn declared_columns(table: &RawTable, provenance: &Provenance, wanted: &[(St
 
 /// Reads the declared factor columns of `table` over `rows` (the rows the reader kept), typed as
 /// declared or from the data (module docs); records each in `provenance` and takes it off the
-/// unused columns. `table_key` is the study table that declares them (`material[0]`: the
-/// factors are `material[0].factors.<name>`).
-pub fn read_factors(table: &RawTable, rows: &[usize], factors: &Factors, provenance: &mut Provenance, origin: &MapOrigin, table_key: &str, path: &Path) -> Result<FactorColumns> {
+/// unused columns. The study table that declares them is `origin`'s ([`table_key`]: for the
+/// source `material[0].data` the factors are `material[0].factors.<name>`).
+pub fn read_factors(table: &RawTable, rows: &[usize], factors: &Factors, provenance: &mut Provenance, origin: &MapOrigin, path: &Path) -> Result<FactorColumns> {
+    let table_key = table_key(origin);
     let declared = factors.declared();
     let wanted: Vec<(String, String)> = declared.iter().map(|(name, _)| (format!("{table_key}.factors.{name}"), name.clone())).collect();
     let columns = declared_columns(table, provenance, &wanted, origin, path)?;

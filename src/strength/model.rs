@@ -108,8 +108,6 @@ pub struct LifetimeModel {
     pub fit: StrengthFit,
     /// The particles predicted for.
     pub population: Population,
-    /// The effects with regression columns, in the order of β (a categorical factor once).
-    linear: Vec<Effect>,
     /// The regression columns (β) and scale columns (γ).
     columns: (Vec<Column>, Vec<Column>),
     /// κ_j z_ij per row (row-major, stride `columns.0.len()`; one row of zeros without
@@ -132,7 +130,6 @@ impl LifetimeModel {
     /// covariate or recorded factor the model needs is an error naming the material and the
     /// source.
     pub fn new(key: &str, label: &str, sphere: Sphere, wall: Elastic, domain: AveragingDomain, fit: StrengthFit, population: Population) -> Result<Self> {
-        let linear = fit.linear();
         if let Some(e) = fit.effects().iter().find(|e| matches!(e, Effect::Populations(_))) {
             return Err(Error::Param {
                 name: "strength".into(),
@@ -145,7 +142,7 @@ impl LifetimeModel {
         }
         let zone = TensileZone::new(sphere.elastic.poisson_ratio);
         let proportional = domain.ratio_to_peak_pressure(&zone).is_some();
-        if let Some(e) = linear.iter().find(|e| e.is_contact_geometry())
+        if let Some(e) = fit.effects().iter().find(|e| e.is_contact_geometry())
             && !proportional
         {
             return Err(Error::Param {
@@ -176,7 +173,7 @@ impl LifetimeModel {
         // Without effects every row is alike: the point estimate is one row.
         let point = if kz.is_empty() && groups.is_empty() { None } else { population.point_weights() };
         let ln_sigma_unit = if proportional { Some(ImpactLoad::on_wall(&sphere, &wall, 1.0, domain).at_velocity(1.0)?.mean_tensile.ln()) } else { None };
-        Ok(LifetimeModel { key: key.into(), label: label.into(), sphere, wall, domain, fit, population, linear, columns: (beta_columns, scale_columns), kz, rows, groups, point, ln_sigma_unit })
+        Ok(LifetimeModel { key: key.into(), label: label.into(), sphere, wall, domain, fit, population, columns: (beta_columns, scale_columns), kz, rows, groups, point, ln_sigma_unit })
     }
 
     /// The regression columns (order of β) and scale columns (order of γ).
@@ -184,10 +181,6 @@ impl LifetimeModel {
         (&self.columns.0, &self.columns.1)
     }
 
-    /// Linear effects, in the order of β.
-    pub fn linear(&self) -> &[Effect] {
-        &self.linear
-    }
 
     /// Whether every particle has the same breakage (no regression or scale column).
     #[inline]
@@ -289,7 +282,7 @@ impl LifetimeModel {
             return;
         }
         for (v, rows) in &self.groups {
-            let m = p.shape * (-v.iter().zip(&p.gamma).map(|(a, g)| a * g).sum::<f64>()).exp();
+            let m = group_modulus(p, v);
             build(laws, m);
             for &i in rows {
                 row(i, m, laws, out);
@@ -314,7 +307,7 @@ impl LifetimeModel {
         let k = self.columns.0.len();
         let mut m = vec![p.shape; self.rows];
         for (v, rows) in &self.groups {
-            let mg = p.shape * (-v.iter().zip(&p.gamma).map(|(a, g)| a * g).sum::<f64>()).exp();
+            let mg = group_modulus(p, v);
             for &i in rows {
                 m[i] = mg;
             }
@@ -357,6 +350,12 @@ impl LifetimeModel {
         let weights = if self.uniform() { None } else { self.population.weight_draws(k, seed ^ 0x9E0_1A7E) };
         Ok((params, weights))
     }
+}
+
+/// The Weibull modulus of a row with scale-column values `v`: m e^(−Σ γ_j v_j).
+#[inline]
+fn group_modulus(p: &Params, v: &[f64]) -> f64 {
+    p.shape * (-v.iter().zip(&p.gamma).map(|(a, g)| a * g).sum::<f64>()).exp()
 }
 
 /// Most horizons one pass of [`LifetimeModel::breakage_into`] evaluates (more are done in chunks).

@@ -129,7 +129,7 @@ pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, 
         provenance.columns.push(ColumnRecord { source: table.headers[c].clone(), field: s.column.clone(), unit: "as in the file".into(), conversion: format!("size measure: {} (ratios only)", s.measure.describe()), found_by: "study".into() });
         provenance.unused.retain(|u| *u != table.headers[c]);
     }
-    let columns = read_factors(&table, &rows, factors, &mut provenance, origin, table_key(origin), path)?;
+    let columns = read_factors(&table, &rows, factors, &mut provenance, origin, path)?;
     sample.add_factors(&columns);
     Ok(Specimens { path: path.to_path_buf(), provenance, ids, sample })
 }

@@ -244,8 +244,9 @@ impl Setup {
             let strength_input = inputs.len();
             inputs.push(Input { name: format!("strength_{}", m.key), unit: "joint draw".into(), marginal: Marginal::Index(draws.len()) });
             let mut effect_inputs = Vec::new();
-            for (e, l) in model.fit.scalar_effects() {
-                let mut v: Vec<f64> = draws.iter().map(|d| e.natural(d.beta[l])).collect();
+            let effect_columns = model.fit.scalar_effects();
+            for (e, l) in &effect_columns {
+                let mut v: Vec<f64> = draws.iter().map(|d| e.natural(d.beta[*l])).collect();
                 v.sort_by(f64::total_cmp);
                 let k = v.len();
                 let p: Vec<f64> = (0..k).map(|r| r as f64 / (k - 1) as f64).collect();
@@ -253,7 +254,6 @@ impl Setup {
                 effect_inputs.push(inputs.len());
                 inputs.push(Input { name: format!("{}_{sym}_{}", e.name(), m.key), unit: "-".into(), marginal: Marginal::Quantiles { p, v } });
             }
-            let effect_columns = model.fit.scalar_effects();
             materials.push(Material { model, draws, weights, sample, path: dpath, read: data.provenance.clone(), strength_input, effect_inputs, effect_columns });
         }
         let samples: Vec<&Sample> = materials.iter().map(|m: &Material| &m.sample).collect();

@@ -143,7 +143,7 @@ fn residuals(dir: &Path, width_cm: f64, key: &str) -> Result<Drawn> {
                 series.push(Series { label: None, points: medians, colour: if si == 0 { BLACK } else { colour(1) }, kind: Kind::Markers(Marker::Triangle, 2.6) });
                 panels.push(Some(Panel {
                     x_categories: levels.clone(),
-                    x_desc: format!("{} (level; band 10–90 %, triangle median)", name.replace('_', " ")),
+                    x_desc: level_axis(&name.replace('_', " ")),
                     y_desc: if si == 0 { "Residual, base model".into() } else { after_label.clone() },
                     x_range: (0.5, levels.len() as f64 + 0.5),
                     y_range,
@@ -186,6 +186,13 @@ fn residuals(dir: &Path, width_cm: f64, key: &str) -> Result<Drawn> {
     figure_grid(&format!("discrepancy_residuals_{key}"), 2.0 * width_cm, 0.3 * rows_n as f64, 2, &panels)
 }
 
+/// The x label of a categorical factor's residual panel: what the band and the triangle are,
+/// shortened for a long column name so that the label fits the panel at 8.5 cm (the full form
+/// cut off "down feed rate (level; band 10–90 %, triangle median)").
+fn level_axis(name: &str) -> String {
+    if name.chars().count() <= 9 { format!("{name} (level; band 10–90 %, triangle median)") } else { format!("{name} (10–90 % band, median)") }
+}
+
 fn probability(dir: &Path, width_cm: f64, key: &str, label: &str, c: RGBColor) -> Result<Drawn> {
     let p = probability_panel(dir, key, label, c)?;
     figure(&format!("discrepancy_probability_{key}"), width_cm, 0.8, &[(p, 1.0)])
@@ -209,6 +216,12 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
     let (mat, stage, raw, adj) = (t.s("material")?, t.s("stage")?, t.f("strength_pa")?, t.f("adjusted_pa")?);
     let fits = Table::load(dir, "fits")?;
     let (fm, fs, fe, shape, scale) = (fits.s("material")?, fits.s("stage")?, fits.s("effects")?, fits.f("weibull_modulus")?, fits.f("scale_pa")?);
+    // The final stage's modulus range (a modulus per level).
+    let moduli = Table::load(dir, "stages").ok().filter(|t| t.has("weibull_modulus_min")).and_then(|t| {
+        let (sm, lo, hi) = (t.s("material").ok()?, t.f("weibull_modulus_min").ok()?, t.f("weibull_modulus_max").ok()?);
+        let last = (0..sm.len()).filter(|&i| sm[i] == key).last()?;
+        Some((lo[last], hi[last]))
+    });
     let mut series = Vec::new();
     let mut xs = Vec::new();
     let mut lines = Vec::new();
@@ -225,7 +238,13 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
         }
         let colour_st = if si == 0 { GREY } else { c };
         let name = if si == 0 { "base model".to_string() } else { format!("+ {}", fe[j].replace(" then ", " + ")) };
-        series.push(Series { label: Some(format!("{name}: m = {m:.1}")), points: pts, colour: colour_st, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 1.6) });
+        // With a modulus per level the line is the reference level's (the adjusted points are
+        // carried onto it): say so, with the range by level (stages.csv; older reports lack it).
+        let label = match moduli.filter(|(lo, hi)| si == 1 && hi > lo) {
+            Some((lo, hi)) => format!("final model: m = {lo:.1}–{hi:.1}, line at {m:.1}"),
+            None => format!("{name}: m = {m:.1}"),
+        };
+        series.push(Series { label: Some(label), points: pts, colour: colour_st, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 1.6) });
         lines.push((m, s, colour_st));
     }
     let xr = padded(xs.iter().copied(), 0.05, 0.05);

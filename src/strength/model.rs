@@ -234,13 +234,21 @@ impl LifetimeModel {
     #[inline]
     pub fn breakage_into(&self, p: &Params, weights: Option<&[f64]>, ln_sigma: f64, horizons: &[Horizon], out: &mut [f64]) {
         debug_assert_eq!(horizons.len(), out.len());
+        if self.uniform() {
+            // One hazard for every particle: each law is used once, no table of laws.
+            let base = p.shape * (ln_sigma - p.mu);
+            let h = base.exp();
+            for (o, hz) in out.iter_mut().zip(horizons) {
+                *o += hz.law(p.shape).p(h, base);
+            }
+            return;
+        }
         for (h, o) in horizons.chunks(LAWS).zip(out.chunks_mut(LAWS)) {
             self.breakage_chunk(p, weights, ln_sigma, h, o);
         }
     }
 
-    /// [`LifetimeModel::breakage_into`] for at most [`LAWS`] horizons.
-    #[inline]
+    /// [`LifetimeModel::breakage_into`] for at most [`LAWS`] horizons, rows with effects.
     fn breakage_chunk(&self, p: &Params, weights: Option<&[f64]>, ln_sigma: f64, horizons: &[Horizon], out: &mut [f64]) {
         let mut laws = [Law::Scaled { c: 0.0 }; LAWS];
         let laws = &mut laws[..horizons.len()];
@@ -249,15 +257,6 @@ impl LifetimeModel {
                 *l = h.law(m);
             }
         };
-        if self.uniform() {
-            build(laws, p.shape);
-            let base = p.shape * (ln_sigma - p.mu);
-            let h = base.exp();
-            for (o, law) in out.iter_mut().zip(laws.iter()) {
-                *o += law.p(h, base);
-            }
-            return;
-        }
         let weights = weights.or(self.point.as_deref());
         let w0 = 1.0 / self.rows as f64;
         let k = self.columns.0.len();

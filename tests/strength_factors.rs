@@ -226,7 +226,7 @@ fn a_hidden_modulus_per_batch_is_named_as_moduli() {
 #[test]
 fn nothing_is_named_when_nothing_is_hidden_even_among_irrelevant_and_shuffled_factors() {
     // Nothing hidden; the declared size, batch and rate plus two numeric and three categorical
-    // irrelevant factors: 17 candidates in all (each categorical factor a scale and a modulus
+    // irrelevant factors: 15 candidates in all (each categorical factor a scale and a modulus
     // per level), one family-wise guard.
     let reps = 100;
     let (_, _, any) = sweep(reps, 33_05, None, |_, _| 0.0, true, false);
@@ -293,10 +293,7 @@ fn the_shipped_real_data_studies_say_what_the_readme_reports_and_a_lab_export_ag
     for f in ["strength_glass_fibres.toml", "strength_carbon_fibres.toml"] {
         std::fs::copy(common::root().join("studies").join(f), s.path("studies").join(f)).unwrap();
     }
-    // The glass study's two-population candidates refit from seven starts in every bootstrap
-    // replicate: 99 replicates here (499 shipped; the verdicts below hold at both).
-    let glass = s.read("studies/strength_glass_fibres.toml").replace("bootstrap = 499", "bootstrap = 99");
-    s.write("studies/strength_glass_fibres.toml", &glass);
+    let glass = s.read("studies/strength_glass_fibres.toml");
     // A lab's export of the carbon fibres: semicolon, decimal comma, MPa, German headers.
     let text = std::fs::read_to_string(s.path("datasets/real/bader_priest_carbon_fibres.csv")).unwrap();
     let mut lab = String::from("Probe;Messlänge [mm];Festigkeit [MPa]\n");
@@ -419,51 +416,131 @@ fn two_population_fits_of_the_real_data_against_the_reliability_package() {
     }
 }
 
-/// `n` synthetic specimens with two flaw populations: a fraction `weak` of them from a population
-/// with 0.6 × the scale (m = 12 both), the rest from the main one; or one population when
-/// `weak` = 0. Candidates: the mixture and the competing-risks law.
-fn two_populations(n: usize, weak: f64, rng: &mut ChaCha8Rng) -> Sample {
+/// A second flaw population hidden in synthetic specimens.
+#[derive(Clone, Copy)]
+enum Flaws {
+    /// One population: 400 MPa, m = 12.
+    None,
+    /// A fraction of the specimens from a population at 0.6 × the scale (m = 12 both): a
+    /// mixture with weaker share `0`.
+    Weak(f64),
+    /// Every specimen holds volume flaws (400 MPa, m = 20) and surface flaws (600 MPa, m = 4),
+    /// and breaks at the weaker: competing risks, weaker-scale modulus 20.
+    Both,
+}
+
+/// `n` synthetic specimens with `flaws`. Candidates: the mixture and the competing-risks law.
+fn two_populations(n: usize, flaws: Flaws, rng: &mut ChaCha8Rng) -> Sample {
     use partlife::strength::flaws::Populations;
     let strength = (0..n)
-        .map(|_| {
-            let s = if rng.random::<f64>() < weak { 0.6 * 400e6 } else { 400e6 };
-            draw_particles(&[f64::ln(s)], 12.0, 1, rng)[0].1.exp()
+        .map(|_| match flaws {
+            Flaws::Both => {
+                let volume = draw_particles(&[f64::ln(400e6)], 20.0, 1, rng)[0].1;
+                let surface = draw_particles(&[f64::ln(600e6)], 4.0, 1, rng)[0].1;
+                volume.min(surface).exp()
+            }
+            Flaws::None | Flaws::Weak(_) => {
+                let weak = if let Flaws::Weak(w) = flaws { w } else { 0.0 };
+                let s = if rng.random::<f64>() < weak { 0.6 * 400e6 } else { 400e6 };
+                draw_particles(&[f64::ln(s)], 12.0, 1, rng)[0].1.exp()
+            }
         })
         .collect();
     Sample { source: "synthetic".into(), strength, populations: vec![Populations::Mixture, Populations::Competing], ..Sample::default() }
 }
 
-fn population_sweep(reps: usize, seed: u64, weak: f64) -> (usize, usize) {
+/// Runs `reps` samples of `n`; returns (the right law named first, its reported parameter — the
+/// weaker share of a mixture, the weaker-scale risk's modulus of competing risks — inside its
+/// 90 % profile-likelihood band, anything named).
+fn population_sweep(reps: usize, seed: u64, n: usize, flaws: Flaws) -> (usize, usize, usize) {
     use partlife::strength::flaws::Populations;
-    let (mut mixture, mut any) = (0, 0);
+    let (right, truth) = match flaws {
+        Flaws::Weak(w) => (Some(Effect::Populations(Populations::Mixture)), w),
+        Flaws::Both => (Some(Effect::Populations(Populations::Competing)), 20.0),
+        Flaws::None => (None, f64::NAN),
+    };
+    let (mut named, mut covered, mut any) = (0, 0, 0);
     for r in 0..reps {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(r as u64 + 1);
-        let s = two_populations(80, weak, &mut rng);
+        let s = two_populations(n, flaws, &mut rng);
         let o = analyse(&s, &settings(seed ^ r as u64), false).unwrap();
-        mixture += usize::from(o.named.first() == Some(&Effect::Populations(Populations::Mixture)));
         any += usize::from(!o.named.is_empty());
+        if o.named.first() != right.as_ref() {
+            for e in o.evidence.iter().filter(|e| e.round == 0) {
+                eprintln!("  sample {r}: {} Λ {:.2} crit {:.2} p {:.3} ΔBIC {:.2} ΔCV {:.2} passed {} named {} {}", e.candidate.name(), e.lr, e.lr_critical, e.p_family, e.delta_bic, e.delta_cv, e.passed, e.named, e.meaning);
+            }
+        }
+        if right.is_some() && o.named.first() == right.as_ref() {
+            named += 1;
+            let e = o.evidence.iter().find(|e| e.named).unwrap();
+            let (lo, hi) = e.band.expect("a named two-population law has its profile band");
+            covered += usize::from(lo <= truth && truth <= hi);
+        }
     }
-    eprintln!("two populations, weak fraction {weak}: mixture named {mixture}/{reps}, anything named {any}/{reps}");
-    (mixture, any)
+    eprintln!("{n} specimens, hidden {:?}: named first {named}/{reps}, inside the 90 % band {covered}/{named}, anything named {any}/{reps}", right.map(|e| e.name()));
+    (named, covered, any)
 }
 
 #[test]
 fn a_hidden_weak_flaw_population_is_named_as_a_mixture() {
     // 80 specimens, 30 % from a population at 0.6 × the scale: fast sibling of the sweep below.
-    let (mixture, _) = population_sweep(2, 33_07, 0.3);
+    let (mixture, _, _) = population_sweep(2, 33_07, 80, Flaws::Weak(0.3));
     assert_eq!(mixture, 2);
-    let (_, any) = population_sweep(2, 33_08, 0.0);
+    let (_, _, any) = population_sweep(2, 33_08, 80, Flaws::None);
     assert_eq!(any, 0);
 }
 
 #[test]
-#[ignore = "slow: 40 + 40 naming loops refitting two-population laws in every bootstrap replicate (several minutes on two cores); fast sibling a_hidden_weak_flaw_population_is_named_as_a_mixture"]
+#[ignore = "slow: 40 + 40 naming loops refitting two-population laws in every bootstrap replicate (about a minute on two cores); fast sibling a_hidden_weak_flaw_population_is_named_as_a_mixture"]
 fn a_hidden_weak_flaw_population_is_named_at_90_percent_and_one_population_at_most_5() {
-    let (mixture, _) = population_sweep(40, 33_09, 0.3);
+    let (mixture, covered, _) = population_sweep(40, 33_09, 80, Flaws::Weak(0.3));
     assert!(mixture >= 36, "mixture named {mixture}/40");
-    let (_, any) = population_sweep(40, 33_10, 0.0);
+    assert!(covered as f64 >= 0.85 * mixture as f64, "weaker share inside its band {covered}/{mixture}");
+    let (_, _, any) = population_sweep(40, 33_10, 80, Flaws::None);
     assert!(any <= 2, "a one-population sample named something in {any}/40");
+}
+
+#[test]
+fn volume_and_surface_flaws_in_every_specimen_are_named_as_competing_risks() {
+    // 200 specimens: fast sibling of the sweep below (the mixture fits these data closely too;
+    // the lower BIC must pick competing risks).
+    let (named, covered, _) = population_sweep(2, 33_11, 200, Flaws::Both);
+    assert_eq!((named, covered), (2, 2));
+}
+
+#[test]
+#[ignore = "slow: 40 naming loops on 200 specimens refitting two-population laws in every bootstrap replicate (about 40 s on two cores); fast sibling volume_and_surface_flaws_in_every_specimen_are_named_as_competing_risks"]
+fn competing_risks_are_named_at_90_percent_with_the_modulus_inside_its_band_at_85() {
+    // At 120 specimens the departure is found in 35 of 40 samples and competing risks named
+    // first in 33 (in two a few low strengths make a small weak mixture component the lower
+    // BIC); at 200, 40 of 40.
+    let (named, covered, _) = population_sweep(40, 33_12, 200, Flaws::Both);
+    assert!(named >= 36, "competing risks named first {named}/40");
+    assert!(covered as f64 >= 0.85 * named as f64, "the weaker-scale modulus inside its 90 % band {covered}/{named}");
+}
+
+#[test]
+#[ignore = "slow: 40 naming loops with 15 factor candidates and both two-population laws refitted in every bootstrap replicate (about a minute on two cores); fast siblings a_hidden_weak_flaw_population_is_named_as_a_mixture (nothing named with one population) and nothing_is_named_when_nothing_is_hidden_even_among_irrelevant_and_shuffled_factors"]
+fn nothing_is_named_among_irrelevant_factors_and_the_two_population_laws() {
+    use partlife::strength::flaws::Populations;
+    let reps = 40;
+    let (mut any, mut candidates) = (0, 0);
+    for r in 0..reps {
+        let mut rng = ChaCha8Rng::seed_from_u64(33_13);
+        rng.set_stream(r as u64 + 1);
+        let c = campaign(&mut rng);
+        let mut s = sample(&c, |_| 0.0, true, &mut rng);
+        s.populations = vec![Populations::Mixture, Populations::Competing];
+        let o = analyse(&s, &settings(33_13 ^ r as u64), false).unwrap();
+        any += usize::from(!o.named.is_empty());
+        candidates = o.evidence.iter().filter(|e| e.round == 0).count();
+        if !o.named.is_empty() {
+            eprintln!("  sample {r}: named {:?}", o.named.iter().map(|e| e.name()).collect::<Vec<_>>());
+        }
+    }
+    eprintln!("nothing hidden, {candidates} candidates: named anything {any}/{reps}");
+    assert!(any as f64 <= 0.05 * reps as f64, "false naming in {any}/{reps}");
 }
 
 /// Batches of uneven size, as a campaign's records often are (90 specimens): two large ones, a

@@ -24,6 +24,12 @@ pub fn wilson90(k: usize, n: usize) -> (f64, f64) {
     ((c - h).max(0.0), (c + h).min(1.0))
 }
 
+/// One parameter of each stage's two-population law (NaN where the stage has none), in the
+/// rows of fits.csv.
+fn law_column(results: &[MaterialResult], f: impl Fn(&crate::strength::flaws::FlawFit) -> f64) -> Vec<f64> {
+    results.iter().flat_map(|r| [&r.outcome.before().model, &r.outcome.after().model]).map(|m| m.law.as_ref().map_or(f64::NAN, &f)).collect()
+}
+
 pub(super) fn names(c: &[Effect]) -> String {
     if c.is_empty() { "none".into() } else { c.iter().map(|c| c.name()).collect::<Vec<_>>().join(" then ") }
 }
@@ -295,7 +301,15 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         scol("stage", results.iter().flat_map(|_| ["before".to_string(), "after".to_string()]).collect()),
         scol("effects", results.iter().flat_map(|r| [names(&r.outcome.before().model.effects), names(&r.outcome.after().model.effects)]).collect()),
         fcol("weibull_modulus", results.iter().flat_map(|r| [r.outcome.before().model.shape(), r.outcome.after().model.shape()]).collect()),
-        fcol("scale_pa", results.iter().flat_map(|r| [reference_ln_scale(&r.outcome.before().model).exp(), reference_ln_scale(&r.outcome.after().model).exp()]).collect()),
+        // No single scale where the law is two populations (its own columns follow).
+        fcol("scale_pa", results.iter().flat_map(|r| [&r.outcome.before().model, &r.outcome.after().model]).map(|m| if m.law.is_some() { f64::NAN } else { reference_ln_scale(m).exp() }).collect()),
+        // A two-population law in place of the Weibull law: its parameters (empty / NaN else).
+        scol("law", results.iter().flat_map(|r| [&r.outcome.before().model, &r.outcome.after().model]).map(|m| m.law.as_ref().map_or(String::new(), |l| l.kind.name().to_string())).collect()),
+        fcol("law_weight", law_column(results, |l| l.p)),
+        fcol("law_scale1_pa", law_column(results, |l| l.first.0)),
+        fcol("law_modulus1", law_column(results, |l| l.first.1)),
+        fcol("law_scale2_pa", law_column(results, |l| l.second.0)),
+        fcol("law_modulus2", law_column(results, |l| l.second.1)),
     ])?;
     dir.write_table("fits", &mut t)?;
 
@@ -335,7 +349,7 @@ fn evidence_row(e: &super::workflow::Evidence) -> String {
         return format!("| {} | {} | | | | | | | skipped: {} |\n", e.round, e.candidate.name(), reason);
     }
     let band = e.band.map(|(a, b)| format!(" (90 % {} {a:.3}–{b:.3})", if e.band_pivotal { "pivotal" } else { "profile" })).unwrap_or_default();
-    let par = e.parameter.as_ref().map(|(k, v, se)| if se.is_finite() { format!("{k} = {v:.3} ± {se:.3}{band}") } else { format!("{k} = {v:.3}") }).unwrap_or_default();
+    let par = e.parameter.as_ref().map(|(k, v, se)| if se.is_finite() { format!("{k} = {v:.3} ± {se:.3}{band}") } else { format!("{k} = {v:.3}{band}") }).unwrap_or_default();
     let verdict = if e.named { "**named**" } else if e.passed { "passed, weaker" } else { "not supported" };
     format!("| {} | {} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {} | {} |\n", e.round, e.candidate.name(), e.lr, e.lr_critical, e.p_family, e.delta_bic, e.delta_cv, par, verdict)
 }
@@ -390,6 +404,15 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             // weakest-link test in the final model follows below).
             for e in r.outcome.evidence.iter().filter(|e| e.named && e.weakest_link.is_none() && !e.meaning.is_empty()) {
                 md.push_str(&format!("\n`{}` (named in round {}): {}.\n", e.candidate.name(), e.round, e.meaning));
+            }
+            // Both two-population laws passing: why the named one.
+            let laws: Vec<&crate::discrepancy::workflow::Evidence> = r.outcome.evidence.iter().filter(|e| e.passed && matches!(e.candidate, crate::strength::Effect::Populations(_))).collect();
+            if let ([a, b], Some(named)) = (laws.as_slice(), laws.iter().find(|e| e.named)) {
+                let other = if a.named { b } else { a };
+                md.push_str(&format!(
+                    "\nBoth two-population laws pass the guard; they describe one departure, so the one with the lower BIC is named: `{}` (ΔBIC {:.1}, {} extra parameters) against `{}` (ΔBIC {:.1}, {}).\n",
+                    named.candidate.name(), named.delta_bic, named.parameters, other.candidate.name(), other.delta_bic, other.parameters
+                ));
             }
         }
         let k_of = |e: &crate::strength::Effect| match e {
@@ -544,5 +567,8 @@ mod tests {
         assert_eq!(evidence_row(&evidence(false, true, None, f64::NAN)), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 | passed, weaker |\n"));
         assert_eq!(evidence_row(&evidence(false, false, None, 0.125)), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 ± 0.125 | not supported |\n"));
         assert_eq!(evidence_row(&evidence(false, false, Some("no roundness column"), 0.125)), format!("| 2 | {name} | | | | | | | skipped: no roundness column |\n"));
+        // A two-population law's parameter has a profile band but no standard error.
+        let law = Evidence { band: Some((0.2, 0.8)), ..evidence(false, false, None, f64::NAN) };
+        assert_eq!(evidence_row(&law), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 (90 % profile 0.200–0.800) | not supported |\n"));
     }
 }

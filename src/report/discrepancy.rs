@@ -199,9 +199,9 @@ fn probability(dir: &Path, width_cm: f64, key: &str, label: &str, c: RGBColor) -
 }
 
 /// The Weibull probability plot of material `key`: each stage's strengths at their plotting
-/// positions and its fitted line ln(−ln(1 − F)) = m (ln σ − ln σ_θ). The line spans exactly the
-/// x axis and the y axis holds both its ends, so nothing of it is clipped and its drawn slope is
-/// the fitted m.
+/// positions and its fitted line ln(−ln(1 − F)) = m (ln σ − ln σ_θ) — for a two-population law
+/// its curve. The line spans exactly the x axis and the y axis holds both its ends, so nothing
+/// of it is clipped and its drawn slope is the fitted m.
 fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<Panel> {
     // Crush data unless materials.csv says the key is a strength file (older reports have no
     // `data` column: crush).
@@ -222,9 +222,20 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
         let last = (0..sm.len()).filter(|&i| sm[i] == key).last()?;
         Some((lo[last], hi[last]))
     });
+    // A stage whose law is two flaw populations (fits.csv `law`; older reports lack it).
+    let law = |j: usize| -> Option<crate::strength::flaws::FlawFit> {
+        let kind = match fits.s("law").ok()?.get(j)?.as_str() {
+            "mixture" => crate::strength::flaws::Populations::Mixture,
+            "competing_risks" => crate::strength::flaws::Populations::Competing,
+            _ => return None,
+        };
+        let g = |c: &str| fits.f(c).ok().and_then(|v| v.get(j).copied());
+        Some(crate::strength::flaws::FlawFit { kind, p: g("law_weight")?, first: (g("law_scale1_pa")?, g("law_modulus1")?), second: (g("law_scale2_pa")?, g("law_modulus2")?), loglik: f64::NAN, identifiable: Ok(()) })
+    };
     let mut series = Vec::new();
     let mut xs = Vec::new();
     let mut lines = Vec::new();
+    let mut curves = Vec::new();
     for (si, st) in ["before", "after"].iter().enumerate() {
         let mut v: Vec<f64> = (0..mat.len()).filter(|&i| mat[i] == key && stage[i] == *st).map(|i| if si == 0 { raw[i] } else { adj[i] } / 1e6).collect();
         v.sort_by(f64::total_cmp);
@@ -240,6 +251,13 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
         let name = if si == 0 { "base model".to_string() } else { format!("+ {}", fe[j].replace(" then ", " + ")) };
         // With a modulus per level the line is the reference level's (the adjusted points are
         // carried onto it): say so, with the range by level (stages.csv; older reports lack it).
+        // A two-population law is drawn as its curve ln(−ln(1 − F(x))), not a line.
+        if let Some(l) = law(j) {
+            let label = format!("{name}: m = {:.1} and {:.1} (curve)", l.first.1.min(l.second.1), l.first.1.max(l.second.1));
+            series.push(Series { label: Some(label), points: pts, colour: colour_st, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 1.6) });
+            curves.push((l, colour_st));
+            continue;
+        }
         let label = match moduli.filter(|(lo, hi)| si == 1 && hi > lo) {
             Some((lo, hi)) => format!("final model: m = {lo:.1}–{hi:.1}, line at {m:.1}"),
             None => format!("{name}: m = {m:.1}"),
@@ -250,6 +268,14 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
     let xr = padded(xs.iter().copied(), 0.05, 0.05);
     for (m, s, colour_st) in lines {
         series.push(Series::line(None, vec![(xr.0, m * (xr.0 - s)), (xr.1, m * (xr.1 - s))], colour_st, 1.0));
+    }
+    for (l, colour_st) in curves {
+        let pts: Vec<(f64, f64)> = (0..=200)
+            .map(|k| xr.0 + (xr.1 - xr.0) * k as f64 / 200.0)
+            .map(|lx| (lx, (-(-l.cdf(lx.exp() * 1e6)).ln_1p()).ln()))
+            .filter(|p| p.1.is_finite())
+            .collect();
+        series.push(Series::line(None, pts, colour_st, 1.0));
     }
     Ok(Panel {
         x_categories: vec![],

@@ -382,7 +382,8 @@ impl Effect {
     }
 
     /// The reported parameter's value for a regression coefficient β (α = −β, q = p = 3β/2,
-    /// strength ratio per 100 °C e^(β/10); damage: β is already the ratio x).
+    /// strength ratio per 100 °C e^(β/10), a level's scale ratio to the reference e^β; damage:
+    /// β is already the ratio x).
     pub fn natural(&self, beta: f64) -> f64 {
         match self {
             Effect::Roundness | Effect::Sphericity => 1.5 * beta,
@@ -391,6 +392,7 @@ impl Effect {
             Effect::Damage | Effect::Populations(_) => beta,
             Effect::Factor(f) => match f.form {
                 Form::Size(_) => -beta,
+                Form::Levels => beta.exp(),
                 _ => beta,
             },
         }
@@ -405,6 +407,7 @@ impl Effect {
             Effect::Damage | Effect::Populations(_) => natural,
             Effect::Factor(f) => match f.form {
                 Form::Size(_) => -natural,
+                Form::Levels => natural.ln(),
                 _ => natural,
             },
         }

@@ -14,10 +14,17 @@
 //! ASTM C1239 §8 for concurrent flaw distributions.)
 //!
 //! The likelihood is maximised over unconstrained coordinates — logit p, ln σ_j, ln m_j, with x
-//! scaled by its median — by Nelder–Mead (argmin) from [`STARTS`] deterministic starts: the two
-//! components split at the 20, 35, 50, 65 and 80 % quantiles, each half given its own Weibull
-//! MLE, and from the one-population fit with a component two and five times weaker. Each start
-//! is restarted until ℓ stops rising by 10⁻¹⁰.
+//! scaled by its median — by a box-constrained BFGS with the analytic gradient (below) from
+//! [`STARTS`] deterministic starts: the two components split at the 20, 35, 50, 65 and 80 %
+//! quantiles, each half given its own Weibull MLE, and the one-population fit with a component
+//! two and five times weaker. With y_j = ln x − ln σ_j and e_j = (x/σ_j)^m_j:
+//!
+//! ```text
+//! ∂ ln f_j/∂ ln σ_j = m_j (e_j − 1)          ∂ ln f_j/∂ ln m_j = 1 + m_j y_j (1 − e_j)
+//! mixture:   ∂ℓ_i/∂θ_j = r_j ∂ ln f_j/∂θ_j,  ∂ℓ_i/∂ logit p = r_1 − p,   r_j = p_j f_j / f
+//! competing: ∂ℓ_i/∂ ln σ_j = m_j (e_j − w_j),  ∂ℓ_i/∂ ln m_j = w_j (1 + m_j y_j) − m_j y_j e_j,
+//!            w_j = h_j / (h_1 + h_2),  h_j = (m_j/σ_j)(x/σ_j)^(m_j−1)
+//! ```
 //!
 //! Moduli are kept in [[`M_MIN`], [`M_MAX`]]: a mixture's likelihood is unbounded as a component
 //! collapses onto one specimen with m → ∞.
@@ -39,9 +46,6 @@
 //! `tests/strength_factors.rs`, and by the unit tests below (a mixture and a competing-risks
 //! sample recovered; a one-population sample reported as not identified).
 
-use argmin::core::{CostFunction, Executor, State};
-use argmin::solver::neldermead::NelderMead;
-use nalgebra::DVector;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
@@ -125,82 +129,150 @@ fn ln_weibull_pdf(x: f64, s: f64, m: f64) -> f64 {
     m.ln() - s.ln() + (m - 1.0) * z.ln() - z.powf(m)
 }
 
-/// Log-likelihood at unconstrained θ for x scaled by its median.
-fn loglik_at(kind: Populations, x: &[f64], t: &[f64]) -> f64 {
-    let l: f64 = match kind {
+/// Log-likelihood at unconstrained θ for x scaled by its median, and its gradient in `g`
+/// (−∞, gradient unset, where the likelihood is not finite).
+fn loglik_grad(kind: Populations, x: &[f64], t: &[f64], g: &mut [f64]) -> f64 {
+    g.iter_mut().for_each(|v| *v = 0.0);
+    let mut l = 0.0;
+    match kind {
         Populations::Mixture => {
-            let lp = -(1.0 + (-t[0]).exp()).ln();
-            let lq = -(1.0 + t[0].exp()).ln();
-            let (s1, m1, s2, m2) = (t[1].exp(), t[2].exp(), t[3].exp(), t[4].exp());
-            x.iter()
-                .map(|&v| {
-                    let a = lp + ln_weibull_pdf(v, s1, m1);
-                    let b = lq + ln_weibull_pdf(v, s2, m2);
-                    let hi = a.max(b);
-                    hi + ((a - hi).exp() + (b - hi).exp()).ln()
-                })
-                .sum()
+            let p = 1.0 / (1.0 + (-t[0]).exp());
+            let lw = [-(1.0 + (-t[0]).exp()).ln(), -(1.0 + t[0].exp()).ln()];
+            let (u, v) = ([t[1], t[3]], [t[2], t[4]]);
+            let m = [v[0].exp(), v[1].exp()];
+            for &xi in x {
+                let lx = xi.ln();
+                let y = [lx - u[0], lx - u[1]];
+                let e = [(m[0] * y[0]).exp(), (m[1] * y[1]).exp()];
+                let a = [0, 1].map(|j| lw[j] + v[j] - u[j] + (m[j] - 1.0) * y[j] - e[j]);
+                let hi = a[0].max(a[1]);
+                let li = hi + ((a[0] - hi).exp() + (a[1] - hi).exp()).ln();
+                l += li;
+                let r = [(a[0] - li).exp(), (a[1] - li).exp()];
+                g[0] += r[0] - p;
+                for j in 0..2 {
+                    if r[j] > 0.0 {
+                        g[1 + 2 * j] += r[j] * m[j] * (e[j] - 1.0);
+                        g[2 + 2 * j] += r[j] * (1.0 + m[j] * y[j] * (1.0 - e[j]));
+                    }
+                }
+            }
         }
         Populations::Competing => {
-            let (s1, m1, s2, m2) = (t[0].exp(), t[1].exp(), t[2].exp(), t[3].exp());
-            x.iter()
-                .map(|&v| {
-                    let (z1, z2) = (v / s1, v / s2);
-                    let h = m1 / s1 * z1.powf(m1 - 1.0) + m2 / s2 * z2.powf(m2 - 1.0);
-                    h.ln() - z1.powf(m1) - z2.powf(m2)
-                })
-                .sum()
+            let (u, v) = ([t[0], t[2]], [t[1], t[3]]);
+            let m = [v[0].exp(), v[1].exp()];
+            for &xi in x {
+                let lx = xi.ln();
+                let y = [lx - u[0], lx - u[1]];
+                let e = [(m[0] * y[0]).exp(), (m[1] * y[1]).exp()];
+                let lh = [0, 1].map(|j| v[j] - u[j] + (m[j] - 1.0) * y[j]);
+                let hi = lh[0].max(lh[1]);
+                let lht = hi + ((lh[0] - hi).exp() + (lh[1] - hi).exp()).ln();
+                l += lht - e[0] - e[1];
+                for j in 0..2 {
+                    let w = (lh[j] - lht).exp();
+                    g[2 * j] += m[j] * (e[j] - w);
+                    g[2 * j + 1] += w * (1.0 + m[j] * y[j]) - m[j] * y[j] * e[j];
+                }
+            }
         }
-    };
-    if l.is_finite() { l } else { f64::NEG_INFINITY }
+    }
+    if l.is_finite() && g.iter().all(|v| v.is_finite()) { l } else { f64::NEG_INFINITY }
 }
 
-struct Nll<'a> {
-    kind: Populations,
-    x: &'a [f64],
-}
-
-impl CostFunction for Nll<'_> {
-    type Param = DVector<f64>;
-    type Output = f64;
-    fn cost(&self, t: &Self::Param) -> std::result::Result<f64, argmin::core::Error> {
-        // Keep the search in a sane box: scales within e^±20 of the median, moduli in
-        // [M_MIN, M_MAX] (a mixture's likelihood is unbounded as a component collapses onto one
-        // specimen with m → ∞; the box keeps such spikes out, and a fit on its edge is reported).
-        let moduli: &[usize] = if self.kind == Populations::Mixture { &[2, 4] } else { &[1, 3] };
-        if t.iter().enumerate().any(|(k, v)| !v.is_finite() || v.abs() > if self.kind == Populations::Mixture && k == 0 { 30.0 } else { 20.0 })
-            || moduli.iter().any(|&k| t[k] < M_MIN.ln() || t[k] > M_MAX.ln())
-        {
-            return Ok(1e300);
-        }
-        let l = loglik_at(self.kind, self.x, t.as_slice());
-        Ok(if l.is_finite() { -l } else { 1e300 })
+/// The box the search stays in: scales within e^±20 of the median, the mixture's logit weight
+/// within ±30, moduli in [[`M_MIN`], [`M_MAX`]].
+fn bounds(kind: Populations) -> Vec<(f64, f64)> {
+    let (s, m) = ((-20.0, 20.0), (M_MIN.ln(), M_MAX.ln()));
+    match kind {
+        Populations::Mixture => vec![(-30.0, 30.0), s, m, s, m],
+        Populations::Competing => vec![s, m, s, m],
     }
 }
 
-fn nelder_mead(kind: Populations, x: &[f64], start: &[f64]) -> Result<(Vec<f64>, f64)> {
-    let mut best = (start.to_vec(), loglik_at(kind, x, start));
-    for _ in 0..20 {
-        let s = DVector::from_vec(best.0.clone());
-        let mut simplex = vec![s.clone()];
-        for k in 0..s.len() {
-            let mut p = s.clone();
-            p[k] += 0.3;
-            simplex.push(p);
+/// Maximises the likelihood from `start` by a projected BFGS with the analytic gradient and an
+/// Armijo backtracking line search, inside [`bounds`]: coordinates on a bound whose gradient
+/// points out of the box are held there (the active set), and the inverse-Hessian estimate is
+/// reset whenever the active set changes. Stops when the free gradient is below 10⁻⁹ per
+/// specimen or three steps in a row gain less than 10⁻¹³ |ℓ|.
+fn bfgs(kind: Populations, x: &[f64], start: &[f64], b: &[(f64, f64)]) -> (Vec<f64>, f64) {
+    let k = b.len();
+    let n = x.len() as f64;
+    let project = |t: &mut [f64]| t.iter_mut().zip(b).for_each(|(v, (lo, hi))| *v = v.clamp(*lo, *hi));
+    let mut t = start.to_vec();
+    project(&mut t);
+    let mut g = vec![0.0; k];
+    let mut l = loglik_grad(kind, x, &t, &mut g);
+    if !l.is_finite() {
+        return (t, l);
+    }
+    let active = |t: &[f64], g: &[f64]| -> Vec<bool> { (0..k).map(|i| b[i].0 == b[i].1 || (t[i] <= b[i].0 && g[i] < 0.0) || (t[i] >= b[i].1 && g[i] > 0.0)).collect() };
+    let identity = |s: f64| -> Vec<f64> { (0..k * k).map(|i| if i % (k + 1) == 0 { s } else { 0.0 }).collect() };
+    let mut h = identity(1.0 / n);
+    let mut act = active(&t, &g);
+    let (mut g_new, mut t_new) = (vec![0.0; k], vec![0.0; k]);
+    let mut stalled = 0;
+    for _ in 0..2000 {
+        let free: Vec<f64> = (0..k).map(|i| if act[i] { 0.0 } else { g[i] }).collect();
+        if free.iter().all(|v| v.abs() <= 1e-9 * n) {
+            break;
         }
-        let solver = NelderMead::new(simplex).with_sd_tolerance(1e-10).map_err(|e| Error::numerical("flaw populations", e.to_string()))?;
-        let res = Executor::new(Nll { kind, x }, solver).configure(|c| c.max_iters(4000)).run().map_err(|e| Error::numerical("flaw populations", e.to_string()))?;
-        let Some(p) = res.state().get_best_param().cloned() else { break };
-        let l = loglik_at(kind, x, p.as_slice());
-        let gain = l - best.1;
-        if l > best.1 {
-            best = (p.as_slice().to_vec(), l);
+        // Ascent direction d = H g on the free coordinates.
+        let mut d: Vec<f64> = (0..k).map(|i| if act[i] { 0.0 } else { (0..k).map(|j| h[i * k + j] * free[j]).sum() }).collect();
+        let mut slope: f64 = d.iter().zip(&free).map(|(a, b)| a * b).sum();
+        if !(slope > 0.0) {
+            h = identity(1.0 / n);
+            d = free.iter().map(|v| v / n).collect();
+            slope = d.iter().zip(&free).map(|(a, b)| a * b).sum();
         }
-        if !(gain > 1e-10) {
+        let mut alpha = 1.0;
+        let mut accepted = None;
+        for _ in 0..60 {
+            for i in 0..k {
+                t_new[i] = t[i] + alpha * d[i];
+            }
+            project(&mut t_new);
+            let l_new = loglik_grad(kind, x, &t_new, &mut g_new);
+            let gained: f64 = t_new.iter().zip(&t).zip(&free).map(|((a, b), gi)| (a - b) * gi).sum();
+            if l_new.is_finite() && l_new >= l + 1e-4 * gained.min(alpha * slope) {
+                accepted = Some(l_new);
+                break;
+            }
+            alpha *= 0.5;
+        }
+        let Some(l_new) = accepted else { break };
+        let s: Vec<f64> = (0..k).map(|i| t_new[i] - t[i]).collect();
+        // y of the minimisation of −ℓ.
+        let y: Vec<f64> = (0..k).map(|i| g[i] - g_new[i]).collect();
+        let gain = l_new - l;
+        t.copy_from_slice(&t_new);
+        g.copy_from_slice(&g_new);
+        l = l_new;
+        let act_new = active(&t, &g);
+        if act_new != act {
+            act = act_new;
+            h = identity(1.0 / n);
+        } else {
+            let ys: f64 = y.iter().zip(&s).map(|(a, b)| a * b).sum();
+            let yy: f64 = y.iter().map(|v| v * v).sum();
+            if ys > 1e-12 * yy.sqrt() * s.iter().map(|v| v * v).sum::<f64>().sqrt() {
+                let rho = 1.0 / ys;
+                // H ← (I − ρ s yᵀ) H (I − ρ y sᵀ) + ρ s sᵀ
+                let hy: Vec<f64> = (0..k).map(|i| (0..k).map(|j| h[i * k + j] * y[j]).sum()).collect();
+                let yhy: f64 = y.iter().zip(&hy).map(|(a, b)| a * b).sum();
+                for i in 0..k {
+                    for j in 0..k {
+                        h[i * k + j] += rho * ((1.0 + rho * yhy) * s[i] * s[j] - hy[i] * s[j] - s[i] * hy[j]);
+                    }
+                }
+            }
+        }
+        stalled = if gain < 1e-13 * l.abs().max(1.0) { stalled + 1 } else { 0 };
+        if stalled == 3 {
             break;
         }
     }
-    Ok(best)
+    (t, l)
 }
 
 /// Fits a two-population law to strengths `x` (all > 0): the best of [`STARTS`] starts, with
@@ -238,7 +310,7 @@ pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
             Populations::Mixture => vec![(st[0] / (1.0 - st[0])).ln(), st[1].ln(), st[2].clamp(M_MIN * 1.01, M_MAX * 0.99).ln(), st[3].ln(), st[4].clamp(M_MIN * 1.01, M_MAX * 0.99).ln()],
             Populations::Competing => vec![st[1].ln(), st[2].clamp(M_MIN * 1.01, M_MAX * 0.99).ln(), st[3].ln(), st[4].clamp(M_MIN * 1.01, M_MAX * 0.99).ln()],
         };
-        let (t, l) = nelder_mead(kind, &xs, &t)?;
+        let (t, l) = bfgs(kind, &xs, &t, &bounds(kind));
         if l.is_finite() {
             optima.push((t, l));
         }
@@ -263,10 +335,10 @@ pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
         why = Some(format!("the weaker population holds {:.2} of {n} specimens", p * n as f64));
     } else if kind == Populations::Mixture && ((1.0 - p) * n as f64) < 1.0 {
         why = Some(format!("the stronger population holds {:.2} of {n} specimens", (1.0 - p) * n as f64));
-    } else if same(first, second) {
-        why = Some(format!("the two populations are the same law (scales {:.4} and {:.4}, moduli {:.2} and {:.2})", first.0, second.0, first.1, second.1));
     } else if kind == Populations::Competing && (first.1.ln() - second.1.ln()).abs() < 0.01 {
         why = Some(format!("the two risks have the same modulus ({:.3} and {:.3}), so together they are one Weibull law (σ^(−m) = σ₁^(−m) + σ₂^(−m)) and any split of its scale fits equally", first.1, second.1));
+    } else if same(first, second) {
+        why = Some(format!("the two populations are the same law (scales {:.4} and {:.4}, moduli {:.2} and {:.2})", first.0, second.0, first.1, second.1));
     } else if kind == Populations::Competing {
         let h = |x: f64, (s, m): (f64, f64)| m / s * (x / s).powf(m - 1.0);
         for (name, a, b) in [("first", first, second), ("second", second, first)] {
@@ -290,6 +362,74 @@ pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
 }
 
 impl FlawFit {
+    /// The profile-likelihood interval at `level` of the parameter the naming loop reports —
+    /// the weaker population's share p of a mixture, the weaker risk's modulus m₁ of competing
+    /// risks — on the strengths `x` it was fitted to: {v : 2[ℓ̂ − max ℓ | v] ≤ χ²₁(level)}, the
+    /// other parameters re-maximised at each v (warm-started BFGS). An end that reaches the
+    /// search box (p → 0 or 1, m at [`M_MIN`] or [`M_MAX`]) is that bound. None if the fit is
+    /// not identified.
+    pub fn profile_band(&self, x: &[f64], level: f64) -> Option<(f64, f64)> {
+        if self.identifiable.is_err() || !(level > 0.0 && level < 1.0) {
+            return None;
+        }
+        let med = crate::stats::median(x);
+        let xs: Vec<f64> = x.iter().map(|v| v / med).collect();
+        let (s1, m1, s2, m2) = ((self.first.0 / med).ln(), self.first.1.ln(), (self.second.0 / med).ln(), self.second.1.ln());
+        let (start, k) = match self.kind {
+            Populations::Mixture => (vec![(self.p / (1.0 - self.p)).ln(), s1, m1, s2, m2], 0),
+            Populations::Competing => (vec![s1, m1, s2, m2], 1),
+        };
+        let full = bounds(self.kind);
+        let (best_t, best) = bfgs(self.kind, &xs, &start, &full);
+        let drop = statrs::distribution::ChiSquared::new(1.0).ok().map(|c| 0.5 * statrs::distribution::ContinuousCDF::inverse_cdf(&c, level))?;
+        let target = best - drop;
+        // max ℓ with coordinate k fixed at v, warm-started from `from`.
+        let profile = |v: f64, from: &[f64]| -> (Vec<f64>, f64) {
+            let mut b = full.clone();
+            b[k] = (v, v);
+            let mut t = from.to_vec();
+            t[k] = v;
+            bfgs(self.kind, &xs, &t, &b)
+        };
+        let natural = |v: f64| if self.kind == Populations::Mixture { 1.0 / (1.0 + (-v).exp()) } else { v.exp() };
+        let mut ends = [0.0; 2];
+        for (e, dir) in [(0, -1.0), (1, 1.0)] {
+            let bound = if dir < 0.0 { full[k].0 } else { full[k].1 };
+            // Step out (doubling) until the profile falls below the target or the box ends.
+            let (mut inside, mut from, mut step) = (best_t[k], best_t.clone(), 0.05);
+            let outside = loop {
+                let v = if dir < 0.0 { (inside - step).max(bound) } else { (inside + step).min(bound) };
+                let (t, l) = profile(v, &from);
+                if !(l >= target) {
+                    break Some(v);
+                }
+                if v == bound {
+                    break None;
+                }
+                (inside, from, step) = (v, t, 2.0 * step);
+            };
+            ends[e] = match outside {
+                None => bound,
+                Some(mut out) => {
+                    for _ in 0..40 {
+                        let mid = 0.5 * (inside + out);
+                        let (t, l) = profile(mid, &from);
+                        if l >= target {
+                            (inside, from) = (mid, t);
+                        } else {
+                            out = mid;
+                        }
+                        if (out - inside).abs() < 1e-4 {
+                            break;
+                        }
+                    }
+                    0.5 * (inside + out)
+                }
+            };
+        }
+        Some((natural(ends[0]), natural(ends[1])))
+    }
+
     /// Log density at x (in the data's units).
     pub fn ln_pdf(&self, x: f64) -> f64 {
         match self.kind {
@@ -342,6 +482,23 @@ mod tests {
     use super::*;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn the_analytic_gradient_equals_central_differences() {
+        let x = [0.6, 0.8, 0.9, 1.0, 1.05, 1.1, 1.3, 0.4];
+        for (kind, t) in [(Populations::Mixture, vec![0.3, -0.2, 1.5, 0.1, 2.2]), (Populations::Competing, vec![-0.1, 1.2, 0.2, 2.5])] {
+            let mut g = vec![0.0; t.len()];
+            let mut scratch = g.clone();
+            loglik_grad(kind, &x, &t, &mut g);
+            for k in 0..t.len() {
+                let (mut a, mut b) = (t.clone(), t.clone());
+                a[k] += 1e-6;
+                b[k] -= 1e-6;
+                let fd = (loglik_grad(kind, &x, &a, &mut scratch) - loglik_grad(kind, &x, &b, &mut scratch)) / 2e-6;
+                assert!((fd - g[k]).abs() < 1e-6 * (1.0 + fd.abs()), "{kind:?} coordinate {k}: analytic {} vs difference {fd}", g[k]);
+            }
+        }
+    }
 
     #[test]
     fn a_mixture_and_competing_risks_are_recovered_and_one_population_is_not_identified() {

@@ -127,10 +127,14 @@ impl ModelFit {
     }
 
     /// The profile-likelihood interval at `level` of a single-column effect's β (`x`: the
-    /// fitted strengths; [`super::regress::profile_interval`]); None for a categorical factor, a
-    /// modulus per level, damage and a two-population law.
+    /// fitted strengths; [`super::regress::profile_interval`]); for a two-population law the
+    /// interval of its reported parameter ([`super::flaws::FlawFit::profile_band`]); None for a
+    /// categorical factor, a modulus per level and damage.
     pub fn profile_band(&self, x: &[f64], c: &Effect, level: f64) -> Option<(f64, f64)> {
-        if self.law.is_some() || self.damage_ratio.is_some() {
+        if let Some(l) = &self.law {
+            return l.profile_band(x, level);
+        }
+        if self.damage_ratio.is_some() {
             return None;
         }
         let r = self.beta_range(c)?;

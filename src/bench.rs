@@ -488,7 +488,7 @@ pub fn uq_speed(study: &Path) -> Result<UqSpeed> {
 /// Times the naming loop on a strength file of `n` specimens with six recorded factors — a
 /// size measure (effective volume, two values), two numeric (a loading rate, log-uniform over
 /// two decades; an irrelevant number) and three categorical (batch of three with batch B 15 %
-/// weaker, furnace of two, operator of four) — at the shipped settings (499 bootstrap
+/// weaker, furnace of two, operator of four) — and the two flaw-population laws, at the shipped settings (499 bootstrap
 /// replicates per round, 999 permutations per residual test, ten folds): (seconds, named,
 /// number of candidates).
 pub fn strength_factors_speed(n: usize) -> Result<(f64, Vec<String>, usize)> {
@@ -522,9 +522,11 @@ pub fn strength_factors_speed(n: usize) -> Result<(f64, Vec<String>, usize)> {
     for c in ["batch", "furnace", "operator"] {
         s.factors.extend(candidates_of(c, FactorType::Categorical, false));
     }
+    // And the two flaw-population laws, on by default for strength files.
+    s.populations = vec![crate::strength::flaws::Populations::Mixture, crate::strength::flaws::Populations::Competing];
     let start = Instant::now();
     let outcome = crate::discrepancy::workflow::analyse(&s, &crate::strength::NamingSettings::default(), true)?;
-    Ok((start.elapsed().as_secs_f64(), outcome.named.iter().map(|e| e.name()).collect(), s.factors.len()))
+    Ok((start.elapsed().as_secs_f64(), outcome.named.iter().map(|e| e.name()).collect(), s.factors.len() + s.populations.len()))
 }
 
 /// Speed of the discrepancy workflow on 100 particles.

@@ -462,7 +462,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 d.report_s
             );
             let (secs, named, candidates) = partlife::bench::strength_factors_speed(500)?;
-            out!("naming loop on a strength file of 500 specimens with 6 recorded factors (size, 2 numeric, 3 categorical; {candidates} candidates; named: {}), 499 bootstrap replicates per round and 999 permutations per residual test: {secs:.2} s (goal < 10 s)", named.join(", "));
+            out!("naming loop on a strength file of 500 specimens with 6 recorded factors (size, 2 numeric, 3 categorical) and both two-population laws ({candidates} candidates; named: {}), 499 bootstrap replicates per round and 999 permutations per residual test: {secs:.2} s (goal < 10 s)", named.join(", "));
             // The curve level needs the calibration's report (its emulator runs).
             match partlife::bench::curve_discrepancy_speed()? {
                 Some((study, headlines, secs)) => out!("curve-level discrepancy loop ({}): {} — {secs:.1} s including the 5 FE runs of the curvature table (goal < 15 min)", study.display(), headlines.join("; ")),

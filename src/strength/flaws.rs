@@ -129,9 +129,9 @@ fn ln_weibull_pdf(x: f64, s: f64, m: f64) -> f64 {
     m.ln() - s.ln() + (m - 1.0) * z.ln() - z.powf(m)
 }
 
-/// Log-likelihood at unconstrained θ for x scaled by its median, and its gradient in `g`
-/// (−∞, gradient unset, where the likelihood is not finite).
-fn loglik_grad(kind: Populations, x: &[f64], t: &[f64], g: &mut [f64]) -> f64 {
+/// Log-likelihood at unconstrained θ of the strengths whose logarithms (x scaled by its median)
+/// are `lnx`, and its gradient in `g` (−∞, gradient unset, where the likelihood is not finite).
+fn loglik_grad(kind: Populations, lnx: &[f64], t: &[f64], g: &mut [f64]) -> f64 {
     g.iter_mut().for_each(|v| *v = 0.0);
     let mut l = 0.0;
     match kind {
@@ -140,8 +140,7 @@ fn loglik_grad(kind: Populations, x: &[f64], t: &[f64], g: &mut [f64]) -> f64 {
             let lw = [-(1.0 + (-t[0]).exp()).ln(), -(1.0 + t[0].exp()).ln()];
             let (u, v) = ([t[1], t[3]], [t[2], t[4]]);
             let m = [v[0].exp(), v[1].exp()];
-            for &xi in x {
-                let lx = xi.ln();
+            for &lx in lnx {
                 let y = [lx - u[0], lx - u[1]];
                 let e = [(m[0] * y[0]).exp(), (m[1] * y[1]).exp()];
                 let a = [0, 1].map(|j| lw[j] + v[j] - u[j] + (m[j] - 1.0) * y[j] - e[j]);
@@ -161,8 +160,7 @@ fn loglik_grad(kind: Populations, x: &[f64], t: &[f64], g: &mut [f64]) -> f64 {
         Populations::Competing => {
             let (u, v) = ([t[0], t[2]], [t[1], t[3]]);
             let m = [v[0].exp(), v[1].exp()];
-            for &xi in x {
-                let lx = xi.ln();
+            for &lx in lnx {
                 let y = [lx - u[0], lx - u[1]];
                 let e = [(m[0] * y[0]).exp(), (m[1] * y[1]).exp()];
                 let lh = [0, 1].map(|j| v[j] - u[j] + (m[j] - 1.0) * y[j]);
@@ -195,14 +193,14 @@ fn bounds(kind: Populations) -> Vec<(f64, f64)> {
 /// points out of the box are held there (the active set), and the inverse-Hessian estimate is
 /// reset whenever the active set changes. Stops when the free gradient is below 10⁻⁹ per
 /// specimen or three steps in a row gain less than 10⁻¹³ |ℓ|.
-fn bfgs(kind: Populations, x: &[f64], start: &[f64], b: &[(f64, f64)]) -> (Vec<f64>, f64) {
+fn bfgs(kind: Populations, lnx: &[f64], start: &[f64], b: &[(f64, f64)]) -> (Vec<f64>, f64) {
     let k = b.len();
-    let n = x.len() as f64;
+    let n = lnx.len() as f64;
     let project = |t: &mut [f64]| t.iter_mut().zip(b).for_each(|(v, (lo, hi))| *v = v.clamp(*lo, *hi));
     let mut t = start.to_vec();
     project(&mut t);
     let mut g = vec![0.0; k];
-    let mut l = loglik_grad(kind, x, &t, &mut g);
+    let mut l = loglik_grad(kind, lnx, &t, &mut g);
     if !l.is_finite() {
         return (t, l);
     }
@@ -232,7 +230,7 @@ fn bfgs(kind: Populations, x: &[f64], start: &[f64], b: &[(f64, f64)]) -> (Vec<f
                 t_new[i] = t[i] + alpha * d[i];
             }
             project(&mut t_new);
-            let l_new = loglik_grad(kind, x, &t_new, &mut g_new);
+            let l_new = loglik_grad(kind, lnx, &t_new, &mut g_new);
             let gained: f64 = t_new.iter().zip(&t).zip(&free).map(|((a, b), gi)| (a - b) * gi).sum();
             if l_new.is_finite() && l_new >= l + 1e-4 * gained.min(alpha * slope) {
                 accepted = Some(l_new);
@@ -291,6 +289,7 @@ pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
     let xs: Vec<f64> = x.iter().map(|v| v / med).collect();
     let sorted_s: Vec<f64> = sorted.iter().map(|v| v / med).collect();
     let one = fit_mle(&xs)?.mle;
+    let lnx: Vec<f64> = xs.iter().map(|v| v.ln()).collect();
     // Starts: splits at quantiles, each part's own MLE; the one-population fit with a weaker
     // second population.
     let mut starts: Vec<[f64; 5]> = Vec::new();
@@ -310,7 +309,7 @@ pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
             Populations::Mixture => vec![(st[0] / (1.0 - st[0])).ln(), st[1].ln(), st[2].clamp(M_MIN * 1.01, M_MAX * 0.99).ln(), st[3].ln(), st[4].clamp(M_MIN * 1.01, M_MAX * 0.99).ln()],
             Populations::Competing => vec![st[1].ln(), st[2].clamp(M_MIN * 1.01, M_MAX * 0.99).ln(), st[3].ln(), st[4].clamp(M_MIN * 1.01, M_MAX * 0.99).ln()],
         };
-        let (t, l) = bfgs(kind, &xs, &t, &bounds(kind));
+        let (t, l) = bfgs(kind, &lnx, &t, &bounds(kind));
         if l.is_finite() {
             optima.push((t, l));
         }
@@ -373,14 +372,14 @@ impl FlawFit {
             return None;
         }
         let med = crate::stats::median(x);
-        let xs: Vec<f64> = x.iter().map(|v| v / med).collect();
+        let lnx: Vec<f64> = x.iter().map(|v| (v / med).ln()).collect();
         let (s1, m1, s2, m2) = ((self.first.0 / med).ln(), self.first.1.ln(), (self.second.0 / med).ln(), self.second.1.ln());
         let (start, k) = match self.kind {
             Populations::Mixture => (vec![(self.p / (1.0 - self.p)).ln(), s1, m1, s2, m2], 0),
             Populations::Competing => (vec![s1, m1, s2, m2], 1),
         };
         let full = bounds(self.kind);
-        let (best_t, best) = bfgs(self.kind, &xs, &start, &full);
+        let (best_t, best) = bfgs(self.kind, &lnx, &start, &full);
         let drop = statrs::distribution::ChiSquared::new(1.0).ok().map(|c| 0.5 * statrs::distribution::ContinuousCDF::inverse_cdf(&c, level))?;
         let target = best - drop;
         // max ℓ with coordinate k fixed at v, warm-started from `from`.
@@ -389,7 +388,7 @@ impl FlawFit {
             b[k] = (v, v);
             let mut t = from.to_vec();
             t[k] = v;
-            bfgs(self.kind, &xs, &t, &b)
+            bfgs(self.kind, &lnx, &t, &b)
         };
         let natural = |v: f64| if self.kind == Populations::Mixture { 1.0 / (1.0 + (-v).exp()) } else { v.exp() };
         let mut ends = [0.0; 2];
@@ -485,7 +484,7 @@ mod tests {
 
     #[test]
     fn the_analytic_gradient_equals_central_differences() {
-        let x = [0.6, 0.8, 0.9, 1.0, 1.05, 1.1, 1.3, 0.4];
+        let x = [0.6f64, 0.8, 0.9, 1.0, 1.05, 1.1, 1.3, 0.4].map(f64::ln);
         for (kind, t) in [(Populations::Mixture, vec![0.3, -0.2, 1.5, 0.1, 2.2]), (Populations::Competing, vec![-0.1, 1.2, 0.2, 2.5])] {
             let mut g = vec![0.0; t.len()];
             let mut scratch = g.clone();

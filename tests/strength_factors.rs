@@ -604,6 +604,50 @@ fn batches_too_small_for_their_own_scale_are_partially_pooled_and_named_when_the
     assert_eq!(e.parameters, 8, "nominal L − 1");
 }
 
+/// Campaigns in the uneven batches whose nine ln-scale offsets are drawn afresh from N(0, τ²)
+/// (a random batch effect, the pooled model's own assumption): (pooled levels named first, τ
+/// inside the reported 90 % band when named, τ inside the band over all campaigns).
+fn random_batches_sweep(reps: usize, seed: u64, tau: f64) -> (usize, usize, usize) {
+    use rand_distr::{Distribution, Normal};
+    let batch = Effect::Factor(Factor { column: "batch".into(), form: Form::Levels });
+    let (mut named, mut covered, mut covered_all) = (0, 0, 0);
+    for r in 0..reps {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(r as u64 + 1);
+        let offsets: Vec<f64> = (0..UNEVEN.len()).map(|_| Normal::new(0.0, tau).unwrap().sample(&mut rng)).collect();
+        let s = uneven_sample(|b| offsets[b], false, &mut rng);
+        let o = analyse(&s, &settings(seed ^ r as u64), false).unwrap();
+        let e = o.evidence.iter().find(|e| e.round == 0 && e.candidate == batch).unwrap();
+        let (lo, hi) = e.band.expect("a pooled factor's τ has its profile band");
+        assert_eq!(e.parameter.as_ref().unwrap().0, "tau");
+        let inside = lo <= tau && tau <= hi;
+        covered_all += usize::from(inside);
+        if o.named.first() == Some(&batch) {
+            named += 1;
+            covered += usize::from(inside);
+        }
+    }
+    eprintln!("random batch effect τ = {tau}: pooled levels named first {named}/{reps}, τ inside its 90 % band {covered}/{named} ({covered_all}/{reps} over all campaigns)");
+    (named, covered, covered_all)
+}
+
+#[test]
+fn a_random_batch_effect_is_pooled_and_its_spread_reported_with_a_band() {
+    // Fast sibling of the 100-campaign sweep below.
+    let (_, _, covered_all) = random_batches_sweep(4, 33_14, 0.1);
+    assert!(covered_all >= 3, "τ inside its band in {covered_all}/4");
+}
+
+#[test]
+#[ignore = "slow: 100 naming loops with the pooled factor's τ searched in every bootstrap refit and profiled (about 10 s on two cores); fast sibling a_random_batch_effect_is_pooled_and_its_spread_reported_with_a_band"]
+fn the_spread_of_a_random_batch_effect_is_inside_its_band_at_85_percent() {
+    // Measured: named first 84/100, τ inside 78 of those 84 (92.9 %). Over all 100 campaigns
+    // 82: where the drawn offsets happen to be small the levels are not named and τ is
+    // underestimated (the band counted, like every other effect's, where the effect is named).
+    let (named, covered, _) = random_batches_sweep(100, 33_15, 0.1);
+    assert!(covered as f64 >= 0.85 * named as f64, "τ inside its band {covered}/{named}");
+}
+
 #[test]
 #[ignore = "slow: 100 + 100 naming loops with the pooled factor's τ searched in every bootstrap refit (about a minute on two cores); fast sibling batches_too_small_for_their_own_scale_are_partially_pooled_and_named_when_they_differ"]
 fn pooled_batches_are_named_at_90_percent_and_falsely_at_most_5() {

@@ -378,7 +378,8 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
                     delta_bic: dbic,
                     delta_cv: dcv,
                     parameter: Some(parameter),
-                    band: m.profile_band(x, c, 0.90).map(|b| natural_band(c, b)),
+                    // A partially pooled factor: the band of its spread τ (its parameter).
+                    band: if matches!(t, Term::Pooled { .. }) { m.tau_band(x, c, 0.90) } else { m.profile_band(x, c, 0.90).map(|b| natural_band(c, b)) },
                     band_pivotal: false,
                     meaning,
                     shape: m.shape(),
@@ -552,8 +553,8 @@ fn describe(c: &Effect, t: &Term, m: &ModelFit, x: &[f64]) -> ((String, f64, f64
         let scales: Vec<f64> = delta.iter().map(|d| d.exp()).collect();
         let (lo, hi) = scales.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), s| (lo.min(*s), hi.max(*s)));
         let list: Vec<String> = levels.iter().zip(&scales).zip(columns).map(|((l, s), z)| format!("{l} ×{s:.3} ({})", z.iter().sum::<f64>() as usize)).collect();
-        let meaning = format!("σ_θ of each level of `{}` relative to the population of levels, partially pooled (spread τ = {tau:.3} in ln σ_θ; specimens in brackets): {}", c.covariate(), list.join(", "));
-        return (("scale_ratio_max_min".into(), hi / lo, f64::NAN), meaning, None);
+        let meaning = format!("σ_θ of each level of `{}` relative to the population of levels, partially pooled (spread τ = {tau:.3} in ln σ_θ; specimens in brackets; the levels span ×{:.3}): {}", c.covariate(), hi / lo, list.join(", "));
+        return (("tau".into(), tau, f64::NAN), meaning, None);
     }
     if let Term::Moduli { levels, reference, .. } = t {
         let gamma: Vec<f64> = m.gamma_range(c).map(|r| m.reg.gamma[r].to_vec()).unwrap_or_default();

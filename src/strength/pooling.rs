@@ -72,13 +72,56 @@ pub(super) fn fit_pooled(x: &[f64], terms: &[(Effect, Term)], ratio: Option<f64>
 /// The Laplace approximation of the marginal log-likelihood of a partially pooled fit (module
 /// docs): ℓ − Σ λ δ²/2 + Σ ½ ln λ − ½ ln det, λ = 1/τ² per pooled column.
 fn laplace_marginal(m: &ModelFit) -> f64 {
-    let mut v = m.reg.loglik - 0.5 * m.reg.ln_det_penalised;
-    for (j, &l) in m.penalty.iter().enumerate() {
+    marginal_of(&m.reg, &m.penalty)
+}
+
+/// [`laplace_marginal`] of a regression fit under the penalties `penalty`.
+fn marginal_of(reg: &RegFit, penalty: &[f64]) -> f64 {
+    let mut v = reg.loglik - 0.5 * reg.ln_det_penalised;
+    for (j, &l) in penalty.iter().enumerate() {
         if l > 0.0 {
-            v += 0.5 * l.ln() - 0.5 * l * m.reg.beta[j] * m.reg.beta[j];
+            v += 0.5 * l.ln() - 0.5 * l * reg.beta[j] * reg.beta[j];
         }
     }
     v
+}
+
+impl ModelFit {
+    /// The profile interval at `level` of a partially pooled factor's spread τ from the Laplace
+    /// marginal likelihood: {τ : 2[ln L(τ̂) − ln L(τ)] ≤ χ²₁(level)}, the other parameters (and
+    /// any other pooled factor's τ) held at the fit's, τ searched in [10⁻³, 3] as in the fit; an
+    /// end reaching that range is its bound. None if `c` is not partially pooled in this fit or
+    /// the model has a profiled damage ratio.
+    pub fn tau_band(&self, x: &[f64], c: &Effect, level: f64) -> Option<(f64, f64)> {
+        use statrs::distribution::{ChiSquared, ContinuousCDF};
+        let r = self.beta_range(c).filter(|r| !r.is_empty())?;
+        if self.damage_ratio.is_some() || self.law.is_some() || !self.penalty.get(r.start).is_some_and(|l| *l > 0.0) {
+            return None;
+        }
+        let at = |ln_tau: f64| -> f64 {
+            let mut penalty = self.penalty.clone();
+            for j in r.clone() {
+                penalty[j] = (-2.0 * ln_tau).exp();
+            }
+            let design = super::regress::Design { columns: &self.columns, offset: self.offset.as_deref(), scale_columns: &self.scale_columns, penalty: &penalty };
+            super::regress::fit_from(x, &design, Some(&self.reg)).map_or(f64::NEG_INFINITY, |reg| marginal_of(&reg, &penalty))
+        };
+        let hat = -0.5 * self.penalty[r.start].ln();
+        let target = at(hat) - 0.5 * ChiSquared::new(1.0).ok()?.inverse_cdf(level);
+        let (lo, hi) = ((1e-3f64).ln(), 3f64.ln());
+        let end = |bound: f64| -> f64 {
+            if at(bound) >= target {
+                return bound;
+            }
+            let (mut inside, mut out) = (hat, bound);
+            while (out - inside).abs() > 1e-3 {
+                let mid = 0.5 * (inside + out);
+                if at(mid) >= target { inside = mid } else { out = mid }
+            }
+            0.5 * (inside + out)
+        };
+        Some((end(lo).exp(), end(hi).exp()))
+    }
 }
 
 

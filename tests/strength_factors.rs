@@ -520,6 +520,52 @@ fn competing_risks_are_named_at_90_percent_with_the_modulus_inside_its_band_at_8
     assert!(covered as f64 >= 0.85 * named as f64, "the weaker-scale modulus inside its 90 % band {covered}/{named}");
 }
 
+/// `n` specimens in three batches (batch B's scale × 0.85), each holding a 30 % weaker flaw
+/// population (0.6 × the scale, m = 12 both): whether the loop names both the batch's scale and
+/// the mixture beside it (in either order) among its first two effects.
+fn batch_and_mixture_sweep(reps: usize, seed: u64, n: usize) -> usize {
+    use partlife::strength::flaws::Populations;
+    let batch_effect = Effect::Factor(Factor { column: "batch".into(), form: Form::Levels });
+    let mixture = Effect::Populations(Populations::Mixture);
+    let mut both = 0;
+    for r in 0..reps {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(r as u64 + 1);
+        let batch: Vec<String> = (0..n).map(|i| ["A", "B", "C"][i % 3].to_string()).collect();
+        let strength = batch
+            .iter()
+            .map(|b| {
+                let s = 400e6 * if b == "B" { 0.85 } else { 1.0 } * if rng.random::<f64>() < 0.3 { 0.6 } else { 1.0 };
+                draw_particles(&[f64::ln(s)], 12.0, 1, &mut rng)[0].1.exp()
+            })
+            .collect();
+        let mut s = Sample { source: "synthetic".into(), strength, populations: vec![Populations::Mixture, Populations::Competing], ..Sample::default() };
+        s.levels.push(("batch".into(), batch));
+        s.factors = vec![Factor { column: "batch".into(), form: Form::Levels }, Factor { column: "batch".into(), form: Form::Moduli }];
+        let o = analyse(&s, &settings(seed ^ r as u64), false).unwrap();
+        let first_two = &o.named[..o.named.len().min(2)];
+        both += usize::from(first_two.contains(&batch_effect) && first_two.contains(&mixture));
+        if !(first_two.contains(&batch_effect) && first_two.contains(&mixture)) {
+            eprintln!("  sample {r}: named {:?}", o.named.iter().map(|e| e.name()).collect::<Vec<_>>());
+        }
+    }
+    eprintln!("{n} specimens, a batch's scale and a weak flaw population: both named {both}/{reps}");
+    both
+}
+
+#[test]
+fn a_batch_effect_and_a_weak_flaw_population_are_both_named() {
+    // Fast sibling of the sweep below: a two-population law fitted beside a scale per level.
+    assert_eq!(batch_and_mixture_sweep(2, 33_16, 150), 2);
+}
+
+#[test]
+#[ignore = "slow: 40 naming loops refitting two-population laws beside a batch's scales in every bootstrap replicate; fast sibling a_batch_effect_and_a_weak_flaw_population_are_both_named"]
+fn a_batch_effect_and_a_weak_flaw_population_are_both_named_at_90_percent() {
+    let both = batch_and_mixture_sweep(40, 33_17, 150);
+    assert!(both >= 36, "both named in {both}/40");
+}
+
 #[test]
 #[ignore = "slow: 40 naming loops with 15 factor candidates and both two-population laws refitted in every bootstrap replicate (about a minute on two cores); fast siblings a_hidden_weak_flaw_population_is_named_as_a_mixture (nothing named with one population) and nothing_is_named_when_nothing_is_hidden_even_among_irrelevant_and_shuffled_factors"]
 fn nothing_is_named_among_irrelevant_factors_and_the_two_population_laws() {
@@ -767,8 +813,12 @@ fn the_jahanmir_study_names_the_batch_and_a_lab_export_agrees() {
     std::fs::create_dir_all(s.path("datasets/real")).unwrap();
     std::fs::copy(common::root().join("datasets/real/jahanmir_silicon_nitride_bend_bars.csv"), s.path("datasets/real/jahanmir_silicon_nitride_bend_bars.csv")).unwrap();
     let study = std::fs::read_to_string(common::root().join("studies/strength_ceramic_jahanmir.toml")).unwrap();
-    let fast = common::edited(&study, &[("bootstrap = 499", "bootstrap = 99"), ("permutations = 999", "permutations = 199"), ("populations = [\"mixture\", \"competing_risks\"]", "")]);
+    // The shipped study at 99 bootstrap replicates, and without the two-population laws (the
+    // recorded factors alone).
+    let fast = common::edited(&study, &[("bootstrap = 499", "bootstrap = 99"), ("permutations = 999", "permutations = 199")]);
     s.write("studies/jahanmir.toml", &fast);
+    let factors_only = common::edited(&fast, &[("populations = [\"mixture\", \"competing_risks\"]", "populations = []")]);
+    s.write("studies/jahanmir_factors.toml", &factors_only);
     // The lab's export: semicolon, decimal comma, German headers, strength in GPa.
     let text = s.read("datasets/real/jahanmir_silicon_nitride_bend_bars.csv");
     let mut lab = String::from("Probe;Labor;Charge;Tischvorschub;Zustellung;Körnung;Biegefestigkeit [GPa]\n");
@@ -787,7 +837,7 @@ fn the_jahanmir_study_names_the_batch_and_a_lab_export_agrees() {
     );
     s.write("studies/jahanmir_lab.toml", &lab_study);
     let mut runs = Vec::new();
-    for name in ["jahanmir", "jahanmir_lab"] {
+    for name in ["jahanmir_factors", "jahanmir", "jahanmir_lab"] {
         let out = s.run(&["run", &format!("studies/{name}.toml"), "--quiet"]);
         assert_eq!(out.code, 0, "{name}: {}", out.stderr);
         let v: serde_json::Value = serde_json::from_str(&s.read(&format!("reports/{name}/verdict.json"))).unwrap();
@@ -812,11 +862,23 @@ fn the_jahanmir_study_names_the_batch_and_a_lab_export_agrees() {
     assert!((batch["likelihood_ratio"].as_f64().unwrap() - 132.73).abs() < 0.005 && (batch["delta_bic"].as_f64().unwrap() + 126.55).abs() < 0.005, "{batch}");
     assert!((moduli["likelihood_ratio"].as_f64().unwrap() - 27.26).abs() < 0.005, "{moduli}");
     assert!((v["gap_before"]["si3n4"].as_f64().unwrap() - 194.3).abs() < 0.05 && (v["gap_after"]["si3n4"].as_f64().unwrap() - 53.9).abs() < 0.05, "{}", v["gap_after"]);
-    // The lab export: the same verdict under its own names, the same final ℓ (the strengths in
-    // GPa: ℓ differs by n ln 10³).
-    let (l, _) = &runs[1];
-    assert_eq!(l["effects_named"]["si3n4"], serde_json::json!(["levels(Charge)", "moduli(Charge)"]));
+    assert_eq!(v["gap_before"]["si3n4"], runs[2].0["gap_before"]["si3n4"]);
+    // With the two-population laws (the shipped study): after the batch's scale a mixture beside
+    // it explains the lower tail better than a modulus per batch (Λ 62.2 against 27.3), and then
+    // the table speed's scale; the final model fits (bootstrap AD p > 0.05).
+    let (p, md) = &runs[1];
+    assert_eq!(p["effects_named"]["si3n4"], serde_json::json!(["levels(batch)", "mixture", "levels(table_speed)"]));
+    let last = p["materials"][0]["stages"].as_array().unwrap().last().unwrap().clone();
+    assert!(last["p_anderson_darling"].as_f64().unwrap() > 0.05, "{last}");
+    let ev = p["evidence"]["si3n4"].as_array().unwrap();
+    let at = |round: u64, name: &str| ev.iter().find(|e| e["round"].as_u64() == Some(round) && e["candidate"] == name).unwrap().clone();
+    let (mixture, moduli) = (at(1, "mixture"), at(1, "moduli(batch)"));
+    assert!((mixture["likelihood_ratio"].as_f64().unwrap() - 62.15).abs() < 0.01 && (moduli["likelihood_ratio"].as_f64().unwrap() - 27.26).abs() < 0.005, "{mixture} {moduli}");
+    assert!(md.contains("scales at the reference of the scale effects beside the law"), "{md}");
+    assert!(!md.contains("**The Weibull law fits these data poorly**"), "{md}");
+    // Its lab export: the same verdict under the lab's names, the same final ℓ.
+    let (l, _) = &runs[2];
+    assert_eq!(l["effects_named"]["si3n4"], serde_json::json!(["levels(Charge)", "mixture", "levels(Tischvorschub)"]));
     let ll = l["materials"][0]["stages"].as_array().unwrap().last().unwrap()["log_likelihood"].as_f64().unwrap();
     assert!((ll - last["log_likelihood"].as_f64().unwrap()).abs() < 1e-6, "{ll} vs {}", last["log_likelihood"]);
-    assert_eq!(v["gap_before"]["si3n4"], l["gap_before"]["si3n4"]);
 }

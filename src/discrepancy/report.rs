@@ -256,7 +256,7 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
     for r in results {
         for (stage, st) in [("before", r.outcome.before()), ("after", r.outcome.after())] {
             let d = st.model.design();
-            let centre = reference_ln_scale(&st.model);
+            let centre = if st.model.law.is_some() { 0.0 } else { reference_ln_scale(&st.model) };
             for i in 0..r.sample.strength.len() {
                 cols.entry("material".into()).or_default().push(r.key.clone());
                 cols.entry("id".into()).or_default().push(r.ids[i].clone());
@@ -265,7 +265,11 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
                 num.entry("strength_pa".into()).or_default().push(x);
                 // With a modulus per level, each specimen's standardised residual is carried onto
                 // the reference level's modulus, so the adjusted strengths share one law.
-                let adjusted = if st.model.scale_columns.is_empty() {
+                // A two-population law: the strengths with the scale effects beside it taken out
+                // (on the law's curve at the reference level).
+                let adjusted = if let Some(l) = &st.model.law {
+                    x * (-l.shift(&st.model.columns, i)).exp()
+                } else if st.model.scale_columns.is_empty() {
                     x * (centre - st.model.reg.ln_scale(&d, i)).exp()
                 } else {
                     (centre + st.model.reg.b * (x.ln() - st.model.reg.ln_scale(&d, i)) / st.model.reg.b_at(&d, i)).exp()
@@ -406,7 +410,9 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                 md.push_str(&format!("\n`{}` (named in round {}): {}.\n", e.candidate.name(), e.round, e.meaning));
             }
             // Both two-population laws passing: why the named one.
-            let laws: Vec<&crate::discrepancy::workflow::Evidence> = r.outcome.evidence.iter().filter(|e| e.passed && matches!(e.candidate, crate::strength::Effect::Populations(_))).collect();
+            let is_law = |e: &&crate::discrepancy::workflow::Evidence| matches!(e.candidate, crate::strength::Effect::Populations(_));
+            let named_round = r.outcome.evidence.iter().filter(is_law).find(|e| e.named).map(|e| e.round);
+            let laws: Vec<&crate::discrepancy::workflow::Evidence> = r.outcome.evidence.iter().filter(is_law).filter(|e| e.passed && Some(e.round) == named_round).collect();
             if let ([a, b], Some(named)) = (laws.as_slice(), laws.iter().find(|e| e.named)) {
                 let other = if a.named { b } else { a };
                 md.push_str(&format!(

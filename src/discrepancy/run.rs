@@ -130,17 +130,18 @@ fn power_study(sample: &Sample, outcome: &Outcome, settings: &NamingSettings, p:
     let mut rows = Vec::new();
     for (si, (name, model)) in scenarios.iter().enumerate() {
         let d = model.design();
-        let ln_scale: Vec<f64> = (0..n0).map(|i| model.reg.ln_scale(&d, i)).collect();
+        // (A two-population law draws its own strengths below; the rows only carry the factors.)
+        let ln_scale: Vec<f64> = (0..n0).map(|i| if model.law.is_some() { model.reg.mu } else { model.reg.ln_scale(&d, i) }).collect();
         for (ni, &n) in p.particles.iter().enumerate() {
             let hits: Vec<(bool, bool)> = (0..p.replicates)
                 .into_par_iter()
                 .map(|r| {
                     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0x9077_E400);
                     rng.set_stream(((si * 64 + ni) * 100_000 + r) as u64 + 1);
-                    let (rows_drawn, mut strength): (Vec<usize>, Vec<f64>) = draw_rows(&ln_scale, |i| 1.0 / model.reg.b_at(&d, i), n, &mut rng).into_iter().map(|(i, ln_s)| (i, ln_s.exp())).unzip();
-                    // A two-population law: its own draws (the rows only carry the factors).
+                    let (rows_drawn, mut strength): (Vec<usize>, Vec<f64>) = draw_rows(&ln_scale, |i| if model.law.is_some() { model.reg.shape() } else { 1.0 / model.reg.b_at(&d, i) }, n, &mut rng).into_iter().map(|(i, ln_s)| (i, ln_s.exp())).unzip();
+                    // A two-population law: its own draws at each drawn row's scale shift.
                     if let Some(law) = &model.law {
-                        strength = (0..n).map(|_| law.sample(&mut rng)).collect();
+                        strength = rows_drawn.iter().map(|&i| law.sample(&mut rng) * law.shift(&model.columns, i).exp()).collect();
                     }
                     let covariates = sample.covariates.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i]).collect())).collect();
                     let synthetic = Sample { source: format!("power replicate {r}"), strength, covariates, levels: sample.levels.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i].clone()).collect())).collect(), factors: sample.factors.clone(), particles: sample.particles, populations: sample.populations.clone() };

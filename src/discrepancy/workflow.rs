@@ -274,11 +274,16 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
     let mut stages = Vec::new();
     for round in 0.. {
         let model = fit_model(x, &current)?;
-        // A two-population law replaces the base law: a candidate while nothing is named, and
-        // once named, the last (scale effects are not fitted beside it).
-        let law_named = current.iter().any(|(_, t)| matches!(t, Term::Populations(_)));
-        let remaining: Vec<&(Effect, Term)> = if named.len() < settings.max_effects && !law_named {
-            available.iter().filter(|(c, t)| !named.contains(c) && (current.is_empty() || !matches!(t, Term::Populations(_)))).collect()
+        // A two-population law replaces the base law; scale effects of recorded columns (one
+        // column, or a scale per level) are fitted beside it, shifting both populations alike.
+        // So a law is a candidate while every named effect is such a scale effect, and once a
+        // law is named only such scale effects remain candidates.
+        let beside_law = |t: &Term| matches!(t, Term::Linear(_) | Term::Levels { .. });
+        let is_law = |t: &Term| matches!(t, Term::Populations(_));
+        let law_named = current.iter().any(|(_, t)| is_law(t));
+        let law_allowed = current.iter().all(|(_, t)| beside_law(t));
+        let remaining: Vec<&(Effect, Term)> = if named.len() < settings.max_effects {
+            available.iter().filter(|(c, t)| !named.contains(c) && if law_named { beside_law(t) } else { !is_law(t) || law_allowed }).collect()
         } else {
             Vec::new()
         };
@@ -519,7 +524,7 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
 /// The reported parameter of a fitted candidate (symbol, value, standard error), what it
 /// means, and for a size measure the weakest-link test.
 fn describe(c: &Effect, t: &Term, m: &ModelFit, x: &[f64]) -> ((String, f64, f64), String, Option<WeakestLink>) {
-    if let Some(law) = &m.law {
+    if let (Some(law), Effect::Populations(_)) = (&m.law, c) {
         let what = match &law.identifiable {
             Ok(()) => law.describe(),
             Err(why) => format!("{} — not identified: {why}", law.describe()),
@@ -532,7 +537,7 @@ fn describe(c: &Effect, t: &Term, m: &ModelFit, x: &[f64]) -> ((String, f64, f64
     }
     let range = m.beta_range(c);
     if let Term::Levels { levels, reference, .. } = t {
-        let beta: Vec<f64> = range.map(|r| m.reg.beta[r].to_vec()).unwrap_or_default();
+        let beta: Vec<f64> = range.map(|r| m.beta()[r].to_vec()).unwrap_or_default();
         let others = levels.iter().filter(|l| *l != reference);
         let mut scales: Vec<(String, f64)> = vec![(reference.clone(), 1.0)];
         scales.extend(others.zip(&beta).map(|(l, b)| (l.clone(), b.exp())));
@@ -571,7 +576,8 @@ fn describe(c: &Effect, t: &Term, m: &ModelFit, x: &[f64]) -> ((String, f64, f64
     // Delta method by a central difference of the reported parameter in β.
     let val_se = if *c == Effect::Damage { f64::NAN } else { 0.5 * (c.parameter(beta + se, m.shape()).1 - c.parameter(beta - se, m.shape()).1).abs() };
     let mut wl = None;
-    if let (Effect::Factor(Factor { form: Form::Size(measure), .. }), Term::Linear(z)) = (c, t) {
+    // (Beside a two-population law there is no one modulus to test the size exponent against.)
+    if let (Effect::Factor(Factor { form: Form::Size(measure), .. }), Term::Linear(z), None) = (c, t, &m.law) {
         // The other effects' columns (and a damage offset at its fitted ratio), refitted under the tie.
         let skip = m.beta_range(c).unwrap_or(0..0);
         let others: Vec<Vec<f64>> = m.columns.iter().enumerate().filter(|(j, _)| !skip.contains(j)).map(|(_, col)| col.clone()).collect();

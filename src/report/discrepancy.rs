@@ -230,7 +230,7 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
             _ => return None,
         };
         let g = |c: &str| fits.f(c).ok().and_then(|v| v.get(j).copied());
-        Some(crate::strength::flaws::FlawFit { kind, p: g("law_weight")?, first: (g("law_scale1_pa")?, g("law_modulus1")?), second: (g("law_scale2_pa")?, g("law_modulus2")?), loglik: f64::NAN, identifiable: Ok(()) })
+        Some(crate::strength::flaws::FlawFit { kind, p: g("law_weight")?, first: (g("law_scale1_pa")?, g("law_modulus1")?), second: (g("law_scale2_pa")?, g("law_modulus2")?), beta: Vec::new(), loglik: f64::NAN, identifiable: Ok(()) })
     };
     let mut series = Vec::new();
     let mut xs = Vec::new();
@@ -253,7 +253,7 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
         // carried onto it): say so, with the range by level (stages.csv; older reports lack it).
         // A two-population law is drawn as its curve ln(−ln(1 − F(x))), not a line.
         if let Some(l) = law(j) {
-            let label = format!("{name}: m = {:.1} and {:.1} (curve)", l.first.1.min(l.second.1), l.first.1.max(l.second.1));
+            let label = format!("final model, {}: m = {:.1} and {:.1} (curve)", l.kind.name().replace('_', " "), l.first.1.min(l.second.1), l.first.1.max(l.second.1));
             series.push(Series { label: Some(label), points: pts, colour: colour_st, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 1.6) });
             curves.push((l, colour_st));
             continue;

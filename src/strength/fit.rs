@@ -144,7 +144,7 @@ impl ModelFit {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(r as u64 + 1);
         let xs = match &self.law {
-            Some(l) => (0..self.n).map(|_| l.sample(&mut rng)).collect(),
+            Some(l) => (0..self.n).map(|i| l.sample(&mut rng) * l.shift(&self.columns, i).exp()).collect(),
             None => self.reg.sample(&self.design(), self.n, &mut rng),
         };
         let refit = fit_model_near(&xs, terms, Some(self)).ok()?;
@@ -172,17 +172,23 @@ pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<&ModelFi
 /// ln σ_i of particle `i` under a model fitted on other rows: its linear terms' columns at row
 /// i and the damage offset at the fitted ratio.
 pub fn predict_ln_scale(fit: &ModelFit, terms: &[(Effect, Term)], i: usize) -> f64 {
-    let mut s = fit.reg.mu;
+    fit.reg.mu + linear_predictor(&fit.reg.beta, fit, terms, i)
+}
+
+/// Σ β_j z_j,i over the regression columns of `terms` at row i (β in the order of the columns),
+/// plus a damage offset at the fit's ratio.
+fn linear_predictor(beta: &[f64], fit: &ModelFit, terms: &[(Effect, Term)], i: usize) -> f64 {
+    let mut s = 0.0;
     let mut j = 0;
     for (_, t) in terms {
         match t {
             Term::Linear(z) => {
-                s += fit.reg.beta[j] * z[i];
+                s += beta[j] * z[i];
                 j += 1;
             }
             Term::Levels { columns, .. } | Term::Pooled { columns, .. } => {
                 for z in columns {
-                    s += fit.reg.beta[j] * z[i];
+                    s += beta[j] * z[i];
                     j += 1;
                 }
             }
@@ -216,7 +222,10 @@ pub fn predict_b(fit: &ModelFit, terms: &[(Effect, Term)], i: usize) -> f64 {
 /// Weibull regression's at [`predict_ln_scale`]).
 pub fn predict_ln_density(fit: &ModelFit, terms: &[(Effect, Term)], i: usize, x: f64) -> f64 {
     match &fit.law {
-        Some(l) => l.ln_pdf(x),
+        Some(l) => {
+            let eta = linear_predictor(&l.beta, fit, terms, i);
+            l.ln_pdf(x * (-eta).exp()) - eta
+        }
         None => fit.reg.ln_density_with(predict_ln_scale(fit, terms, i), predict_b(fit, terms, i), x),
     }
 }

@@ -38,9 +38,21 @@
 //! acts on the data (its hazard below 1 % of the other's at every specimen), or when starts reach optima within 0.1 in ℓ whose laws differ
 //! (several maxima). The naming loop never names a law so reported.
 //!
+//! **Beside scale effects** ([`fit_shifted`]): recorded columns that act on the scale (a numeric
+//! factor's ln-linear or power column, a scale per level) shift both populations alike,
+//! ln σ_j,i = ln σ_j + Σ_k β_k z_k,i, so ℓ_i = ℓ_law(ln x_i − η_i) − η_i with η_i = Σ_k β_k z_k,i and
+//! ∂ℓ_i/∂β_k = z_k,i Σ_j ∂ℓ_i/∂ ln σ_j; the β are fitted jointly with the law (starts at the
+//! one-law regression's β). A modulus per level, pooled levels and damage are not fitted
+//! beside a law.
+//!
+//! The search finds the local maxima these starts lead to; the degenerate spikes where a
+//! component collapses onto a few specimens (the likelihood is unbounded there) are not sought,
+//! and a fit that reaches the modulus bound is reported as not identified.
+//!
 //! In the naming loop ([`crate::discrepancy::workflow`]) a two-population law is a candidate
 //! in place of the base law (`Effect::Populations`, 3 or 2 extra parameters): offered while
-//! nothing is named, and the last effect once named (scale effects are not fitted beside it).
+//! every named effect is such a scale effect; once named, only such scale effects remain
+//! candidates.
 //!
 //! Verified against the `reliability` package (tests/bench/reliability/fit.py) in
 //! `tests/strength_factors.rs`, and by the unit tests below (a mixture and a competing-risks
@@ -118,6 +130,10 @@ pub struct FlawFit {
     pub first: (f64, f64),
     /// (scale, modulus) of population 2.
     pub second: (f64, f64),
+    /// Coefficients of the scale effects fitted beside the law (row i's scales × e^(Σ β_k z_k,i);
+    /// empty without).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub beta: Vec<f64>,
     /// Maximised log-likelihood (density of x in its own units).
     pub loglik: f64,
     /// Ok, or why the two populations are not identified by these data.
@@ -131,46 +147,66 @@ fn ln_weibull_pdf(x: f64, s: f64, m: f64) -> f64 {
 
 /// Log-likelihood at unconstrained θ of the strengths whose logarithms (x scaled by its median)
 /// are `lnx`, and its gradient in `g` (−∞, gradient unset, where the likelihood is not finite).
-fn loglik_grad(kind: Populations, lnx: &[f64], t: &[f64], g: &mut [f64]) -> f64 {
+/// θ is the law's coordinates followed by one β per column of `z`: row i's scales are shifted
+/// by η_i = Σ_k β_k z_k,i, so ℓ_i = ℓ_law(ln x_i − η_i) − η_i and ∂ℓ_i/∂η_i = Σ_j ∂ℓ_i/∂ ln σ_j.
+fn loglik_grad(kind: Populations, lnx: &[f64], z: &[Vec<f64>], t: &[f64], g: &mut [f64]) -> f64 {
     g.iter_mut().for_each(|v| *v = 0.0);
     let mut l = 0.0;
+    let k0 = kind.parameters();
+    let eta = |i: usize| -> f64 { z.iter().zip(&t[k0..]).map(|(c, b)| b * c[i]).sum() };
     match kind {
         Populations::Mixture => {
             let p = 1.0 / (1.0 + (-t[0]).exp());
             let lw = [-(1.0 + (-t[0]).exp()).ln(), -(1.0 + t[0].exp()).ln()];
             let (u, v) = ([t[1], t[3]], [t[2], t[4]]);
             let m = [v[0].exp(), v[1].exp()];
-            for &lx in lnx {
+            for (i, &lx0) in lnx.iter().enumerate() {
+                let h = eta(i);
+                let lx = lx0 - h;
                 let y = [lx - u[0], lx - u[1]];
                 let e = [(m[0] * y[0]).exp(), (m[1] * y[1]).exp()];
                 let a = [0, 1].map(|j| lw[j] + v[j] - u[j] + (m[j] - 1.0) * y[j] - e[j]);
                 let hi = a[0].max(a[1]);
                 let li = hi + ((a[0] - hi).exp() + (a[1] - hi).exp()).ln();
-                l += li;
+                l += li - h;
                 let r = [(a[0] - li).exp(), (a[1] - li).exp()];
                 g[0] += r[0] - p;
+                let mut gu = 0.0;
                 for j in 0..2 {
                     if r[j] > 0.0 {
-                        g[1 + 2 * j] += r[j] * m[j] * (e[j] - 1.0);
+                        let du = r[j] * m[j] * (e[j] - 1.0);
+                        g[1 + 2 * j] += du;
+                        gu += du;
                         g[2 + 2 * j] += r[j] * (1.0 + m[j] * y[j] * (1.0 - e[j]));
                     }
+                }
+                for (k, c) in z.iter().enumerate() {
+                    g[k0 + k] += gu * c[i];
                 }
             }
         }
         Populations::Competing => {
             let (u, v) = ([t[0], t[2]], [t[1], t[3]]);
             let m = [v[0].exp(), v[1].exp()];
-            for &lx in lnx {
+            for (i, &lx0) in lnx.iter().enumerate() {
+                let h = eta(i);
+                let lx = lx0 - h;
                 let y = [lx - u[0], lx - u[1]];
                 let e = [(m[0] * y[0]).exp(), (m[1] * y[1]).exp()];
                 let lh = [0, 1].map(|j| v[j] - u[j] + (m[j] - 1.0) * y[j]);
                 let hi = lh[0].max(lh[1]);
                 let lht = hi + ((lh[0] - hi).exp() + (lh[1] - hi).exp()).ln();
-                l += lht - e[0] - e[1];
+                l += lht - e[0] - e[1] - h;
+                let mut gu = 0.0;
                 for j in 0..2 {
                     let w = (lh[j] - lht).exp();
-                    g[2 * j] += m[j] * (e[j] - w);
+                    let du = m[j] * (e[j] - w);
+                    g[2 * j] += du;
+                    gu += du;
                     g[2 * j + 1] += w * (1.0 + m[j] * y[j]) - m[j] * y[j] * e[j];
+                }
+                for (k, c) in z.iter().enumerate() {
+                    g[k0 + k] += gu * c[i];
                 }
             }
         }
@@ -179,13 +215,15 @@ fn loglik_grad(kind: Populations, lnx: &[f64], t: &[f64], g: &mut [f64]) -> f64 
 }
 
 /// The box the search stays in: scales within e^±20 of the median, the mixture's logit weight
-/// within ±30, moduli in [[`M_MIN`], [`M_MAX`]].
-fn bounds(kind: Populations) -> Vec<(f64, f64)> {
+/// within ±30, moduli in [[`M_MIN`], [`M_MAX`]], each of `columns` scale coefficients within ±20.
+fn bounds(kind: Populations, columns: usize) -> Vec<(f64, f64)> {
     let (s, m) = ((-20.0, 20.0), (M_MIN.ln(), M_MAX.ln()));
-    match kind {
+    let mut b = match kind {
         Populations::Mixture => vec![(-30.0, 30.0), s, m, s, m],
         Populations::Competing => vec![s, m, s, m],
-    }
+    };
+    b.extend(std::iter::repeat_n(s, columns));
+    b
 }
 
 /// Maximises the likelihood from `start` by a projected BFGS with the analytic gradient and an
@@ -193,14 +231,14 @@ fn bounds(kind: Populations) -> Vec<(f64, f64)> {
 /// points out of the box are held there (the active set), and the inverse-Hessian estimate is
 /// reset whenever the active set changes. Stops when the free gradient is below 10⁻⁹ per
 /// specimen or three steps in a row gain less than 10⁻¹³ |ℓ|.
-fn bfgs(kind: Populations, lnx: &[f64], start: &[f64], b: &[(f64, f64)]) -> (Vec<f64>, f64) {
+fn bfgs(kind: Populations, lnx: &[f64], z: &[Vec<f64>], start: &[f64], b: &[(f64, f64)]) -> (Vec<f64>, f64) {
     let k = b.len();
     let n = lnx.len() as f64;
     let project = |t: &mut [f64]| t.iter_mut().zip(b).for_each(|(v, (lo, hi))| *v = v.clamp(*lo, *hi));
     let mut t = start.to_vec();
     project(&mut t);
     let mut g = vec![0.0; k];
-    let mut l = loglik_grad(kind, lnx, &t, &mut g);
+    let mut l = loglik_grad(kind, lnx, z, &t, &mut g);
     if !l.is_finite() {
         return (t, l);
     }
@@ -230,7 +268,7 @@ fn bfgs(kind: Populations, lnx: &[f64], start: &[f64], b: &[(f64, f64)]) -> (Vec
                 t_new[i] = t[i] + alpha * d[i];
             }
             project(&mut t_new);
-            let l_new = loglik_grad(kind, lnx, &t_new, &mut g_new);
+            let l_new = loglik_grad(kind, lnx, z, &t_new, &mut g_new);
             let gained: f64 = t_new.iter().zip(&t).zip(&free).map(|((a, b), gi)| (a - b) * gi).sum();
             if l_new.is_finite() && l_new >= l + 1e-4 * gained.min(alpha * slope) {
                 accepted = Some(l_new);
@@ -276,6 +314,13 @@ fn bfgs(kind: Populations, lnx: &[f64], start: &[f64], b: &[(f64, f64)]) -> (Vec
 /// Fits a two-population law to strengths `x` (all > 0): the best of [`STARTS`] starts, with
 /// the identifiability verdict.
 pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
+    fit_shifted(kind, x, &[])
+}
+
+/// [`fit`] with both populations' scales shifted row by row by the scale effects of the columns
+/// `z` (ln σ_j,i = ln σ_j + Σ_k β_k z_k,i: a batch or a loading rate acts on every flaw alike).
+/// The starts put β at the one-law Weibull regression's and split the strengths so adjusted.
+pub fn fit_shifted(kind: Populations, x: &[f64], z: &[Vec<f64>]) -> Result<FlawFit> {
     let n = x.len();
     if n < 10 {
         return Err(Error::numerical("flaw populations", format!("{n} specimens are too few for a two-population law (at least 10)")));
@@ -283,13 +328,18 @@ pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
     if let Some(v) = x.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
         return Err(Error::numerical("flaw populations", format!("strengths must be finite and > 0 (got {v})")));
     }
-    let mut sorted = x.to_vec();
+    // The one-law regression's β, and the strengths adjusted by it.
+    let beta0: Vec<f64> = if z.is_empty() { Vec::new() } else { crate::strength::regress::fit(x, &crate::strength::regress::Design { columns: z, ..Default::default() })?.beta };
+    let shift = |beta: &[f64], i: usize| -> f64 { z.iter().zip(beta).map(|(c, b)| b * c[i]).sum() };
+    let adjusted: Vec<f64> = (0..n).map(|i| x[i] * (-shift(&beta0, i)).exp()).collect();
+    let mut sorted = adjusted.clone();
     sorted.sort_by(f64::total_cmp);
-    let med = crate::stats::median(x);
-    let xs: Vec<f64> = x.iter().map(|v| v / med).collect();
+    let med = crate::stats::median(&adjusted);
+    let xs: Vec<f64> = adjusted.iter().map(|v| v / med).collect();
     let sorted_s: Vec<f64> = sorted.iter().map(|v| v / med).collect();
     let one = fit_mle(&xs)?.mle;
-    let lnx: Vec<f64> = xs.iter().map(|v| v.ln()).collect();
+    let lnx: Vec<f64> = x.iter().map(|v| (v / med).ln()).collect();
+    let k0 = kind.parameters();
     // Starts: splits at quantiles, each part's own MLE; the one-population fit with a weaker
     // second population.
     let mut starts: Vec<[f64; 5]> = Vec::new();
@@ -305,11 +355,12 @@ pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
     }
     let mut optima: Vec<(Vec<f64>, f64)> = Vec::new();
     for st in &starts {
-        let t: Vec<f64> = match kind {
+        let mut t: Vec<f64> = match kind {
             Populations::Mixture => vec![(st[0] / (1.0 - st[0])).ln(), st[1].ln(), st[2].clamp(M_MIN * 1.01, M_MAX * 0.99).ln(), st[3].ln(), st[4].clamp(M_MIN * 1.01, M_MAX * 0.99).ln()],
             Populations::Competing => vec![st[1].ln(), st[2].clamp(M_MIN * 1.01, M_MAX * 0.99).ln(), st[3].ln(), st[4].clamp(M_MIN * 1.01, M_MAX * 0.99).ln()],
         };
-        let (t, l) = bfgs(kind, &lnx, &t, &bounds(kind));
+        t.extend(&beta0);
+        let (t, l) = bfgs(kind, &lnx, z, &t, &bounds(kind, z.len()));
         if l.is_finite() {
             optima.push((t, l));
         }
@@ -326,6 +377,9 @@ pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
         if a.0 <= b.0 { (p, a, b) } else { (if kind == Populations::Mixture { 1.0 - p } else { 1.0 }, b, a) }
     };
     let (p, first, second) = law(&best.0);
+    let beta = best.0[k0..].to_vec();
+    // The identifiability checks look at the strengths with the fitted shifts taken out.
+    let x: Vec<f64> = (0..n).map(|i| x[i] * (-shift(&beta, i)).exp()).collect();
     let same = |a: (f64, f64), b: (f64, f64)| (a.0.ln() - b.0.ln()).abs() < 0.05 && (a.1.ln() - b.1.ln()).abs() < 0.1;
     let mut why: Option<String> = None;
     if let Some(m) = [first.1, second.1].into_iter().find(|m| *m > 0.98 * M_MAX || *m < 1.02 * M_MIN) {
@@ -357,29 +411,31 @@ pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
             }
         }
     }
-    Ok(FlawFit { kind, p, first, second, loglik: best.1 - n as f64 * med.ln(), identifiable: why.map_or(Ok(()), Err) })
+    Ok(FlawFit { kind, p, first, second, beta, loglik: best.1 - n as f64 * med.ln(), identifiable: why.map_or(Ok(()), Err) })
 }
 
 impl FlawFit {
     /// The profile-likelihood interval at `level` of the parameter the naming loop reports —
     /// the weaker population's share p of a mixture, the weaker risk's modulus m₁ of competing
-    /// risks — on the strengths `x` it was fitted to: {v : 2[ℓ̂ − max ℓ | v] ≤ χ²₁(level)}, the
+    /// risks — on the strengths `x` (and scale-effect columns `z`) it was fitted to:
+    /// {v : 2[ℓ̂ − max ℓ | v] ≤ χ²₁(level)}, the
     /// other parameters re-maximised at each v (warm-started BFGS). An end that reaches the
     /// search box (p → 0 or 1, m at [`M_MIN`] or [`M_MAX`]) is that bound. None if the fit is
     /// not identified.
-    pub fn profile_band(&self, x: &[f64], level: f64) -> Option<(f64, f64)> {
+    pub fn profile_band(&self, x: &[f64], z: &[Vec<f64>], level: f64) -> Option<(f64, f64)> {
         if self.identifiable.is_err() || !(level > 0.0 && level < 1.0) {
             return None;
         }
         let med = crate::stats::median(x);
         let lnx: Vec<f64> = x.iter().map(|v| (v / med).ln()).collect();
         let (s1, m1, s2, m2) = ((self.first.0 / med).ln(), self.first.1.ln(), (self.second.0 / med).ln(), self.second.1.ln());
-        let (start, k) = match self.kind {
+        let (mut start, k) = match self.kind {
             Populations::Mixture => (vec![(self.p / (1.0 - self.p)).ln(), s1, m1, s2, m2], 0),
             Populations::Competing => (vec![s1, m1, s2, m2], 1),
         };
-        let full = bounds(self.kind);
-        let (best_t, best) = bfgs(self.kind, &lnx, &start, &full);
+        start.extend(&self.beta);
+        let full = bounds(self.kind, z.len());
+        let (best_t, best) = bfgs(self.kind, &lnx, z, &start, &full);
         let drop = statrs::distribution::ChiSquared::new(1.0).ok().map(|c| 0.5 * statrs::distribution::ContinuousCDF::inverse_cdf(&c, level))?;
         let target = best - drop;
         // max ℓ with coordinate k fixed at v, warm-started from `from`.
@@ -388,7 +444,7 @@ impl FlawFit {
             b[k] = (v, v);
             let mut t = from.to_vec();
             t[k] = v;
-            bfgs(self.kind, &lnx, &t, &b)
+            bfgs(self.kind, &lnx, z, &t, &b)
         };
         let natural = |v: f64| if self.kind == Populations::Mixture { 1.0 / (1.0 + (-v).exp()) } else { v.exp() };
         let mut ends = [0.0; 2];
@@ -429,6 +485,11 @@ impl FlawFit {
         Some((natural(ends[0]), natural(ends[1])))
     }
 
+    /// Row i's scale shift η_i = Σ_k β_k z_k,i (0 without scale effects).
+    pub fn shift(&self, z: &[Vec<f64>], i: usize) -> f64 {
+        z.iter().zip(&self.beta).map(|(c, b)| b * c[i]).sum()
+    }
+
     /// Log density at x (in the data's units).
     pub fn ln_pdf(&self, x: f64) -> f64 {
         match self.kind {
@@ -449,9 +510,10 @@ impl FlawFit {
     /// The fitted law in words (strengths in the data's units, Pa for a strength file).
     pub fn describe(&self) -> String {
         let pop = |(s, m): (f64, f64)| format!("σ = {:.1} MPa, m = {m:.2}", s / 1e6);
+        let at = if self.beta.is_empty() { "" } else { " (scales at the reference of the scale effects beside the law, which shift both populations alike)" };
         match self.kind {
-            Populations::Mixture => format!("{:.1} % of specimens with {} (weaker), {:.1} % with {}", 100.0 * self.p, pop(self.first), 100.0 * (1.0 - self.p), pop(self.second)),
-            Populations::Competing => format!("every specimen holds both flaw populations: {} and {}", pop(self.first), pop(self.second)),
+            Populations::Mixture => format!("{:.1} % of specimens with {} (weaker), {:.1} % with {}{at}", 100.0 * self.p, pop(self.first), 100.0 * (1.0 - self.p), pop(self.second)),
+            Populations::Competing => format!("every specimen holds both flaw populations: {} and {}{at}", pop(self.first), pop(self.second)),
         }
     }
 
@@ -485,15 +547,16 @@ mod tests {
     #[test]
     fn the_analytic_gradient_equals_central_differences() {
         let x = [0.6f64, 0.8, 0.9, 1.0, 1.05, 1.1, 1.3, 0.4].map(f64::ln);
-        for (kind, t) in [(Populations::Mixture, vec![0.3, -0.2, 1.5, 0.1, 2.2]), (Populations::Competing, vec![-0.1, 1.2, 0.2, 2.5])] {
+        let z = vec![vec![0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.5, -1.0]];
+        for (kind, t) in [(Populations::Mixture, vec![0.3, -0.2, 1.5, 0.1, 2.2, 0.15]), (Populations::Competing, vec![-0.1, 1.2, 0.2, 2.5, -0.2])] {
             let mut g = vec![0.0; t.len()];
             let mut scratch = g.clone();
-            loglik_grad(kind, &x, &t, &mut g);
+            loglik_grad(kind, &x, &z, &t, &mut g);
             for k in 0..t.len() {
                 let (mut a, mut b) = (t.clone(), t.clone());
                 a[k] += 1e-6;
                 b[k] -= 1e-6;
-                let fd = (loglik_grad(kind, &x, &a, &mut scratch) - loglik_grad(kind, &x, &b, &mut scratch)) / 2e-6;
+                let fd = (loglik_grad(kind, &x, &z, &a, &mut scratch) - loglik_grad(kind, &x, &z, &b, &mut scratch)) / 2e-6;
                 assert!((fd - g[k]).abs() < 1e-6 * (1.0 + fd.abs()), "{kind:?} coordinate {k}: analytic {} vs difference {fd}", g[k]);
             }
         }
@@ -502,18 +565,18 @@ mod tests {
     #[test]
     fn a_mixture_and_competing_risks_are_recovered_and_one_population_is_not_identified() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let mix = FlawFit { kind: Populations::Mixture, p: 0.3, first: (1.0, 12.0), second: (2.0, 10.0), loglik: 0.0, identifiable: Ok(()) };
+        let mix = FlawFit { kind: Populations::Mixture, p: 0.3, first: (1.0, 12.0), second: (2.0, 10.0), beta: Vec::new(), loglik: 0.0, identifiable: Ok(()) };
         let x: Vec<f64> = (0..600).map(|_| mix.sample(&mut rng)).collect();
         let f = fit(Populations::Mixture, &x).unwrap();
         assert!(f.identifiable.is_ok(), "{f:?}");
         assert!((f.p - 0.3).abs() < 0.06 && (f.first.0 - 1.0).abs() < 0.05 && (f.second.0 - 2.0).abs() < 0.05, "{f:?}");
-        let cr = FlawFit { kind: Populations::Competing, p: 1.0, first: (1.0, 3.0), second: (1.3, 20.0), loglik: 0.0, identifiable: Ok(()) };
+        let cr = FlawFit { kind: Populations::Competing, p: 1.0, first: (1.0, 3.0), second: (1.3, 20.0), beta: Vec::new(), loglik: 0.0, identifiable: Ok(()) };
         let x: Vec<f64> = (0..800).map(|_| cr.sample(&mut rng)).collect();
         let f = fit(Populations::Competing, &x).unwrap();
         assert!(f.identifiable.is_ok(), "{f:?}");
         assert!((f.first.1 - 3.0).abs() < 0.6 && (f.second.1 - 20.0).abs() < 8.0, "{f:?}");
         // One Weibull population fitted as a mixture.
-        let one = FlawFit { kind: Populations::Competing, p: 1.0, first: (1.0, 8.0), second: (1.0, 8.0), loglik: 0.0, identifiable: Ok(()) };
+        let one = FlawFit { kind: Populations::Competing, p: 1.0, first: (1.0, 8.0), second: (1.0, 8.0), beta: Vec::new(), loglik: 0.0, identifiable: Ok(()) };
         let y: Vec<f64> = (0..400).map(|_| one.sample(&mut rng)).collect();
         let g = fit(Populations::Mixture, &y).unwrap();
         assert!(g.identifiable.is_err(), "one Weibull population must not be reported as two: {g:?}");

@@ -37,7 +37,9 @@ pub struct ModelFit {
     /// Number of particles fitted.
     pub n: usize,
     /// A two-population law in place of the Weibull law (then `reg` is the plain two-parameter
-    /// fit, kept for the reference scale, and the likelihood, CDF and draws are the law's).
+    /// fit, kept for the reference scale, and the likelihood, CDF and draws are the law's; the
+    /// linear effects beside it shift both populations' scales by the law's own β over
+    /// `columns`).
     pub law: Option<crate::strength::flaws::FlawFit>,
 }
 
@@ -51,7 +53,7 @@ impl ModelFit {
     /// when partially pooled); a two-population law's own (4 or 5).
     pub fn parameters(&self) -> usize {
         if let Some(l) = &self.law {
-            return l.kind.parameters();
+            return l.kind.parameters() + l.beta.len();
         }
         2 + self.widths.iter().zip(&self.effects).map(|(w, e)| if *e == Effect::Damage { 1 } else { *w }).sum::<usize>() + self.scale_columns.len() - self.pooled_effects()
     }
@@ -94,6 +96,12 @@ impl ModelFit {
         (0..self.n).map(|i| 1.0 / self.reg.b_at(&d, i)).fold((self.reg.shape(), self.reg.shape()), |(lo, hi), m| (lo.min(m), hi.max(m)))
     }
 
+    /// The scale-effect coefficients β, in the order of the columns: the regression's, or those
+    /// fitted beside a two-population law.
+    pub fn beta(&self) -> &[f64] {
+        self.law.as_ref().map_or(&self.reg.beta, |l| &l.beta)
+    }
+
     /// Maximised log-likelihood.
     pub fn loglik(&self) -> f64 {
         self.law.as_ref().map_or(self.reg.loglik, |l| l.loglik)
@@ -102,7 +110,7 @@ impl ModelFit {
     /// Fitted CDF of specimen i at x.
     pub fn cdf(&self, i: usize, x: f64) -> f64 {
         match &self.law {
-            Some(l) => l.cdf(x),
+            Some(l) => l.cdf(x * (-l.shift(&self.columns, i)).exp()),
             None => self.reg.cdf(&self.design(), i, x),
         }
     }
@@ -132,7 +140,7 @@ impl ModelFit {
     /// categorical factor, a modulus per level and damage.
     pub fn profile_band(&self, x: &[f64], c: &Effect, level: f64) -> Option<(f64, f64)> {
         if let Some(l) = &self.law {
-            return l.profile_band(x, level);
+            return if matches!(c, Effect::Populations(_)) { l.profile_band(x, &self.columns, level) } else { None };
         }
         if self.damage_ratio.is_some() {
             return None;
@@ -155,6 +163,9 @@ impl ModelFit {
             return Some((*self.reg.gamma.get(r.start)?, self.reg.gamma_se[r.start]));
         }
         let j = self.beta_range(c)?.start;
+        if let Some(l) = &self.law {
+            return Some((*l.beta.get(j)?, f64::NAN));
+        }
         Some((*self.reg.beta.get(j)?, self.reg.beta_se[j]))
     }
 }
@@ -168,12 +179,27 @@ pub(super) fn fit_at(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>, ln_
     let mut penalty = Vec::new();
     let mut pooled = 0;
     if let Some(kind) = terms.iter().find_map(|(_, t)| if let Term::Populations(k) = t { Some(*k) } else { None }) {
-        if terms.len() > 1 {
-            return Err(Error::numerical("two flaw populations", "a two-population law is fitted against the base law only, not beside other effects"));
+        // Beside a two-population law: scale effects of recorded columns (one ln-linear or
+        // power column, or one scale per level), shifting both populations alike.
+        for (c, t) in terms {
+            match t {
+                Term::Linear(z) => {
+                    columns.push(z.clone());
+                    widths.push(1);
+                }
+                Term::Levels { columns: z, .. } => {
+                    columns.extend(z.iter().cloned());
+                    widths.push(z.len());
+                }
+                Term::Populations(_) => widths.push(0),
+                _ => return Err(Error::numerical("two flaw populations", format!("`{}` is not fitted beside a two-population law (only scale effects of recorded columns and levels are)", c.name()))),
+            }
+            effects.push(c.clone());
         }
-        let law = crate::strength::flaws::fit(kind, x)?;
+        let law = crate::strength::flaws::fit_shifted(kind, x, &columns)?;
         let reg = fit(x, &Design::default())?;
-        return Ok(ModelFit { effects: vec![terms[0].0.clone()], widths: vec![0], scale_widths: vec![0], scale_columns: Vec::new(), penalty: Vec::new(), reg, columns: Vec::new(), offset: None, damage_ratio: None, n: x.len(), law: Some(law) });
+        let k = effects.len();
+        return Ok(ModelFit { effects, widths, scale_widths: vec![0; k], scale_columns: Vec::new(), penalty: vec![0.0; columns.len()], reg, columns, offset: None, damage_ratio: None, n: x.len(), law: Some(law) });
     }
     let mut scale_columns = Vec::new();
     let mut scale_widths = Vec::new();

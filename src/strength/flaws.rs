@@ -166,10 +166,9 @@ fn loglik_grad(kind: Populations, lnx: &[f64], z: &[Vec<f64>], t: &[f64], g: &mu
                 let y = [lx - u[0], lx - u[1]];
                 let e = [(m[0] * y[0]).exp(), (m[1] * y[1]).exp()];
                 let a = [0, 1].map(|j| lw[j] + v[j] - u[j] + (m[j] - 1.0) * y[j] - e[j]);
-                let hi = a[0].max(a[1]);
-                let li = hi + ((a[0] - hi).exp() + (a[1] - hi).exp()).ln();
+                // ln(e^a₀ + e^a₁) and the responsibilities from one exponential.
+                let (li, r) = log_sum_and_shares(a);
                 l += li - h;
-                let r = [(a[0] - li).exp(), (a[1] - li).exp()];
                 g[0] += r[0] - p;
                 let mut gu = 0.0;
                 for j in 0..2 {
@@ -194,12 +193,11 @@ fn loglik_grad(kind: Populations, lnx: &[f64], z: &[Vec<f64>], t: &[f64], g: &mu
                 let y = [lx - u[0], lx - u[1]];
                 let e = [(m[0] * y[0]).exp(), (m[1] * y[1]).exp()];
                 let lh = [0, 1].map(|j| v[j] - u[j] + (m[j] - 1.0) * y[j]);
-                let hi = lh[0].max(lh[1]);
-                let lht = hi + ((lh[0] - hi).exp() + (lh[1] - hi).exp()).ln();
+                let (lht, share) = log_sum_and_shares(lh);
                 l += lht - e[0] - e[1] - h;
                 let mut gu = 0.0;
                 for j in 0..2 {
-                    let w = (lh[j] - lht).exp();
+                    let w = share[j];
                     let du = m[j] * (e[j] - w);
                     g[2 * j] += du;
                     gu += du;
@@ -212,6 +210,16 @@ fn loglik_grad(kind: Populations, lnx: &[f64], z: &[Vec<f64>], t: &[f64], g: &mu
         }
     }
     if l.is_finite() && g.iter().all(|v| v.is_finite()) { l } else { f64::NEG_INFINITY }
+}
+
+/// ln(e^a₀ + e^a₁) and the shares e^(a_j) / (e^a₀ + e^a₁), from one exponential.
+fn log_sum_and_shares(a: [f64; 2]) -> (f64, [f64; 2]) {
+    let (hi, lo) = if a[0] >= a[1] { (0, 1) } else { (1, 0) };
+    let q = (a[lo] - a[hi]).exp();
+    let mut share = [0.0; 2];
+    share[hi] = 1.0 / (1.0 + q);
+    share[lo] = q * share[hi];
+    (a[hi] + q.ln_1p(), share)
 }
 
 /// The box the search stays in: scales within e^±20 of the median, the mixture's logit weight

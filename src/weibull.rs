@@ -397,6 +397,15 @@ pub fn scale_for_size(scale: f64, shape: f64, size_from: f64, size_to: f64) -> f
     scale * (size_from / size_to).powf(1.0 / shape)
 }
 
+/// CDF at x of two Weibull flaw populations, each (σ_j, m_j): the mixture
+/// p F₁(x) + (1 − p) F₂(x) (`mixture`, a specimen holds one kind of flaw) or the competing risks
+/// 1 − exp[−(x/σ₁)^m₁ − (x/σ₂)^m₂] (every specimen holds both; `p` unused). The laws are fitted
+/// in `strength::flaws`; the probability plot draws them from their parameters.
+pub fn two_population_cdf(mixture: bool, p: f64, first: (f64, f64), second: (f64, f64), x: f64) -> f64 {
+    let h = |(s, m): (f64, f64)| (x / s).powf(m);
+    if mixture { p * -(-h(first)).exp_m1() + (1.0 - p) * -(-h(second)).exp_m1() } else { -(-h(first) - h(second)).exp_m1() }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

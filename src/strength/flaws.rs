@@ -162,9 +162,7 @@ fn loglik_grad(kind: Populations, lnx: &[f64], z: &[Vec<f64>], t: &[f64], g: &mu
             let m = [v[0].exp(), v[1].exp()];
             for (i, &lx0) in lnx.iter().enumerate() {
                 let h = eta(i);
-                let lx = lx0 - h;
-                let y = [lx - u[0], lx - u[1]];
-                let e = [(m[0] * y[0]).exp(), (m[1] * y[1]).exp()];
+                let (y, e) = standardised(lx0 - h, u, m);
                 let a = [0, 1].map(|j| lw[j] + v[j] - u[j] + (m[j] - 1.0) * y[j] - e[j]);
                 // ln(e^a₀ + e^a₁) and the responsibilities from one exponential.
                 let (li, r) = log_sum_and_shares(a);
@@ -189,9 +187,7 @@ fn loglik_grad(kind: Populations, lnx: &[f64], z: &[Vec<f64>], t: &[f64], g: &mu
             let m = [v[0].exp(), v[1].exp()];
             for (i, &lx0) in lnx.iter().enumerate() {
                 let h = eta(i);
-                let lx = lx0 - h;
-                let y = [lx - u[0], lx - u[1]];
-                let e = [(m[0] * y[0]).exp(), (m[1] * y[1]).exp()];
+                let (y, e) = standardised(lx0 - h, u, m);
                 let lh = [0, 1].map(|j| v[j] - u[j] + (m[j] - 1.0) * y[j]);
                 let (lht, share) = log_sum_and_shares(lh);
                 l += lht - e[0] - e[1] - h;
@@ -210,6 +206,13 @@ fn loglik_grad(kind: Populations, lnx: &[f64], z: &[Vec<f64>], t: &[f64], g: &mu
         }
     }
     if l.is_finite() && g.iter().all(|v| v.is_finite()) { l } else { f64::NEG_INFINITY }
+}
+
+/// y_j = ln x − ln σ_j and e_j = e^(m_j y_j) = (x/σ_j)^m_j of both populations at ln x.
+#[inline]
+fn standardised(lx: f64, u: [f64; 2], m: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+    let y = [lx - u[0], lx - u[1]];
+    (y, [(m[0] * y[0]).exp(), (m[1] * y[1]).exp()])
 }
 
 /// ln(e^a₀ + e^a₁) and the shares e^(a_j) / (e^a₀ + e^a₁), from one exponential.
@@ -525,13 +528,9 @@ impl FlawFit {
         }
     }
 
-    /// CDF at x.
+    /// CDF at x (at the reference of any scale effects beside the law).
     pub fn cdf(&self, x: f64) -> f64 {
-        let h = |(s, m): (f64, f64)| (x / s).powf(m);
-        match self.kind {
-            Populations::Mixture => self.p * -(-h(self.first)).exp_m1() + (1.0 - self.p) * -(-h(self.second)).exp_m1(),
-            Populations::Competing => -(-h(self.first) - h(self.second)).exp_m1(),
-        }
+        crate::weibull::two_population_cdf(self.kind == Populations::Mixture, self.p, self.first, self.second, x)
     }
 
     /// One draw by inversion of the CDF (bisection in ln x).

@@ -50,7 +50,8 @@ impl ModelFit {
     }
 
     /// Number of parameters: μ, b, and each effect's (one; L − 1 for levels or moduli, also
-    /// when partially pooled); a two-population law's own (4 or 5).
+    /// when partially pooled); a two-population law's own (4 or 5) plus one per column of the scale
+    /// effects beside it.
     pub fn parameters(&self) -> usize {
         if let Some(l) = &self.law {
             return l.kind.parameters() + l.beta.len();

@@ -13,8 +13,9 @@
 //!   power law), categorical (one scale per level), a size measure with its exponent free and
 //!   the weakest-link test — for any brittle strength data, not only particles.
 //! * [`flaws`]: two flaw populations — the two-component Weibull mixture and the
-//!   competing-risks Weibull — fitted from several starts with non-identifiability reported;
-//!   naming candidates in place of the one Weibull law (`Effect::Populations`).
+//!   competing-risks Weibull — fitted from several starts (BFGS, analytic gradient) with
+//!   non-identifiability reported and profile bands; naming candidates in place of the one
+//!   Weibull law (`Effect::Populations`), beside the scale effects of recorded columns.
 //! * [`specimens`]: strength data as input — a file of specimen strengths with a size measure
 //!   and recorded factors, read through the intake into a [`Sample`] the naming loop takes
 //!   like a crush sample.

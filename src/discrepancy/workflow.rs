@@ -412,12 +412,12 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
         // named. (Ranked by Λ alone, the mixture's fifth parameter lets it approximate
         // competing-risks data closely enough to win about a third of the time; it must buy
         // ½ ln n in ℓ over the four-parameter law.)
-        let is_law = |e: &Evidence| matches!(e.candidate, Effect::Populations(_));
+        let law_evidence = |e: &Evidence| matches!(e.candidate, Effect::Populations(_));
         let best = best.map(|i| {
-            if !is_law(&round_ev[i].0) {
+            if !law_evidence(&round_ev[i].0) {
                 return i;
             }
-            round_ev.iter().enumerate().filter(|(_, e)| e.0.passed && is_law(&e.0)).min_by(|a, b| a.1.0.delta_bic.total_cmp(&b.1.0.delta_bic)).map_or(i, |(j, _)| j)
+            round_ev.iter().enumerate().filter(|(_, e)| e.0.passed && law_evidence(&e.0)).min_by(|a, b| a.1.0.delta_bic.total_cmp(&b.1.0.delta_bic)).map_or(i, |(j, _)| j)
         });
         let chosen = best.map(|i| {
             round_ev[i].0.named = true;

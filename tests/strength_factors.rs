@@ -1,8 +1,9 @@
 //! Generic effects of recorded factors (issue 33): hidden effects named through the generator —
 //! a size effect, a scale per batch, a modulus per batch, a partially pooled batch effect in
-//! batches of 25 … 1 specimens, a loading-rate effect (ln-linear and power law), a weak second
-//! flaw population —, parameters inside their 90 % bands, no false naming with irrelevant or
-//! shuffled factors, and the shipped real data sets (Smith & Naylor glass fibres, Bader & Priest
+//! batches of 25 … 1 specimens (and the spread of random batch offsets), a loading-rate effect
+//! (ln-linear and power law), a weak second flaw population (a mixture, also beside a batch
+//! effect), volume and surface flaws in every specimen (competing risks) —, parameters inside
+//! their 90 % bands, no false naming with irrelevant or shuffled factors, and the shipped real data sets (Smith & Naylor glass fibres, Bader & Priest
 //! carbon fibres) against the `reliability` package's fits (tests/bench/reliability/).
 //!
 //! Synthetic specimens: x_i = exp(ln σ_i + ln(−ln U)/m) with the effect in ln σ_i (the crate's

@@ -221,9 +221,50 @@ pub fn golden_max(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> f
     0.5 * (a + b)
 }
 
+/// One end of a profile-likelihood interval: the edge of the set {v : `inside`(v)} reached from
+/// `start` (inside) in direction `dir` (±1). Steps of `step`, growing × 1.6, until a point is
+/// outside — or the `bound`, returned if it is still inside — then bisection to `tol`; the
+/// midpoint of the final bracket. None if `inside` fails (None) or 40 steps stay inside. The
+/// crate's one copy (a regression coefficient, a two-population law's parameter, a pooled spread);
+/// `inside` may keep state, e.g. warm-start from the last point it found inside.
+pub fn region_end(mut inside: impl FnMut(f64) -> Option<bool>, start: f64, dir: f64, mut step: f64, bound: f64, tol: f64) -> Option<f64> {
+    let clamp = |v: f64| if dir < 0.0 { v.max(bound) } else { v.min(bound) };
+    let (mut keep, mut out) = (start, clamp(start + dir * step));
+    let mut tries = 0;
+    while inside(out)? {
+        if out == bound {
+            return Some(bound);
+        }
+        keep = out;
+        step *= 1.6;
+        out = clamp(out + dir * step);
+        tries += 1;
+        if tries > 40 {
+            return None;
+        }
+    }
+    for _ in 0..80 {
+        if (out - keep).abs() <= tol {
+            break;
+        }
+        let mid = 0.5 * (keep + out);
+        if inside(mid)? { keep = mid } else { out = mid }
+    }
+    Some(0.5 * (keep + out))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn region_end_finds_the_edge_of_an_interval_and_stops_at_its_bound() {
+        let inside = |v: f64| Some(v * v <= 2.0);
+        assert!((region_end(inside, 0.0, 1.0, 0.1, f64::INFINITY, 1e-9).unwrap() - 2f64.sqrt()).abs() < 1e-8);
+        assert!((region_end(inside, 0.0, -1.0, 0.1, f64::NEG_INFINITY, 1e-9).unwrap() + 2f64.sqrt()).abs() < 1e-8);
+        assert_eq!(region_end(inside, 0.0, 1.0, 0.1, 1.2, 1e-9), Some(1.2));
+        assert_eq!(region_end(|_| Some(true), 0.0, 1.0, 0.1, f64::INFINITY, 1e-9), None);
+    }
 
     #[test]
     fn hermite_is_exact_for_cubics() {

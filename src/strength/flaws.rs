@@ -153,7 +153,7 @@ fn loglik_grad(kind: Populations, lnx: &[f64], z: &[Vec<f64>], t: &[f64], g: &mu
     g.iter_mut().for_each(|v| *v = 0.0);
     let mut l = 0.0;
     let k0 = kind.parameters();
-    let eta = |i: usize| -> f64 { z.iter().zip(&t[k0..]).map(|(c, b)| b * c[i]).sum() };
+    let eta = |i: usize| shift_at(z, &t[k0..], i);
     match kind {
         Populations::Mixture => {
             let p = 1.0 / (1.0 + (-t[0]).exp());
@@ -206,6 +206,11 @@ fn loglik_grad(kind: Populations, lnx: &[f64], z: &[Vec<f64>], t: &[f64], g: &mu
         }
     }
     if l.is_finite() && g.iter().all(|v| v.is_finite()) { l } else { f64::NEG_INFINITY }
+}
+
+/// Row i's scale shift η_i = Σ_k β_k z_k,i.
+fn shift_at(z: &[Vec<f64>], beta: &[f64], i: usize) -> f64 {
+    z.iter().zip(beta).map(|(c, b)| b * c[i]).sum()
 }
 
 /// y_j = ln x − ln σ_j and e_j = e^(m_j y_j) = (x/σ_j)^m_j of both populations at ln x.
@@ -341,8 +346,7 @@ pub fn fit_shifted(kind: Populations, x: &[f64], z: &[Vec<f64>]) -> Result<FlawF
     }
     // The one-law regression's β, and the strengths adjusted by it.
     let beta0: Vec<f64> = if z.is_empty() { Vec::new() } else { crate::strength::regress::fit(x, &crate::strength::regress::Design { columns: z, ..Default::default() })?.beta };
-    let shift = |beta: &[f64], i: usize| -> f64 { z.iter().zip(beta).map(|(c, b)| b * c[i]).sum() };
-    let adjusted: Vec<f64> = (0..n).map(|i| x[i] * (-shift(&beta0, i)).exp()).collect();
+    let adjusted: Vec<f64> = (0..n).map(|i| x[i] * (-shift_at(z, &beta0, i)).exp()).collect();
     let mut sorted = adjusted.clone();
     sorted.sort_by(f64::total_cmp);
     let med = crate::stats::median(&adjusted);
@@ -390,7 +394,7 @@ pub fn fit_shifted(kind: Populations, x: &[f64], z: &[Vec<f64>]) -> Result<FlawF
     let (p, first, second) = law(&best.0);
     let beta = best.0[k0..].to_vec();
     // The identifiability checks look at the strengths with the fitted shifts taken out.
-    let x: Vec<f64> = (0..n).map(|i| x[i] * (-shift(&beta, i)).exp()).collect();
+    let x: Vec<f64> = (0..n).map(|i| x[i] * (-shift_at(z, &beta, i)).exp()).collect();
     let same = |a: (f64, f64), b: (f64, f64)| (a.0.ln() - b.0.ln()).abs() < 0.05 && (a.1.ln() - b.1.ln()).abs() < 0.1;
     let mut why: Option<String> = None;
     if let Some(m) = [first.1, second.1].into_iter().find(|m| *m > 0.98 * M_MAX || *m < 1.02 * M_MIN) {
@@ -458,47 +462,33 @@ impl FlawFit {
             bfgs(self.kind, &lnx, z, &t, &b)
         };
         let natural = |v: f64| if self.kind == Populations::Mixture { 1.0 / (1.0 + (-v).exp()) } else { v.exp() };
-        let mut ends = [0.0; 2];
-        for (e, dir) in [(0, -1.0), (1, 1.0)] {
+        // Warm-started from the last point found inside.
+        let end = |dir: f64| {
+            let mut from = best_t.clone();
             let bound = if dir < 0.0 { full[k].0 } else { full[k].1 };
-            // Step out (doubling) until the profile falls below the target or the box ends.
-            let (mut inside, mut from, mut step) = (best_t[k], best_t.clone(), 0.05);
-            let outside = loop {
-                let v = if dir < 0.0 { (inside - step).max(bound) } else { (inside + step).min(bound) };
-                let (t, l) = profile(v, &from);
-                if !(l >= target) {
-                    break Some(v);
-                }
-                if v == bound {
-                    break None;
-                }
-                (inside, from, step) = (v, t, 2.0 * step);
-            };
-            ends[e] = match outside {
-                None => bound,
-                Some(mut out) => {
-                    for _ in 0..40 {
-                        let mid = 0.5 * (inside + out);
-                        let (t, l) = profile(mid, &from);
-                        if l >= target {
-                            (inside, from) = (mid, t);
-                        } else {
-                            out = mid;
-                        }
-                        if (out - inside).abs() < 1e-4 {
-                            break;
-                        }
+            crate::stats::region_end(
+                |v| {
+                    let (t, l) = profile(v, &from);
+                    let keep = l >= target;
+                    if keep {
+                        from = t;
                     }
-                    0.5 * (inside + out)
-                }
-            };
-        }
+                    Some(keep)
+                },
+                best_t[k],
+                dir,
+                0.05,
+                bound,
+                1e-4,
+            )
+        };
+        let ends = [end(-1.0)?, end(1.0)?];
         Some((natural(ends[0]), natural(ends[1])))
     }
 
     /// Row i's scale shift η_i = Σ_k β_k z_k,i (0 without scale effects).
     pub fn shift(&self, z: &[Vec<f64>], i: usize) -> f64 {
-        z.iter().zip(&self.beta).map(|(c, b)| b * c[i]).sum()
+        shift_at(z, &self.beta, i)
     }
 
     /// Log density at x (in the data's units).

@@ -109,18 +109,8 @@ impl ModelFit {
         let hat = -0.5 * self.penalty[r.start].ln();
         let target = at(hat) - 0.5 * ChiSquared::new(1.0).ok()?.inverse_cdf(level);
         let (lo, hi) = ((1e-3f64).ln(), 3f64.ln());
-        let end = |bound: f64| -> f64 {
-            if at(bound) >= target {
-                return bound;
-            }
-            let (mut inside, mut out) = (hat, bound);
-            while (out - inside).abs() > 1e-3 {
-                let mid = 0.5 * (inside + out);
-                if at(mid) >= target { inside = mid } else { out = mid }
-            }
-            0.5 * (inside + out)
-        };
-        Some((end(lo).exp(), end(hi).exp()))
+        let end = |dir: f64, bound: f64| crate::stats::region_end(|v| Some(at(v) >= target), hat, dir, 0.05, bound, 1e-3);
+        Some((end(-1.0, lo)?.exp(), end(1.0, hi)?.exp()))
     }
 }
 

@@ -218,30 +218,7 @@ pub fn profile_interval(x: &[f64], design: &Design, fitted: &RegFit, j: usize, l
         let d = Design { columns: &others, offset: Some(&offset), scale_columns: design.scale_columns, penalty: &penalty };
         fit(x, &d).ok().map(|f| fitted.loglik - f.loglik - crit)
     };
-    let end = |dir: f64| -> Option<f64> {
-        let b0 = fitted.beta[j];
-        // Bracket: inside (deficit < 0) at the estimate, outside somewhere along dir.
-        let (mut inside, mut outside) = (b0, b0 + dir * z * se);
-        let mut step = z * se;
-        let mut tries = 0;
-        while deficit(outside)? < 0.0 {
-            inside = outside;
-            step *= 1.6;
-            outside += dir * step;
-            tries += 1;
-            if tries > 40 {
-                return None;
-            }
-        }
-        for _ in 0..80 {
-            if (outside - inside).abs() <= 1e-6 * se {
-                break;
-            }
-            let mid = 0.5 * (inside + outside);
-            if deficit(mid)? < 0.0 { inside = mid } else { outside = mid }
-        }
-        Some(0.5 * (inside + outside))
-    };
+    let end = |dir: f64| crate::stats::region_end(|b| deficit(b).map(|d| d < 0.0), fitted.beta[j], dir, z * se, dir * f64::INFINITY, 1e-6 * se);
     Some((end(-1.0)?, end(1.0)?))
 }
 

@@ -470,7 +470,22 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             let explained = match (r.outcome.named.is_empty(), tried.is_empty()) {
                 (true, true) => "and nothing recorded in the data explains the misfit".to_string(),
                 (true, false) => format!("and nothing recorded in the data explains the misfit; two flaw populations ({}), tried in its place, do not pass the guard", tried.join(", ")),
-                (false, _) => "even with the named effects".to_string(),
+                (false, true) => "even with the named effects".to_string(),
+                (false, false) => {
+                    // Were the laws offered in the last round (beside the named effects)?
+                    let last = r.outcome.stages.len() - 1;
+                    let law = |e: &&crate::discrepancy::workflow::Evidence| e.skipped.is_none() && matches!(e.candidate, crate::strength::Effect::Populations(_));
+                    let offered = r.outcome.evidence.iter().filter(law).any(|e| e.round == last);
+                    let law_named = r.outcome.named.iter().any(|e| matches!(e, crate::strength::Effect::Populations(_)));
+                    match (law_named, offered) {
+                        (true, _) => "even with the named effects".to_string(),
+                        (false, true) => "even with the named effects; two flaw populations beside them do not pass the guard".to_string(),
+                        (false, false) => format!(
+                            "even with the named effects; two flaw populations were not tried beside {} (a two-population law is fitted beside scale effects of recorded columns only, not beside a partially pooled factor, a modulus per level or damage)",
+                            r.outcome.named.iter().map(|e| format!("`{}`", e.name())).collect::<Vec<_>>().join(" and ")
+                        ),
+                    }
+                }
             };
             md.push_str(&format!("\n**The Weibull law fits these data poorly** ({tests}, parametric bootstrap), {explained}: the departure lies in the shape of the distribution, not in a factor the data carry.\n"));
         }

@@ -104,6 +104,7 @@ pub struct ReportDir {
     tmp_path: PathBuf,
     files: Vec<String>,
     committed: bool,
+    documents: bool,
 }
 
 impl ReportDir {
@@ -115,7 +116,17 @@ impl ReportDir {
             std::fs::remove_dir_all(&tmp_path).map_err(|e| Error::write(&tmp_path, e))?;
         }
         std::fs::create_dir(&tmp_path).map_err(|e| Error::write(&tmp_path, e))?;
-        Ok(ReportDir { final_path: root.join(name), tmp_path, files: Vec::new(), committed: false })
+        Ok(ReportDir { final_path: root.join(name), tmp_path, files: Vec::new(), committed: false, documents: true })
+    }
+
+    /// Whether the commit writes `report.pdf` and `report.html` (`crate::runkit`); on by default.
+    pub fn documents(&self) -> bool {
+        self.documents
+    }
+
+    /// Turns the documents on or off (`partlife run --no-document`).
+    pub fn set_documents(&mut self, on: bool) {
+        self.documents = on;
     }
 
     /// Where files are written until commit.

@@ -40,6 +40,9 @@ enum Command {
         /// refuse, listing them all.
         #[arg(long)]
         no_deps: bool,
+        /// Do not write report.pdf and report.html.
+        #[arg(long)]
+        no_document: bool,
     },
     /// Evaluate one Slurm array task of a batch file written by `run --executor slurm`
     /// (the task index from --task or SLURM_ARRAY_TASK_ID); results go to the batch's cache.
@@ -50,13 +53,17 @@ enum Command {
         #[arg(long)]
         task: Option<usize>,
     },
-    /// Redraw the figures of a report from its tables (no simulation).
+    /// Redraw the figures of a report and write its report.pdf and report.html from its tables
+    /// (no simulation).
     Report {
         /// Report name (the study file's stem), e.g. lifetime.
         name: String,
         /// Root directory of the reports.
         #[arg(long, default_value = "reports")]
         reports_dir: PathBuf,
+        /// Redraw the figures only.
+        #[arg(long)]
+        no_document: bool,
     },
     /// Find where the strength model and crush data disagree, name the missing effect, add it
     /// and show the gap shrink. Either a study file (kind = "discrepancy") or `--data`.
@@ -268,8 +275,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         rayon::ThreadPoolBuilder::new().num_threads(n.into()).build_global().context("setting the thread count")?;
     }
     match cli.command {
-        Command::Run { study, reports_dir, quiet, executor, no_deps } => {
+        Command::Run { study, reports_dir, quiet, executor, no_deps, no_document } => {
             let mut opts = partlife::runner::RunOptions::new(reports_dir, !quiet);
+            opts.documents = !no_document;
             if no_deps {
                 opts.deps = partlife::runner::Deps::Refuse;
             }
@@ -323,12 +331,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 r.task, r.evaluations, r.model_failures, r.already_cached, r.setup_s, r.compute_s, r.write_s
             );
         }
-        Command::Report { name, reports_dir } => {
+        Command::Report { name, reports_dir, no_document } => {
             let dir = reports_dir.join(&name);
+            if !dir.is_dir() {
+                return Err(partlife::Error::data_file(&dir, "directory", format!("no report named {name} under {} (run its study first: partlife run studies/{name}.toml)", reports_dir.display())).into());
+            }
             let rendered = partlife::report::redraw(&dir)?;
             out!("redrew {} files in {}", rendered.files.len(), dir.display());
             for (fig, n) in rendered.legend_hidden.iter().filter(|(_, n)| *n > 0) {
                 eprintln!("warning: figure {fig}: its legend hides {n} data samples (no free corner)");
+            }
+            if !no_document {
+                let docs = partlife::report::build::write(&dir)?;
+                out!("wrote {} in {}", docs.join(" and "), dir.display());
             }
         }
         Command::Datasets { command: DatasetsCommand::Synth { settings, out_dir } } => {

@@ -36,6 +36,8 @@ pub struct RunOptions {
     pub executor: Option<ExecutorKind>,
     /// What to do with a study this one reads whose report is missing or stale.
     pub deps: Deps,
+    /// Write `report.pdf` and `report.html` with the report (`--no-document`: false).
+    pub documents: bool,
 }
 
 /// What a run does with a prerequisite study (one whose report it reads) when that report is
@@ -52,7 +54,7 @@ pub enum Deps {
 impl RunOptions {
     /// Reports under `reports_root`, the study's executor, prerequisites run when needed.
     pub fn new(reports_root: impl Into<PathBuf>, progress: bool) -> Self {
-        RunOptions { reports_root: reports_root.into(), progress, executor: None, deps: Deps::Run }
+        RunOptions { reports_root: reports_root.into(), progress, executor: None, deps: Deps::Run, documents: true }
     }
 }
 
@@ -88,6 +90,24 @@ pub fn progress_bar(len: u64, show: bool, template: &str) -> ProgressBar {
         pb.set_style(style);
     }
     pb
+}
+
+/// Starts the report directory of study `name` under the run's reports root, with the run's
+/// choice of documents.
+pub fn report_dir(opts: &RunOptions, name: &str) -> Result<ReportDir> {
+    let mut dir = ReportDir::create(&opts.reports_root, name)?;
+    dir.set_documents(opts.documents);
+    Ok(dir)
+}
+
+/// `summary.md` of a study kind whose run states its results as headline lines (lifetime, DEM,
+/// crush FE): the title and one bullet per line, each generated from the run's numbers.
+pub fn headline_summary(title: &str, lines: &[String]) -> String {
+    let mut md = format!("# {title}\n\n## Headline\n\n");
+    for l in lines {
+        md.push_str(&format!("* {}\n", l.trim()));
+    }
+    md
 }
 
 /// Records rendered figures in the report and any legend that had to hide data as a failure.
@@ -131,12 +151,19 @@ pub struct RunRecord {
     pub failures: Vec<String>,
 }
 
-/// Writes `manifest.json` (listing every file of the report) and renames the report into place.
+/// Writes `manifest.json` (listing every file of the report), then — unless the run turned them
+/// off — `report.pdf` and `report.html` from the report's files (`crate::report::build`), and
+/// renames the report into place. Documents that cannot be written do not lose the run: the
+/// manifest then records why among its failures and lists no document.
 pub fn commit_with_manifest(mut dir: ReportDir, loaded: &StudyFile, study_resolved: serde_json::Value, run: RunRecord) -> Result<PathBuf> {
     let (git_revision, git_dirty) = git_state(loaded.path.parent().unwrap_or(Path::new(".")));
     let mut outputs = dir.files().to_vec();
     outputs.push("manifest.json".into());
-    let manifest = Manifest {
+    let documents = ["report.pdf".to_string(), "report.html".to_string()];
+    if dir.documents() {
+        outputs.extend(documents.iter().cloned());
+    }
+    let mut manifest = Manifest {
         partlife_version: env!("CARGO_PKG_VERSION").into(),
         study: loaded.name.clone(),
         study_file: loaded.path.display().to_string(),
@@ -153,7 +180,18 @@ pub fn commit_with_manifest(mut dir: ReportDir, loaded: &StudyFile, study_resolv
         failures: run.failures,
         outputs,
     };
-    let json = serde_json::to_vec_pretty(&manifest).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    dir.write_bytes("manifest.json", &json)?;
+    let json = |m: &Manifest| serde_json::to_vec_pretty(m).map_err(|e| Error::numerical("manifest", e.to_string()));
+    dir.write_bytes("manifest.json", &json(&manifest)?)?;
+    if dir.documents() {
+        match crate::report::build::write(dir.path()) {
+            Ok(files) => dir.record(files),
+            Err(e) => {
+                manifest.failures.push(format!("report.pdf and report.html not written: {e}"));
+                manifest.outputs.retain(|o| !documents.contains(o));
+                let p = dir.path().join("manifest.json");
+                crate::io::write_atomic(&p, &json(&manifest)?)?;
+            }
+        }
+    }
     dir.commit()
 }

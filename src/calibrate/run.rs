@@ -98,7 +98,7 @@ pub fn run_calibrate(loaded: &StudyFile, s: &CalibrateStudy, opts: &RunOptions) 
         }
     };
     progress("tables");
-    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
     let space = cal.emulator.space().clone();
     let headlines = write_tables(&mut dir, s, &prep, &cal, curves, compare_file.as_deref())?;
     progress("figures");

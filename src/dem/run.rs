@@ -351,7 +351,7 @@ pub fn run_dem(loaded: &StudyFile, s: &DemStudy, opts: &RunOptions) -> Result<Ru
     let dt = setup.time_step;
     let total_steps = (s.run.duration / dt).ceil() as u64;
     let mut dem = Dem::new(setup, &file)?;
-    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
 
     let pb = crate::runkit::progress_bar(total_steps, opts.progress, "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} steps {msg} (eta {eta})");
     let mut snaps: Vec<f64> = s.run.snapshots.clone();
@@ -377,6 +377,7 @@ pub fn run_dem(loaded: &StudyFile, s: &DemStudy, opts: &RunOptions) -> Result<Ru
     }
     pb.set_message("tables");
     let headlines = write_tables(&mut dir, &dem, s, loop_s)?;
+    dir.write_bytes("summary.md", crate::runkit::headline_summary("Particle flow through the tube bank (DEM)", &headlines).as_bytes())?;
     pb.set_message("figures");
     let rendered = crate::report::dem::render(dir.path(), s.figures.width_cm)?;
     let mut failures = Vec::new();

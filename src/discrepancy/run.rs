@@ -50,7 +50,7 @@ use super::report::{headline, summary, verdict_json, write_tables};
 use super::workflow::{Outcome, analyse, validate};
 use crate::data::{CrushData, read_crush};
 use crate::error::{Error, Result};
-use crate::io::{InputFile, ReportDir};
+use crate::io::InputFile;
 use crate::lifetime::impacts_in;
 use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
 use crate::strength::regress::draw_rows;
@@ -232,7 +232,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power });
     }
 
-    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
     write_tables(&mut dir, &results)?;
     let verdict = verdict_json(loaded, s, &results);
     let json = serde_json::to_string_pretty(&verdict).map_err(|e| Error::numerical("verdict.json", e.to_string()))?;

@@ -196,7 +196,7 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     };
     pb.set_position(pb.length().unwrap_or(0));
 
-    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
     write_tables(&mut dir, s, &state, &keys, &singles, &allocated)?;
     let summary = super::summary::summary(s, &state, &singles, &allocated);
     let mut text = summary.text.clone();

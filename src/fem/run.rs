@@ -162,8 +162,9 @@ pub fn run_crush(loaded: &StudyFile, s: &CrushStudy, opts: &RunOptions) -> Resul
         runs.push((case.clone(), t, r));
     }
     pb.set_message("tables");
-    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
     let headlines = write_tables(&mut dir, &runs)?;
+    dir.write_bytes("summary.md", crate::runkit::headline_summary("Crush test of single particles (FE)", &headlines).as_bytes())?;
     pb.set_message("figures");
     let rendered = crate::report::crush::render(dir.path(), s.figures.width_cm)?;
     record_figures(&mut dir, rendered, &mut failures);

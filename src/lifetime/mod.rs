@@ -13,6 +13,7 @@
 //! Verified by the unit tests below (series expansion of P_N for tiny p, geometric closed form)
 //! and by `tests/verification/lifetime.rs`.
 
+pub mod attrition;
 pub mod damage;
 
 use crate::contact::{AveragingDomain, ContactState, ContactStress, Elastic, Impact, Sphere};

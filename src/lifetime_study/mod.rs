@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 use crate::contact::ContactState;
 use crate::data::CrushData;
 use crate::error::{Error, Result};
-use crate::io::{InputFile, ReportDir};
+use crate::io::InputFile;
 use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
 use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSpec, StudyFile, check, elastic};
 use crate::strength::{LifetimeChain, LifetimeModel, ParameterSummary, Params, StrengthFit, contact_at_break, sample_of, summarise};
@@ -304,7 +304,7 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
     }
 
     // Tables into a temporary report directory.
-    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
     write_particles(&mut dir, &runs)?;
     write_weibull(&mut dir, &runs, s)?;
     write_size_trend(&mut dir, &runs)?;
@@ -317,7 +317,9 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
         pb.inc(1);
     }
     write_force_time(&mut dir, &runs, s)?;
-    let headlines = write_summary(&mut dir, &runs, s)?;
+    let tables::Summary { headlines, attrition } = write_summary(&mut dir, &runs, s)?;
+    let md = crate::runkit::headline_summary("Breaking probability after repeated impacts (the deliverable's chain)", &headlines) + &attrition;
+    dir.write_bytes("summary.md", md.as_bytes())?;
     pb.inc(1);
 
     // Figures from the tables just written.

@@ -307,8 +307,28 @@ pub(super) fn write_force_time(dir: &mut ReportDir, runs: &[MaterialRun], s: &Li
     dir.write_table("force_time", &mut df)
 }
 
-pub(super) fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -> Result<Vec<String>> {
+/// The summary's headline lines and its section in a plant engineer's units.
+pub(super) struct Summary {
+    /// One line per material.
+    pub headlines: Vec<String>,
+    /// Markdown section: share broken in the first year, years to 1 % and 10 % broken.
+    pub attrition: String,
+}
+
+pub(super) fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -> Result<Summary> {
+    use crate::lifetime::attrition::{SHARES, grid, years_to};
+    use crate::report::captions::{percent, years_text};
     let v = s.impact.reference_velocity_m_s;
+    let t = grid();
+    let one = t.iter().position(|&y| (y - 1.0).abs() < 1e-12).unwrap_or(0);
+    let longest = t[t.len() - 1];
+    let yt = |y: f64| if y.is_infinite() { format!("> {longest:.0}") } else { years_text(y) };
+    let conf = 100.0 * s.weibull.confidence;
+    let mut att = format!(
+        "\n## In a plant engineer's units\n\nAttrition at {v} m/s: the share of the particle inventory broken in the first year of operation ({:.0} impacts per particle), and the years of operation until 1 % and 10 % of it are broken — the estimate and its {conf:.0} % confidence band from the strength law's uncertainty (independent trials). \"> {longest:.0}\": not within {longest:.0} years.\n\n| material | broken in year 1 | years to 1 % broken | years to 10 % broken |\n|---|---|---|---|\n",
+        s.impact.impacts_per_year
+    );
+    let mut a: (Vec<String>, Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 3]>) = Default::default();
     let (mut k, mut l, mut vv, mut yy, mut nn, mut p, mut pl, mut pu) = (vec![], vec![], vec![], vec![], vec![], vec![], vec![], vec![]);
     let mut headlines = Vec::new();
     for r in runs {
@@ -350,7 +370,40 @@ pub(super) fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &Lifet
             line.push_str(&format!(" P({years} yr) = {point:.2e} [{lo:.1e}, {hi:.1e}]"));
         }
         headlines.push(line);
+        // The same bands on the grid of horizons: P curves of the draws do not cross (one
+        // hazard scales them all), so the band of the years to a share is read off the band's
+        // edges, the upper P edge giving the earlier time.
+        let grid_counts: Vec<f64> = t.iter().map(|&y| impacts_in(y, s.impact.impacts_per_year)).collect();
+        let g = model.bands(&r.params, s.impact.energy_fraction, v, &grid_counts, s.strength.uncertainty, s.strength.draws, seed, s.weibull.confidence)?;
+        let (gp, gl, gu): (Vec<f64>, Vec<f64>, Vec<f64>) = (g.iter().map(|x| x.0).collect(), g.iter().map(|x| x.1).collect(), g.iter().map(|x| x.2).collect());
+        let to = |x: f64| [years_to(&t, &gu, x), years_to(&t, &gp, x), years_to(&t, &gl, x)];
+        let first = [gl[one], gp[one], gu[one]];
+        let b3 = |b: &[f64; 3], f: &dyn Fn(f64) -> String| crate::report::captions::with_band(&f(b[1]), &f(b[0]), &f(b[2]));
+        att.push_str(&format!("| {} | {} | {} | {} |\n", r.label, b3(&first, &percent), b3(&to(SHARES[0]), &yt), b3(&to(SHARES[1]), &yt)));
+        a.0.push(r.label.clone());
+        a.1.push(first);
+        a.2.push(to(SHARES[0]));
+        a.3.push(to(SHARES[1]));
     }
+    let q = |v: &[[f64; 3]], i: usize| v.iter().map(|b| b[i]).collect::<Vec<f64>>();
+    let na = a.0.len();
+    dir.write_table(
+        "attrition",
+        &mut table(vec![
+            scol("material", a.0),
+            fcol("velocity_m_s", vec![v; na]),
+            fcol("first_year_lower", q(&a.1, 0)),
+            fcol("first_year", q(&a.1, 1)),
+            fcol("first_year_upper", q(&a.1, 2)),
+            fcol("years_to_1pct_lower", q(&a.2, 0)),
+            fcol("years_to_1pct", q(&a.2, 1)),
+            fcol("years_to_1pct_upper", q(&a.2, 2)),
+            fcol("years_to_10pct_lower", q(&a.3, 0)),
+            fcol("years_to_10pct", q(&a.3, 1)),
+            fcol("years_to_10pct_upper", q(&a.3, 2)),
+            fcol("confidence", vec![s.weibull.confidence; na]),
+        ])?,
+    )?;
     let m = p.len();
     let mut df = table(vec![
         scol("material_key", k),
@@ -364,7 +417,7 @@ pub(super) fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &Lifet
         fcol("confidence", vec![s.weibull.confidence; m]),
     ])?;
     dir.write_table("lifetime_summary", &mut df)?;
-    Ok(headlines)
+    Ok(Summary { headlines, attrition: att })
 }
 
 /// The strength model of every material: its effects, population, and each parameter's

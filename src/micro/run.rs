@@ -96,7 +96,7 @@ pub fn run_microstructure(loaded: &StudyFile, s: &MicroStudy, opts: &RunOptions)
     }
 
     pb.set_message("tables and figures");
-    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
     write_phases(&mut dir, &phases, s.plane)?;
     write_structures(&mut dir, s, &built, &by_structure, &phases)?;
     write_hot_spots(&mut dir, s, &built, &by_structure, &phases)?;

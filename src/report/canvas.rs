@@ -49,7 +49,7 @@ pub fn register_fonts() -> Result<()> {
     if ok { Ok(()) } else { Err(Error::Figure { name: "fonts".into(), detail: "DejaVu Sans could not be registered".into() }) }
 }
 
-fn usvg_options() -> &'static usvg::Options<'static> {
+pub(crate) fn usvg_options() -> &'static usvg::Options<'static> {
     static OPTS: OnceLock<usvg::Options<'static>> = OnceLock::new();
     OPTS.get_or_init(|| {
         let mut db = usvg::fontdb::Database::new();

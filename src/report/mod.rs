@@ -14,6 +14,11 @@
 //! embedded DejaVu Sans font ([`canvas`]).
 
 pub mod canvas;
+pub mod build;
+pub mod captions;
+pub mod document;
+pub mod html;
+pub mod pdf;
 pub mod calibrate;
 pub mod crush;
 pub mod dem;

@@ -359,7 +359,7 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
     }
     pb.inc(1);
 
-    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
     write_phases(&mut dir, &phases)?;
     let (text, headline) = describe(s, &phases, &s.phases.file.display().to_string());
     let mut md = format!("# Temperature: {}\n\n## Phases\n\n{text}\n\nThe figure `phase_fractions` draws every phase against temperature (amorphous phases dashed), in the style of the deliverable's Fig. 2. Between the tabulated temperatures the fractions are interpolated linearly; nothing is extrapolated beyond them.{}\n", s.phases.composition, illustrative_sentence(&s.phases.file));

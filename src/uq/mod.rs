@@ -7,6 +7,8 @@
 //!   [`crate::strength::LifetimeModel`].
 //! * [`forms`]: each strength model fitted, weighed by stacking (the state of knowledge, also
 //!   experiment design's prior) and propagated.
+//! * [`attrition`]: the answer in a plant engineer's units — share broken in the first year,
+//!   years to 1 % and 10 % broken, with 90 % bands.
 //! * [`headline`]: the comparison rows, their model average and the ± notation.
 //! * [`propagate`]: blocks of Monte Carlo, LHS or shifted Sobol' samples, collected in order.
 //! * [`run`]: the run — strength models with stacking weights, the model-averaged headline,
@@ -14,6 +16,7 @@
 //! * [`sobol`]: Saltelli design, first-order (Saltelli 2010) and total (Jansen) Sobol' indices
 //!   with bootstrap intervals.
 
+pub mod attrition;
 pub mod forms;
 pub mod headline;
 pub mod propagate;

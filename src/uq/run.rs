@@ -75,8 +75,9 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
         }
     }
 
-    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
     let headline = write_headline(&mut dir, &forms)?;
+    let attrition = super::attrition::write(&mut dir, &forms)?;
     write_strength_models(&mut dir, &forms)?;
     let primary = &forms[0];
     write_convergence(&mut dir, &primary.setup, &primary.prop)?;
@@ -90,7 +91,8 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     let averaging = write_averaging(&mut dir, s, &loaded.path, &shared, &forms)?;
     pb.inc(1);
     let varying = primary.setup.varying(Mode::Split);
-    let md = summary(s, &forms, &final_indices, &varying, &outputs, &headline, &averaging);
+    let mut md = summary(s, &forms, &final_indices, &varying, &outputs, &headline, &averaging);
+    md.push_str(&super::attrition::markdown(&attrition, &impacts_per_year_text(&primary.setup), &primary.setup.materials[0].model.label, primary.setup.models.contains(&DamageModel::TavaresKing)));
     dir.write_bytes("summary.md", md.as_bytes())?;
     pb.set_message("figures");
     let mut failures = Vec::new();
@@ -105,6 +107,13 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: headline.lines })
+}
+
+/// "730" for a fixed number of impacts a year, "5–95 % 500–900" for an uncertain one.
+fn impacts_per_year_text(st: &super::setup::Setup) -> String {
+    let m = &st.inputs[st.shared(2)].marginal;
+    let (lo, hi) = (m.quantile(0.05), m.quantile(0.95));
+    if lo == hi { format!("{lo:.0}") } else { format!("{lo:.0}–{hi:.0} (5–95 %)") }
 }
 
 fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {

@@ -387,6 +387,14 @@ impl Setup {
     /// instead of read from x (`None`: at the crush data's temperature). Needs
     /// [`Setup::attach_thermal`] for `Some`.
     pub fn evaluate_at_temperatures(&self, x: &[f64], mode: Mode, temperatures: Option<[f64; 2]>, out: &mut [f64]) -> Result<()> {
+        let (strength, moduli, shared) = self.chain_inputs(x, mode, temperatures)?;
+        self.evaluate_at(strength, moduli, shared, out)
+    }
+
+    /// The chain's inputs of sample x: strength parameters and population weights, Young's
+    /// modulus factors (candidate, reference) and the shared inputs (η, V, impacts per year, γ).
+    #[allow(clippy::type_complexity)]
+    fn chain_inputs<'a>(&'a self, x: &'a [f64], mode: Mode, temperatures: Option<[f64; 2]>) -> Result<([(Params, Option<&'a [f64]>); 2], [f64; 2], [f64; 4])> {
         let mut strength = [self.params(0, x, mode), self.params(1, x, mode)];
         let mut moduli = [1.0; 2];
         if let Some(t) = temperatures {
@@ -398,7 +406,27 @@ impl Setup {
                 moduli[k] = f.modulus;
             }
         }
-        self.evaluate_at(strength, moduli, [x[self.shared(0)], x[self.shared(1)], x[self.shared(2)], x[self.shared(3)]], out)
+        Ok((strength, moduli, [x[self.shared(0)], x[self.shared(1)], x[self.shared(2)], x[self.shared(3)]]))
+    }
+
+    /// P of sample x per material, horizon of `years` and damage model of `models` (which
+    /// cannot include Tavares–King: its law needs a table per number of impacts), at the crush
+    /// data's temperature, into `out` (length 2 · years · models, laid out as [`Setup::slot`]
+    /// lays out the study's horizons and models).
+    pub fn evaluate_years(&self, x: &[f64], mode: Mode, years: &[f64], models: &[DamageModel], out: &mut [f64]) -> Result<()> {
+        if models.contains(&DamageModel::TavaresKing) {
+            return Err(Error::numerical("comparison", "Tavares–King at horizons without a table of critical ratios"));
+        }
+        let (strength, moduli, [eta, v, per_year, _]) = self.chain_inputs(x, mode, None)?;
+        out.fill(0.0);
+        let per = years.len() * models.len();
+        let laws: Vec<Horizon> = years.iter().flat_map(|y| models.iter().map(move |&model| Horizon { model, impacts: y * per_year, ln_x_star: 0.0 })).collect();
+        for (j, (p, w)) in strength.into_iter().enumerate() {
+            let model = &self.materials[j].model;
+            let ln_sigma = model.ln_impact_stress_with_modulus(eta, v, moduli[j])?;
+            model.breakage_into(&p, w, ln_sigma, &laws, &mut out[j * per..(j + 1) * per]);
+        }
+        Ok(())
     }
 
     /// P per material, horizon and damage model at explicit strength parameters and population

@@ -68,7 +68,7 @@ use serde::{Deserialize, Serialize};
 use super::koh::KohOptions;
 use crate::calibrate::data::load_curves;
 use crate::error::{Error, Result};
-use crate::io::{InputFile, ReportDir};
+use crate::io::InputFile;
 use crate::model::Simulator;
 use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_manifest, progress_bar, record_figures};
 use crate::schema::{FigureOptions, StudyFile, check};
@@ -309,7 +309,7 @@ pub fn run_curves(loaded: &StudyFile, s: &CurveStudy, opts: &RunOptions) -> Resu
     let base_ls = inputs_loop.model.eval(&[], &outcome.theta_ls);
     let trend = trend_along_curve(&points, &base_ls, groups.len(), s.seed)?;
 
-    let mut dir = ReportDir::create(&opts.reports_root, &loaded.name)?;
+    let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
     write_curve_tables(&mut dir, &groups, &points, &cal, &outcome, &base_ls, table.as_ref())?;
     let where_ = disagreement(&outcome.stages[0].fit, &points, groups.len());
     let verdict = curve_verdict(loaded, s, &groups, &outcome, &where_, &trend);

@@ -1,0 +1,295 @@
+//! What a study kind adds to its document ([`super::build`]): blocks for the first page and, per
+//! figure, a title, a caption generated from the numbers the figure shows (read from the same
+//! tables it is drawn from) and the rows of its table that matter. A kind or figure without an
+//! entry gets a caption that says which files hold the figure and its tables — never a sentence
+//! about numbers it did not read.
+
+use std::path::Path;
+
+use super::document::{Block, Span, Text};
+use super::{Table, prob_text};
+use crate::error::Result;
+
+/// Blocks for the first page, and summary sections (by heading prefix) to move up to it.
+#[derive(Default)]
+pub struct FirstPage {
+    /// Blocks after the answer.
+    pub blocks: Vec<Block>,
+    /// Headings of summary sections to move onto the first page.
+    pub move_up: Vec<String>,
+}
+
+/// What a figure's section says.
+#[derive(Default)]
+pub struct FigureNote {
+    /// Title (None: from the file stem).
+    pub title: Option<String>,
+    /// Caption.
+    pub caption: Text,
+    /// Blocks after the figure (rows of its table).
+    pub blocks: Vec<Block>,
+}
+
+/// Text with the summary's markup (`code`, **bold**) as spans.
+fn p(t: &str) -> Text {
+    super::document::spans(t)
+}
+
+/// A probability in a plant engineer's words: a percentage with two significant figures.
+pub fn percent(p: f64) -> String {
+    if !p.is_finite() {
+        return "—".into();
+    }
+    let v = 100.0 * p;
+    if v == 0.0 {
+        "0 %".into()
+    } else if v < 1e-3 {
+        format!("{v:.1e} %")
+    } else {
+        format!("{} %", sig2(v))
+    }
+}
+
+/// "value (low – high)", or the value alone when the band is that same text ("> 100", "0 %").
+pub fn with_band(value: &str, low: &str, high: &str) -> String {
+    if value == low && value == high { value.to_string() } else { format!("{value} ({low} – {high})") }
+}
+
+/// Two significant figures, no exponent from 0.001 up ("0.036", "5.3", "49", "1234").
+fn sig2(v: f64) -> String {
+    if v >= 10.0 {
+        format!("{v:.0}")
+    } else {
+        let d = (1.0 - v.log10().floor()).max(0.0) as usize;
+        format!("{v:.d$}")
+    }
+}
+
+/// Years in a plant engineer's words ("never" for an infinite time).
+pub fn years_text(y: f64) -> String {
+    if y.is_infinite() {
+        "never".into()
+    } else if !y.is_finite() || y < 0.0 {
+        "—".into()
+    } else if y < 1e-3 {
+        format!("{y:.1e}")
+    } else {
+        sig2(y)
+    }
+}
+
+/// First-page blocks of a study kind.
+pub fn first_page(kind: &str, _dir: &Path) -> Result<FirstPage> {
+    Ok(match kind {
+        "uq" => FirstPage { move_up: vec!["In a plant engineer's units".into(), "What drives it".into()], ..FirstPage::default() },
+        "lifetime" => FirstPage { move_up: vec!["In a plant engineer's units".into()], ..FirstPage::default() },
+        "experiments" => FirstPage { move_up: vec!["Today".into(), "The budget".into()], ..FirstPage::default() },
+        _ => FirstPage::default(),
+    })
+}
+
+/// The note of figure `stem` of a study kind.
+pub fn figure(kind: &str, dir: &Path, stem: &str) -> Result<FigureNote> {
+    let note = match (kind, stem) {
+        ("uq", _) => uq(dir, stem)?,
+        ("experiments", "experiments_metrics") => Some(experiments(dir)?),
+        _ => None,
+    };
+    Ok(note.unwrap_or_else(|| FigureNote {
+        title: None,
+        caption: vec![Span::plain("Drawn from this report's tables; the summary above states its numbers. Files: "), Span { text: format!("{stem}.svg"), bold: false, code: true }, Span::plain(", .pdf, .png.")],
+        blocks: vec![],
+    }))
+}
+
+fn uq_labels(dir: &Path) -> Result<(Vec<String>, Vec<String>, String, String)> {
+    let m = Table::load(dir, "materials")?;
+    let primary = m.s("primary_strength_model")?.first().cloned().unwrap_or_default();
+    let damage = m.s("primary_damage_model")?.first().cloned().unwrap_or_default();
+    Ok((m.s("key")?, m.s("label")?, primary, damage))
+}
+
+fn yr(y: f64) -> String {
+    if y == 1.0 { "1 yr".into() } else { format!("{y} yr") }
+}
+
+fn uq(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
+    let (keys, labels, primary, damage) = uq_labels(dir)?;
+    let label = |k: &str| keys.iter().position(|x| x == k).map_or(k.to_string(), |i| labels[i].clone());
+    let (cand, refr) = (labels.first().cloned().unwrap_or_default(), labels.get(1).cloned().unwrap_or_default());
+    Ok(Some(match stem {
+        "uq_breakage_vs_velocity" => {
+            let t = Table::load(dir, "breakage_vs_velocity")?;
+            let (mat, years, v, med, lo, hi) = (t.s("material")?, t.f("years")?, t.f("velocity_m_s")?, t.f("median")?, t.f("q05")?, t.f("q95")?);
+            let last = years.iter().cloned().fold(f64::MIN, f64::max);
+            let vmax = v.iter().cloned().fold(f64::MIN, f64::max);
+            // The grid velocity nearest 5 m/s, the deliverable's maximum after the receiver.
+            let v5 = v.iter().cloned().min_by(|a, b| (a - 5.0).abs().total_cmp(&(b - 5.0).abs())).unwrap_or(5.0);
+            let at = |k: &str, vv: f64| (0..mat.len()).find(|&i| mat[i] == k && years[i] == last && v[i] == vv);
+            let mut parts = Vec::new();
+            for k in &keys {
+                if let Some(i) = at(k, v5) {
+                    parts.push(format!("{} {} (90 % band {} – {})", label(k), prob_text(med[i]), prob_text(lo[i]), prob_text(hi[i])));
+                }
+            }
+            FigureNote {
+                title: Some("Breaking probability against impact velocity".into()),
+                caption: p(&format!(
+                    "P_break of {cand} and {refr} against the impact velocity (0 – {vmax:.0} m/s), median and 90 % band over every uncertain input except the velocity, under the `{primary}` strength model and {damage}, one panel per horizon. At {v5:.2} m/s over {}: {}.",
+                    yr(last),
+                    parts.join(", ")
+                )),
+                blocks: vec![],
+            }
+        }
+        "uq_distributions" => {
+            let b = Table::load(dir, "breakage")?.filter("strength_model", &primary)?;
+            let (mat, model, years, med, lo, hi) = (b.s("material")?, b.s("model")?, b.f("years")?, b.f("median")?, b.f("q05")?, b.f("q95")?);
+            let code = model.first().cloned().unwrap_or_default();
+            let rows: Vec<Vec<String>> = (0..mat.len()).filter(|&i| model[i] == code).map(|i| vec![label(&mat[i]), yr(years[i]), prob_text(med[i]), format!("{} – {}", prob_text(lo[i]), prob_text(hi[i]))]).collect();
+            FigureNote {
+                title: Some("Distribution of the breaking probability".into()),
+                caption: p(&format!("Density of log₁₀ P_break over the Monte Carlo samples for {cand} and {refr}, `{primary}` strength model, {damage}; the medians and 90 % bands it shows are in the table below.")),
+                blocks: vec![Block::Table { header: vec!["material".into(), "horizon".into(), "median P".into(), "90 % band".into()], rows }],
+            }
+        }
+        "uq_convergence" => {
+            let t = Table::load(dir, "convergence")?;
+            let (years, n, pw, se) = (t.f("years")?, t.f("samples")?, t.f("p_candidate_worse")?, t.f("mc_se")?);
+            let nmax = n.iter().cloned().fold(0.0, f64::max);
+            let last: Vec<String> = (0..n.len()).filter(|&i| n[i] == nmax).map(|i| format!("{} at {}", pm(pw[i], se[i]), yr(years[i]))).collect();
+            FigureNote {
+                title: Some("Convergence of the comparison".into()),
+                caption: p(&format!("P({cand} breaks more than {refr}) against the number of Monte Carlo samples, with ±2 Monte Carlo standard errors (`{primary}` strength model). With all {nmax:.0} samples: {}.", last.join("; "))),
+                blocks: vec![],
+            }
+        }
+        "uq_sobol" | "uq_sobol_convergence" => {
+            let t = Table::load(dir, "sobol")?;
+            let (out, n, input, s1, s1l, s1h, st, stl, sth, ol) = (t.s("output")?, t.f("n")?, t.s("input")?, t.f("s1")?, t.f("s1_lo")?, t.f("s1_hi")?, t.f("st")?, t.f("st_lo")?, t.f("st_hi")?, t.s("output_label")?);
+            let nmax = n.iter().cloned().fold(0.0, f64::max);
+            let mut rows = Vec::new();
+            let mut lead = Vec::new();
+            for o in super::distinct(&out) {
+                let mut idx: Vec<usize> = (0..out.len()).filter(|&i| out[i] == o && n[i] == nmax).collect();
+                idx.sort_by(|&a, &b| st[b].total_cmp(&st[a]));
+                if let Some(&i) = idx.first() {
+                    lead.push(format!("{}: {} (S_T = {:.2}, 90 % {:.2} – {:.2})", ol[i], input[i], st[i], stl[i], sth[i]));
+                }
+                for &i in idx.iter().take(3) {
+                    rows.push(vec![ol[i].clone(), input[i].clone(), format!("{:.2} [{:.2}, {:.2}]", s1[i], s1l[i], s1h[i]), format!("{:.2} [{:.2}, {:.2}]", st[i], stl[i], sth[i])]);
+                }
+            }
+            if stem == "uq_sobol" {
+                FigureNote {
+                    title: Some("What drives it: Sobol' indices".into()),
+                    caption: p(&format!("First-order (S) and total (S_T) Sobol' indices with their 90 % bootstrap intervals, Saltelli base sample {nmax:.0}, `{primary}` strength model, one panel per output. The largest total index per output: {}.", lead.join("; "))),
+                    blocks: vec![Block::Table { header: vec!["output".into(), "input".into(), "S (90 %)".into(), "S_T (90 %)".into()], rows }],
+                }
+            } else {
+                let sizes: Vec<f64> = super::distinct(&n);
+                FigureNote {
+                    title: Some("Convergence of the Sobol' indices".into()),
+                    caption: p(&format!(
+                        "Total Sobol' indices of the first output against the Saltelli base sample size ({} sizes, {} – {nmax:.0}); flat lines over the last sizes mean the indices have converged. At the largest size: {}.",
+                        sizes.len(),
+                        sizes.iter().cloned().fold(f64::MAX, f64::min),
+                        lead.first().cloned().unwrap_or_default()
+                    )),
+                    blocks: vec![],
+                }
+            }
+        }
+        "uq_model_form" => {
+            let b = Table::load(dir, "breakage")?.filter("strength_model", &primary)?;
+            let (mat, model, years, med, lo, hi) = (b.s("material")?, b.s("model")?, b.f("years")?, b.f("median")?, b.f("q05")?, b.f("q95")?);
+            let rows: Vec<Vec<String>> = (0..mat.len()).map(|i| vec![model[i].replace('_', " "), label(&mat[i]), yr(years[i]), prob_text(med[i]), format!("{} – {}", prob_text(lo[i]), prob_text(hi[i]))]).collect();
+            FigureNote {
+                title: Some("The damage models side by side".into()),
+                caption: p(&format!("P_break of {cand} and {refr} under each damage model (`{primary}` strength model): dot the median, bar the 90 % band; a P of exactly 0 (below Vogel–Peukert's threshold) sits on the axis floor. The values are in the table below.")),
+                blocks: vec![Block::Table { header: vec!["damage model".into(), "material".into(), "horizon".into(), "median P".into(), "90 % band".into()], rows }],
+            }
+        }
+        "uq_strength_models" => {
+            let c = Table::load(dir, "comparison")?.filter("model", &damage_code(dir)?)?;
+            let (sm, years, pw, se) = (c.s("strength_model")?, c.f("years")?, c.f("p_candidate_worse")?, c.f("mc_se")?);
+            let w = Table::load(dir, "weights")?;
+            let (wn, ww) = (w.s("strength_model")?, w.f("weight_stacking")?);
+            let rows: Vec<Vec<String>> = (0..sm.len())
+                .map(|i| {
+                    let weight = wn.iter().position(|x| *x == sm[i]).map_or("1 (average)".into(), |j| format!("{:.3}", ww[j]));
+                    vec![sm[i].clone(), weight, yr(years[i]), pm(pw[i], se[i])]
+                })
+                .collect();
+            let best = (0..wn.len()).max_by(|&a, &b| ww[a].total_cmp(&ww[b]));
+            FigureNote {
+                title: Some("The strength models side by side".into()),
+                caption: p(&format!(
+                    "P({cand} breaks more than {refr}) under each strength model and averaged with the stacking weights (±2 Monte Carlo standard errors), and P_break at the last horizon per material (median, 90 % band). The stacking weights put {} on `{}`.",
+                    best.map_or("—".into(), |j| format!("{:.3}", ww[j])),
+                    best.map_or("—".into(), |j| wn[j].clone())
+                )),
+                blocks: vec![Block::Table { header: vec!["strength model".into(), "stacking weight".into(), "horizon".into(), format!("P({cand} worse) ± se")], rows }],
+            }
+        }
+        _ => return Ok(None),
+    }))
+}
+
+/// The primary damage model's code (`independent`) from `breakage.csv`'s first row.
+fn damage_code(dir: &Path) -> Result<String> {
+    Ok(Table::load(dir, "comparison")?.s("model")?.first().cloned().unwrap_or_default())
+}
+
+fn pm(v: f64, se: f64) -> String {
+    if se > 0.0 && se.is_finite() {
+        let d = (-(se.log10().floor()) + 1.0).clamp(0.0, 4.0) as usize;
+        format!("{v:.d$} ± {se:.d$}")
+    } else {
+        format!("{v:.4} (se 0: the same in every sample)")
+    }
+}
+
+fn experiments(dir: &Path) -> Result<FigureNote> {
+    let t = Table::load(dir, "plans")?;
+    let (cand, size, pcs, evsi) = (t.s("candidate")?, t.f("size")?, t.f("pcs")?, t.f("evsi")?);
+    let currency = t.s("currency")?.first().cloned().unwrap_or_default();
+    let cands = super::distinct(&cand);
+    let mut rows = Vec::new();
+    for c in &cands {
+        // The largest size evaluated for each candidate.
+        if let Some(i) = (0..cand.len()).filter(|&i| &cand[i] == c).max_by(|&a, &b| size[a].total_cmp(&size[b])) {
+            rows.push(vec![c.clone(), format!("{:.0}", size[i]), format!("{:.3}", pcs[i]), format!("{:.3}", evsi[i])]);
+        }
+    }
+    let best = (0..cand.len()).max_by(|&a, &b| evsi[a].total_cmp(&evsi[b]));
+    Ok(FigureNote {
+        title: Some("What each candidate experiment would teach".into()),
+        caption: p(&format!(
+            "Each metric against the number of tests, one line per candidate experiment ({} candidates): probability of choosing the better particle, expected posterior weight of the true damage model, expected width of the 90 % bands of P_break, and the expected value of sample information (EVSI, {currency}). The largest EVSI is {} with {}.",
+            cands.len(),
+            best.map_or("—".into(), |i| format!("{:.3} {currency}", evsi[i])),
+            best.map_or("—".into(), |i| format!("{} × {:.0}", cand[i], size[i]))
+        )),
+        blocks: vec![Block::Table { header: vec!["candidate".into(), "largest size".into(), "P(correct choice)".into(), format!("EVSI ({currency})")], rows }],
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plant_units() {
+        assert_eq!(percent(0.0), "0 %");
+        assert_eq!(percent(0.2038), "20 %");
+        assert_eq!(percent(0.0204), "2.0 %");
+        assert_eq!(percent(0.00096), "0.096 %");
+        assert_eq!(percent(2.5e-7), "2.5e-5 %");
+        assert_eq!(years_text(f64::INFINITY), "never");
+        assert_eq!(years_text(0.4937), "0.49");
+        assert_eq!(years_text(0.0361), "0.036");
+        assert_eq!(years_text(5.35), "5.3");
+        assert_eq!(years_text(37.2), "37");
+    }
+}

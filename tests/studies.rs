@@ -226,6 +226,20 @@ fn main_uq_study_writes_the_headline_deterministically() {
     }
     let manifest: serde_json::Value = serde_json::from_str(&a.read(&format!("{dir}/manifest.json"))).unwrap();
     assert_eq!(manifest["failures"].as_array().map(|v| v.len()), Some(0), "{}", manifest["failures"]);
+    // The decision document: the run's headline numbers in the PDF's text (poppler), the answer
+    // in a plant engineer's units and Vogel–Peukert's "no breakage" in words on its first page.
+    assert!(a.path(&format!("{dir}/report.html")).is_file());
+    if let Some(t) = common::program("tests/studies.rs main study document", "pdftotext", "poppler-utils", "PARTLIFE_EXPECT_POPPLER") {
+        let pdf = a.path(&format!("{dir}/report.pdf"));
+        let all = common::pdf_text(&t, &pdf, None);
+        for line in stdout.lines().filter(|l| !l.starts_with("wrote ")) {
+            assert!(all.contains(&common::one_space(line)), "report.pdf lacks the headline \"{line}\"");
+        }
+        let first = common::pdf_text(&t, &pdf, Some((1, 1)));
+        assert!(first.contains("In a plant engineer's units") && first.contains("Vogel–Peukert breaks nothing"), "page 1: {first}");
+    }
+    let attrition = a.read(&format!("{dir}/summary.md"));
+    assert!(attrition.contains("| diagnosed | independent trials | Gen 4 |"), "summary.md lacks the attrition table");
     // Figures of one strength and damage model say which; Sobol' panels name their output in
     // words, not by column name (before: "Index of log10 p gen4").
     for (f, said) in [("uq_breakage_vs_velocity", "diagnosed strength, indep. trials"), ("uq_distributions", "diagnosed strength, indep. trials"), ("uq_sobol", "strength model: diagnosed; damage: independent trials")] {

@@ -5,9 +5,10 @@
 //! font read from the machine): greedy line breaking, tables with columns sized to their content
 //! and wrapped to the text width (the header repeats on a new page), figures at their physical
 //! width (narrowed to the text width), a running title and "page k of n" on every page. Each
-//! page becomes one SVG (figures nested as `<svg>` elements with their own viewBox), which
-//! svg2pdf turns into a form XObject with its fonts embedded and subset; pdf-writer assembles
-//! the pages. Nothing in the file depends on the time or the machine: the same document gives
+//! page becomes form XObjects made by svg2pdf from SVG, fonts embedded and subset: one layer
+//! per font face (svg2pdf writes the fonts of one conversion in hash-map order, so one face per
+//! conversion keeps the bytes the same from run to run) and each figure's own SVG; pdf-writer
+//! assembles the pages. Nothing in the file depends on the time or the machine: the same document gives
 //! the same bytes. Verified by `tests/documents.rs` (pdfinfo, pdffonts, pdftotext).
 
 use std::collections::HashMap;
@@ -489,13 +490,21 @@ fn layout(doc: &Document) -> Result<Layout> {
     Ok(lay)
 }
 
-fn page_svg(lay: &Layout, k: usize, running: &str) -> Result<String> {
+/// One page as XObjects: SVG layers, each holding at most one font face (svg2pdf writes the
+/// fonts of one conversion in hash-map order, so a layer with two faces would give different
+/// bytes from run to run), and the figures with their placement (x, y, w, h from the top left).
+struct Page {
+    layers: Vec<String>,
+    figures: Vec<(usize, [f64; 4])>,
+}
+
+fn page_layers(lay: &Layout, k: usize, running: &str) -> Page {
     let n = lay.pages.len();
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\">\n<rect x=\"0\" y=\"0\" width=\"{w}\" height=\"{h}\" fill=\"#FFFFFF\"/>\n",
-        w = PAGE.0,
-        h = PAGE.1
-    );
+    let head = format!("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\">\n", w = PAGE.0, h = PAGE.1);
+    // Layer 0: white page, fills, rules and regular text; 1: bold text; 2: code.
+    let mut layers = [head.clone() + &format!("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#FFFFFF\"/>\n", PAGE.0, PAGE.1), head.clone(), head];
+    let mut used = [true, false, false];
+    let mut figures = Vec::new();
     let mut els = lay.pages[k].clone();
     // Running title and page number.
     els.push(El::Text { x: LEFT, y: 36.0, size: 7.5, runs: vec![(Face::Regular, running.to_string())], grey: true, middle: false });
@@ -504,34 +513,32 @@ fn page_svg(lay: &Layout, k: usize, running: &str) -> Result<String> {
     for el in &els {
         match el {
             El::Text { x, y, size, runs, grey, middle } => {
-                s.push_str(&format!(
-                    "<text x=\"{x:.2}\" y=\"{y:.2}\" font-size=\"{size}\" font-family=\"DejaVu Sans\" xml:space=\"preserve\" fill=\"{}\"{}>",
-                    if *grey { "#555555" } else { "#000000" },
-                    if *middle { " text-anchor=\"middle\"" } else { "" }
-                ));
+                // Each run is its own text element at the x its predecessors' advances give.
+                let mut xr = *x;
                 for (f, t) in runs {
-                    match f {
-                        Face::Regular => s.push_str(&format!("<tspan>{}</tspan>", escape(t))),
-                        Face::Bold => s.push_str(&format!("<tspan font-weight=\"bold\">{}</tspan>", escape(t))),
-                        Face::Mono => s.push_str(&format!("<tspan font-family=\"DejaVu Sans Mono\">{}</tspan>", escape(t))),
-                    }
+                    let (layer, attrs) = match f {
+                        Face::Regular => (0, ""),
+                        Face::Bold => (1, " font-weight=\"bold\""),
+                        Face::Mono => (2, ""),
+                    };
+                    let family = if *f == Face::Mono { "DejaVu Sans Mono" } else { "DejaVu Sans" };
+                    used[layer] = true;
+                    layers[layer].push_str(&format!(
+                        "<text x=\"{xr:.2}\" y=\"{y:.2}\" font-size=\"{size}\" font-family=\"{family}\"{attrs} xml:space=\"preserve\" fill=\"{}\"{}>{}</text>\n",
+                        if *grey { "#555555" } else { "#000000" },
+                        if *middle { " text-anchor=\"middle\"" } else { "" },
+                        escape(t)
+                    ));
+                    xr += width(t, *f, *size);
                 }
-                s.push_str("</text>\n");
             }
-            El::Rule { x0, x1, y, w } => s.push_str(&format!("<line x1=\"{x0:.2}\" y1=\"{y:.2}\" x2=\"{x1:.2}\" y2=\"{y:.2}\" stroke=\"#000000\" stroke-width=\"{w}\"/>\n")),
-            El::Fill { x, y, w, h, rgb } => s.push_str(&format!("<rect x=\"{x:.2}\" y=\"{y:.2}\" width=\"{w:.2}\" height=\"{h:.2}\" fill=\"#{:02X}{:02X}{:02X}\"/>\n", rgb.0, rgb.1, rgb.2)),
-            El::Figure { x, y, w, h, index } => {
-                let svg = &lay.figures[*index];
-                let (vw, vh, _) = figure_size(svg)?;
-                s.push_str(&format!(
-                    "<svg x=\"{x:.2}\" y=\"{y:.2}\" width=\"{w:.2}\" height=\"{h:.2}\" viewBox=\"0 0 {vw} {vh}\">{}</svg>\n",
-                    svg_body(svg)?
-                ));
-            }
+            El::Rule { x0, x1, y, w } => layers[0].push_str(&format!("<line x1=\"{x0:.2}\" y1=\"{y:.2}\" x2=\"{x1:.2}\" y2=\"{y:.2}\" stroke=\"#000000\" stroke-width=\"{w}\"/>\n")),
+            El::Fill { x, y, w, h, rgb } => layers[0].push_str(&format!("<rect x=\"{x:.2}\" y=\"{y:.2}\" width=\"{w:.2}\" height=\"{h:.2}\" fill=\"#{:02X}{:02X}{:02X}\"/>\n", rgb.0, rgb.1, rgb.2)),
+            El::Figure { x, y, w, h, index } => figures.push((*index, [*x, *y, *w, *h])),
         }
     }
-    s.push_str("</svg>\n");
-    Ok(s)
+    let layers = layers.into_iter().zip(used).filter(|(_, u)| *u).map(|(l, _)| l + "</svg>\n").collect();
+    Page { layers, figures }
 }
 
 fn options() -> &'static usvg::Options<'static> {
@@ -546,20 +553,11 @@ fn options() -> &'static usvg::Options<'static> {
     })
 }
 
-fn tree(svg: &str, k: usize) -> Result<usvg::Tree> {
-    usvg::Tree::from_str(svg, options()).map_err(|e| Error::Figure { name: format!("report.pdf page {}", k + 1), detail: format!("SVG parse: {e}") })
-}
-
-/// The pages of a document as SVG (points as user units).
-pub fn pages(doc: &Document) -> Result<Vec<String>> {
-    let lay = layout(doc)?;
-    (0..lay.pages.len()).map(|k| page_svg(&lay, k, &doc.running)).collect()
-}
 
 /// The document as PDF bytes.
 pub fn render(doc: &Document) -> Result<Vec<u8>> {
-    let pages = pages(doc)?;
-    let trees: Vec<usvg::Tree> = pages.iter().enumerate().map(|(k, p)| tree(p, k)).collect::<Result<_>>()?;
+    let lay = layout(doc)?;
+    let pages: Vec<Page> = (0..lay.pages.len()).map(|k| page_layers(&lay, k, &doc.running)).collect();
     let mut alloc = Ref::new(1);
     let catalog = alloc.bump();
     let tree_id = alloc.bump();
@@ -570,25 +568,111 @@ pub fn render(doc: &Document) -> Result<Vec<u8>> {
     pdf.catalog(catalog).pages(tree_id);
     pdf.pages(tree_id).kids(page_ids.iter().copied()).count(pages.len() as i32);
     pdf.document_info(info).title(TextStr(&doc.title)).producer(TextStr(concat!("partlife ", env!("CARGO_PKG_VERSION"))));
-    for (k, t) in trees.iter().enumerate() {
-        let (chunk, x_ref) = svg2pdf::to_chunk(t, svg2pdf::ConversionOptions::default())
-            .map_err(|e| Error::Figure { name: format!("report.pdf page {}", k + 1), detail: format!("PDF: {e:?}") })?;
+    // An SVG as a form XObject of this PDF (its objects renumbered into the document's).
+    let mut embed = |pdf: &mut Pdf, svg: &str, what: &str| -> Result<Ref> {
+        let t = usvg::Tree::from_str(svg, options()).map_err(|e| Error::Figure { name: what.to_string(), detail: format!("SVG parse: {e}") })?;
+        let (chunk, x_ref) = svg2pdf::to_chunk(&t, svg2pdf::ConversionOptions::default()).map_err(|e| Error::Figure { name: what.to_string(), detail: format!("PDF: {e:?}") })?;
         let mut map = HashMap::new();
         let chunk = chunk.renumber(|old| *map.entry(old).or_insert_with(|| alloc.bump()));
-        let x_ref = map[&x_ref];
-        let name = Name(b"P0");
-        let mut page = pdf.page(page_ids[k]);
-        page.media_box(Rect::new(0.0, 0.0, PAGE.0 as f32, PAGE.1 as f32));
-        page.parent(tree_id);
-        page.contents(content_ids[k]);
-        page.resources().x_objects().pair(name, x_ref);
-        page.finish();
-        let mut content = Content::new();
-        content.save_state().transform([PAGE.0 as f32, 0.0, 0.0, PAGE.1 as f32, 0.0, 0.0]).x_object(name).restore_state();
-        pdf.stream(content_ids[k], &content.finish());
         pdf.extend(&chunk);
+        Ok(map[&x_ref])
+    };
+    for (k, page) in pages.iter().enumerate() {
+        let what = format!("report.pdf page {}", k + 1);
+        let mut content = Content::new();
+        let mut xobjects: Vec<(String, Ref)> = Vec::new();
+        for (i, layer) in page.layers.iter().enumerate() {
+            let r = embed(&mut pdf, layer, &what)?;
+            let name = format!("L{i}");
+            content.save_state().transform([PAGE.0 as f32, 0.0, 0.0, PAGE.1 as f32, 0.0, 0.0]).x_object(Name(name.as_bytes())).restore_state();
+            xobjects.push((name, r));
+        }
+        for (i, (index, [x, y, w, h])) in page.figures.iter().enumerate() {
+            let r = embed(&mut pdf, &lay.figures[*index], &what)?;
+            let name = format!("F{i}");
+            let (x, y, w, h) = (*x as f32, *y as f32, *w as f32, *h as f32);
+            content.save_state().transform([w, 0.0, 0.0, h, x, PAGE.1 as f32 - y - h]).x_object(Name(name.as_bytes())).restore_state();
+            xobjects.push((name, r));
+        }
+        let mut p = pdf.page(page_ids[k]);
+        p.media_box(Rect::new(0.0, 0.0, PAGE.0 as f32, PAGE.1 as f32));
+        p.parent(tree_id);
+        p.contents(content_ids[k]);
+        {
+            let mut res = p.resources();
+            let mut xo = res.x_objects();
+            for (name, r) in &xobjects {
+                xo.pair(Name(name.as_bytes()), *r);
+            }
+        }
+        p.finish();
+        pdf.stream(content_ids[k], &content.finish());
     }
-    Ok(pdf.finish())
+    Ok(canonical(&pdf.finish()))
+}
+
+/// The PDF with the entries of every dictionary of references in one order. svg2pdf writes the
+/// resource dictionaries of an XObject (`/xo0 40 0 R`, `/gs0 39 0 R`, …) from hash maps, in an
+/// order that changes from run to run; the order of a dictionary's entries has no meaning, so
+/// sorting them gives the same bytes for the same document. Stream data (after `stream`, its
+/// `/Length` bytes) is copied untouched.
+fn canonical(pdf: &[u8]) -> Vec<u8> {
+    const START: &[u8] = b">>\nstream\n";
+    let find = |hay: &[u8], from: usize, needle: &[u8]| hay[from..].windows(needle.len()).position(|w| w == needle).map(|i| i + from);
+    let mut out = Vec::with_capacity(pdf.len());
+    let mut pos = 0;
+    while pos < pdf.len() {
+        let Some(i) = find(pdf, pos, START) else {
+            out.extend(sorted_pairs(&pdf[pos..]));
+            break;
+        };
+        let data = i + START.len();
+        let text = &pdf[pos..data];
+        let length = text
+            .windows(8)
+            .rposition(|w| w == b"/Length ")
+            .and_then(|k| {
+                let digits: Vec<u8> = text[k + 8..].iter().take_while(|c| c.is_ascii_digit()).copied().collect();
+                std::str::from_utf8(&digits).ok()?.parse::<usize>().ok()
+            })
+            .unwrap_or(0);
+        out.extend(sorted_pairs(text));
+        let end = (data + length).min(pdf.len());
+        out.extend_from_slice(&pdf[data..end]);
+        pos = end;
+    }
+    out
+}
+
+/// Text of PDF objects with each run of `/name N 0 R` lines between a line ending in `<<` and a
+/// `>>` line sorted.
+fn sorted_pairs(text: &[u8]) -> Vec<u8> {
+    let is_pair = |l: &[u8]| {
+        let t = l.trim_ascii();
+        let parts: Vec<&[u8]> = t.split(|&c| c == b' ').collect();
+        parts.len() == 4 && parts[0].first() == Some(&b'/') && parts[1].iter().all(u8::is_ascii_digit) && parts[2] == b"0" && parts[3] == b"R"
+    };
+    let lines: Vec<&[u8]> = text.split(|&c| c == b'\n').collect();
+    let mut out: Vec<&[u8]> = Vec::with_capacity(lines.len());
+    let mut i = 0;
+    while i < lines.len() {
+        out.push(lines[i]);
+        if lines[i].trim_ascii_end().ends_with(b"<<") {
+            let mut j = i + 1;
+            while j < lines.len() && is_pair(lines[j]) {
+                j += 1;
+            }
+            if j > i + 2 && j < lines.len() && lines[j].trim_ascii() == b">>" {
+                let mut run: Vec<&[u8]> = lines[i + 1..j].to_vec();
+                run.sort();
+                out.extend(run);
+                i = j;
+                continue;
+            }
+        }
+        i += 1;
+    }
+    out.join(&b'\n')
 }
 
 #[cfg(test)]
@@ -610,6 +694,14 @@ mod tests {
         // A word longer than the line is cut by characters.
         let long = wrap(&[Span::plain("a".repeat(200))], 10.0, 50.0);
         assert!(long.len() > 3 && long.iter().all(|(_, w)| *w <= 50.0));
+    }
+
+    #[test]
+    fn dictionaries_of_references_are_sorted_and_streams_kept() {
+        let a = b"1 0 obj\n<<\n  /XObject <<\n    /xo1 43 0 R\n    /xo0 40 0 R\n  >>\n  /Length 9\n>>\nstream\n<<\n/b 1 0 R\nendstream\n";
+        let b = b"1 0 obj\n<<\n  /XObject <<\n    /xo0 40 0 R\n    /xo1 43 0 R\n  >>\n  /Length 9\n>>\nstream\n<<\n/b 1 0 R\nendstream\n";
+        assert_eq!(canonical(a), canonical(b));
+        assert_eq!(canonical(b), b.to_vec());
     }
 
     #[test]

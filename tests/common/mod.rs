@@ -172,3 +172,33 @@ shape_resolution = 0.001
 "#
     )
 }
+
+/// Whether an external reader a test needs is here: `Some(path)`, or None after printing
+/// "SKIPPED <test>: <why>" — unless `expect_env` is set to 1 (`.ci/run` sets it where it
+/// installed the package), which makes a missing program a failure.
+pub fn program(test: &str, name: &str, package: &str, expect_env: &str) -> Option<PathBuf> {
+    let found = std::env::var_os("PATH").and_then(|paths| std::env::split_paths(&paths).map(|d| d.join(name)).find(|p| p.is_file()));
+    if found.is_none() {
+        let why = format!("{name} not found (Debian package {package}; .ci/run installs it)");
+        assert!(std::env::var(expect_env).as_deref() != Ok("1"), "{test}: {why}, but {expect_env}=1");
+        let _ = std::io::Write::write_all(&mut std::io::stderr(), format!("\nSKIPPED {test}: {why}\n").as_bytes());
+    }
+    found
+}
+
+/// Text of a PDF by poppler's pdftotext (pages `first..=last`, all when None), with every run
+/// of whitespace made one space, so a sentence wrapped over lines still matches.
+pub fn pdf_text(pdftotext: &Path, pdf: &Path, pages: Option<(usize, usize)>) -> String {
+    let mut cmd = Command::new(pdftotext);
+    if let Some((a, b)) = pages {
+        cmd.args(["-f", &a.to_string(), "-l", &b.to_string()]);
+    }
+    let o = cmd.arg(pdf).arg("-").output().unwrap();
+    assert!(o.status.success(), "pdftotext {}: {}", pdf.display(), String::from_utf8_lossy(&o.stderr));
+    one_space(&String::from_utf8_lossy(&o.stdout))
+}
+
+/// Every run of whitespace as one space.
+pub fn one_space(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}

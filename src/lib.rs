@@ -23,7 +23,8 @@
 //!   lifetime study (runner) · main study (uq: per strength model + stacking average)
 //!   · discrepancy (names the effects; before/after are instances of the model)
 //!                                                     │
-//!     io::ReportDir ─► reports/<name>/{manifest.json, *.csv} ─► report::render ─► *.svg *.png *.pdf
+//!     io::ReportDir ─► reports/<name>/{manifest.json, *.csv, summary.md} ─► report::render ─► *.svg *.png *.pdf
+//!                      └► report::build (one Document) ─► report::pdf / report::html ─► report.pdf, report.html
 //! ```
 //!
 //! ## The seam: model vs method
@@ -52,7 +53,7 @@
 //!  9  dem · fem · micro              the solvers with their studies (micro: microstructure micromechanics)
 //!  8  runkit · synth · thermal       run helpers; the crush-data generator; parameters against temperature
 //!  7  schema                         study files, TOML errors, shared options
-//!  6  dist · lab · phases · report   declared distributions; the example lab exports; phase-fraction tables; figures from tables
+//!  6  dist · lab · phases · report   declared distributions; the example lab exports; phase-fraction tables; figures and documents from tables
 //!  5  data · testfns                 datasets with plausibility ranges; analytic simulators
 //!  4  lifetime · model · weibull     P_N and damage laws; the Simulator seam; ASTM C1239
 //!  3  contact · design · io · params · stats
@@ -76,7 +77,7 @@
 //! | [`testfns`] | analytic simulators (Ishigami) |
 //! | [`contact`] | Hertz: contact size, surface stresses, average tensile stress (explicit domain), crush, impact with η |
 //! | [`weibull`] | ASTM C1239 MLE, unbiasing, pivotal and Fisher bounds, probability plot, size scaling |
-//! | [`lifetime`] | P_N without underflow, impacts per year, the impact load; [`lifetime::damage`]: independent trials, Vogel–Peukert, Tavares–King as per-sample laws |
+//! | [`lifetime`] | P_N without underflow, impacts per year, the impact load; [`lifetime::damage`]: independent trials, Vogel–Peukert, Tavares–King as per-sample laws; [`lifetime::attrition`]: years until a share of the inventory is broken, on a grid of horizons |
 //! | [`strength`] | the one strength/lifetime model: effects (the five particle effects and generic effects of recorded factors — scale and modulus per level, partial pooling of small levels (`pooling`), ln-linear and power laws, the weakest-link size effect and its test, `factors`; two flaw populations, `flaws`), strength files with factor columns through the intake (`specimens`), Weibull regression and the fitted model (`regress`, `mle`), pivotal/bootstrap/Bayesian joint draws, exact pivotal and profile-likelihood bands of effects, populations (with recorded factors predicted for a level, levels in proportion, a value or a distribution: `predict`), `LifetimeModel` (a modulus and a damage law per level) and its Simulator, stacking weights |
 //! | [`dist`] | distributions declared in study files and the DEM velocity spectrum, as inverse-CDF marginals |
 //! | [`dem`] | native DEM of the tube bank: Hertz–Mindlin, cell lists, impacts, profiles, VTK; `TubeBankModel` |
@@ -88,7 +89,7 @@
 //! | [`discrepancy`] | the discrepancy workflow: diagnosis (quantile residuals, bootstrap AD/KS, residual trends), the name → add → diagnose loop over the strength model's effects (crush data, or strength files with any recorded factors: `[[strength]]`) with a max-T bootstrap guard on the one-parameter scale, categorical residual diagnosis (Kruskal–Wallis of location and of scatter) (also behind `effects = "diagnosed"` and its cross-validated scores), lifetime before/after, detection power; `partlife discrepancy`; Kennedy–O'Hagan GP discrepancy with BIC comparison of model terms, on crush curves too |
 //! | [`experiments`] | decision-driven experiment design: preposterior analysis by importance reweighting (probability of correct selection, EVSI, expected posterior bands and model weights, reserve-sample fallback) and resample-move where reweighting degenerates (`experiments::smc`: adaptive tempering, diagonal-pCN moves of the samples, plans evaluated test after test, greedy steps on carried posteriors); the main study's state of knowledge as weighted samples; candidates: crush tests (sieve fraction, shape measured or not, temperature; optionally the discrepancy naming loop's verdict on the pooled data), single- and repeated-impact breakage tests, η and impact-velocity measurements; the `experiments` study: ranked plans, greedy or exhaustive budget allocation, report |
 //! | [`temperature`] | the `temperature` study: the phase-fraction table (Fig. 2 style), the temperature laws of the calibrated parameters with bands next to the calibrated states, the discrepancy workflow's softening term beside them, held-out crush curves at another temperature predicted through the crush FE from the laws (and from each calibrated state as it is) with their coverage judged against the intervals' nominal level, and the main study's breakage against operating temperature with Table 1's softening temperatures |
-//! | [`uq`] | the main study (`kind = "uq"`): strength models as a model-form choice with stacking weights, Monte Carlo propagation through each material's `LifetimeModel`, damage models and averaging domains side by side, Sobol' indices with bootstrap intervals; optionally at operating temperatures through the laws of [`thermal`] |
+//! | [`uq`] | the main study (`kind = "uq"`): strength models as a model-form choice with stacking weights, Monte Carlo propagation through each material's `LifetimeModel`, damage models and averaging domains side by side, Sobol' indices with bootstrap intervals, attrition in a plant engineer's units (`uq::attrition`); optionally at operating temperatures through the laws of [`thermal`] |
 //! | [`intake`] | the one data intake of every tabular input: bytes → text (UTF-8, BOM, UTF-16, Windows-1252) → table (delimiter and decimal mark sniffed, header row; or one sheet of .xlsx/.xls/.xlsb/.ods via calamine) → columns resolved to fields (study map, then name + unit grammar) → SI values (exact decimal conversion) → plausibility; material filter, join by id, recorded factor columns of any file (`factors`), the provenance record; whether a file is a synthetic stand-in (the generator's settings or an export manifest beside it); a minimal .xlsx/.ods writer |
 //! | [`data`] | crush datasets (with the factor columns a study declares) and Table 1 through the intake, with row/column-precise validation; the plausibility range of every numeric input column, and of the derived strength |
 //! | [`lab`] | the example lab exports of `datasets/examples/` (a semicolon CSV and a workbook) from the SI crush files |
@@ -98,12 +99,12 @@
 //! | [`phases`] | phase-fraction tables against temperature (Thermo-Calc/pycalphad exports): format, validation, conversion of mole and mass fractions to the volume fractions a rule of mixtures takes, linear interpolation, the amorphous fraction; the rule of the shipped illustrative table |
 //! | [`stats`] | median, Pearson correlation with p-value, line fit, the one sample-quantile definition (Hyndman–Fan type 7) and the weighted inverse CDF, the one linear interpolation (`locate` + `lerp`), the one ranking |
 //! | [`schema`] | the study-file layer under every study module: `StudyFile` (read, kind, parse), TOML errors with line and key, relative paths, shared options (contact, impact, figures, materials) |
-//! | [`runkit`] | what every run shares: options (the executor choice among them), summary, clock, progress bars, figures' records, the report commit with `manifest.json` |
+//! | [`runkit`] | what every run shares: options (the executor choice among them), summary, clock, progress bars, figures' records, the report commit with `manifest.json` and the documents, `summary.md` from headline lines |
 //! | [`lifetime_study`] | the lifetime study (`kind = "lifetime"`): schema and run, through `strength` |
 //! | [`study`] | the dispatch from `kind` to each study module's schema and validation: `load` → `LoadedStudy` |
 //! | [`runner`] | the dispatch from a loaded study to its runner, after the prerequisite studies whose reports it reads when those are missing or stale (the study graph; top of the graph: only the CLI and `bench` use it) |
 //! | [`io`] | atomic report directories, CSV tables, manifest (with each input's intake record), the one VTK `DataArray` writer; reading report tables and study files; scratch directories |
-//! | [`report`] | figures from tables only: SVG (plotters) → PNG (resvg) and vector PDF (svg2pdf) |
+//! | [`report`] | figures from tables only: SVG (plotters) → PNG (resvg) and vector PDF (svg2pdf); the decision document of every study: one document model (`report::document`) built from a report's files (`report::build`, captions from the figures' tables in `report::captions`) and rendered to A4 PDF (`report::pdf`: layout, fonts embedded and subset, pdf-writer) and one self-contained HTML page (`report::html`) |
 //! | [`bench`](mod@bench) | the speed figures the issues ask for |
 //!
 //! ## Conventions

@@ -6,7 +6,7 @@ mod common;
 use common::{Scratch, root};
 use partlife::io::{col_f64, col_str, read_table};
 
-const TABLES: [&str; 12] = [
+const TABLES: [&str; 13] = [
     "particles",
     "weibull_fits",
     "weibull_points",
@@ -19,6 +19,7 @@ const TABLES: [&str; 12] = [
     "force_time",
     "lifetime_summary",
     "strength_fits",
+    "attrition",
 ];
 const FIGURES: [&str; 6] =
     ["fig05_force_time", "fig13_stress_profile", "fig14_sigma_vs_diameter", "fig14_weibull_cdf", "fig15_impact", "fig16_breakage"];
@@ -82,7 +83,8 @@ fn lifetime_study_writes_every_output() {
     assert_eq!(m["study_toml"].as_str().unwrap(), s.read("studies/lifetime.toml"));
     assert_eq!(m["study_resolved"]["impact"]["energy_fraction"], 0.1);
     assert!(m["evaluations"]["lifetime_chain"].as_u64().unwrap() == 2 * 201);
-    assert_eq!(m["outputs"].as_array().unwrap().len(), TABLES.len() + 3 * FIGURES.len() + 1);
+    // Tables, figures in three formats, manifest.json, summary.md, report.pdf and report.html.
+    assert_eq!(m["outputs"].as_array().unwrap().len(), TABLES.len() + 3 * FIGURES.len() + 4);
     // No temporary directory left behind.
     let names: Vec<String> = std::fs::read_dir(s.path("reports")).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     assert_eq!(names, ["lifetime"]);

@@ -93,6 +93,7 @@ pub fn figure(kind: &str, dir: &Path, stem: &str) -> Result<FigureNote> {
     let note = match (kind, stem) {
         ("uq", _) => uq(dir, stem)?,
         ("experiments", "experiments_metrics") => Some(experiments(dir)?),
+        ("lifetime", _) => lifetime(dir, stem)?,
         _ => None,
     };
     Ok(note.unwrap_or_else(|| FigureNote {
@@ -248,6 +249,85 @@ fn pm(v: f64, se: f64) -> String {
     } else {
         format!("{v:.4} (se 0: the same in every sample)")
     }
+}
+
+/// Per material of a lifetime report, `f(label, row)` over the rows of `table`.
+fn per_material(dir: &Path, table: &str, f: &dyn Fn(&Table, usize) -> Result<String>) -> Result<String> {
+    let t = Table::load(dir, table)?;
+    let labels = t.s("material")?;
+    let parts: Vec<String> = (0..labels.len()).map(|i| Ok(format!("{} {}", labels[i], f(&t, i)?))).collect::<Result<_>>()?;
+    Ok(parts.join("; "))
+}
+
+/// The deliverable's figures (Figs. 5, 13–16) of a lifetime report.
+fn lifetime(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
+    let note = |title: &str, caption: String| Some(FigureNote { title: Some(title.into()), caption: p(&caption), blocks: vec![] });
+    Ok(match stem {
+        "fig05_force_time" => {
+            let t = Table::load(dir, "force_time")?;
+            let (mat, f, v) = (t.s("material")?, t.f("force_n")?, t.f("velocity_m_s")?);
+            let mut parts = Vec::new();
+            for m in super::distinct(&mat) {
+                let peak = (0..mat.len()).filter(|&i| mat[i] == m).map(|i| f[i]).fold(0.0, f64::max);
+                parts.push(format!("{m} {peak:.1} N"));
+            }
+            note("Impact force and impulse (deliverable Fig. 5)", format!("Contact force and running impulse against time of one particle hitting a steel tube at {} m/s; peak force {}.", v.first().copied().unwrap_or(f64::NAN), parts.join(", ")))
+        }
+        "fig13_stress_profile" => note(
+            "Radial surface stress of the crush test (deliverable Fig. 13)",
+            format!(
+                "Radial surface stress against distance from the contact centre for the median particle at its crush force, and σ̄, the mean tensile σᵣ over its averaging domain (dashed): {}.",
+                per_material(dir, "stress_profile_summary", &|t, i| Ok(format!("d = {:.2} mm, F = {:.0} N, σ̄ = {:.0} MPa", t.f("diameter_m")?[i] * 1e3, t.f("crush_force_n")?[i], t.f("sigma_bar_pa")?[i] / 1e6)))?
+            ),
+        ),
+        "fig14_sigma_vs_diameter" => note(
+            "Strength against particle size (deliverable Fig. 14, left)",
+            format!(
+                "σ̄ at break against particle diameter with a power-law fit σ̄ ∝ d^b: {}.",
+                per_material(dir, "size_trend", &|t, i| Ok(format!("b = {:.2} ± {:.2} (r = {:.2}, p = {})", t.f("exponent")?[i], t.f("exponent_se")?[i], t.f("pearson_r_log")?[i], prob_text(t.f("p_value")?[i]))))?
+            )
+            .replace('-', "−"),
+        ),
+        "fig14_weibull_cdf" => note(
+            "Weibull strength distribution (deliverable Fig. 14, right)",
+            format!(
+                "Breaking probability against σ̄ at break: the data at (i − 0.5)/N, the fitted Weibull law (ASTM C1239) and its pivotal confidence band: {}.",
+                per_material(dir, "weibull_fits", &|t, i| Ok(format!(
+                    "N = {:.0}, m = {:.2} ({:.0} % bounds {:.2}–{:.2}), σθ = {:.0} MPa",
+                    t.f("n")?[i],
+                    t.f("shape_used")?[i],
+                    100.0 * t.f("confidence")?[i],
+                    t.f("shape_lower")?[i],
+                    t.f("shape_upper")?[i],
+                    t.f("scale_pa")?[i] / 1e6
+                )))?
+            ),
+        ),
+        "fig15_impact" => {
+            let t = Table::load(dir, "impact_curves")?;
+            let (mat, v, f, sb) = (t.s("material")?, t.f("velocity_m_s")?, t.f("f_max_n")?, t.f("sigma_bar_pa")?);
+            let vmax = v.iter().cloned().fold(0.0, f64::max);
+            let parts: Vec<String> = (0..mat.len()).filter(|&i| v[i] == vmax).map(|i| format!("{} F_max = {:.1} N, σ̄ = {:.0} MPa", mat[i], f[i], sb[i] / 1e6)).collect();
+            note("Impact load against velocity (deliverable Fig. 15)", format!("Maximum contact force and σ̄ at that force against the impact velocity on a steel tube; at {vmax:.0} m/s: {}.", parts.join("; ")))
+        }
+        "fig16_breakage" => note(
+            "Breaking probability after repeated impacts (deliverable Fig. 16)",
+            format!(
+                "Breaking probability after N impacts against the impact velocity (independent trials); at the reference velocity, {} m/s: {}.",
+                Table::load(dir, "lifetime_summary")?.f("velocity_m_s")?.first().copied().unwrap_or(f64::NAN),
+                per_material(dir, "lifetime_summary", &|t, i| Ok(format!(
+                    "{} yr ({:.0} impacts) {} ({:.0} % band {} – {})",
+                    t.f("years")?[i],
+                    t.f("impacts")?[i],
+                    prob_text(t.f("p_break")?[i]),
+                    100.0 * t.f("confidence")?[i],
+                    prob_text(t.f("p_break_lower")?[i]),
+                    prob_text(t.f("p_break_upper")?[i])
+                )))?
+            ),
+        ),
+        _ => None,
+    })
 }
 
 fn experiments(dir: &Path) -> Result<FigureNote> {

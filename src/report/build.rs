@@ -48,7 +48,30 @@ pub fn question(study_toml: &str) -> String {
         }
         out.push(c.to_string());
     }
-    out.join(" ")
+    let q = out.join(" ");
+    // The line saying what a good result looks like may begin mid-line.
+    let cut = ["A good result", "Good result", "a good result"].iter().filter_map(|k| q.find(k)).min();
+    match cut {
+        Some(k) => q[..k].trim_end().to_string(),
+        None => q,
+    }
+}
+
+/// The question a study of `kind` answers, for a study file without an opening comment.
+fn kind_question(kind: &str) -> &'static str {
+    match kind {
+        "uq" => "How sure are we that the candidate particle breaks more than the reference, under which strength model, and what drives it?",
+        "lifetime" => "What share of the particles breaks after a year and after ten years of impacts, and how sure are we?",
+        "discrepancy" => "What do the data carry that the Weibull strength model misses, and does naming it change the lifetime?",
+        "discrepancy_curves" => "What does the calibrated crush model miss in the measured force–displacement curves?",
+        "experiments" => "Which experiment next, for the decision between the particles?",
+        "calibrate" => "Which material constants reproduce the measured crush curves, and how well do the data fix them?",
+        "crush" => "How does a single particle load and break between the platens?",
+        "dem" => "How do the particles flow through the tube bank, and how hard do they hit the tubes?",
+        "temperature" => "How do the phases, the strength and the lifetime change with temperature?",
+        "microstructure" => "How do the microstructure's phases set the particle's stiffness and strength?",
+        _ => "What does this study find?",
+    }
 }
 
 fn s(v: &Value, key: &str) -> String {
@@ -188,11 +211,13 @@ pub fn document(dir: &Path) -> Result<Document> {
     let (title, lead, mut sections) = from_markdown(&md);
     let mut first: Vec<Block> = Vec::new();
     let q = question(m.get("study_toml").and_then(Value::as_str).unwrap_or(""));
-    if !q.is_empty() {
-        let mut t = vec![Span::bold("Question. ")];
+    let mut t = vec![Span::bold("Question. ")];
+    if q.is_empty() {
+        t.push(Span::plain(format!("{} (the study file opens with no comment; this is the question every {kind} study answers.)", kind_question(&kind))));
+    } else {
         t.extend(spans(&q));
-        first.push(Block::Paragraph(t));
     }
+    first.push(Block::Paragraph(t));
     first.extend(lead);
     if let Some(k) = sections.iter().position(|s| s.heading == "Headline" || s.heading == "Verdict" || s.heading == "Answer") {
         let h = sections.remove(k);
@@ -272,6 +297,7 @@ mod tests {
         assert_eq!(question(t), "The main study: how sure are we that Gen 4 breaks more?");
         assert_eq!(question("# Purpose.\n# Good result: x\n"), "Purpose.");
         assert_eq!(question("kind = \"uq\""), "");
+        assert_eq!(question("# Purpose: the loop on real data. A good result: nothing\n# named.\n"), "Purpose: the loop on real data.");
     }
 
     #[test]

@@ -94,6 +94,7 @@ pub fn figure(kind: &str, dir: &Path, stem: &str) -> Result<FigureNote> {
         ("uq", _) => uq(dir, stem)?,
         ("experiments", "experiments_metrics") => Some(experiments(dir)?),
         ("lifetime", _) => lifetime(dir, stem)?,
+        ("discrepancy", _) => discrepancy(dir, stem)?,
         _ => None,
     };
     Ok(note.unwrap_or_else(|| FigureNote {
@@ -251,6 +252,11 @@ fn pm(v: f64, se: f64) -> String {
     }
 }
 
+/// Two decimals with a typographic minus ("−0.54").
+fn minus(v: f64) -> String {
+    format!("{v:.2}").replace('-', "−")
+}
+
 /// Per material of a lifetime report, `f(label, row)` over the rows of `table`.
 fn per_material(dir: &Path, table: &str, f: &dyn Fn(&Table, usize) -> Result<String>) -> Result<String> {
     let t = Table::load(dir, table)?;
@@ -284,9 +290,8 @@ fn lifetime(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
             "Strength against particle size (deliverable Fig. 14, left)",
             format!(
                 "σ̄ at break against particle diameter with a power-law fit σ̄ ∝ d^b: {}.",
-                per_material(dir, "size_trend", &|t, i| Ok(format!("b = {:.2} ± {:.2} (r = {:.2}, p = {})", t.f("exponent")?[i], t.f("exponent_se")?[i], t.f("pearson_r_log")?[i], prob_text(t.f("p_value")?[i]))))?
-            )
-            .replace('-', "−"),
+                per_material(dir, "size_trend", &|t, i| Ok(format!("b = {} ± {:.2} (r = {}, p = {})", minus(t.f("exponent")?[i]), t.f("exponent_se")?[i], minus(t.f("pearson_r_log")?[i]), prob_text(t.f("p_value")?[i]))))?
+            ),
         ),
         "fig14_weibull_cdf" => note(
             "Weibull strength distribution (deliverable Fig. 14, right)",
@@ -328,6 +333,65 @@ fn lifetime(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
         ),
         _ => None,
     })
+}
+
+/// Figures of a discrepancy (or strength-data) report.
+fn discrepancy(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
+    if stem == "discrepancy_evidence" {
+        let t = Table::load(dir, "evidence")?;
+        let (mat, round, cand, lr, crit, pf, dbic, named) = (t.s("material")?, t.f("round")?, t.s("candidate")?, t.f("likelihood_ratio")?, t.f("likelihood_ratio_critical")?, t.f("p_family")?, t.f("delta_bic")?, t.s("named")?);
+        let mut rows = Vec::new();
+        let mut said = Vec::new();
+        for m in super::distinct(&mat) {
+            for r in super::distinct(&round) {
+                let mut idx: Vec<usize> = (0..mat.len()).filter(|&i| mat[i] == m && round[i] == r && lr[i].is_finite()).collect();
+                if idx.is_empty() {
+                    continue;
+                }
+                idx.sort_by(|&a, &b| lr[b].total_cmp(&lr[a]));
+                let top = idx[0];
+                let verdict = match idx.iter().find(|&&i| named[i] == "true") {
+                    Some(&i) => format!("named {}", cand[i]),
+                    None => "nothing named".into(),
+                };
+                said.push(format!("{m}, round {r}: strongest {} (Λ = {:.1} against {:.1}), {verdict}", cand[top], lr[top], crit[top]));
+                for &i in idx.iter().take(3) {
+                    rows.push(vec![m.clone(), format!("{r}"), cand[i].clone(), format!("{:.1}", lr[i]), format!("{:.1}", crit[i]), prob_text(pf[i]), format!("{:.1}", dbic[i]), named[i].clone()]);
+                }
+            }
+        }
+        return Ok(Some(FigureNote {
+            title: Some("Evidence for each candidate effect".into()),
+            caption: p(&format!("Likelihood ratio Λ of every candidate effect per round of the naming loop, against the round's critical value for the whole family of candidates: {}. The three strongest candidates of each round are in the table below.", said.join("; "))),
+            blocks: vec![Block::Table { header: vec!["material".into(), "round".into(), "candidate".into(), "Λ".into(), "critical".into(), "p (family)".into(), "ΔBIC".into(), "named".into()], rows }],
+        }));
+    }
+    if stem == "discrepancy_gap" {
+        let t = Table::load(dir, "stages")?;
+        let (mat, round, eff, gap, exp, pad) = (t.s("material")?, t.f("round")?, t.s("effects")?, t.f("gap")?, t.f("gap_expected")?, t.f("p_anderson_darling")?);
+        let rows: Vec<Vec<String>> = (0..mat.len()).map(|i| vec![mat[i].clone(), format!("{}", round[i]), eff[i].clone(), format!("{:.1}", gap[i]), format!("{:.1}", exp[i]), prob_text(pad[i])]).collect();
+        return Ok(Some(FigureNote {
+            title: Some("The gap between model and data, round by round".into()),
+            caption: p("Gap measure G per round of the naming loop and material, with its expectation when nothing is missing; the Anderson–Darling p-value of the model's fit at each round is in the table below."),
+            blocks: vec![Block::Table { header: vec!["material".into(), "round".into(), "effects".into(), "gap G".into(), "expected".into(), "AD p".into()], rows }],
+        }));
+    }
+    if let Some(key) = stem.strip_prefix("discrepancy_probability_") {
+        let t = Table::load(dir, "fits")?.filter("material", key)?;
+        let (stage, eff, m, scale, law) = (t.s("stage")?, t.s("effects")?, t.f("weibull_modulus")?, t.f("scale_pa")?, t.s("law")?);
+        let parts: Vec<String> = (0..stage.len())
+            .map(|i| {
+                let what = if law[i].is_empty() { format!("m = {:.2}, σθ = {:.0} MPa", m[i], scale[i] / 1e6) } else { format!("a two-population law ({})", law[i]) };
+                format!("{} (effects: {}): {what}", stage[i], eff[i])
+            })
+            .collect();
+        return Ok(Some(FigureNote {
+            title: Some(format!("Weibull probability plot, {key}")),
+            caption: p(&format!("Weibull probability plot of the strengths before (as reduced) and after the named effects (adjusted to the average recorded factors), with the fitted laws: {}.", parts.join("; "))),
+            blocks: vec![],
+        }));
+    }
+    Ok(None)
 }
 
 fn experiments(dir: &Path) -> Result<FigureNote> {

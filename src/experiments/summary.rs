@@ -1,6 +1,7 @@
 //! `summary.md` of an experiments study: every sentence generated from the numbers it states.
 
 use crate::report::prob_text as prob;
+use crate::report::pm_text as pm;
 use super::plan::{Allocated, Evaluated, first_step};
 use super::preposterior::Scored;
 use super::state::State;
@@ -43,16 +44,6 @@ fn years(y: f64) -> String {
     if y == 1.0 { "1 year".into() } else { format!("{y} years") }
 }
 
-/// Value ± error, to the error's precision (at most 4 decimals: "1.0000 ± 0.0000" is a
-/// probability within 0.00005 of 1).
-fn pm(v: f64, se: f64) -> String {
-    if se > 0.0 && se.is_finite() {
-        let d = (-(se.log10().floor()) + 1.0).clamp(0.0, 4.0) as usize;
-        format!("{v:.d$} ± {se:.d$}")
-    } else {
-        format!("{v:.4}")
-    }
-}
 
 /// Whether a ranking by the bands of log10 P would depend on the floor put under P, and the
 /// ranking that does not (`order`: the singles by the study's objective per cost, best first).

@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use super::document::{Block, Span, Text};
-use super::{Table, prob_text};
+use super::{Table, pm_text as pm, prob_text};
 use crate::error::Result;
 
 /// Blocks for the first page, and summary sections (by heading prefix) to move up to it.
@@ -243,14 +243,6 @@ fn damage_code(dir: &Path) -> Result<String> {
     Ok(Table::load(dir, "comparison")?.s("model")?.first().cloned().unwrap_or_default())
 }
 
-fn pm(v: f64, se: f64) -> String {
-    if se > 0.0 && se.is_finite() {
-        let d = (-(se.log10().floor()) + 1.0).clamp(0.0, 4.0) as usize;
-        format!("{v:.d$} ± {se:.d$}")
-    } else {
-        format!("{v:.4} (se 0: the same in every sample)")
-    }
-}
 
 /// Two decimals with a typographic minus ("−0.54").
 fn minus(v: f64) -> String {

@@ -165,6 +165,17 @@ pub fn prob_text(p: f64) -> String {
     }
 }
 
+/// Value ± error, to the error's precision (at most 4 decimals: "1.0000 ± 0.0000" is a
+/// probability within 0.00005 of 1); the value alone, to 4 decimals, without an error.
+pub fn pm_text(v: f64, se: f64) -> String {
+    if se > 0.0 && se.is_finite() {
+        let d = (-(se.log10().floor()) + 1.0).clamp(0.0, 4.0) as usize;
+        format!("{v:.d$} ± {se:.d$}")
+    } else {
+        format!("{v:.4}")
+    }
+}
+
 /// Draws every figure of the lifetime report in `dir` from its tables.
 pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
     let mats = Materials::load(dir)?;

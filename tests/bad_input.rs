@@ -273,6 +273,11 @@ fn report_of_a_missing_run() {
     let s = Scratch::new();
     let out = s.run(&["report", "lifetime"]);
     assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("reports/lifetime") && out.stderr.contains("no report named lifetime"), "{}", out.stderr);
+    // A directory without its manifest.
+    std::fs::create_dir_all(s.path("reports/lifetime")).unwrap();
+    let out = s.run(&["report", "lifetime"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("manifest.json"), "{}", out.stderr);
 }
 

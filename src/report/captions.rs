@@ -95,6 +95,7 @@ pub fn figure(kind: &str, dir: &Path, stem: &str) -> Result<FigureNote> {
         ("experiments", "experiments_metrics") => Some(experiments(dir)?),
         ("lifetime", _) => lifetime(dir, stem)?,
         ("discrepancy", _) => discrepancy(dir, stem)?,
+        ("calibrate", _) => calibration(dir, stem)?,
         _ => None,
     };
     Ok(note.unwrap_or_else(|| FigureNote {
@@ -384,6 +385,61 @@ fn discrepancy(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
         }));
     }
     Ok(None)
+}
+
+/// Figures of a calibration report.
+fn calibration(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
+    let t = Table::load(dir, "parameters")?;
+    let (name, unit, mean, q05, q95, rhat, ess) = (t.s("name")?, t.s("unit")?, t.f("posterior_mean")?, t.f("q05")?, t.f("q95")?, t.f("r_hat")?, t.f("ess_bulk")?);
+    let value = |v: f64, u: &str| if u == "Pa" { format!("{:.3} GPa", v / 1e9) } else { format!("{v:.3}") };
+    Ok(Some(match stem {
+        "calibration_corner" => {
+            let c = Table::load(dir, "correlation")?;
+            let names = c.s("name")?;
+            // The strongest posterior correlation between two parameters.
+            let mut best = (0.0f64, String::new(), String::new());
+            for (i, a) in names.iter().enumerate() {
+                for b in names.iter().skip(i + 1) {
+                    let r = c.f(b)?[i];
+                    if r.abs() > best.0.abs() {
+                        best = (r, a.clone(), b.clone());
+                    }
+                }
+            }
+            let rows: Vec<Vec<String>> = (0..name.len()).map(|i| vec![name[i].clone(), value(mean[i], &unit[i]), format!("{} – {}", value(q05[i], &unit[i]), value(q95[i], &unit[i]))]).collect();
+            FigureNote {
+                title: Some("Posterior of the calibrated constants".into()),
+                caption: p(&format!(
+                    "Posterior pair plot: each constant's histogram and the draws of every pair. The strongest correlation is between {} and {} (r = {}); means and 90 % intervals are in the table below.",
+                    best.1,
+                    best.2,
+                    minus(best.0)
+                )),
+                blocks: vec![Block::Table { header: vec!["constant".into(), "posterior mean".into(), "90 % interval".into()], rows }],
+            }
+        }
+        "calibration_trace" => FigureNote {
+            title: Some("MCMC traces".into()),
+            caption: p(&format!(
+                "Traces of four walkers per constant; R̂ {} and bulk effective sample sizes {} (R̂ ≤ 1.01 and ESS ≥ 400 say the chains mixed).",
+                (0..name.len()).map(|i| format!("{} {:.3}", name[i], rhat[i])).collect::<Vec<_>>().join(", "),
+                (0..name.len()).map(|i| format!("{} {:.0}", name[i], ess[i])).collect::<Vec<_>>().join(", ")
+            )),
+            blocks: vec![],
+        },
+        "calibration_fit" | "calibration_residuals" => {
+            let o = Table::load(dir, "observations")?;
+            let (v, lo, hi) = (o.f("value")?, o.f("predictive_q05")?, o.f("predictive_q95")?);
+            let inside = (0..v.len()).filter(|&i| v[i] >= lo[i] && v[i] <= hi[i]).count();
+            let share = format!("{inside} of {} observations ({}) lie inside their 90 % posterior-predictive interval", v.len(), percent(inside as f64 / v.len().max(1) as f64));
+            if stem == "calibration_fit" {
+                FigureNote { title: Some("Measured against calibrated".into()), caption: p(&format!("The measurements with the calibrated model at posterior draws and its 90 % posterior-predictive band: {share}.")), blocks: vec![] }
+            } else {
+                FigureNote { title: Some("Standardised residuals".into()), caption: p(&format!("Standardised residuals (d − median)/σ of every observation with the 90 % predictive band: {share}.")), blocks: vec![] }
+            }
+        }
+        _ => return Ok(None),
+    }))
 }
 
 fn experiments(dir: &Path) -> Result<FigureNote> {

@@ -52,7 +52,7 @@ fn every_run_writes_both_documents_and_report_rewrites_them_byte_identically() {
     assert_eq!(figs.len(), 6);
     assert_eq!(html.matches("<figure ").count(), figs.len());
     for (k, f) in figs.iter().enumerate() {
-        assert!(html.contains(&format!("<figure id=\"{f}\">")) && html.contains(&format!("<strong>Figure {}.</strong>", k + 1)), "{f}");
+        assert!(html.contains(&format!("<figure id=\"fig-{f}\">")) && html.contains(&format!("<h2 id=\"{f}\">")) && html.contains(&format!("<strong>Figure {}.</strong>", k + 1)), "{f}");
     }
     // The plant engineer's units on the first page, from this run's attrition table.
     let first = html.split("<nav id=\"contents\">").next().unwrap();

@@ -96,6 +96,7 @@ pub fn figure(kind: &str, dir: &Path, stem: &str) -> Result<FigureNote> {
         ("lifetime", _) => lifetime(dir, stem)?,
         ("discrepancy", _) => discrepancy(dir, stem)?,
         ("calibrate", _) => calibration(dir, stem)?,
+        ("crush", _) => crush(dir, stem)?,
         _ => None,
     };
     Ok(note.unwrap_or_else(|| FigureNote {
@@ -436,6 +437,58 @@ fn calibration(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
                 FigureNote { title: Some("Measured against calibrated".into()), caption: p(&format!("The measurements with the calibrated model at posterior draws and its 90 % posterior-predictive band: {share}.")), blocks: vec![] }
             } else {
                 FigureNote { title: Some("Standardised residuals".into()), caption: p(&format!("Standardised residuals (d − median)/σ of every observation with the 90 % predictive band: {share}.")), blocks: vec![] }
+            }
+        }
+        _ => return Ok(None),
+    }))
+}
+
+/// Figures of a crush FE report.
+fn crush(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
+    let t = Table::load(dir, "crush_summary")?;
+    let (label, d, peak, at, frac, warn) = (t.s("label")?, t.f("diameter_m")?, t.f("peak_force_n")?, t.f("peak_displacement_m")?, t.f("fracture_displacement_m")?, t.s("quasi_static_warning")?);
+    let first = label.first().cloned().unwrap_or_default();
+    let snapshot = || -> Result<String> {
+        let f = Table::load(dir, "fields")?;
+        let u = f.f("displacement_m")?;
+        Ok(format!("{:.1} µm", u.iter().cloned().fold(0.0, f64::max) * 1e6))
+    };
+    Ok(Some(match stem {
+        "crush_force_displacement" => {
+            let parts: Vec<String> = (0..label.len())
+                .map(|i| {
+                    let q = if warn[i].is_empty() { String::new() } else { format!(" ({})", warn[i]) };
+                    format!("{} (d = {:.2} mm): peak {:.1} N at δ = {:.1} µm, fracture at δ = {:.1} µm{q}", label[i], d[i] * 1e3, peak[i], at[i] * 1e6, frac[i] * 1e6)
+                })
+                .collect();
+            FigureNote { title: Some("Force against platen displacement".into()), caption: p(&format!("Crush force against platen displacement per case, fracture marked: {}.", parts.join("; "))), blocks: vec![] }
+        }
+        "crush_strain_map" | "crush_strain_map_contact" => FigureNote {
+            title: Some(if stem == "crush_strain_map" { "Maximum principal strain, whole section".into() } else { "Maximum principal strain at the contact".into() }),
+            caption: p(&format!("Maximum principal log strain of {first} in the axisymmetric section at the last snapshot (platen displacement {}); the colour range is ± the 98th percentile of |ε₁| in the window.", snapshot()?)),
+            blocks: vec![],
+        },
+        "crush_depth_profile" => {
+            let dp = Table::load(dir, "depth_profile")?;
+            let (case, u, z, e1, e3) = (dp.s("case")?, dp.f("displacement_m")?, dp.f("depth_m")?, dp.f("max_principal_log_strain")?, dp.f("min_principal_log_strain")?);
+            // The first case's last snapshot.
+            let c0 = case.first().cloned().unwrap_or_default();
+            let last = (0..u.len()).filter(|&i| case[i] == c0).map(|i| u[i]).fold(f64::MIN, f64::max);
+            let rows: Vec<usize> = (0..u.len()).filter(|&i| case[i] == c0 && u[i] == last).collect();
+            let i = rows.iter().copied().max_by(|&a, &b| e1[a].total_cmp(&e1[b]));
+            let j = rows.iter().copied().min_by(|&a, &b| e3[a].total_cmp(&e3[b]));
+            let strain = |v: f64| format!("{v:.4}").replace('-', "−");
+            FigureNote {
+                title: Some("Principal strains below the contact".into()),
+                caption: p(&format!(
+                    "Principal log strains on the axis below the contact against depth ({first}); at the last snapshot (platen displacement {:.1} µm) the largest ε₁ is {} at a depth of {}, the most compressive ε₃ {} at {}.",
+                    last * 1e6,
+                    i.map_or("—".into(), |i| strain(e1[i])),
+                    i.map_or("—".into(), |i| format!("{:.1} µm", z[i] * 1e6)),
+                    j.map_or("—".into(), |j| strain(e3[j])),
+                    j.map_or("—".into(), |j| format!("{:.1} µm", z[j] * 1e6))
+                )),
+                blocks: vec![],
             }
         }
         _ => return Ok(None),

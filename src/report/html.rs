@@ -94,7 +94,7 @@ fn block(out: &mut String, b: &Block, figure_no: &mut usize) -> Result<()> {
         Block::Figure { stem, svg, caption } => {
             *figure_no += 1;
             out.push_str(&format!(
-                "<figure id=\"{}\">\n{}\n<figcaption><strong>Figure {}.</strong> {}</figcaption>\n</figure>\n",
+                "<figure id=\"fig-{}\">\n{}\n<figcaption><strong>Figure {}.</strong> {}</figcaption>\n</figure>\n",
                 escape(stem),
                 inline_svg(svg, stem)?,
                 figure_no,

@@ -97,6 +97,7 @@ pub fn figure(kind: &str, dir: &Path, stem: &str) -> Result<FigureNote> {
         ("discrepancy", _) => discrepancy(dir, stem)?,
         ("calibrate", _) => calibration(dir, stem)?,
         ("crush", _) => crush(dir, stem)?,
+        ("dem", _) => dem(dir, stem)?,
         _ => None,
     };
     Ok(note.unwrap_or_else(|| FigureNote {
@@ -487,6 +488,58 @@ fn crush(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
                     i.map_or("—".into(), |i| format!("{:.1} µm", z[i] * 1e6)),
                     j.map_or("—".into(), |j| strain(e3[j])),
                     j.map_or("—".into(), |j| format!("{:.1} µm", z[j] * 1e6))
+                )),
+                blocks: vec![],
+            }
+        }
+        _ => return Ok(None),
+    }))
+}
+
+/// Figures of a DEM report.
+fn dem(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
+    Ok(Some(match stem {
+        "dem_velocity_profile" => {
+            let t = Table::load(dir, "velocity_profile")?;
+            let v = t.f("mean_vz_m_s")?;
+            let (lo, hi) = (v.iter().cloned().fold(f64::MAX, f64::min), v.iter().cloned().fold(f64::MIN, f64::max));
+            FigureNote {
+                title: Some("Mean vertical velocity through the bank (deliverable Fig. 4, right)".into()),
+                caption: p(&format!("Mean vertical particle velocity against height through the tube bank, tube rows marked; it oscillates between {} and {} m/s.", minus(lo), minus(hi))),
+                blocks: vec![],
+            }
+        }
+        "dem_speed_map" => FigureNote {
+            title: Some("Mean speed between the tubes (deliverable Fig. 4, left)".into()),
+            caption: p("Time-averaged particle speed on a grid over the section of the bank, the tubes drawn in; the values are in `speed_map.csv`."),
+            blocks: vec![],
+        },
+        "dem_impact_spectra" => {
+            let t = Table::load(dir, "impact_spectrum")?;
+            let (target, row, n, q50, q95) = (t.s("target")?, t.f("row")?, t.f("impacts")?, t.f("q50_v_normal_m_s")?, t.f("q95_v_normal_m_s")?);
+            // Row 0 holds every impact of its target.
+            let rows: Vec<Vec<String>> = (0..row.len()).map(|i| vec![target[i].clone(), if row[i] == 0.0 { "all".into() } else { format!("{}", row[i]) }, format!("{:.0}", n[i]), format!("{:.3}", q50[i]), format!("{:.3}", q95[i])]).collect();
+            let top = (0..row.len()).filter(|&i| target[i] == "tube" && row[i] > 0.0).max_by(|&a, &b| q95[a].total_cmp(&q95[b]));
+            FigureNote {
+                title: Some("Impact velocities per tube row".into()),
+                caption: p(&format!(
+                    "Distribution of the normal impact velocities per row of the bank ({}); the highest 95th percentile on a tube is {}. Impacts and quantiles per row are in the table below.",
+                    super::distinct(&target).iter().map(|t| match t.as_str() { "tube" => "on the tubes".to_string(), "particle" => "between particles".to_string(), o => format!("on {o}") }).collect::<Vec<_>>().join(" and "),
+                    top.map_or("—".into(), |i| format!("{:.3} m/s (row {})", q95[i], row[i]))
+                )),
+                blocks: vec![Block::Table { header: vec!["target".into(), "row".into(), "impacts".into(), "median v_n (m/s)".into(), "95th percentile (m/s)".into()], rows }],
+            }
+        }
+        "dem_force_time" => {
+            let t = Table::load(dir, "force_trace")?;
+            let (f, j, v) = (t.f("normal_force_n")?, t.f("cumulative_impulse_n_s")?, t.f("v_normal_m_s")?);
+            FigureNote {
+                title: Some("Force of one impact (deliverable Fig. 5)".into()),
+                caption: p(&format!(
+                    "Normal contact force and its running impulse during one recorded tube impact at {:.2} m/s: peak force {:.3} N, impulse {:.3} µN·s.",
+                    v.first().copied().unwrap_or(f64::NAN),
+                    f.iter().cloned().fold(0.0, f64::max),
+                    j.last().copied().unwrap_or(f64::NAN) * 1e6
                 )),
                 blocks: vec![],
             }

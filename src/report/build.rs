@@ -1,9 +1,12 @@
 //! The [`Document`] of a report directory, built from its files alone (no re-simulation), the
 //! same way for every study kind:
 //!
-//! * **first page** — the question (the study file's opening comment), the summary's lead
-//!   paragraphs and its `Headline` section, and for the main study the answer in a plant
-//!   engineer's units (`attrition.csv`) and what drives it;
+//! * **first page** — the question (the study file's opening comment; without one, the question
+//!   its kind answers, said as such), the summary's lead paragraphs and its `Headline` (or
+//!   `Verdict`, `Answer`) section, then the summary sections its kind moves up
+//!   ([`super::captions::first_page`]: the answer in a plant engineer's units of the main and
+//!   lifetime studies, what drives the main study's answer, the experiments study's state of
+//!   knowledge today and its plan for the budget);
 //! * the summary's other sections (`summary.md`, whose sentences the run generated from its
 //!   numbers);
 //! * **one section per figure** (every `*.svg` the manifest lists, in order) with a caption

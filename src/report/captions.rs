@@ -1,8 +1,8 @@
 //! What a study kind adds to its document ([`super::build`]): blocks for the first page and, per
 //! figure, a title, a caption generated from the numbers the figure shows (read from the same
 //! tables it is drawn from) and the rows of its table that matter. A kind or figure without an
-//! entry gets a caption that says which files hold the figure and its tables — never a sentence
-//! about numbers it did not read.
+//! entry in [`figure`] gets a caption that says it is drawn from the report's tables and names
+//! its files — never a sentence about numbers it did not read.
 
 use std::path::Path;
 

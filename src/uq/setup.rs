@@ -379,7 +379,7 @@ impl Setup {
     /// P per material, horizon and damage model of the sample with inputs x, into `out`
     /// (length [`Setup::outputs`]).
     pub fn evaluate_into(&self, x: &[f64], mode: Mode, out: &mut [f64]) -> Result<()> {
-        let temperatures = self.thermal.as_ref().map(|th| [x[th.temperature_inputs[0]], x[th.temperature_inputs[1]]]);
+        let temperatures = self.sample_temperatures(x);
         self.evaluate_at_temperatures(x, mode, temperatures, out)
     }
 
@@ -389,6 +389,11 @@ impl Setup {
     pub fn evaluate_at_temperatures(&self, x: &[f64], mode: Mode, temperatures: Option<[f64; 2]>, out: &mut [f64]) -> Result<()> {
         let (strength, moduli, shared) = self.chain_inputs(x, mode, temperatures)?;
         self.evaluate_at(strength, moduli, shared, out)
+    }
+
+    /// The operating temperatures of sample x (candidate, reference; °C), where the study has them.
+    fn sample_temperatures(&self, x: &[f64]) -> Option<[f64; 2]> {
+        self.thermal.as_ref().map(|th| [x[th.temperature_inputs[0]], x[th.temperature_inputs[1]]])
     }
 
     /// The chain's inputs of sample x: strength parameters and population weights, Young's
@@ -410,14 +415,16 @@ impl Setup {
     }
 
     /// P of sample x per material, horizon of `years` and damage model of `models` (which
-    /// cannot include Tavares–King: its law needs a table per number of impacts), at the crush
-    /// data's temperature, into `out` (length 2 · years · models, laid out as [`Setup::slot`]
-    /// lays out the study's horizons and models).
+    /// cannot include Tavares–King: its law needs a table per number of impacts), at the sample's
+    /// operating temperatures where the study has them (as [`Setup::evaluate_into`]), into `out`
+    /// (length 2 · years · models, laid out as [`Setup::slot`] lays out the study's horizons and
+    /// models).
     pub fn evaluate_years(&self, x: &[f64], mode: Mode, years: &[f64], models: &[DamageModel], out: &mut [f64]) -> Result<()> {
         if models.contains(&DamageModel::TavaresKing) {
             return Err(Error::numerical("comparison", "Tavares–King at horizons without a table of critical ratios"));
         }
-        let (strength, moduli, [eta, v, per_year, _]) = self.chain_inputs(x, mode, None)?;
+        let temperatures = self.sample_temperatures(x);
+        let (strength, moduli, [eta, v, per_year, _]) = self.chain_inputs(x, mode, temperatures)?;
         out.fill(0.0);
         let per = years.len() * models.len();
         let laws: Vec<Horizon> = years.iter().flat_map(|y| models.iter().map(move |&model| Horizon { model, impacts: y * per_year, ln_x_star: 0.0 })).collect();

@@ -99,6 +99,9 @@ enum Command {
         /// stale: refuse instead.
         #[arg(long)]
         no_deps: bool,
+        /// Do not write report.pdf and report.html.
+        #[arg(long)]
+        no_document: bool,
     },
     /// Dataset tools.
     Datasets {
@@ -291,7 +294,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             out!("wrote {} in {:.2} s", summary.report_dir.display(), summary.wall_time_s);
         }
-        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, youngs_modulus_pa, poisson_ratio, density_kg_m3, reports_dir, quiet, no_deps } => {
+        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, youngs_modulus_pa, poisson_ratio, density_kg_m3, reports_dir, quiet, no_deps, no_document } => {
             let loaded = match (&study, &data) {
                 (_, Some(d)) => {
                     let (Some(e), Some(nu), Some(rho)) = (youngs_modulus_pa, poisson_ratio, density_kg_m3) else {
@@ -308,6 +311,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 return Err(partlife::Error::config(loaded.file.path.display().to_string(), "kind", "`partlife discrepancy` runs studies of kind \"discrepancy\" or \"discrepancy_curves\"").into());
             }
             let mut opts = partlife::runner::RunOptions::new(reports_dir, !quiet);
+            opts.documents = !no_document;
             if no_deps {
                 opts.deps = partlife::runner::Deps::Refuse;
             }

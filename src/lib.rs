@@ -104,7 +104,7 @@
 //! | [`study`] | the dispatch from `kind` to each study module's schema and validation: `load` → `LoadedStudy` |
 //! | [`runner`] | the dispatch from a loaded study to its runner, after the prerequisite studies whose reports it reads when those are missing or stale (the study graph; top of the graph: only the CLI and `bench` use it) |
 //! | [`io`] | atomic report directories, CSV tables, manifest (with each input's intake record), the one VTK `DataArray` writer; reading report tables and study files; scratch directories |
-//! | [`report`] | figures from tables only: SVG (plotters) → PNG (resvg) and vector PDF (svg2pdf); the decision document of every study: one document model (`report::document`) built from a report's files (`report::build`, captions from the figures' tables in `report::captions`) and rendered to A4 PDF (`report::pdf`: layout, fonts embedded and subset, pdf-writer) and one self-contained HTML page (`report::html`) |
+//! | [`report`] | figures from tables only: SVG (plotters) → PNG (resvg) and vector PDF (svg2pdf); the decision document of every study: one document model (`report::document`) built from a report's files (`report::build`, captions from the figures' tables in `report::captions`) and rendered to A4 PDF (`report::layout`: text metrics, line breaking, tables, pages; `report::pdf`: fonts embedded and subset, pdf-writer) and one self-contained HTML page (`report::html`) |
 //! | [`bench`](mod@bench) | the speed figures the issues ask for |
 //!
 //! ## Conventions

@@ -7,7 +7,7 @@
 //! Verified in a headless browser by `tests/documents.rs`.
 
 use super::document::{Block, Document, Span};
-use super::pdf::{escape, svg_body, svg_head};
+use super::layout::{escape, svg_body, svg_head};
 use crate::error::Result;
 
 const STYLE: &str = "\

@@ -18,6 +18,7 @@ pub mod build;
 pub mod captions;
 pub mod document;
 pub mod html;
+pub mod layout;
 pub mod pdf;
 pub mod calibrate;
 pub mod crush;

@@ -196,6 +196,11 @@ fn shipped_crush_data_reveal_the_generators_hidden_effects() {
     let (sc, rate) = (partlife::io::col_str(&p, &path, "scenario").unwrap(), partlife::io::col_f64(&p, &path, "rate_all").unwrap());
     let eff: Vec<f64> = (0..sc.len()).filter(|&i| sc[i] == "effects").map(|i| rate[i]).collect();
     assert!(eff.len() == 8 && eff[0] < eff[3] && eff[3] >= 0.9 && eff[4] < eff[7], "{eff:?}");
+    // Every figure of the document has a caption read from its numbers; the power figure's gives
+    // the first material's rate at the fewest particles, as the table holds it.
+    let captions = common::figure_captions(&s.path("reports/discrepancy_crush"));
+    let (_, power) = captions.iter().find(|(stem, _)| stem == "discrepancy_power").expect("a power caption");
+    assert!(power.contains(&format!("in {} of the data sets at 20 particles", partlife::report::captions::percent(eff[0]))), "{power}");
     // Redrawn from the tables alone: the same figures.
     let before = s.read("reports/discrepancy_crush/discrepancy_gap.svg");
     let out = s.run(&["report", "discrepancy_crush"]);

@@ -38,6 +38,9 @@ fn run_verdict(s: &Scratch, name: &str, study: &str) -> serde_json::Value {
     s.write(&path, study);
     let out = s.run(&["discrepancy", &path, "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
+    // The document's caption is read from the curves' numbers.
+    let captions = common::figure_captions(&s.path(&format!("reports/{name}")));
+    assert!(captions.iter().any(|(stem, c)| stem == "discrepancy_curves" && c.contains("The gap RMS(δ̂/σ) falls from")), "{captions:?}");
     serde_json::from_str(&s.read(&format!("reports/{name}/verdict.json"))).unwrap()
 }
 

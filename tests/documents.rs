@@ -218,6 +218,8 @@ fn other_study_kinds_write_both_documents() {
         let m: serde_json::Value = serde_json::from_str(&s.read(&format!("{dir}/manifest.json"))).unwrap();
         let svgs = m["outputs"].as_array().unwrap().iter().filter(|o| o.as_str().is_some_and(|o| o.ends_with(".svg") && !o.contains('/'))).count();
         assert!(svgs > 0 && html.matches("<figure ").count() == svgs, "{study}: {svgs} figures, {} in the page", html.matches("<figure ").count());
+        // Every figure's caption is read from its numbers (none is the generic one).
+        assert_eq!(common::figure_captions(&s.path(&dir)).len(), svgs, "{study}");
         // The question is the study file's opening comment.
         let question = partlife::report::build::question(&s.read(&format!("studies/{study}.toml")));
         assert!(!question.is_empty() && html.contains(&format!("<strong>Question. </strong>")), "{study}");

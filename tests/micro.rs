@@ -85,6 +85,16 @@ fn the_image_study_writes_tables_figures_and_a_vtu() {
     assert!(vtu.contains("NumberOfCells=\"98304\"") && vtu.matches("<DataArray").count() == 4 + 1 + 8, "vtu header or arrays wrong");
     // The manifest hashes the image.
     assert!(s.read("reports/microstructure_image/manifest.json").contains("micro_bl1630_segmented.png"));
+    // The document's captions state the numbers their figures show: the map's cells and those
+    // above their phase's strength, counted here from the map's table.
+    let captions = common::figure_captions(&dir);
+    let (_, sigma1) = captions.iter().find(|(k, _)| k == "sigma1_tension_bl1630_image").expect("a caption of the σ₁ map");
+    let map = dir.join("map_bl1630_image.csv");
+    let (phase, sig) = (column(&map, "phase"), numbers(&map, "sigma1_tension_pa"));
+    let ph = dir.join("phases.csv");
+    let (names, strength) = (column(&ph, "phase"), numbers(&ph, "tensile_strength_pa"));
+    let above = (0..sig.len()).filter(|&i| sig[i] > strength[names.iter().position(|n| *n == phase[i]).unwrap()]).count();
+    assert!(sigma1.contains(&format!("{above} of the map's {} cells", sig.len())), "{sigma1}");
     // `partlife report` redraws every figure from the tables alone, identically.
     let svg = s.read("reports/microstructure_image/sigma1_compression_bl1630_image.svg");
     std::fs::remove_dir_all(s.path("datasets")).unwrap();
@@ -231,6 +241,15 @@ fn the_shipped_topology_study_builds_the_arrangements_it_compares() {
 fn judge_failure(s: &Scratch, realisations: usize) {
     let dir = s.path("reports/microstructure_failure");
     let f = dir.join("failure_summary.csv");
+    // Each crack map's caption gives its run's strength, as a lower bound where the run used up
+    // its event limit.
+    let captions = common::figure_captions(&dir);
+    let (st, re, te, strength, stopped) = (column(&f, "structure"), numbers(&f, "realisation"), column(&f, "test"), numbers(&f, "strength_pa"), column(&f, "stopped"));
+    for i in (0..st.len()).filter(|&i| re[i] == 0.0) {
+        let (_, c) = captions.iter().find(|(k, _)| *k == format!("cracks_{}_{}", te[i], st[i])).expect("a crack map per structure and test");
+        let said = if stopped[i] == "max_events" { format!("its strength is at least {:.1} MPa", strength[i] / 1e6) } else { format!("the strength {:.1} MPa", strength[i] / 1e6) };
+        assert!(c.contains(&said), "{} {}: {c}", st[i], te[i]);
+    }
     let (st, te, strength, phase, first) = (column(&f, "structure"), column(&f, "test"), numbers(&f, "strength_pa"), column(&f, "first_crack_phase"), numbers(&f, "first_crack_pa"));
     assert_eq!(st.len(), 2 * 2 * realisations, "two structures, two tests, every realisation");
     for i in 0..st.len() {

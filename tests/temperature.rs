@@ -177,6 +177,14 @@ fn temperature_study_writes_the_laws_the_softening_comparison_and_breakage_again
     let so = dir.join("softening.csv");
     let (m, lo, hi) = (table_f64(&so, "q50"), table_f64(&so, "lo"), table_f64(&so, "hi"));
     assert!(lo[0] < 0.684 && 0.684 < hi[0], "[{}, {}]", lo[0], hi[0]);
+    // The breakage figure's caption states the table's median at the lowest temperature.
+    let l = dir.join("lifetime_vs_temperature.csv");
+    let (label, years, temp, q50) = (table_text(&l, "material"), table_f64(&l, "years"), table_f64(&l, "temperature_c"), table_f64(&l, "p_q50"));
+    let t0 = temp.iter().cloned().fold(f64::INFINITY, f64::min);
+    let i = (0..label.len()).find(|&i| label[i] == label[0] && years[i] == years[0] && temp[i] == t0).unwrap();
+    let captions = common::figure_captions(&dir);
+    let (_, breakage) = captions.iter().find(|(stem, _)| stem == "breakage_vs_temperature").expect("a breakage caption");
+    assert!(breakage.contains(&format!("{} {} at {t0} °C", label[0], partlife::report::prob_text(q50[i]))), "{breakage}");
     let summary = s.read("reports/temperature/summary.md");
     assert!(summary.contains(&format!("by the factor {:.3} [{:.3}, {:.3}]", m[0], lo[0], hi[0])), "{summary}");
     assert!(summary.contains(&format!("gives {:.3} [{:.3}, {:.3}]", m[1], lo[1], hi[1])), "{summary}");

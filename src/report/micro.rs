@@ -67,7 +67,7 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
 }
 
 /// Each structure's label (from `structure_summary.csv`), or its key.
-fn structure_labels(dir: &Path) -> Result<impl Fn(&str) -> String> {
+pub(crate) fn structure_labels(dir: &Path) -> Result<impl Fn(&str) -> String> {
     let t = Table::load(dir, "structure_summary")?;
     let (n, l) = (t.s("structure")?, t.s("label")?);
     Ok(move |k: &str| n.iter().position(|x| x == k).map_or(k.to_string(), |i| l[i].clone()))

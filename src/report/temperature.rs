@@ -32,7 +32,7 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
 }
 
 /// A parameter's name and unit as an axis label, with the value scale (Pa shown in GPa).
-fn axis(name: &str, unit: &str) -> (String, f64) {
+pub(crate) fn axis(name: &str, unit: &str) -> (String, f64) {
     let what = match name {
         "g" => "Shear modulus G".to_string(),
         "k1" => "Bulk modulus K₁".to_string(),

@@ -202,3 +202,32 @@ pub fn pdf_text(pdftotext: &Path, pdf: &Path, pages: Option<(usize, usize)>) -> 
 pub fn one_space(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
+
+/// The caption of each figure of `report.html` in report directory `dir`, by file stem (text
+/// with the tags dropped, `&amp;`, `&lt;`, `&gt;`, `&quot;` and `&#39;` read back); asserts that
+/// every figure has one and that none is the generic caption of a figure whose numbers the
+/// document does not read ("Drawn from this report's tables").
+#[allow(dead_code)]
+pub fn figure_captions(dir: &Path) -> Vec<(String, String)> {
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let mut out = Vec::new();
+    for part in html.split("<figure ").skip(1) {
+        let stem = part.split("id=\"fig-").nth(1).and_then(|r| r.split('"').next()).unwrap_or("").to_string();
+        let cap = part.split("<figcaption>").nth(1).and_then(|r| r.split("</figcaption>").next()).unwrap_or_else(|| panic!("{}: figure {stem} has no caption", dir.display()));
+        let mut text = String::new();
+        let mut tag = false;
+        for c in cap.chars() {
+            match c {
+                '<' => tag = true,
+                '>' => tag = false,
+                c if !tag => text.push(c),
+                _ => {}
+            }
+        }
+        let text = text.replace("&lt;", "<").replace("&gt;", ">").replace("&quot;", "\"").replace("&#39;", "'").replace("&amp;", "&");
+        assert!(!text.contains("Drawn from this report's tables"), "{}: figure {stem} has the generic caption", dir.display());
+        out.push((stem, text));
+    }
+    assert!(!out.is_empty(), "{}: no figure in report.html", dir.display());
+    out
+}

@@ -3,12 +3,20 @@
 //! tables it is drawn from) and the rows of its table that matter. A kind or figure without an
 //! entry in [`figure`] gets a caption that says it is drawn from the report's tables and names
 //! its files — never a sentence about numbers it did not read.
+//!
+//! The main study, the experiments, lifetime, calibration, crush FE and DEM kinds are here; the
+//! discrepancy kinds (strength data and curves) in `discrepancy`, the temperature kind in
+//! `temperature` and the microstructure kind in `micro`.
 
 use std::path::Path;
 
 use super::document::{Block, Span, Text};
 use super::{Table, pm_text as pm, prob_text};
 use crate::error::Result;
+
+mod discrepancy;
+mod micro;
+mod temperature;
 
 /// Blocks for the first page, and summary sections (by heading prefix) to move up to it.
 #[derive(Default)]
@@ -94,7 +102,10 @@ pub fn figure(kind: &str, dir: &Path, stem: &str) -> Result<FigureNote> {
         ("uq", _) => uq(dir, stem)?,
         ("experiments", "experiments_metrics") => Some(experiments(dir)?),
         ("lifetime", _) => lifetime(dir, stem)?,
-        ("discrepancy", _) => discrepancy(dir, stem)?,
+        ("discrepancy", _) => discrepancy::figure(dir, stem)?,
+        ("discrepancy_curves", _) => discrepancy::curves(dir, stem)?,
+        ("temperature", _) => temperature::figure(dir, stem)?,
+        ("microstructure", _) => micro::figure(dir, stem)?,
         ("calibrate", _) => calibration(dir, stem)?,
         ("crush", _) => crush(dir, stem)?,
         ("dem", _) => dem(dir, stem)?,
@@ -330,65 +341,6 @@ fn lifetime(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
     })
 }
 
-/// Figures of a discrepancy (or strength-data) report.
-fn discrepancy(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
-    if stem == "discrepancy_evidence" {
-        let t = Table::load(dir, "evidence")?;
-        let (mat, round, cand, lr, crit, pf, dbic, named) = (t.s("material")?, t.f("round")?, t.s("candidate")?, t.f("likelihood_ratio")?, t.f("likelihood_ratio_critical")?, t.f("p_family")?, t.f("delta_bic")?, t.s("named")?);
-        let mut rows = Vec::new();
-        let mut said = Vec::new();
-        for m in super::distinct(&mat) {
-            for r in super::distinct(&round) {
-                let mut idx: Vec<usize> = (0..mat.len()).filter(|&i| mat[i] == m && round[i] == r && lr[i].is_finite()).collect();
-                if idx.is_empty() {
-                    continue;
-                }
-                idx.sort_by(|&a, &b| lr[b].total_cmp(&lr[a]));
-                let top = idx[0];
-                let verdict = match idx.iter().find(|&&i| named[i] == "true") {
-                    Some(&i) => format!("named {}", cand[i]),
-                    None => "nothing named".into(),
-                };
-                said.push(format!("{m}, round {r}: strongest {} (Λ = {:.1} against {:.1}), {verdict}", cand[top], lr[top], crit[top]));
-                for &i in idx.iter().take(3) {
-                    rows.push(vec![m.clone(), format!("{r}"), cand[i].clone(), format!("{:.1}", lr[i]), format!("{:.1}", crit[i]), prob_text(pf[i]), format!("{:.1}", dbic[i]), named[i].clone()]);
-                }
-            }
-        }
-        return Ok(Some(FigureNote {
-            title: Some("Evidence for each candidate effect".into()),
-            caption: p(&format!("Likelihood ratio Λ of every candidate effect per round of the naming loop, against the round's critical value for the whole family of candidates: {}. The three strongest candidates of each round are in the table below.", said.join("; "))),
-            blocks: vec![Block::Table { header: vec!["material".into(), "round".into(), "candidate".into(), "Λ".into(), "critical".into(), "p (family)".into(), "ΔBIC".into(), "named".into()], rows }],
-        }));
-    }
-    if stem == "discrepancy_gap" {
-        let t = Table::load(dir, "stages")?;
-        let (mat, round, eff, gap, exp, pad) = (t.s("material")?, t.f("round")?, t.s("effects")?, t.f("gap")?, t.f("gap_expected")?, t.f("p_anderson_darling")?);
-        let rows: Vec<Vec<String>> = (0..mat.len()).map(|i| vec![mat[i].clone(), format!("{}", round[i]), eff[i].clone(), format!("{:.1}", gap[i]), format!("{:.1}", exp[i]), prob_text(pad[i])]).collect();
-        return Ok(Some(FigureNote {
-            title: Some("The gap between model and data, round by round".into()),
-            caption: p("Gap measure G per round of the naming loop and material, with its expectation when nothing is missing; the Anderson–Darling p-value of the model's fit at each round is in the table below."),
-            blocks: vec![Block::Table { header: vec!["material".into(), "round".into(), "effects".into(), "gap G".into(), "expected".into(), "AD p".into()], rows }],
-        }));
-    }
-    if let Some(key) = stem.strip_prefix("discrepancy_probability_") {
-        let t = Table::load(dir, "fits")?.filter("material", key)?;
-        let (stage, eff, m, scale, law) = (t.s("stage")?, t.s("effects")?, t.f("weibull_modulus")?, t.f("scale_pa")?, t.s("law")?);
-        let parts: Vec<String> = (0..stage.len())
-            .map(|i| {
-                let what = if law[i].is_empty() { format!("m = {:.2}, σθ = {:.0} MPa", m[i], scale[i] / 1e6) } else { format!("a two-population law ({})", law[i]) };
-                format!("{} (effects: {}): {what}", stage[i], eff[i])
-            })
-            .collect();
-        return Ok(Some(FigureNote {
-            title: Some(format!("Weibull probability plot, {key}")),
-            caption: p(&format!("Weibull probability plot of the strengths before (as reduced) and after the named effects (adjusted to the average recorded factors), with the fitted laws: {}.", parts.join("; "))),
-            blocks: vec![],
-        }));
-    }
-    Ok(None)
-}
-
 /// Figures of a calibration report.
 fn calibration(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
     let t = Table::load(dir, "parameters")?;
@@ -418,6 +370,19 @@ fn calibration(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
                     minus(best.0)
                 )),
                 blocks: vec![Block::Table { header: vec!["constant".into(), "posterior mean".into(), "90 % interval".into()], rows }],
+            }
+        }
+        "calibration_comparison" => {
+            let c = Table::load(dir, "comparison")?;
+            let (names, rl, tl, ch) = (c.s("name")?, c.s("reference_label")?, c.s("this_label")?, c.f("change_percent")?);
+            let (reference, this) = (rl.first().cloned().unwrap_or_default(), tl.first().cloned().unwrap_or_default());
+            let changes: Vec<String> = (0..names.len()).map(|i| format!("{} {:+.1} %", names[i], ch[i]).replace('-', "−")).collect();
+            let big: Vec<&str> = (0..names.len()).filter(|&i| ch[i].abs() > 30.0).map(|i| names[i].as_str()).collect();
+            let big = if big.is_empty() { "No mean moves by more than 30 %.".to_string() } else { format!("More than 30 % (red): {}.", big.join(", ")) };
+            FigureNote {
+                title: Some(format!("{this} against {reference}")),
+                caption: p(&format!("Posterior mean and 90 % interval of each constant in {reference} and in this calibration ({this}), with the change of the mean shaded by size (pale below 10 %, amber to 30 %, red above): {}. {big}", changes.join(", "))),
+                blocks: vec![],
             }
         }
         "calibration_trace" => FigureNote {

@@ -242,6 +242,20 @@ fn main_uq_study_writes_the_headline_deterministically() {
     }
     let attrition = a.read(&format!("{dir}/summary.md"));
     assert!(attrition.contains("| diagnosed | independent trials | Gen 4 |"), "summary.md lacks the attrition table");
+    // Every damage model of the study is in the table, Tavares–King included, and each row's
+    // first year agrees with the study's own 1-year horizon in breakage.csv (the table's median
+    // is over its 4096-sample subset, the horizon's over every sample: within 10 %).
+    let (att, brk) = (a.path(&format!("{dir}/attrition.csv")), a.path(&format!("{dir}/breakage.csv")));
+    let (asm, amod, amat, afirst) = (common::table_text(&att, "strength_model"), common::table_text(&att, "model"), common::table_text(&att, "material"), common::table_f64(&att, "first_year_median"));
+    let (bsm, bmod, bmat, byears, bmed) = (common::table_text(&brk, "strength_model"), common::table_text(&brk, "model"), common::table_text(&brk, "material"), common::table_f64(&brk, "years"), common::table_f64(&brk, "median"));
+    let labels = [("gen4", "Gen 4"), ("bl1630", "BL 16/30")];
+    for model in ["independent", "tavares_king"] {
+        for (key, label) in labels {
+            let i = (0..asm.len()).find(|&i| asm[i] == "diagnosed" && amod[i] == model && amat[i] == label).unwrap_or_else(|| panic!("attrition.csv has no row for {model}, {label}"));
+            let k = (0..bsm.len()).find(|&k| bsm[k] == "diagnosed" && bmod[k] == model && bmat[k] == key && byears[k] == 1.0).unwrap();
+            assert!((afirst[i] / bmed[k] - 1.0).abs() < 0.1, "{model}, {label}: first year {} against the 1-year median {}", afirst[i], bmed[k]);
+        }
+    }
     // Figures of one strength and damage model say which; Sobol' panels name their output in
     // words, not by column name (before: "Index of log10 p gen4").
     for (f, said) in [("uq_breakage_vs_velocity", "diagnosed strength, indep. trials"), ("uq_distributions", "diagnosed strength, indep. trials"), ("uq_sobol", "strength model: diagnosed; damage: independent trials")] {

@@ -92,7 +92,7 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     pb.inc(1);
     let varying = primary.setup.varying(Mode::Split);
     let mut md = summary(s, &forms, &final_indices, &varying, &outputs, &headline, &averaging);
-    md.push_str(&super::attrition::markdown(&attrition, &impacts_per_year_text(&primary.setup), &primary.setup.materials[0].model.label, primary.setup.models.contains(&DamageModel::TavaresKing)));
+    md.push_str(&super::attrition::markdown(&attrition, &impacts_per_year_text(&primary.setup), &primary.setup.materials[0].model.label));
     dir.write_bytes("summary.md", md.as_bytes())?;
     pb.set_message("figures");
     let mut failures = Vec::new();

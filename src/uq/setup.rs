@@ -88,6 +88,9 @@ pub struct Material {
 /// The temperature of the crush data assumed when the `temperature_c` column is empty (°C).
 pub const ROOM_TEMPERATURE_C: f64 = 20.0;
 
+/// γ points of a Tavares–King table of critical ratios (linear in γ between them).
+const TK_GAMMA_POINTS: usize = 41;
+
 impl Material {
     /// The temperature of its crush data T₀ (°C): every row's `temperature_c`, or
     /// [`ROOM_TEMPERATURE_C`] when none is given; data at several temperatures are refused (the
@@ -166,7 +169,7 @@ impl Shared {
                 return Err(Error::config(&file, "impact.impacts_per_year", "the Tavares–King model needs a fixed number of impacts per year (its damage table is per N)"));
             };
             let (glo, ghi) = (gamma.quantile(0.0), gamma.quantile(1.0));
-            s.impact.years.iter().map(|y| Some(CriticalRatioTable::new((y * n_year).round().max(1.0) as u64, glo, ghi.max(glo + 1e-9), 41))).collect()
+            s.impact.years.iter().map(|y| Some(CriticalRatioTable::new((y * n_year).round().max(1.0) as u64, glo, ghi.max(glo + 1e-9), TK_GAMMA_POINTS))).collect()
         } else {
             vec![None; s.impact.years.len()]
         };
@@ -414,20 +417,41 @@ impl Setup {
         Ok((strength, moduli, [x[self.shared(0)], x[self.shared(1)], x[self.shared(2)], x[self.shared(3)]]))
     }
 
-    /// P of sample x per material, horizon of `years` and damage model of `models` (which
-    /// cannot include Tavares–King: its law needs a table per number of impacts), at the sample's
-    /// operating temperatures where the study has them (as [`Setup::evaluate_into`]), into `out`
-    /// (length 2 · years · models, laid out as [`Setup::slot`] lays out the study's horizons and
-    /// models).
-    pub fn evaluate_years(&self, x: &[f64], mode: Mode, years: &[f64], models: &[DamageModel], out: &mut [f64]) -> Result<()> {
-        if models.contains(&DamageModel::TavaresKing) {
+    /// The Tavares–King tables of critical ratios x*(N, γ) at horizons `years` (N = years ×
+    /// impacts per year, rounded, at least 1), over the study's γ range, as the study's own
+    /// horizons have them; None when the study has no Tavares–King model (which guarantees a
+    /// fixed number of impacts per year).
+    pub fn tk_tables(&self, years: &[f64]) -> Option<Vec<CriticalRatioTable>> {
+        if !self.models.contains(&DamageModel::TavaresKing) {
+            return None;
+        }
+        let Marginal::Fixed(per_year) = self.inputs[self.shared(2)].marginal else { return None };
+        let gamma = &self.inputs[self.shared(3)].marginal;
+        let (lo, hi) = (gamma.quantile(0.0), gamma.quantile(1.0));
+        let ns: Vec<u64> = years.iter().map(|y| (y * per_year).round().max(1.0) as u64).collect();
+        Some(CriticalRatioTable::for_impacts(&ns, lo, hi.max(lo + 1e-9), TK_GAMMA_POINTS))
+    }
+
+    /// P of sample x per material, horizon of `years` and damage model of `models`, at the
+    /// sample's operating temperatures where the study has them (as [`Setup::evaluate_into`]),
+    /// into `out` (length 2 · years · models, laid out as [`Setup::slot`] lays out the study's
+    /// horizons and models). Tavares–King needs `tk`, its tables at `years` ([`Setup::tk_tables`]).
+    pub fn evaluate_years(&self, x: &[f64], mode: Mode, years: &[f64], models: &[DamageModel], tk: Option<&[CriticalRatioTable]>, out: &mut [f64]) -> Result<()> {
+        if models.contains(&DamageModel::TavaresKing) && tk.is_none_or(|t| t.len() != years.len()) {
             return Err(Error::numerical("comparison", "Tavares–King at horizons without a table of critical ratios"));
         }
         let temperatures = self.sample_temperatures(x);
-        let (strength, moduli, [eta, v, per_year, _]) = self.chain_inputs(x, mode, temperatures)?;
+        let (strength, moduli, [eta, v, per_year, gamma]) = self.chain_inputs(x, mode, temperatures)?;
         out.fill(0.0);
         let per = years.len() * models.len();
-        let laws: Vec<Horizon> = years.iter().flat_map(|y| models.iter().map(move |&model| Horizon { model, impacts: y * per_year, ln_x_star: 0.0 })).collect();
+        let laws: Vec<Horizon> = years
+            .iter()
+            .enumerate()
+            .flat_map(|(h, y)| {
+                let ln_x_star = tk.map_or(0.0, |t| t[h].ln_ratio(gamma));
+                models.iter().map(move |&model| Horizon { model, impacts: y * per_year, ln_x_star })
+            })
+            .collect();
         for (j, (p, w)) in strength.into_iter().enumerate() {
             let model = &self.materials[j].model;
             let ln_sigma = model.ln_impact_stress_with_modulus(eta, v, moduli[j])?;

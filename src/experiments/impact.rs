@@ -75,7 +75,7 @@ impl ImpactTest {
             return bad(format!("material {material}, {particles} particles, V = {velocity} m/s, counts {counts:?}: needs particles ≥ 1, V > 0 and increasing counts ≥ 1"));
         }
         let (glo, ghi) = state.gamma_range;
-        let tk: Option<Vec<CriticalRatioTable>> = state.damage.contains(&DamageModel::TavaresKing).then(|| counts.iter().map(|&n| CriticalRatioTable::new(n, glo, ghi.max(glo + 1e-9), 41)).collect());
+        let tk: Option<Vec<CriticalRatioTable>> = state.damage.contains(&DamageModel::TavaresKing).then(|| CriticalRatioTable::for_impacts(&counts, glo, ghi.max(glo + 1e-9), 41));
         let mut test = ImpactTest { material, particles, velocity, counts, probs: Vec::new(), clamped: (0, 0.0), tk };
         let per: Vec<(Vec<f64>, f64)> = state.samples.par_iter().map(|s| test.intervals_at(state, s)).collect::<Result<_>>()?;
         let violations: Vec<f64> = per.iter().map(|(_, w)| *w).filter(|&w| w > CLAMP_TOLERANCE).collect();

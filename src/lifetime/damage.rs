@@ -300,13 +300,10 @@ pub struct CriticalRatioTable {
 }
 
 impl CriticalRatioTable {
-    /// The table on `points` γ values spanning [lo, hi].
+    /// The table on `points` γ values spanning [lo, hi] (one backward sweep per γ, as
+    /// [`CriticalRatioTable::for_impacts`]).
     pub fn new(n: u64, lo: f64, hi: f64, points: usize) -> CriticalRatioTable {
-        use rayon::prelude::*;
-        let points = points.max(2);
-        let gamma: Vec<f64> = (0..points).map(|i| lo + (hi - lo) * i as f64 / (points - 1) as f64).collect();
-        let ln_x = gamma.par_iter().map(|&g| critical_ratio(g, n).ln()).collect();
-        CriticalRatioTable { n, gamma, ln_x }
+        Self::for_impacts(&[n], lo, hi, points).remove(0)
     }
 
     /// One table per N of `ns` on `points` γ values spanning [lo, hi], from one backward sweep

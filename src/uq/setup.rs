@@ -169,7 +169,8 @@ impl Shared {
                 return Err(Error::config(&file, "impact.impacts_per_year", "the Tavares–King model needs a fixed number of impacts per year (its damage table is per N)"));
             };
             let (glo, ghi) = (gamma.quantile(0.0), gamma.quantile(1.0));
-            s.impact.years.iter().map(|y| Some(CriticalRatioTable::new((y * n_year).round().max(1.0) as u64, glo, ghi.max(glo + 1e-9), TK_GAMMA_POINTS))).collect()
+            let ns: Vec<u64> = s.impact.years.iter().map(|y| (y * n_year).round().max(1.0) as u64).collect();
+            CriticalRatioTable::for_impacts(&ns, glo, ghi.max(glo + 1e-9), TK_GAMMA_POINTS).into_iter().map(Some).collect()
         } else {
             vec![None; s.impact.years.len()]
         };

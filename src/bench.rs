@@ -283,20 +283,36 @@ pub struct DemSpeed {
 /// then times `steps` steps on 1 thread and `steps` more on all threads. Returns the particle
 /// count at the start of timing and one [`DemSpeed`] per thread count.
 pub fn dem_particle_steps_per_second(fill_s: f64, steps: u64) -> Result<(usize, Vec<DemSpeed>)> {
+    dem_scaling(fill_s, steps, &one_and_all())
+}
+
+/// 1 and all of rayon's threads (1 alone on one thread).
+fn one_and_all() -> Vec<usize> {
+    let all = rayon::current_num_threads();
+    if all > 1 { vec![1, all] } else { vec![1] }
+}
+
+/// The thread counts of a scaling table: 1, 2, 4, … below `max`, and `max`.
+pub fn thread_counts(max: usize) -> Vec<usize> {
+    let mut c: Vec<usize> = std::iter::successors(Some(1usize), |&k| Some(2 * k)).take_while(|&k| k < max.max(1)).collect();
+    c.push(max.max(1));
+    c
+}
+
+/// A pool of `threads` workers.
+fn pool(threads: usize) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| crate::Error::numerical("thread pool", e.to_string()))
+}
+
+/// [`dem_particle_steps_per_second`] on each thread count of `counts`, one bank filled once and
+/// timed `steps` steps per count in turn.
+pub fn dem_scaling(fill_s: f64, steps: u64, counts: &[usize]) -> Result<(usize, Vec<DemSpeed>)> {
     let mut dem = crate::dem::Dem::new(dem_benchmark_setup()?, "<dem benchmark>")?;
     dem.advance((fill_s / dem.setup.time_step).round() as u64)?;
     let n0 = dem.p.len();
     let mut out = Vec::new();
-    let all = rayon::current_num_threads();
-    let mut counts = vec![1];
-    if all > 1 {
-        counts.push(all);
-    }
-    for threads in counts {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| crate::Error::numerical("thread pool", e.to_string()))?;
+    for &threads in counts {
+        let pool = pool(threads)?;
         let before = dem.counters.particle_steps;
         let ph0 = dem.phase_seconds;
         let b0 = dem.counters.builds;
@@ -348,18 +364,15 @@ pub struct FemSpeed {
 /// Times one crush run to fracture on 1 thread and on all threads, `repeats` times each, and
 /// keeps the fastest of each.
 pub fn fem_speed(repeats: usize) -> Result<Vec<FemSpeed>> {
+    fem_scaling(repeats, &one_and_all())
+}
+
+/// [`fem_speed`] on each thread count of `counts`.
+pub fn fem_scaling(repeats: usize, counts: &[usize]) -> Result<Vec<FemSpeed>> {
     let setup = fem_benchmark_setup()?;
-    let all = rayon::current_num_threads();
-    let mut counts = vec![1];
-    if all > 1 {
-        counts.push(all);
-    }
     let mut out = Vec::new();
-    for threads in counts {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| crate::Error::numerical("thread pool", e.to_string()))?;
+    for &threads in counts {
+        let pool = pool(threads)?;
         let mut best: Option<FemSpeed> = None;
         for _ in 0..repeats.max(1) {
             let start = Instant::now();
@@ -383,6 +396,40 @@ pub fn fem_speed(repeats: usize) -> Result<Vec<FemSpeed>> {
         out.extend(best);
     }
     Ok(out)
+}
+
+/// The main study's wall time per thread count.
+#[derive(Debug, Clone)]
+pub struct StudyScaling {
+    /// (threads, wall seconds of the run: fits, propagation, tables, figures, documents).
+    pub seconds: Vec<(usize, f64)>,
+    /// Whether its tables are byte-identical on every thread count.
+    pub identical: bool,
+    /// The tables compared.
+    pub tables: Vec<&'static str>,
+}
+
+/// `studies/gen4_vs_bl.toml` end to end into a scratch reports directory on each thread count of
+/// `counts` (the run's own wall time, as its manifest records it), and whether its tables are the
+/// same bytes on every count.
+pub fn main_study_scaling(counts: &[usize]) -> Result<StudyScaling> {
+    let loaded = crate::study::load(&repo_path("studies/gen4_vs_bl.toml"))?;
+    let tables = vec!["breakage.csv", "comparison.csv", "sobol.csv", "attrition.csv", "strength_models.csv"];
+    let mut seconds = Vec::new();
+    let mut first: Option<Vec<Option<Vec<u8>>>> = None;
+    let mut identical = true;
+    for &threads in counts {
+        let root = TempDir::new("bench-scaling")?;
+        let opts = crate::runner::RunOptions::new(root.path().to_path_buf(), false);
+        let s = pool(threads)?.install(|| crate::runner::run(&loaded, &opts))?;
+        seconds.push((threads, s.wall_time_s));
+        let bytes: Vec<Option<Vec<u8>>> = tables.iter().map(|t| std::fs::read(root.path().join("gen4_vs_bl").join(t)).ok()).collect();
+        match &first {
+            None => first = Some(bytes),
+            Some(f) => identical &= *f == bytes,
+        }
+    }
+    Ok(StudyScaling { seconds, identical, tables })
 }
 
 /// The Rosenbrock banana of the MCMC verification (docs/reference.md, verification §2):
@@ -679,4 +726,16 @@ pub fn intake_speed(rows: usize, repeats: usize) -> Result<IntakeSpeed> {
     };
     let size = |p: &Path| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0);
     Ok(IntakeSpeed { rows, csv_s: time(&csv_src)?, xlsx_s: time(&xlsx_src)?, bytes: (size(&csv_path), size(&xlsx_path)) })
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn scaling_counts_double_up_to_the_available_threads() {
+        assert_eq!(super::thread_counts(1), vec![1]);
+        assert_eq!(super::thread_counts(2), vec![1, 2]);
+        assert_eq!(super::thread_counts(6), vec![1, 2, 4, 6]);
+        assert_eq!(super::thread_counts(16), vec![1, 2, 4, 8, 16]);
+        assert_eq!(super::thread_counts(0), vec![1]);
+    }
 }

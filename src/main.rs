@@ -109,7 +109,7 @@ enum Command {
         command: DatasetsCommand,
     },
     /// Measure the speed figures (evaluations per second, fit time, study wall time).
-    #[command(group(clap::ArgGroup::new("benchmark").args(["study", "dem", "fem", "mcmc", "uq", "discrepancy", "experiments", "micro", "intake"]).multiple(false)))]
+    #[command(group(clap::ArgGroup::new("benchmark").args(["study", "dem", "fem", "mcmc", "uq", "discrepancy", "experiments", "micro", "intake", "scaling"]).multiple(false)))]
     Bench {
         /// Time the core figures and this study end to end.
         #[arg(long)]
@@ -156,6 +156,12 @@ enum Command {
         /// Rows of the intake benchmark.
         #[arg(long, default_value_t = 100_000, requires = "intake")]
         rows: usize,
+        /// Run the scaling benchmark instead: the DEM cold-test bank (particle-steps/s), the
+        /// crush FE (element-steps/s) and the main study (wall s) on 1, 2, 4, … up to the
+        /// available threads (`--threads` caps them), as one table with the speed-up on the
+        /// most threads, and the DEM's time per step by phase (a few minutes on 2 cores).
+        #[arg(long)]
+        scaling: bool,
     },
 }
 
@@ -447,6 +453,34 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     f.rebuilds
                 );
             }
+        }
+        Command::Bench { scaling: true, .. } => {
+            let max = rayon::current_num_threads();
+            let counts = partlife::bench::thread_counts(max);
+            out!("machine: {} threads available to rayon ({} logical CPUs); thread counts {counts:?}", max, std::thread::available_parallelism().map_or(0, |n| n.get()));
+            let (n, dem) = partlife::bench::dem_scaling(0.15, 10_000, &counts)?;
+            let fem = partlife::bench::fem_scaling(2, &counts)?;
+            let study = partlife::bench::main_study_scaling(&counts)?;
+            let head: Vec<String> = counts.iter().map(|c| if *c == 1 { "1 thread".to_string() } else { c.to_string() }).collect();
+            out!("| work | {} | speed-up on {max} |", head.join(" | "));
+            out!("|---|{}---|", "---|".repeat(counts.len()));
+            let row = |what: String, v: Vec<f64>, higher_better: bool, fmt: &dyn Fn(f64) -> String| {
+                let speed_up = if higher_better { v[v.len() - 1] / v[0] } else { v[0] / v[v.len() - 1] };
+                format!("| {what} | {} | {speed_up:.2}× |", v.iter().map(|x| fmt(*x)).collect::<Vec<_>>().join(" | "))
+            };
+            let e = |x: f64| format!("{x:.3e}");
+            out!("{}", row(format!("DEM cold-test bank, {n} particles (particle-steps/s)"), dem.iter().map(|d| d.particle_steps_per_second).collect(), true, &e));
+            let elements = fem.first().map_or(0, |f| f.elements);
+            out!("{}", row(format!("crush FE, {elements} elements (element-steps/s)"), fem.iter().map(|f| f.element_steps_per_second).collect(), true, &e));
+            out!("{}", row("main study `gen4_vs_bl` (wall s)".into(), study.seconds.iter().map(|s| s.1).collect(), false, &|x| format!("{x:.2}")));
+            out!("main study tables ({}) byte-identical on every thread count: {}", study.tables.join(", "), if study.identical { "yes" } else { "NO" });
+            out!("DEM time per step by phase (µs): threads | kick–drift | check | rebuild | forces | reduction | kick + sample | rebuilds");
+            for d in &dem {
+                let ph: Vec<String> = d.phase_us.iter().map(|v| format!("{v:.0}")).collect();
+                out!("  {} | {} | {}", d.threads, ph.join(" | "), d.rebuilds);
+            }
+            let fe: Vec<String> = fem.iter().map(|f| format!("{} thread(s) {:.2} s", f.threads, f.run_seconds)).collect();
+            out!("crush FE run to fracture ({} steps): {}; peak force the same on every count: {}", fem.first().map_or(0, |f| f.steps), fe.join(", "), if fem.windows(2).all(|w| w[0].peak_force == w[1].peak_force) { "yes" } else { "NO" });
         }
         Command::Bench { mcmc: true, chain, .. } => {
             // Checked before the benchmark runs: a bad argument costs nothing.

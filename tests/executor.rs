@@ -147,7 +147,16 @@ for t in $(seq 0 "$last"); do if [ "$t" = 1 ]; then echo "${id}_$t|CANCELLED by 
 /// UNKNOWN and resubmitted the cancelled ones.)
 #[test]
 fn task_states_come_from_sacct_when_scontrol_fails_and_unknown_states_are_not_resubmitted() {
-    for sacct_fails in [false, true] {
+    // The stub runs the array's tasks one after another on one core: the two cases side by side.
+    std::thread::scope(|scope| {
+        for sacct_fails in [false, true] {
+            scope.spawn(move || sacct_case(sacct_fails));
+        }
+    });
+}
+
+fn sacct_case(sacct_fails: bool) {
+    {
         let s = Scratch::new();
         tiny_calibration(&s, "kind = \"slurm\"\nevaluations_per_task = 1\npoll_seconds = 0.05\nretries = 2");
         let stub = s.path("stub");

@@ -155,26 +155,25 @@ fn task_states_come_from_sacct_when_scontrol_fails_and_unknown_states_are_not_re
     });
 }
 
+/// One case of the test above: sacct answering, or failing too.
 fn sacct_case(sacct_fails: bool) {
-    {
-        let s = Scratch::new();
-        tiny_calibration(&s, "kind = \"slurm\"\nevaluations_per_task = 1\npoll_seconds = 0.05\nretries = 2");
-        let stub = s.path("stub");
-        std::fs::create_dir_all(&stub).unwrap();
-        stub_slurm(&stub);
-        if sacct_fails {
-            std::fs::write(stub.join("sacct_fails"), "").unwrap();
-        }
-        let path = format!("{}:{}", stub.display(), std::env::var("PATH").unwrap_or_default());
-        let out = s.run_env(&["run", "studies/cal.toml", "--quiet"], &[("PATH", &path)]);
-        assert_eq!(out.code, 0, "sacct fails: {sacct_fails}: {}", out.stderr);
-        let attempts = common::table_f64(&s.path("reports/cal/executor.csv"), "attempt");
-        assert!(!attempts.is_empty() && attempts.iter().all(|&a| a == 0.0), "sacct fails: {sacct_fails}: resubmitted: attempts {attempts:?}");
-        let manifest = s.read("reports/cal/manifest.json");
-        let expect: &[&str] = if sacct_fails { &["state unknown", "Unable to contact slurm controller", "accounting storage is disabled", "not resubmitted"] } else { &["was cancelled", "not resubmitted"] };
-        for e in expect {
-            assert!(manifest.contains(e), "sacct fails: {sacct_fails}: the manifest lacks \"{e}\"");
-        }
-        assert!(!manifest.contains("ended UNKNOWN"), "sacct fails: {sacct_fails}");
+    let s = Scratch::new();
+    tiny_calibration(&s, "kind = \"slurm\"\nevaluations_per_task = 1\npoll_seconds = 0.05\nretries = 2");
+    let stub = s.path("stub");
+    std::fs::create_dir_all(&stub).unwrap();
+    stub_slurm(&stub);
+    if sacct_fails {
+        std::fs::write(stub.join("sacct_fails"), "").unwrap();
     }
+    let path = format!("{}:{}", stub.display(), std::env::var("PATH").unwrap_or_default());
+    let out = s.run_env(&["run", "studies/cal.toml", "--quiet"], &[("PATH", &path)]);
+    assert_eq!(out.code, 0, "sacct fails: {sacct_fails}: {}", out.stderr);
+    let attempts = common::table_f64(&s.path("reports/cal/executor.csv"), "attempt");
+    assert!(!attempts.is_empty() && attempts.iter().all(|&a| a == 0.0), "sacct fails: {sacct_fails}: resubmitted: attempts {attempts:?}");
+    let manifest = s.read("reports/cal/manifest.json");
+    let expect: &[&str] = if sacct_fails { &["state unknown", "Unable to contact slurm controller", "accounting storage is disabled", "not resubmitted"] } else { &["was cancelled", "not resubmitted"] };
+    for e in expect {
+        assert!(manifest.contains(e), "sacct fails: {sacct_fails}: the manifest lacks \"{e}\"");
+    }
+    assert!(!manifest.contains("ended UNKNOWN"), "sacct fails: {sacct_fails}");
 }

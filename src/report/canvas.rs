@@ -141,10 +141,44 @@ pub fn colour(i: usize) -> RGBColor {
     PALETTE[i % PALETTE.len()]
 }
 
-/// Tick-label formatter with a number of decimals suited to the axis span.
-pub fn tick_format(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
-    let span = (hi - lo).abs().max(1e-300);
-    let decimals = (-(span / 5.0).log10().floor()).clamp(0.0, 8.0) as usize;
+/// The step between the tick labels plotters draws on [lo, hi] with at most `max_labels` of them:
+/// the finest of 1, 2 and 5 × 10^k whose labels fit (plotters' float key points count the
+/// multiples of a step inside the range the same way).
+fn tick_step(lo: f64, hi: f64, max_labels: usize) -> f64 {
+    let (lo, hi) = (lo.min(hi), lo.max(hi));
+    let span = (hi - lo).max(1e-300);
+    let count = |step: f64| 1.0 + ((hi / step).floor() - (lo / step).ceil());
+    let mut step = 10f64.powf(span.log10().floor());
+    if count(step) > max_labels.max(1) as f64 {
+        step *= 10.0;
+    }
+    for _ in 0..64 {
+        let finer = [step / 2.0, step / 5.0, step / 10.0];
+        match finer.iter().find(|&&s| count(s).round() > max_labels.max(1) as f64) {
+            Some(_) => {
+                // The finest of the three that still fits, if any.
+                return finer.iter().copied().take_while(|&s| count(s).round() <= max_labels.max(1) as f64).last().unwrap_or(step);
+            }
+            None => step /= 10.0,
+        }
+    }
+    step
+}
+
+/// Tick-label formatter with as many decimals as the step between the labels needs, for an axis
+/// drawn with at most `max_labels` labels (before: decimals from the span alone, so "0.30 0.40
+/// … 0.70" ran together on a narrow panel where "0.3 … 0.7" says the same).
+pub fn tick_format(lo: f64, hi: f64, max_labels: usize) -> impl Fn(&f64) -> String {
+    let mut step = tick_step(lo, hi, max_labels);
+    // Where the next finer step would fit but for one label, rounding inside plotters may take
+    // it: its digits then, so that two labels never read the same.
+    let (lo_, hi_) = (lo.min(hi), lo.max(hi));
+    let mantissa = step / 10f64.powf((step.log10() + 1e-9).floor());
+    let finer = if mantissa > 4.0 { step * 0.4 } else { step * 0.5 };
+    if 1.0 + ((hi_ / finer).floor() - (lo_ / finer).ceil()) <= max_labels as f64 + 1.0 {
+        step = finer;
+    }
+    let decimals = (-(step.log10() + 1e-9).floor()).clamp(0.0, 8.0) as usize;
     move |v: &f64| {
         let s = format!("{:.*}", decimals, v);
         // Avoid "-0".
@@ -195,10 +229,17 @@ mod tests {
         assert!(check_glyphs("t", "\u{10FFFD}").is_err());
         assert_eq!(power_of_ten(&1.0), "1");
         assert_eq!(power_of_ten(&3e2), "3×10²");
-        let f = tick_format(0.0, 20.0);
+        let f = tick_format(0.0, 20.0, 6);
         assert_eq!(f(&5.0), "5");
-        let f = tick_format(0.0, 1.0);
+        let f = tick_format(0.0, 1.0, 6);
         assert_eq!(f(&-0.5), "−0.5");
+        // The corner plot's t axis (0.23–0.72 GPa): labels every 0.1, one decimal.
+        assert_eq!(tick_step(0.23, 0.72, 6), 0.1);
+        assert_eq!(tick_format(0.23, 0.72, 6)(&0.3), "0.3");
+        // Finer steps keep their digits: 0.05 on a 0.25 span, 0.02 with more labels allowed.
+        assert_eq!(tick_format(0.0, 0.25, 6)(&0.05), "0.05");
+        assert_eq!(tick_step(0.0, 0.1, 6), 0.02);
+        assert_eq!(tick_step(0.0, 20.0, 6), 5.0);
         assert_eq!(canvas_size(8.5, 0.75).0, 1928);
     }
 }

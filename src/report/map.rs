@@ -62,7 +62,7 @@ pub fn map_figure(m: &MapSpec, cells: impl FnOnce(&mut MapChart) -> Result<()>) 
             .y_label_area_size(pt(27.0))
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(&err)?;
-        let (xf, yf) = (tick_format(x0, x1), tick_format(y0, y1));
+        let (xf, yf) = (tick_format(x0, x1, m.labels.0), tick_format(y0, y1, m.labels.1));
         chart
             .configure_mesh()
             .x_desc(x_desc)
@@ -117,7 +117,7 @@ pub fn map_figure(m: &MapSpec, cells: impl FnOnce(&mut MapChart) -> Result<()>) 
                 Rectangle::new([(0.0, a), (1.0, b)], (m.colour)(0.5 * (a + b)).filled())
             }))
             .map_err(&err)?;
-            let bf = tick_format(b0, b1);
+            let bf = tick_format(b0, b1, 5);
             bar.configure_secondary_axes()
                 .y_desc(bar_desc)
                 .label_style(text(7.0))

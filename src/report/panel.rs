@@ -208,7 +208,7 @@ fn draw_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, p: &Panel, name: &str) 
         .y_label_area_size(pt(31.0))
         .build_cartesian_2d(p.x_range.0..p.x_range.1, p.y_range.0..p.y_range.1)
         .map_err(&err)?;
-    let xf_num = tick_format(p.x_range.0, p.x_range.1);
+    let xf_num = tick_format(p.x_range.0, p.x_range.1, 6);
     let xf = |v: &f64| {
         if p.x_categories.is_empty() {
             return xf_num(v);
@@ -216,7 +216,7 @@ fn draw_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, p: &Panel, name: &str) 
         let k = v.round();
         if (v - k).abs() < 1e-9 && k >= 1.0 { p.x_categories.get(k as usize - 1).cloned().unwrap_or_default() } else { String::new() }
     };
-    let yf_lin = tick_format(p.y_range.0, p.y_range.1);
+    let yf_lin = tick_format(p.y_range.0, p.y_range.1, 6);
     let yf = |v: &f64| if p.y_log { power_of_ten(&10f64.powf(*v)) } else { yf_lin(v) };
     let span = (p.y_range.1 - p.y_range.0).round() as usize;
     let y_labels = if p.y_log { if span <= 8 { span + 1 } else { span / 2 + 1 } } else { 6 };

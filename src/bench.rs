@@ -2,7 +2,9 @@
 //!
 //! * σ̄(V) + P_N evaluations per second on one core (goal ≥ 2·10⁷/s);
 //! * Weibull MLE + 10⁴-sample pivotal bounds for N = 50 (goal < 50 ms), on all threads and on one;
-//! * the lifetime study end to end (goal < 5 s), when a study file is given.
+//! * the lifetime study end to end (goal < 5 s), when a study file is given;
+//! * the scaling table ([`dem_scaling`], [`fem_scaling`], [`main_study_scaling`] over
+//!   [`thread_counts`]): the DEM bank, the crush FE and the main study on 1, 2, 4, … threads.
 //!
 //! Benchmarks find the repository's studies and datasets from the repository ([`repo_path`]),
 //! whatever the working directory, and write only into scratch directories ([`TempDir`]): a

@@ -100,8 +100,14 @@ impl VogelPeukert {
 /// Damage D of one impact at ratio x = E_k/E_m < 1 (fixed point of the Tavares–King relation);
 /// None when there is no fixed point below 1 (the particle breaks).
 pub fn tk_damage(x: f64, gamma: f64) -> Option<f64> {
+    tk_damage_from(x, gamma, 0.0)
+}
+
+/// [`tk_damage`] with the fixed-point iteration started from `d0` (a neighbouring solve's
+/// damage; the same fixed point, in fewer steps).
+fn tk_damage_from(x: f64, gamma: f64, d0: f64) -> Option<f64> {
     let e = 2.0 * gamma / 5.0;
-    let mut d = 0.0f64;
+    let mut d = d0.clamp(0.0, 0.999_999);
     for _ in 0..200 {
         let denom = 2.0 * gamma - 5.0 * d + 5.0;
         if denom <= 0.0 {
@@ -186,24 +192,10 @@ fn ln_next(x: f64, gamma: f64, d0: f64) -> (f64, f64) {
     if x >= 1.0 {
         return (f64::INFINITY, d0);
     }
-    let e = 2.0 * gamma / 5.0;
-    let mut d = d0.clamp(0.0, 0.999_999);
-    for _ in 0..200 {
-        let denom = 2.0 * gamma - 5.0 * d + 5.0;
-        if denom <= 0.0 {
-            return (f64::INFINITY, d0);
-        }
-        let next = (2.0 * gamma / denom * x).powf(e);
-        if !(next < 1.0) {
-            return (f64::INFINITY, d0);
-        }
-        let done = (next - d).abs() <= 1e-14 * next.max(1e-300);
-        d = next;
-        if done {
-            break;
-        }
+    match tk_damage_from(x, gamma, d0) {
+        Some(d) => (x.ln() - (-d).ln_1p(), d),
+        None => (f64::INFINITY, d0),
     }
-    (x.ln() - (-d).ln_1p(), d)
 }
 
 /// x*(N, γ) for every N of `ns` in one backward sweep: the one-impact threshold x*(1) (the

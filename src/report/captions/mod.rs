@@ -376,7 +376,7 @@ fn calibration(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
             let c = Table::load(dir, "comparison")?;
             let (names, rl, tl, ch) = (c.s("name")?, c.s("reference_label")?, c.s("this_label")?, c.f("change_percent")?);
             let (reference, this) = (rl.first().cloned().unwrap_or_default(), tl.first().cloned().unwrap_or_default());
-            let changes: Vec<String> = (0..names.len()).map(|i| format!("{} {:+.1} %", names[i], ch[i]).replace('-', "−")).collect();
+            let changes: Vec<String> = (0..names.len()).map(|i| format!("{} {} %", names[i], format!("{:+.1}", ch[i]).replace('-', "−"))).collect();
             let big: Vec<&str> = (0..names.len()).filter(|&i| ch[i].abs() > 30.0).map(|i| names[i].as_str()).collect();
             let big = if big.is_empty() { "No mean moves by more than 30 %.".to_string() } else { format!("More than 30 % (red): {}.", big.join(", ")) };
             FigureNote {

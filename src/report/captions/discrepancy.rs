@@ -92,9 +92,16 @@ fn covariate_name(c: &str) -> String {
     c.replace('_', " ")
 }
 
-/// One finding in words: a trend's Spearman ρ or a factor's worst level, with its permutation p.
+/// One finding in words, as `findings.csv` records its kind: a trend's Spearman ρ, a factor's
+/// level shift or its scatter per level (each with the level that differs most), with the
+/// permutation p.
 fn finding(kind: &str, rho: f64, level: &str, p_perm: f64) -> String {
-    if kind == "trend" { format!("ρ = {} (p = {})", super::minus(rho), prob_text(p_perm)) } else { format!("worst level {level} (p = {})", prob_text(p_perm)) }
+    let p = prob_text(p_perm);
+    match kind {
+        "trend" => format!("trend ρ = {} (p = {p})", super::minus(rho)),
+        "scatter" => format!("scatter per level, most apart at {level} (p = {p})"),
+        _ => format!("level shift, most apart at {level} (p = {p})"),
+    }
 }
 
 fn residuals(dir: &Path, key: &str) -> Result<FigureNote> {
@@ -111,7 +118,7 @@ fn residuals(dir: &Path, key: &str) -> Result<FigureNote> {
     Ok(FigureNote {
         title: Some(format!("Residuals against the recorded covariates, {label}")),
         caption: p(&format!(
-            "The standardised residual of every specimen against each covariate its file records, with the base model (left) and with the named effects, {after} (right); lines join binned means. Rank correlations with their permutation p in round {first}: {}.{end}",
+            "The standardised residual of every specimen against each covariate its file records, with the base model (left) and with the named effects, {after} (right); for a numeric covariate a line joins binned means, for a factor each level shows its 10–90 % band and median (triangle). The residual tests with their permutation p in round {first}: {}.{end}",
             said(first)
         )),
         blocks: vec![],
@@ -200,4 +207,16 @@ pub(super) fn curves(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
         )),
         blocks: vec![Block::Table { header: vec!["curve".into(), "temperature".into(), "largest |δ̂|/F, base model".into(), "final model".into()], rows }],
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    /// Each kind of residual test in words (a lab file with a batch factor gave "worst level B"
+    /// twice, once for the level shift and once for the scatter, under "rank correlations").
+    #[test]
+    fn findings_say_their_kind() {
+        assert_eq!(super::finding("trend", -0.68, "", 0.001), format!("trend ρ = −0.68 (p = {})", super::prob_text(0.001)));
+        assert!(super::finding("levels", f64::NAN, "B", 0.002).starts_with("level shift, most apart at B"));
+        assert!(super::finding("scatter", f64::NAN, "B", 0.39).starts_with("scatter per level, most apart at B"));
+    }
 }

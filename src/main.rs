@@ -267,6 +267,10 @@ macro_rules! out {
     }};
 }
 
+/// The DEM phases `bench --dem` and `--scaling` time, in [`partlife::dem::Dem::phase_seconds`]'s
+/// order.
+const DEM_PHASES: &str = "kick–drift (+ reactions, closing kick), check, rebuild, forces, bookkeeping, settle + sample";
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
@@ -441,24 +445,26 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Bench { dem: true, .. } => {
             out!("machine: {} threads available to rayon", rayon::current_num_threads());
-            let (n, figs) = partlife::bench::dem_particle_steps_per_second(0.15, 25_000)?;
-            out!("DEM cold-test bank, {n} particles after 0.15 s of filling, 25 000 steps per measurement:");
-            for f in figs {
+            let d = partlife::bench::dem_particle_steps_per_second(0.15, 25_000)?;
+            out!("DEM cold-test bank, {} particles after 0.15 s of filling, 25 000 steps per measurement from that state:", d.particles);
+            for f in &d.speeds {
                 let ph: Vec<String> = f.phase_us.iter().map(|v| format!("{v:.0}")).collect();
                 out!(
-                    "  {} thread(s): {:.4e} particle-steps/s; µs/step [kick–drift, check, rebuild, forces, reduction, kick+sample] = [{}]; {} rebuilds",
+                    "  {} thread(s): {:.4e} particle-steps/s; µs/step [{DEM_PHASES}] = [{}]; {} rebuilds",
                     f.threads,
                     f.particle_steps_per_second,
                     ph.join(", "),
                     f.rebuilds
                 );
             }
+            out!("  same trajectories on every count: {}", if d.identical { "yes" } else { "NO" });
         }
         Command::Bench { scaling: true, .. } => {
             let max = rayon::current_num_threads();
             let counts = partlife::bench::thread_counts(max);
             out!("machine: {} threads available to rayon ({} logical CPUs); thread counts {counts:?}", max, std::thread::available_parallelism().map_or(0, |n| n.get()));
-            let (n, dem) = partlife::bench::dem_scaling(0.15, 10_000, &counts)?;
+            let dem = partlife::bench::dem_scaling(partlife::bench::dem_benchmark_setup()?, 0.15, 10_000, &counts)?;
+            let deep = partlife::bench::dem_scaling(partlife::bench::dem_deep_bank_setup()?, 0.15, 1_000, &counts)?;
             let fem = partlife::bench::fem_scaling(2, &counts)?;
             let study = partlife::bench::main_study_scaling(&counts)?;
             let head: Vec<String> = counts.iter().map(|c| if *c == 1 { "1 thread".to_string() } else { c.to_string() }).collect();
@@ -469,15 +475,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 format!("| {what} | {} | {speed_up:.2}× |", v.iter().map(|x| fmt(*x)).collect::<Vec<_>>().join(" | "))
             };
             let e = |x: f64| format!("{x:.3e}");
-            out!("{}", row(format!("DEM cold-test bank, {n} particles (particle-steps/s)"), dem.iter().map(|d| d.particle_steps_per_second).collect(), true, &e));
+            for (what, d) in [("DEM cold-test bank", &dem), ("DEM bank, 10× deeper slab", &deep)] {
+                out!("{}", row(format!("{what}, {} particles (particle-steps/s)", d.particles), d.speeds.iter().map(|d| d.particle_steps_per_second).collect(), true, &e));
+            }
             let elements = fem.first().map_or(0, |f| f.elements);
             out!("{}", row(format!("crush FE, {elements} elements (element-steps/s)"), fem.iter().map(|f| f.element_steps_per_second).collect(), true, &e));
             out!("{}", row("main study `gen4_vs_bl` (wall s)".into(), study.seconds.iter().map(|s| s.1).collect(), false, &|x| format!("{x:.2}")));
             out!("main study tables ({}) byte-identical on every thread count: {}", study.tables.join(", "), if study.identical { "yes" } else { "NO" });
-            out!("DEM time per step by phase (µs): threads | kick–drift | check | rebuild | forces | reduction | kick + sample | rebuilds");
-            for d in &dem {
-                let ph: Vec<String> = d.phase_us.iter().map(|v| format!("{v:.0}")).collect();
-                out!("  {} | {} | {}", d.threads, ph.join(" | "), d.rebuilds);
+            for (what, d) in [("cold-test bank", &dem), ("10× deeper slab", &deep)] {
+                out!("DEM {what}, same trajectories on every thread count: {}; time per step by phase (µs): threads | {} | rebuilds", if d.identical { "yes" } else { "NO" }, DEM_PHASES.replace(", ", " | "));
+                for s in &d.speeds {
+                    let ph: Vec<String> = s.phase_us.iter().map(|v| format!("{v:.0}")).collect();
+                    out!("  {} | {} | {}", s.threads, ph.join(" | "), s.rebuilds);
+                }
             }
             let fe: Vec<String> = fem.iter().map(|f| format!("{} thread(s) {:.2} s", f.threads, f.run_seconds)).collect();
             out!("crush FE run to fracture ({} steps): {}; peak force the same on every count: {}", fem.first().map_or(0, |f| f.steps), fe.join(", "), if fem.windows(2).all(|w| w[0].peak_force == w[1].peak_force) { "yes" } else { "NO" });

@@ -14,10 +14,24 @@ use crate::io::TempDir;
 /// bank (Ø 25 mm tubes, 5 staggered rows, 125 mm × 5 mm slab), 1 mm particles, ρ = 3600 kg/m³,
 /// E = 10⁸ Pa, ν = 0.25, e = 0.7, μ = 0.3, Δt = 2 µs, 200 kg/(m² s) inserted at 0.5 m/s.
 pub fn dem_benchmark_setup() -> Result<crate::dem::DemSetup> {
+    dem_bank_setup(1.0)
+}
+
+/// The large DEM case: the cold-test bank with a slab ten times deeper along the tubes (50 mm)
+/// and the same flux per area, so ten times the particles of [`dem_benchmark_setup`] (about
+/// 100 000 after 0.15 s).
+pub fn dem_deep_bank_setup() -> Result<crate::dem::DemSetup> {
+    dem_bank_setup(10.0)
+}
+
+/// The benchmark bank with its slab `depth` times the cold test's 5 mm.
+fn dem_bank_setup(depth: f64) -> Result<crate::dem::DemSetup> {
     use crate::dem::contact::{Interaction, Material};
     use crate::dem::geometry::{BankSpec, Geometry};
     use crate::dem::{DemSetup, Diameters, Inlet, ProbeSetup};
-    let geometry = Geometry::tube_bank(&BankSpec::cold_test());
+    let mut bank = BankSpec::cold_test();
+    bank.slab *= depth;
+    let geometry = Geometry::tube_bank(&bank);
     let m = Material { density: 3600.0, youngs_modulus: 1e8, poisson_ratio: 0.25 };
     let i = Interaction { restitution: 0.7, friction: 0.3, rolling_friction: 0.0 };
     let inlet = Inlet { mass_flux: 200.0, velocity: 0.5, z_lo: geometry.z_hi - 0.015, z_hi: geometry.z_hi };
@@ -50,18 +64,30 @@ pub struct DemSpeed {
     pub threads: usize,
     /// Particle-steps per second.
     pub particle_steps_per_second: f64,
-    /// Wall time per step and phase (µs): kick–drift, position check, neighbour rebuild, force
-    /// blocks, serial reduction, closing kick and sampling.
+    /// Wall time per step and phase (µs): kick–drift (with the previous evaluation's reactions
+    /// and closing kick), position check, neighbour rebuild, force blocks, serial bookkeeping of
+    /// impacts, settling and sampling.
     pub phase_us: [f64; 6],
     /// Neighbour-list builds during the measurement.
     pub rebuilds: u64,
 }
 
-/// DEM particle-steps per second: fills the bank for `fill_s` simulated seconds on all threads,
-/// then times `steps` steps on 1 thread and `steps` more on all threads. Returns the particle
-/// count at the start of timing and one [`DemSpeed`] per thread count.
-pub fn dem_particle_steps_per_second(fill_s: f64, steps: u64) -> Result<(usize, Vec<DemSpeed>)> {
-    dem_scaling(fill_s, steps, &one_and_all())
+/// A DEM case timed on several thread counts.
+#[derive(Debug, Clone)]
+pub struct DemScaling {
+    /// Particles at the start of timing.
+    pub particles: usize,
+    /// One measurement per thread count.
+    pub speeds: Vec<DemSpeed>,
+    /// Whether every count ended in the same state, bit for bit (positions, velocities, angular
+    /// velocities, impacts).
+    pub identical: bool,
+}
+
+/// DEM particle-steps per second of the cold-test bank: fills it for `fill_s` simulated seconds,
+/// then times `steps` steps from that state on 1 thread and on all threads.
+pub fn dem_particle_steps_per_second(fill_s: f64, steps: u64) -> Result<DemScaling> {
+    dem_scaling(dem_benchmark_setup()?, fill_s, steps, &one_and_all())
 }
 
 /// 1 and all of rayon's threads (1 alone on one thread).
@@ -82,15 +108,20 @@ fn pool(threads: usize) -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| crate::Error::numerical("thread pool", e.to_string()))
 }
 
-/// [`dem_particle_steps_per_second`] on each thread count of `counts`, one bank filled once and
-/// timed `steps` steps per count in turn.
-pub fn dem_scaling(fill_s: f64, steps: u64, counts: &[usize]) -> Result<(usize, Vec<DemSpeed>)> {
-    let mut dem = crate::dem::Dem::new(dem_benchmark_setup()?, "<dem benchmark>")?;
-    dem.advance((fill_s / dem.setup.time_step).round() as u64)?;
-    let n0 = dem.p.len();
-    let mut out = Vec::new();
+/// `setup` filled for `fill_s` simulated seconds on the most threads of `counts`, then `steps`
+/// steps timed from that same state on each count (so every count does the same work), and
+/// whether they all end in the same state.
+pub fn dem_scaling(setup: crate::dem::DemSetup, fill_s: f64, steps: u64, counts: &[usize]) -> Result<DemScaling> {
+    let mut filled = crate::dem::Dem::new(setup, "<dem benchmark>")?;
+    let fill_steps = (fill_s / filled.setup.time_step).round() as u64;
+    pool(counts.iter().copied().max().unwrap_or(1))?.install(|| filled.advance(fill_steps))?;
+    let particles = filled.p.len();
+    let mut speeds = Vec::new();
+    let mut first: Option<crate::dem::Dem> = None;
+    let mut identical = true;
     for &threads in counts {
         let pool = pool(threads)?;
+        let mut dem = filled.clone();
         let before = dem.counters.particle_steps;
         let ph0 = dem.phase_seconds;
         let b0 = dem.counters.builds;
@@ -101,14 +132,30 @@ pub fn dem_scaling(fill_s: f64, steps: u64, counts: &[usize]) -> Result<(usize, 
         for (k, v) in phase_us.iter_mut().enumerate() {
             *v = 1e6 * (dem.phase_seconds[k] - ph0[k]) / steps as f64;
         }
-        out.push(DemSpeed {
+        speeds.push(DemSpeed {
             threads,
             particle_steps_per_second: (dem.counters.particle_steps - before) as f64 / secs,
             phase_us,
             rebuilds: dem.counters.builds - b0,
         });
+        match &first {
+            None => first = Some(dem),
+            Some(f) => identical &= same_state(f, &dem),
+        }
     }
-    Ok((n0, out))
+    Ok(DemScaling { particles, speeds, identical })
+}
+
+/// Same particles, positions, velocities, angular velocities and impacts, bit for bit.
+fn same_state(a: &crate::dem::Dem, b: &crate::dem::Dem) -> bool {
+    let bits = |v: &[[f64; 3]]| v.iter().flat_map(|x| x.map(f64::to_bits)).collect::<Vec<u64>>();
+    let (p, q) = (&a.p, &b.p);
+    p.id == q.id
+        && bits(&p.pos) == bits(&q.pos)
+        && bits(&p.vel) == bits(&q.vel)
+        && bits(&p.omega) == bits(&q.omega)
+        && a.impacts.len() == b.impacts.len()
+        && a.impacts.iter().zip(&b.impacts).all(|(x, y)| x.particle == y.particle && x.v_normal.to_bits() == y.v_normal.to_bits())
 }
 
 /// The crush FE speed case: the `studies/crush_gen3_rt.toml` set-up (1 mm sphere, JH-2, default

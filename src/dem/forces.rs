@@ -3,7 +3,7 @@
 
 use super::contact::{ContactGeom, PairLaw, contact_velocity, hertz_mindlin, tube_radius_star};
 use super::geometry::Geometry;
-use super::grid::{Grid, PairState};
+use super::grid::{BLOCK, Grid, PairBlock};
 use super::particles::{MAX_WALL_CONTACTS, WallSlot};
 use super::probe::{Impact, Target, TraceSample};
 use super::vec3::{V3, add_to, cross, dot, norm, scale, sub};
@@ -21,6 +21,21 @@ pub(super) fn kick(v: &mut V3, w: &mut V3, f: V3, t: V3, a: f64, b: f64) {
     for c in 0..3 {
         v[c] += a * f[c];
         w[c] += b * t[c];
+    }
+}
+
+/// Adds to one block's forces and torques (block `b`, slices `fs`, `ts`) the reactions on its
+/// particles from every block up to and including it, in block order; `reach` is the largest
+/// block offset any reaction has.
+pub(super) fn add_reactions(outs: &[BlockOut], reach: usize, b: usize, fs: &mut [V3], ts: &mut [V3]) {
+    let lo = b * BLOCK;
+    for s in b.saturating_sub(reach)..=b {
+        if let Some(list) = outs.get(s).and_then(|o| o.reactions.get(b - s)) {
+            for &(j, f, t) in list {
+                add_to(&mut fs[j as usize - lo], f);
+                add_to(&mut ts[j as usize - lo], t);
+            }
+        }
     }
 }
 
@@ -56,7 +71,6 @@ pub(super) struct Ctx<'a> {
     pub(super) mass: &'a [f64],
     pub(super) id: &'a [u64],
     pub(super) start: &'a [u32],
-    pub(super) nbr: &'a [u32],
     pub(super) cell_of: &'a [u32],
     pub(super) grid: &'a Grid,
     pub(super) geom: &'a Geometry,
@@ -73,8 +87,11 @@ pub(super) struct Ctx<'a> {
 
 impl Ctx<'_> {
     /// Forces on the particles of one block (starting at `lo`), records into `out` (cleared).
-    pub(super) fn block(&self, lo: usize, force: &mut [V3], torque: &mut [V3], walls: &mut [[WallSlot; MAX_WALL_CONTACTS]], state: &mut [PairState], out: &mut BlockOut) {
-        out.reactions.clear();
+    pub(super) fn block(&self, lo: usize, force: &mut [V3], torque: &mut [V3], walls: &mut [[WallSlot; MAX_WALL_CONTACTS]], pairs: &mut PairBlock, out: &mut BlockOut) {
+        for r in &mut out.reactions {
+            r.clear();
+        }
+        let own_block = lo / BLOCK;
         out.impacts.clear();
         out.trace.clear();
         out.trace_ended = false;
@@ -88,7 +105,7 @@ impl Ctx<'_> {
             let mut fi = scale(self.gravity, mi);
             let mut ti = [0.0; 3];
             for k in self.start[i] as usize..self.start[i + 1] as usize {
-                let j = self.nbr[k] as usize;
+                let j = pairs.j[k - base] as usize;
                 let pj = self.pos[j];
                 let mut d = [pi[0] - pj[0], pi[1] - pj[1], pi[2] - pj[2]];
                 if d[1] > half {
@@ -102,7 +119,7 @@ impl Ctx<'_> {
                 if r2 >= rs * rs {
                     continue;
                 }
-                let st = &mut state[k - base];
+                let st = &mut pairs.state[k - base];
                 let new_contact = st.last + 1 != self.epoch;
                 if new_contact {
                     st.xi = [0.0; 3];
@@ -154,7 +171,12 @@ impl Ctx<'_> {
                 add_to(&mut ti, scale(arm_x_f, -ri));
                 add_to(&mut ti, cf.rolling_torque);
                 let tj = sub(scale(arm_x_f, -rj), cf.rolling_torque);
-                out.reactions.push((j as u32, scale(cf.force, -1.0), tj));
+                // Bucketed by the target's block, counted from this one (j > i: never before).
+                let offset = j / BLOCK - own_block;
+                if out.reactions.len() <= offset {
+                    out.reactions.resize_with(offset + 1, Vec::new);
+                }
+                out.reactions[offset].push((j as u32, scale(cf.force, -1.0), tj));
             }
             // Walls and tubes near the particle's cell.
             for &w in self.grid.walls_near(self.cell_of[i] as usize) {

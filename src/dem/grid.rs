@@ -2,6 +2,12 @@
 //! half neighbour list (pairs i < j within r_i + r_j + skin) rebuilt when any particle has moved
 //! more than half the skin since the last build.
 //!
+//! A rebuild is three passes: the particles' cells in parallel and a counting sort
+//! ([`sort_by_cell`]); then one parallel pass over fixed blocks of [`BLOCK`] particles that finds
+//! each row's pairs and carries the contact history of touching pairs over from the previous list
+//! ([`NeighbourList::build`]). Each block keeps its own pair storage ([`PairBlock`]), the same
+//! blocks the force loop owns, so nothing is concatenated serially.
+//!
 //! The grid also keeps, per cell, the walls (planes and tubes) within reach of a particle in
 //! that cell, so the wall loop tests a handful of candidates instead of every tube.
 
@@ -9,6 +15,10 @@ use rayon::prelude::*;
 
 use super::geometry::Geometry;
 use super::vec3::V3;
+
+/// Particles per block of the neighbour list and the force loop (fixed: results do not depend on
+/// the thread count).
+pub const BLOCK: usize = 256;
 
 /// The cell grid.
 #[derive(Debug, Clone)]
@@ -189,92 +199,174 @@ pub struct PairState {
     pub last: u32,
 }
 
-/// Half neighbour list in CSR form.
+/// The rows of one block of [`BLOCK`] particles: neighbour indices j > i and their pair states,
+/// row after row.
 #[derive(Debug, Clone, Default)]
-pub struct NeighbourList {
-    /// Row starts, len n + 1.
-    pub start: Vec<u32>,
-    /// Neighbour indices j > i.
+pub struct PairBlock {
+    /// Neighbour indices, rows in particle order, each sorted.
     pub j: Vec<u32>,
     /// Pair states, aligned with `j`.
     pub state: Vec<PairState>,
+}
+
+/// Half neighbour list: global row starts (CSR) and the pairs stored per block.
+#[derive(Debug, Clone, Default)]
+pub struct NeighbourList {
+    /// Row starts, len n + 1 (global pair numbering).
+    pub start: Vec<u32>,
+    /// Pairs of particles [b·BLOCK, (b+1)·BLOCK).
+    pub blocks: Vec<PairBlock>,
     /// Cell of each particle at the build.
     pub cell_of: Vec<u32>,
 }
 
-/// Sorts particles by cell: returns (order, cell of each sorted particle, cell starts).
-pub fn sort_by_cell(grid: &Grid, pos: &[V3]) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
-    let cells: Vec<u32> = pos.iter().map(|&p| grid.index(grid.coords(p)) as u32).collect();
+/// What a rebuild carries over: the previous list, each particle's index in it
+/// (`u32::MAX` = inserted since) and the force evaluation that list last saw.
+pub struct History<'a> {
+    /// The previous list.
+    pub old: &'a NeighbourList,
+    /// Index in the previous list of each (sorted) particle.
+    pub origin: &'a [u32],
+    /// The last force evaluation (epoch).
+    pub epoch: u32,
+}
+
+impl History<'_> {
+    /// The state of touching pair (i, j) in the previous list, oriented for (i, j); a fresh state
+    /// when either particle is new or the pair did not touch at the last evaluation.
+    fn carry(&self, i: usize, j: usize) -> PairState {
+        let (oi, oj) = (self.origin[i], self.origin[j]);
+        let old = self.old;
+        if oi == u32::MAX || oj == u32::MAX || old.start.is_empty() || self.epoch == 0 {
+            return PairState::default();
+        }
+        let (a, b, sign) = if oi < oj { (oi, oj, 1.0) } else { (oj, oi, -1.0) };
+        // Particles placed by hand since the last build have no row.
+        if a as usize + 1 >= old.start.len() {
+            return PairState::default();
+        }
+        let (row, states) = old.row(a as usize);
+        match row.binary_search(&b) {
+            Ok(pos) if states[pos].last == self.epoch => {
+                let xi = states[pos].xi;
+                PairState { xi: [sign * xi[0], sign * xi[1], sign * xi[2]], last: self.epoch }
+            }
+            _ => PairState::default(),
+        }
+    }
+}
+
+impl NeighbourList {
+    /// Row i: its neighbours j > i and their states.
+    #[inline]
+    pub fn row(&self, i: usize) -> (&[u32], &[PairState]) {
+        let b = i / BLOCK;
+        let base = self.start[b * BLOCK] as usize;
+        let (s, e) = (self.start[i] as usize - base, self.start[i + 1] as usize - base);
+        let blk = &self.blocks[b];
+        (&blk.j[s..e], &blk.state[s..e])
+    }
+
+    /// Pairs in the list.
+    pub fn pairs(&self) -> usize {
+        self.start.last().map_or(0, |&k| k as usize)
+    }
+
+    /// The half list of particles already sorted by cell: j > i within r_i + r_j + skin (minimum
+    /// image along y), with the history of pairs touching now carried over from `history`. One
+    /// parallel pass over fixed blocks; the row starts are summed serially (one add a particle).
+    #[allow(clippy::too_many_arguments)]
+    pub fn build(grid: &Grid, pos: &[V3], radius: &[f64], cell_of: Vec<u32>, cell_start: &[u32], skin: f64, slab: f64, history: &History) -> NeighbourList {
+        let n = pos.len();
+        let half = slab / 2.0;
+        let built: Vec<(Vec<u32>, PairBlock)> = (0..n.div_ceil(BLOCK))
+            .into_par_iter()
+            .with_max_len(1)
+            .map(|b| {
+                let lo = b * BLOCK;
+                let hi = (lo + BLOCK).min(n);
+                let mut counts = Vec::with_capacity(hi - lo);
+                let mut blk = PairBlock { j: Vec::with_capacity((hi - lo) * 8), state: Vec::with_capacity((hi - lo) * 8) };
+                for i in lo..hi {
+                    let before = blk.j.len();
+                    let (pi, ri) = (pos[i], radius[i]);
+                    // Forward cells in increasing order: rows come out sorted by j.
+                    for &nc in grid.forward_cells(cell_of[i] as usize) {
+                        let nc = nc as usize;
+                        let (s, e) = (cell_start[nc] as usize, cell_start[nc + 1] as usize);
+                        let s = s.max(i + 1);
+                        for j in s..e {
+                            let pj = pos[j];
+                            let dx = pi[0] - pj[0];
+                            let mut dy = pi[1] - pj[1];
+                            if dy > half {
+                                dy -= slab;
+                            } else if dy < -half {
+                                dy += slab;
+                            }
+                            let dz = pi[2] - pj[2];
+                            let d2 = dx * dx + dy * dy + dz * dz;
+                            let touch = ri + radius[j];
+                            let cut = touch + skin;
+                            if d2 < cut * cut {
+                                blk.j.push(j as u32);
+                                // Only pairs touching now look their history up.
+                                blk.state.push(if d2 < touch * touch { history.carry(i, j) } else { PairState::default() });
+                            }
+                        }
+                    }
+                    counts.push((blk.j.len() - before) as u32);
+                }
+                (counts, blk)
+            })
+            .collect();
+        let mut start = Vec::with_capacity(n + 1);
+        start.push(0u32);
+        let mut blocks = Vec::with_capacity(built.len());
+        let mut last = 0u32;
+        for (counts, blk) in built {
+            for c in counts {
+                last += c;
+                start.push(last);
+            }
+            blocks.push(blk);
+        }
+        NeighbourList { start, blocks, cell_of }
+    }
+}
+
+/// Sorts particles by cell, leaving out those `drop` marks (indices past its end are kept):
+/// returns (order, cell of each sorted particle, cell starts). The cells are found in parallel;
+/// the counting sort is stable, so equal cells keep their input order.
+pub fn sort_by_cell(grid: &Grid, pos: &[V3], drop: Option<&[bool]>) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
+    const GONE: u32 = u32::MAX;
+    let cells: Vec<u32> = pos
+        .par_iter()
+        .enumerate()
+        .with_min_len(4096)
+        .map(|(i, &p)| if drop.is_some_and(|d| d.get(i).copied().unwrap_or(false)) { GONE } else { grid.index(grid.coords(p)) as u32 })
+        .collect();
     let mut count = vec![0u32; grid.cells() + 1];
     for &c in &cells {
-        count[c as usize + 1] += 1;
+        if c != GONE {
+            count[c as usize + 1] += 1;
+        }
     }
     for k in 1..count.len() {
         count[k] += count[k - 1];
     }
+    let kept = *count.last().unwrap_or(&0) as usize;
     let cell_start = count.clone();
     let mut next = count;
-    let mut order = vec![0u32; pos.len()];
+    let mut order = vec![0u32; kept];
+    let mut sorted_cells = vec![0u32; kept];
     for (i, &c) in cells.iter().enumerate() {
-        order[next[c as usize] as usize] = i as u32;
-        next[c as usize] += 1;
-    }
-    let sorted_cells = order.iter().map(|&i| cells[i as usize]).collect();
-    (order, sorted_cells, cell_start)
-}
-
-/// Rows of the half list for particles already sorted by cell: j > i within r_i + r_j + skin
-/// (minimum image along y). Built in parallel over fixed blocks and concatenated in order.
-pub fn build_pairs(grid: &Grid, pos: &[V3], radius: &[f64], cell_of: &[u32], cell_start: &[u32], skin: f64, slab: f64) -> (Vec<u32>, Vec<u32>) {
-    const BLOCK: usize = 1024;
-    let n = pos.len();
-    let half = slab / 2.0;
-    let blocks: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(BLOCK))
-        .into_par_iter()
-        .with_max_len(1)
-        .map(|b| {
-            let lo = b * BLOCK;
-            let hi = (lo + BLOCK).min(n);
-            let mut counts = Vec::with_capacity(hi - lo);
-            let mut js = Vec::with_capacity((hi - lo) * 8);
-            for i in lo..hi {
-                let before = js.len();
-                let (pi, ri) = (pos[i], radius[i]);
-                // Forward cells in increasing order: rows come out sorted by j.
-                for &nc in grid.forward_cells(cell_of[i] as usize) {
-                    let nc = nc as usize;
-                    let (s, e) = (cell_start[nc] as usize, cell_start[nc + 1] as usize);
-                    let s = s.max(i + 1);
-                    for j in s..e {
-                        let pj = pos[j];
-                        let dx = pi[0] - pj[0];
-                        let mut dy = pi[1] - pj[1];
-                        if dy > half {
-                            dy -= slab;
-                        } else if dy < -half {
-                            dy += slab;
-                        }
-                        let dz = pi[2] - pj[2];
-                        let cut = ri + radius[j] + skin;
-                        if dx * dx + dy * dy + dz * dz < cut * cut {
-                            js.push(j as u32);
-                        }
-                    }
-                }
-                counts.push((js.len() - before) as u32);
-            }
-            (counts, js)
-        })
-        .collect();
-    let mut start = Vec::with_capacity(n + 1);
-    start.push(0u32);
-    let mut all = Vec::with_capacity(blocks.iter().map(|b| b.1.len()).sum());
-    for (counts, js) in blocks {
-        for c in counts {
-            let last = *start.last().unwrap_or(&0);
-            start.push(last + c);
+        if c != GONE {
+            let at = next[c as usize] as usize;
+            order[at] = i as u32;
+            sorted_cells[at] = c;
+            next[c as usize] += 1;
         }
-        all.extend_from_slice(&js);
     }
-    (start, all)
+    (order, sorted_cells, cell_start)
 }

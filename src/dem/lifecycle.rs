@@ -45,17 +45,12 @@ impl Dem {
     }
 
     /// Removes exited particles, inserts due ones, sorts by cell and rebuilds the half list,
-    /// carrying pair histories over by particle id.
+    /// carrying pair histories over by particle index. The exited particles are left out by the
+    /// sort, so the particle arrays are gathered once.
     pub(super) fn rebuild(&mut self) -> Result<()> {
-        // Old index of every particle after removal and insertion (u32::MAX: new), so that the
-        // histories of touching pairs can be carried over from the old list.
         let n_old = self.p.len();
-        let mut origin: Vec<u32> = match self.remove_exited() {
-            Some(keep) => keep,
-            None => (0..n_old as u32).collect(),
-        };
-        self.insert_due();
-        origin.resize(self.p.len(), u32::MAX);
+        let exited = self.record_exits();
+        self.insert_due(exited.as_deref());
         // Free wall slots whose wall is no longer touched.
         let g = &self.setup.geometry;
         let p = &mut self.p;
@@ -66,72 +61,36 @@ impl Dem {
                 }
             }
         });
-        let (order, cell_of, cell_start) = sort_by_cell(&self.grid, &self.p.pos);
-        self.p.gather(&order);
-        let origin: Vec<u32> = order.iter().map(|&k| origin[k as usize]).collect();
-        let slab = self.setup.geometry.slab;
-        let (start, j) = build_pairs(&self.grid, &self.p.pos, &self.p.radius, &cell_of, &cell_start, self.setup.skin(), slab);
+        let (order, cell_of, cell_start) = sort_by_cell(&self.grid, &self.p.pos, exited.as_deref());
+        self.spare.gather_from(&self.p, &order);
+        std::mem::swap(&mut self.p, &mut self.spare);
+        // Index in the old list of each sorted particle (inserted ones have none).
+        let origin: Vec<u32> = order.iter().map(|&k| if (k as usize) < n_old { k } else { u32::MAX }).collect();
         let old = std::mem::take(&mut self.nl);
-        let p = &self.p;
-        let epoch = self.epoch;
-        // Rows in parallel: only overlapping pairs look their history up (binary search in the
-        // old row of the lower old index; rows are sorted).
-        let state: Vec<PairState> = (0..p.len())
-            .into_par_iter()
-            .with_min_len(BLOCK)
-            .flat_map_iter(|i| {
-                let (old, origin, start, j) = (&old, &origin, &start, &j);
-                (start[i] as usize..start[i + 1] as usize).map(move |k| {
-                    let jj = j[k] as usize;
-                    let (oi, oj) = (origin[i], origin[jj]);
-                    if oi == u32::MAX || oj == u32::MAX || old.start.is_empty() {
-                        return PairState::default();
-                    }
-                    let mut d = sub(p.pos[i], p.pos[jj]);
-                    d[1] = min_image(d[1], slab);
-                    let rs = p.radius[i] + p.radius[jj];
-                    if dot(d, d) >= rs * rs {
-                        return PairState::default();
-                    }
-                    let (a, b, sign) = if oi < oj { (oi, oj, 1.0) } else { (oj, oi, -1.0) };
-                    // Particles placed by hand since the last build have no row.
-                    if a as usize + 1 >= old.start.len() {
-                        return PairState::default();
-                    }
-                    let row = &old.j[old.start[a as usize] as usize..old.start[a as usize + 1] as usize];
-                    match row.binary_search(&b) {
-                        Ok(pos) => {
-                            let st = old.state[old.start[a as usize] as usize + pos];
-                            if st.last == epoch && epoch > 0 { PairState { xi: scale(st.xi, sign), last: epoch } } else { PairState::default() }
-                        }
-                        Err(_) => PairState::default(),
-                    }
-                })
-            })
-            .collect();
-        self.nl = NeighbourList { start, j, state, cell_of };
+        let history = History { old: &old, origin: &origin, epoch: self.epoch };
+        self.nl = NeighbourList::build(&self.grid, &self.p.pos, &self.p.radius, cell_of, &cell_start, self.setup.skin(), self.setup.geometry.slab, &history);
         self.p.pos_at_build.clone_from(&self.p.pos);
         self.steps_since_build = 0;
         self.counters.builds += 1;
         Ok(())
     }
 
-    /// Removes particles below the outlet; returns the kept old indices when any left.
-    pub(super) fn remove_exited(&mut self) -> Option<Vec<u32>> {
+    /// Records the particles below the outlet (outflow, passes after the warm-up); returns which
+    /// particles left when any did. They stay in the arrays until the rebuild's sort drops them.
+    pub(super) fn record_exits(&mut self) -> Option<Vec<bool>> {
         let z_out = self.setup.geometry.outlet_z?;
         if !self.p.pos.iter().any(|x| x[2] < z_out) {
             return None;
         }
         let warm = self.setup.probes.warmup;
-        let mut keep = Vec::with_capacity(self.p.len());
-        for i in 0..self.p.len() {
+        let mut gone = vec![false; self.p.len()];
+        for (i, out) in gone.iter_mut().enumerate() {
             if self.p.pos[i][2] < z_out {
+                *out = true;
                 self.outflow_mass += self.p.mass[i];
                 self.counters.exited += 1;
                 if self.time >= warm {
                     self.outflow_mass_measured += self.p.mass[i];
-                }
-                if self.time >= warm {
                     self.passes.push(Pass {
                         particle: self.p.id[i],
                         diameter: 2.0 * self.p.radius[i],
@@ -140,15 +99,13 @@ impl Dem {
                         particle_impacts: self.p.n_particle[i],
                     });
                 }
-            } else {
-                keep.push(i as u32);
             }
         }
-        self.p.gather(&keep);
-        Some(keep)
+        Some(gone)
     }
 
-    pub(super) fn insert_due(&mut self) {
+    /// Inserts the particles due at the inlet, clear of every particle not marked `gone`.
+    pub(super) fn insert_due(&mut self, gone: Option<&[bool]>) {
         let Some(inlet) = self.setup.inlet else { return };
         let g = &self.setup.geometry;
         let area = (g.x_hi - g.x_lo) * g.slab;
@@ -162,7 +119,7 @@ impl Dem {
         // Particles that may overlap new ones.
         // Sorted by x: a candidate is checked against the particles within 2 r_max in x only.
         let mut near: Vec<(V3, f64)> = (0..self.p.len())
-            .filter(|&i| self.p.pos[i][2] + self.p.radius[i] > inlet.z_lo - r_max)
+            .filter(|&i| self.p.pos[i][2] + self.p.radius[i] > inlet.z_lo - r_max && !gone.is_some_and(|g| g[i]))
             .map(|i| (self.p.pos[i], self.p.radius[i]))
             .collect();
         near.sort_by(|a, b| a.0[0].total_cmp(&b.0[0]));

@@ -43,8 +43,15 @@
 //! # Determinism
 //!
 //! Forces are computed in parallel over fixed blocks of particles; each block owns its
-//! particles' forces and pair histories and returns the reactions on its neighbours, which are
-//! added serially in block order. Trajectories are therefore bit-identical for any thread count.
+//! particles' forces and pair histories and returns the reactions on its neighbours, bucketed by
+//! the neighbour's block. Each block then adds the reactions on its particles from every earlier
+//! block and itself, in block order, so every particle's force is summed in the same order on
+//! any thread count: trajectories are bit-identical for any thread count.
+//!
+//! That addition and the step's closing half kick are deferred to the next step's opening pass
+//! (the same arithmetic in the same order, one pass over the arrays fewer); [`Dem::settle`]
+//! applies them wherever velocities or forces are read: before a field sample, at the end of
+//! [`Dem::step`] and of [`Dem::advance`].
 
 pub mod contact;
 pub mod geometry;
@@ -69,18 +76,19 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use contact::{PairLaw, hertz_energy};
-use grid::{Grid, NeighbourList, PairState, build_pairs, sort_by_cell};
+use grid::{BLOCK, Grid, History, NeighbourList, sort_by_cell};
 use particles::{Particles, WallSlot};
 use probe::{FlowSample, Fields, Impact, Pass, Target, TraceSample};
-use vec3::{V3, add_to, dot, norm, scale, sub};
+use vec3::{V3, dot, norm, sub};
 
-/// Block size of the parallel force loop (fixed: results do not depend on the thread count).
-const BLOCK: usize = 256;
-
-/// A pair of records the force blocks return for serial reduction.
-#[derive(Debug, Default)]
+/// What a force block returns. Aligned to two cache lines so that blocks on different threads
+/// never write the same line (their vectors' lengths and the worst overlap live here).
+#[derive(Debug, Clone, Default)]
+#[repr(align(128))]
 struct BlockOut {
-    reactions: Vec<(u32, V3, V3)>,
+    /// Reactions (particle, force, torque) on later particles, bucketed by the target's block
+    /// minus this block.
+    reactions: Vec<Vec<(u32, V3, V3)>>,
     impacts: Vec<(Impact, u32, u32, f64, f64)>,
     trace: Vec<TraceSample>,
     trace_ended: bool,
@@ -103,6 +111,7 @@ pub struct Counters {
 }
 
 /// A DEM simulation.
+#[derive(Clone)]
 pub struct Dem {
     /// Its set-up.
     pub setup: DemSetup,
@@ -111,6 +120,8 @@ pub struct Dem {
     grid: Grid,
     /// Particles.
     pub p: Particles,
+    /// The arrays a rebuild gathers into (then swapped with `p`), kept for their capacity.
+    spare: Particles,
     nl: NeighbourList,
     /// Simulated time (s).
     pub time: f64,
@@ -143,12 +154,20 @@ pub struct Dem {
     trace_done: bool,
     reduce_seconds: f64,
     block_out: Vec<BlockOut>,
+    /// Largest block offset of a reaction in `block_out`.
+    reach: usize,
+    /// The last force evaluation's reactions are not yet added to `p.force`/`p.torque`.
+    pending_reactions: bool,
+    /// The last step's closing half kick is not yet applied to `p.vel`/`p.omega`.
+    pending_kick: bool,
     /// Force evaluations so far (pair-contact epoch, see [`grid::PairState`]).
     epoch: u32,
     /// Counters.
     pub counters: Counters,
-    /// Wall time per phase (s): kick–drift, position check, neighbour rebuild, force blocks,
-    /// serial reduction, closing kick and sampling.
+    /// Wall time per phase (s): kick–drift (with the previous evaluation's reactions and closing
+    /// kick), position check, neighbour rebuild, force blocks, serial bookkeeping of impacts,
+    /// settling (reactions and closing kick, where a sample or the end of a run needs them) and
+    /// sampling.
     pub phase_seconds: [f64; 6],
 }
 
@@ -173,6 +192,7 @@ impl Dem {
             pw,
             grid,
             p: Particles::default(),
+            spare: Particles::default(),
             nl: NeighbourList::default(),
             time: 0.0,
             step: 0,
@@ -193,6 +213,9 @@ impl Dem {
             trace_done: false,
             reduce_seconds: 0.0,
             block_out: Vec::new(),
+            reach: 0,
+            pending_reactions: false,
+            pending_kick: false,
             epoch: 0,
             counters: Counters::default(),
             phase_seconds: [0.0; 6],
@@ -226,14 +249,15 @@ impl Dem {
     /// Total mechanical energy: kinetic + Hertz elastic (pairs and walls) − gravity work (J).
     /// Exact only for e = 1 and μ = 0.
     pub fn energy(&self) -> f64 {
+        debug_assert!(!self.pending_reactions && !self.pending_kick, "read between settled steps");
         let p = &self.p;
         let mut e = p.kinetic_energy();
         let gvec = self.setup.gravity;
         let slab = self.setup.geometry.slab;
         for i in 0..p.len() {
             e -= p.mass[i] * dot(gvec, p.pos[i]);
-            for k in self.nl.start[i] as usize..self.nl.start[i + 1] as usize {
-                let j = self.nl.j[k] as usize;
+            for &j in self.nl.row(i).0 {
+                let j = j as usize;
                 let mut d = sub(p.pos[i], p.pos[j]);
                 d[1] = min_image(d[1], slab);
                 let delta = p.radius[i] + p.radius[j] - norm(d);
@@ -252,17 +276,65 @@ impl Dem {
     }
 
 
-    /// Advances `n` steps.
+    /// Advances `n` steps; velocities and forces are complete when it returns.
     pub fn advance(&mut self, n: u64) -> Result<()> {
         for _ in 0..n {
-            self.step()?;
+            self.step_deferred()?;
         }
+        self.settle_timed();
         Ok(())
     }
 
-    /// One velocity-Verlet step.
+    /// One velocity-Verlet step; velocities and forces are complete when it returns.
     pub fn step(&mut self) -> Result<()> {
+        self.step_deferred()?;
+        self.settle_timed();
+        Ok(())
+    }
+
+    /// Adds the pending reactions and applies the pending closing half kick, in parallel over
+    /// the force blocks (the same arithmetic the next step's opening pass would do).
+    pub fn settle(&mut self) {
+        if !self.pending_reactions && !self.pending_kick {
+            return;
+        }
+        let (reactions, close) = (self.pending_reactions, self.pending_kick);
+        let (outs, reach) = (&self.block_out, self.reach);
+        let half = 0.5 * self.setup.time_step;
+        let p = &mut self.p;
+        p.vel
+            .par_chunks_mut(BLOCK)
+            .zip(p.omega.par_chunks_mut(BLOCK))
+            .zip(p.force.par_chunks_mut(BLOCK))
+            .zip(p.torque.par_chunks_mut(BLOCK))
+            .zip(p.mass.par_chunks(BLOCK))
+            .zip(p.inv_inertia.par_chunks(BLOCK))
+            .enumerate()
+            .for_each(|(b, (((((vs, ws), fs), ts), ms), iis))| {
+                if reactions {
+                    add_reactions(outs, reach, b, fs, ts);
+                }
+                if close {
+                    for k in 0..vs.len() {
+                        kick(&mut vs[k], &mut ws[k], fs[k], ts[k], half / ms[k], half * iis[k]);
+                    }
+                }
+            });
+        self.pending_reactions = false;
+        self.pending_kick = false;
+    }
+
+    /// [`Self::settle`], its time counted with the closing kick and sampling.
+    fn settle_timed(&mut self) {
+        let t0 = std::time::Instant::now();
+        self.settle();
+        self.phase_seconds[5] += t0.elapsed().as_secs_f64();
+    }
+
+    /// One step leaving the reactions and the closing half kick pending.
+    fn step_deferred(&mut self) -> Result<()> {
         if !self.primed {
+            debug_assert!(!self.pending_reactions && !self.pending_kick);
             self.p.vel_pred.clone_from(&self.p.vel);
             self.p.omega_pred.clone_from(&self.p.omega);
             self.rebuild()?;
@@ -273,9 +345,12 @@ impl Dem {
         let half = 0.5 * dt;
         let slab = self.setup.geometry.slab;
         let skin2 = (0.5 * self.setup.skin()).powi(2);
-        // Kick + drift, and the largest displacement since the last build.
+        // (Reactions and closing kick of the last step,) kick + drift, and the largest
+        // displacement since the last build.
         let t0 = std::time::Instant::now();
         let bounds = self.escape_bounds();
+        let (reactions, close) = (self.pending_reactions, self.pending_kick);
+        let (outs, reach) = (&self.block_out, self.reach);
         let p = &mut self.p;
         // Fixed blocks of plain loops over slices (the compiler keeps them tight; rayon only
         // distributes blocks).
@@ -286,16 +361,23 @@ impl Dem {
             .zip(p.omega.par_chunks_mut(BLOCK))
             .zip(p.vel_pred.par_chunks_mut(BLOCK))
             .zip(p.omega_pred.par_chunks_mut(BLOCK))
-            .zip(p.force.par_chunks(BLOCK))
-            .zip(p.torque.par_chunks(BLOCK))
+            .zip(p.force.par_chunks_mut(BLOCK))
+            .zip(p.torque.par_chunks_mut(BLOCK))
             .zip(p.mass.par_chunks(BLOCK))
             .zip(p.inv_inertia.par_chunks(BLOCK))
             .zip(p.pos_at_build.par_chunks(BLOCK))
-            .map(|(((((((((xs, vs), ws), vps), wps), fs), ts), ms), iis), x0s)| {
+            .enumerate()
+            .map(|(blk, (((((((((xs, vs), ws), vps), wps), fs), ts), ms), iis), x0s))| {
+                if reactions {
+                    add_reactions(outs, reach, blk, fs, ts);
+                }
                 let mut worst = 0.0f64;
                 for k in 0..xs.len() {
                     let (x, v, w, f, t) = (&mut xs[k], &mut vs[k], &mut ws[k], fs[k], ts[k]);
                     let (a, b) = (half / ms[k], half * iis[k]);
+                    if close {
+                        kick(v, w, f, t, a, b);
+                    }
                     kick(v, w, f, t, a, b);
                     // End-of-step prediction v(t) + Δt a(t) for the velocity-dependent forces.
                     vps[k] = [v[0] + a * f[0], v[1] + a * f[1], v[2] + a * f[2]];
@@ -324,6 +406,8 @@ impl Dem {
                 worst
             })
             .reduce(|| 0.0, f64::max);
+        self.pending_reactions = false;
+        self.pending_kick = false;
         self.time += dt;
         self.step += 1;
         self.steps_since_build += 1;
@@ -337,23 +421,11 @@ impl Dem {
         }
         let t3 = std::time::Instant::now();
         self.compute_forces()?;
+        self.pending_kick = true;
         let t5 = std::time::Instant::now();
-        let p = &mut self.p;
-        p.vel
-            .par_chunks_mut(BLOCK)
-            .zip(p.omega.par_chunks_mut(BLOCK))
-            .zip(p.force.par_chunks(BLOCK))
-            .zip(p.torque.par_chunks(BLOCK))
-            .zip(p.mass.par_chunks(BLOCK))
-            .zip(p.inv_inertia.par_chunks(BLOCK))
-            .for_each(|(((((vs, ws), fs), ts), ms), iis)| {
-                for k in 0..vs.len() {
-                    let (v, w, f, t) = (&mut vs[k], &mut ws[k], fs[k], ts[k]);
-                    kick(v, w, f, t, half / ms[k], half * iis[k]);
-                }
-            });
         self.counters.particle_steps += self.p.len() as u64;
         if self.time >= self.setup.probes.warmup && self.step.is_multiple_of(self.setup.probes.sample_every) {
+            self.settle();
             self.sample();
         }
         let t6 = std::time::Instant::now();
@@ -368,21 +440,7 @@ impl Dem {
     }
 
     fn compute_forces(&mut self) -> Result<()> {
-        let n = self.p.len();
-        let nblocks = n.div_ceil(BLOCK);
-        // Split the pair states at block boundaries so that each block owns its rows.
-        let mut state_blocks: Vec<&mut [PairState]> = Vec::with_capacity(nblocks);
-        {
-            let mut rest: &mut [PairState] = &mut self.nl.state;
-            let mut consumed = 0usize;
-            for b in 0..nblocks {
-                let hi = self.nl.start[((b + 1) * BLOCK).min(n)] as usize;
-                let (head, tail) = rest.split_at_mut(hi - consumed);
-                state_blocks.push(head);
-                rest = tail;
-                consumed = hi;
-            }
-        }
+        let nblocks = self.p.len().div_ceil(BLOCK);
         self.epoch += 1;
         let ctx = Ctx {
             epoch: self.epoch,
@@ -393,7 +451,6 @@ impl Dem {
             mass: &self.p.mass,
             id: &self.p.id,
             start: &self.nl.start,
-            nbr: &self.nl.j,
             cell_of: &self.nl.cell_of,
             grid: &self.grid,
             geom: &self.setup.geometry,
@@ -415,21 +472,19 @@ impl Dem {
             .par_chunks_mut(BLOCK)
             .zip(self.p.torque.par_chunks_mut(BLOCK))
             .zip(self.p.walls.par_chunks_mut(BLOCK))
-            .zip(state_blocks.into_par_iter())
+            .zip(self.nl.blocks.par_iter_mut())
             .zip(outs.par_iter_mut())
             .enumerate()
             // One block per task: rayon's default leaves of many blocks balance badly when the
             // contact density varies with height.
             .with_max_len(1)
             .for_each(|(b, ((((f, t), w), s), out))| ctx.block(b * BLOCK, f, t, w, s, out));
-        // Serial reduction in block order.
+        // Serial bookkeeping in block order (the reactions wait for the next parallel pass).
         let tr = std::time::Instant::now();
         let mut worst: Option<(f64, u32)> = None;
+        self.reach = 0;
         for out in &outs {
-            for &(j, f, t) in &out.reactions {
-                add_to(&mut self.p.force[j as usize], f);
-                add_to(&mut self.p.torque[j as usize], t);
-            }
+            self.reach = self.reach.max(out.reactions.len().saturating_sub(1));
             for &(imp, i, j, delta, fnorm) in &out.impacts {
                 match imp.target {
                     Target::Particle => {
@@ -462,6 +517,7 @@ impl Dem {
             }
         }
         self.block_out = outs;
+        self.pending_reactions = true;
         self.reduce_seconds = tr.elapsed().as_secs_f64();
         if let Some((frac, i)) = worst {
             let i = i as usize;
@@ -481,6 +537,7 @@ impl Dem {
     }
 
     fn sample(&mut self) {
+        debug_assert!(!self.pending_kick, "sampled before the closing kick");
         let mut mass = 0.0;
         for i in 0..self.p.len() {
             self.fields.add(self.p.pos[i], self.p.vel[i]);
@@ -503,8 +560,8 @@ impl Dem {
         let slab = self.setup.geometry.slab;
         let mut z_count = vec![0u32; p.len()];
         for i in 0..p.len() {
-            for k in self.nl.start[i] as usize..self.nl.start[i + 1] as usize {
-                let j = self.nl.j[k] as usize;
+            for &j in self.nl.row(i).0 {
+                let j = j as usize;
                 let mut d = sub(p.pos[i], p.pos[j]);
                 d[1] = min_image(d[1], slab);
                 if norm(d) < p.radius[i] + p.radius[j] {

@@ -90,29 +90,38 @@ impl Particles {
         self.walls.push([WallSlot::FREE; MAX_WALL_CONTACTS]);
     }
 
-    /// Reorders every field: new index k holds old index `order[k]` (which may drop particles).
-    pub fn gather(&mut self, order: &[u32]) {
-        fn g<T: Copy + Send + Sync>(v: &mut Vec<T>, order: &[u32]) {
-            use rayon::prelude::*;
-            let out: Vec<T> = order.par_iter().with_min_len(4096).map(|&k| v[k as usize]).collect();
-            *v = out;
-        }
-        g(&mut self.pos, order);
-        g(&mut self.vel, order);
-        g(&mut self.omega, order);
-        g(&mut self.vel_pred, order);
-        g(&mut self.omega_pred, order);
-        g(&mut self.force, order);
-        g(&mut self.torque, order);
-        g(&mut self.radius, order);
-        g(&mut self.mass, order);
-        g(&mut self.inv_inertia, order);
-        g(&mut self.id, order);
-        g(&mut self.t_insert, order);
-        g(&mut self.n_tube, order);
-        g(&mut self.n_particle, order);
-        g(&mut self.pos_at_build, order);
-        g(&mut self.walls, order);
+    /// Makes `self` the particles of `src` in the order `order`: new index k holds `src`'s index
+    /// `order[k]` (which may drop particles). The arrays keep their capacity, so a rebuild that
+    /// gathers into the spare set and swaps allocates nothing, and the insertions that follow
+    /// push without reallocating; the fields are gathered side by side (one task each).
+    pub fn gather_from(&mut self, src: &Particles, order: &[u32]) {
+        rayon::scope(|s| {
+            let Particles { pos, vel, omega, vel_pred, omega_pred, force, torque, radius, mass, inv_inertia, id, t_insert, n_tube, n_particle, pos_at_build, walls } = self;
+            macro_rules! field {
+                ($dst:ident) => {
+                    s.spawn(move |_| {
+                        $dst.clear();
+                        $dst.extend(order.iter().map(|&k| src.$dst[k as usize]));
+                    });
+                };
+            }
+            field!(pos);
+            field!(vel);
+            field!(omega);
+            field!(vel_pred);
+            field!(omega_pred);
+            field!(force);
+            field!(torque);
+            field!(radius);
+            field!(mass);
+            field!(inv_inertia);
+            field!(id);
+            field!(t_insert);
+            field!(n_tube);
+            field!(n_particle);
+            field!(pos_at_build);
+            field!(walls);
+        });
     }
 
     /// Kinetic energy, translational + rotational (J).

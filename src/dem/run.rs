@@ -360,13 +360,24 @@ pub fn run_dem(loaded: &StudyFile, s: &DemStudy, opts: &RunOptions) -> Result<Ru
     let chunk = 500u64;
     let t_loop = Instant::now();
     while dem.step < total_steps {
-        let n = chunk.min(total_steps - dem.step);
-        for _ in 0..n {
-            dem.step()?;
-            while next_snap < snaps.len() && dem.time >= snaps[next_snap] - 0.5 * dt {
-                write_snapshot(&mut dir, &dem)?;
-                next_snap += 1;
+        // Up to the chunk's end or the step that reaches the next snapshot, whichever is first
+        // (time accumulated as the solver does, so the same step is found).
+        let mut n = chunk.min(total_steps - dem.step);
+        if let Some(&t_snap) = snaps.get(next_snap) {
+            let (mut t, mut k) = (dem.time, 0);
+            while k < n {
+                t += dt;
+                k += 1;
+                if t >= t_snap - 0.5 * dt {
+                    break;
+                }
             }
+            n = k;
+        }
+        dem.advance(n)?;
+        while next_snap < snaps.len() && dem.time >= snaps[next_snap] - 0.5 * dt {
+            write_snapshot(&mut dir, &dem)?;
+            next_snap += 1;
         }
         pb.set_position(dem.step);
         pb.set_message(format!("t = {:.3} s, {} particles, {} impacts", dem.time, dem.p.len(), dem.impacts.len()));

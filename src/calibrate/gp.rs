@@ -133,10 +133,12 @@ impl Gp {
 
     /// Predictive mean and variance of the latent function at `p` (output units).
     pub fn predict(&self, p: &[f64]) -> (f64, f64) {
-        let ks = DVector::from_iterator(self.x.len(), self.x.iter().map(|xi| matern52(xi, p, &self.inv_l, self.signal_variance)));
+        let mut ks = DVector::from_iterator(self.x.len(), self.x.iter().map(|xi| matern52(xi, p, &self.inv_l, self.signal_variance)));
         let mean = ks.dot(&self.alpha);
-        let v = self.chol.solve(&ks);
-        let var = (self.signal_variance - ks.dot(&v)).max(0.0);
+        // k*ᵀ K⁻¹ k* = |L⁻¹ k*|² with K = L Lᵀ: one triangular solve, in place (the full
+        // `solve` does two and allocates).
+        self.chol.l_dirty().solve_lower_triangular_unchecked_mut(&mut ks);
+        let var = (self.signal_variance - ks.norm_squared()).max(0.0);
         (self.y_mean + self.y_sd * mean, self.y_sd * self.y_sd * var)
     }
 

@@ -267,6 +267,9 @@ macro_rules! out {
     }};
 }
 
+/// Steps of the fine-mesh crush FE benchmark.
+const FINE_STEPS: u64 = 1000;
+
 /// The DEM phases `bench --dem` and `--scaling` time, in [`partlife::dem::Dem::phase_seconds`]'s
 /// order.
 const DEM_PHASES: &str = "kick–drift (+ reactions, closing kick), check, rebuild, forces, bookkeeping, settle + sample";
@@ -466,6 +469,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let dem = partlife::bench::dem_scaling(partlife::bench::dem_benchmark_setup()?, 0.15, 10_000, &counts)?;
             let deep = partlife::bench::dem_scaling(partlife::bench::dem_deep_bank_setup()?, 0.15, 1_000, &counts)?;
             let fem = partlife::bench::fem_scaling(2, &counts)?;
+            let fine = partlife::bench::fem_steps_scaling(&partlife::bench::fem_fine_setup()?, FINE_STEPS, 2, &counts)?;
             let study = partlife::bench::main_study_scaling(&counts)?;
             let head: Vec<String> = counts.iter().map(|c| if *c == 1 { "1 thread".to_string() } else { c.to_string() }).collect();
             out!("| work | {} | speed-up on {max} |", head.join(" | "));
@@ -480,6 +484,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             let elements = fem.first().map_or(0, |f| f.elements);
             out!("{}", row(format!("crush FE, {elements} elements (element-steps/s)"), fem.iter().map(|f| f.element_steps_per_second).collect(), true, &e));
+            let fine_elements = fine.first().map_or(0, |f| f.elements);
+            out!("{}", row(format!("crush FE, fine mesh, {fine_elements} elements (element-steps/s)"), fine.iter().map(|f| f.element_steps_per_second).collect(), true, &e));
             out!("{}", row("main study `gen4_vs_bl` (wall s)".into(), study.seconds.iter().map(|s| s.1).collect(), false, &|x| format!("{x:.2}")));
             out!("main study tables ({}) byte-identical on every thread count: {}", study.tables.join(", "), if study.identical { "yes" } else { "NO" });
             for (what, d) in [("cold-test bank", &dem), ("10× deeper slab", &deep)] {
@@ -491,6 +497,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             let fe: Vec<String> = fem.iter().map(|f| format!("{} thread(s) {:.2} s", f.threads, f.run_seconds)).collect();
             out!("crush FE run to fracture ({} steps): {}; peak force the same on every count: {}", fem.first().map_or(0, |f| f.steps), fe.join(", "), if fem.windows(2).all(|w| w[0].peak_force == w[1].peak_force) { "yes" } else { "NO" });
+            out!("crush FE fine mesh, {FINE_STEPS} steps: platen impulse the same bits on every count: {}", if fine.windows(2).all(|w| w[0].impulse.to_bits() == w[1].impulse.to_bits()) { "yes" } else { "NO" });
         }
         Command::Bench { mcmc: true, chain, .. } => {
             // Checked before the benchmark runs: a bad argument costs nothing.
@@ -584,6 +591,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     f.elements, f.steps, f.threads, f.element_steps_per_second, f.run_seconds, f.peak_force
                 );
             }
+            let all = rayon::current_num_threads();
+            let fine = partlife::bench::fem_steps_scaling(&partlife::bench::fem_fine_setup()?, FINE_STEPS, 2, &if all > 1 { vec![1, all] } else { vec![1] })?;
+            for f in &fine {
+                out!("crush FE, fine mesh ({} elements, {FINE_STEPS} steps from the start), {} thread(s): {:.4e} element-steps/s, {:.2} s", f.elements, f.threads, f.element_steps_per_second, f.seconds);
+            }
+            out!("  same platen impulse on every count: {}", if fine.windows(2).all(|w| w[0].impulse.to_bits() == w[1].impulse.to_bits()) { "yes" } else { "NO" });
         }
         Command::Bench { study, .. } => {
             out!("machine: {} threads available to rayon", rayon::current_num_threads());

@@ -66,6 +66,14 @@ impl<S: Simulator + ?Sized> Simulator for &S {
     }
 }
 
+/// Runs `f` on a worker of the current rayon pool: directly when called from one, else handed
+/// to the global pool once. A solver's time loop runs through it, so that each of its parallel
+/// passes is an in-pool split (a pass of one task runs inline) rather than a job injected from
+/// outside and waited on, which costs two thread switches per pass.
+pub fn on_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    if rayon::current_thread_index().is_some() { f() } else { rayon::scope(|_| f()) }
+}
+
 /// Fails with [`Error::Numerical`] if any output is not finite, naming the output and θ.
 pub fn check_outputs(model: &str, specs: &[OutputSpec], theta: &[f64], y: &[f64]) -> Result<()> {
     for (s, v) in specs.iter().zip(y) {

@@ -20,6 +20,17 @@ use super::vec3::V3;
 /// the thread count).
 pub const BLOCK: usize = 256;
 
+/// Below this many blocks a pass runs as one task: handing a block of a few microseconds' work
+/// to another thread costs about as much as doing it (small rigs, or many runs side by side).
+pub const PARALLEL_BLOCKS: usize = 8;
+
+/// Blocks per task of a pass over `nblocks` blocks: all of them below [`PARALLEL_BLOCKS`], else
+/// one (each block a task, for balance where the contact density varies with height).
+#[inline]
+pub fn blocks_per_task(nblocks: usize) -> usize {
+    if nblocks < PARALLEL_BLOCKS { nblocks.max(1) } else { 1 }
+}
+
 /// The cell grid.
 #[derive(Debug, Clone)]
 pub struct Grid {
@@ -279,9 +290,12 @@ impl NeighbourList {
     pub fn build(grid: &Grid, pos: &[V3], radius: &[f64], cell_of: Vec<u32>, cell_start: &[u32], skin: f64, slab: f64, history: &History) -> NeighbourList {
         let n = pos.len();
         let half = slab / 2.0;
-        let built: Vec<(Vec<u32>, PairBlock)> = (0..n.div_ceil(BLOCK))
+        let nblocks = n.div_ceil(BLOCK);
+        let per_task = blocks_per_task(nblocks);
+        let built: Vec<(Vec<u32>, PairBlock)> = (0..nblocks)
             .into_par_iter()
-            .with_max_len(1)
+            .with_min_len(per_task)
+            .with_max_len(per_task)
             .map(|b| {
                 let lo = b * BLOCK;
                 let hi = (lo + BLOCK).min(n);
@@ -336,9 +350,12 @@ impl NeighbourList {
 }
 
 /// Sorts particles by cell, leaving out those `drop` marks (indices past its end are kept):
-/// returns (order, cell of each sorted particle, cell starts). The cells are found in parallel;
-/// the counting sort is stable, so equal cells keep their input order.
-pub fn sort_by_cell(grid: &Grid, pos: &[V3], drop: Option<&[bool]>) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
+/// returns (order, cell of each sorted particle); the cell starts are left in `starts` (len
+/// cells + 1: cell c holds sorted particles `starts[c]..starts[c + 1]`). The cells are found in
+/// parallel; the counting sort is stable (equal cells keep their input order). `buf` is the
+/// sort's one cells-long array, kept by the caller: a large, sparse grid (a long incline, a wide
+/// box) would otherwise allocate and fault in tens of megabytes at every rebuild.
+pub fn sort_by_cell<'b>(grid: &Grid, pos: &[V3], drop: Option<&[bool]>, buf: &'b mut Vec<u32>) -> (Vec<u32>, Vec<u32>, &'b [u32]) {
     const GONE: u32 = u32::MAX;
     let cells: Vec<u32> = pos
         .par_iter()
@@ -346,27 +363,30 @@ pub fn sort_by_cell(grid: &Grid, pos: &[V3], drop: Option<&[bool]>) -> (Vec<u32>
         .with_min_len(4096)
         .map(|(i, &p)| if drop.is_some_and(|d| d.get(i).copied().unwrap_or(false)) { GONE } else { grid.index(grid.coords(p)) as u32 })
         .collect();
-    let mut count = vec![0u32; grid.cells() + 1];
+    // buf[c + 1] counts cell c; its prefix sums make buf[c + 1] the end of cell c; scattering
+    // from the last particle down then moves buf[c + 1] to the start of cell c.
+    let nc = grid.cells();
+    buf.clear();
+    buf.resize(nc + 2, 0);
     for &c in &cells {
         if c != GONE {
-            count[c as usize + 1] += 1;
+            buf[c as usize + 1] += 1;
         }
     }
-    for k in 1..count.len() {
-        count[k] += count[k - 1];
+    for k in 1..nc + 1 {
+        buf[k] += buf[k - 1];
     }
-    let kept = *count.last().unwrap_or(&0) as usize;
-    let cell_start = count.clone();
-    let mut next = count;
+    let kept = buf[nc] as usize;
+    buf[nc + 1] = kept as u32;
     let mut order = vec![0u32; kept];
     let mut sorted_cells = vec![0u32; kept];
-    for (i, &c) in cells.iter().enumerate() {
+    for (i, &c) in cells.iter().enumerate().rev() {
         if c != GONE {
-            let at = next[c as usize] as usize;
-            order[at] = i as u32;
-            sorted_cells[at] = c;
-            next[c as usize] += 1;
+            let end = &mut buf[c as usize + 1];
+            *end -= 1;
+            order[*end as usize] = i as u32;
+            sorted_cells[*end as usize] = c;
         }
     }
-    (order, sorted_cells, cell_start)
+    (order, sorted_cells, &buf[1..])
 }

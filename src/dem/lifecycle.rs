@@ -54,21 +54,23 @@ impl Dem {
         // Free wall slots whose wall is no longer touched.
         let g = &self.setup.geometry;
         let p = &mut self.p;
-        p.walls.par_iter_mut().zip(p.pos.par_iter().zip(p.radius.par_iter())).with_min_len(BLOCK).for_each(|(slots, (&x, &r))| {
+        p.walls.par_iter_mut().zip(p.pos.par_iter().zip(p.radius.par_iter())).with_min_len(PARALLEL_BLOCKS * BLOCK).for_each(|(slots, (&x, &r))| {
             for slot in slots.iter_mut() {
                 if slot.wall != u32::MAX && wall_contact(g, slot.wall, x, r).is_none() {
                     *slot = WallSlot::FREE;
                 }
             }
         });
-        let (order, cell_of, cell_start) = sort_by_cell(&self.grid, &self.p.pos, exited.as_deref());
+        let mut buf = std::mem::take(&mut self.cell_buf);
+        let (order, cell_of, cell_start) = sort_by_cell(&self.grid, &self.p.pos, exited.as_deref(), &mut buf);
         self.spare.gather_from(&self.p, &order);
         std::mem::swap(&mut self.p, &mut self.spare);
         // Index in the old list of each sorted particle (inserted ones have none).
         let origin: Vec<u32> = order.iter().map(|&k| if (k as usize) < n_old { k } else { u32::MAX }).collect();
         let old = std::mem::take(&mut self.nl);
         let history = History { old: &old, origin: &origin, epoch: self.epoch };
-        self.nl = NeighbourList::build(&self.grid, &self.p.pos, &self.p.radius, cell_of, &cell_start, self.setup.skin(), self.setup.geometry.slab, &history);
+        self.nl = NeighbourList::build(&self.grid, &self.p.pos, &self.p.radius, cell_of, cell_start, self.setup.skin(), self.setup.geometry.slab, &history);
+        self.cell_buf = buf;
         self.p.pos_at_build.clone_from(&self.p.pos);
         self.steps_since_build = 0;
         self.counters.builds += 1;

@@ -76,7 +76,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use contact::{PairLaw, hertz_energy};
-use grid::{BLOCK, Grid, History, NeighbourList, sort_by_cell};
+use grid::{BLOCK, Grid, History, NeighbourList, PARALLEL_BLOCKS, blocks_per_task, sort_by_cell};
 use particles::{Particles, WallSlot};
 use probe::{FlowSample, Fields, Impact, Pass, Target, TraceSample};
 use vec3::{V3, dot, norm, sub};
@@ -122,6 +122,8 @@ pub struct Dem {
     pub p: Particles,
     /// The arrays a rebuild gathers into (then swapped with `p`), kept for their capacity.
     spare: Particles,
+    /// The cell sort's counts and starts, kept for its capacity.
+    cell_buf: Vec<u32>,
     nl: NeighbourList,
     /// Simulated time (s).
     pub time: f64,
@@ -193,6 +195,7 @@ impl Dem {
             grid,
             p: Particles::default(),
             spare: Particles::default(),
+            cell_buf: Vec::new(),
             nl: NeighbourList::default(),
             time: 0.0,
             step: 0,
@@ -278,18 +281,18 @@ impl Dem {
 
     /// Advances `n` steps; velocities and forces are complete when it returns.
     pub fn advance(&mut self, n: u64) -> Result<()> {
-        for _ in 0..n {
-            self.step_deferred()?;
-        }
-        self.settle_timed();
-        Ok(())
+        crate::model::on_pool(|| {
+            for _ in 0..n {
+                self.step_deferred()?;
+            }
+            self.settle_timed();
+            Ok(())
+        })
     }
 
     /// One velocity-Verlet step; velocities and forces are complete when it returns.
     pub fn step(&mut self) -> Result<()> {
-        self.step_deferred()?;
-        self.settle_timed();
-        Ok(())
+        self.advance(1)
     }
 
     /// Adds the pending reactions and applies the pending closing half kick, in parallel over
@@ -301,6 +304,7 @@ impl Dem {
         let (reactions, close) = (self.pending_reactions, self.pending_kick);
         let (outs, reach) = (&self.block_out, self.reach);
         let half = 0.5 * self.setup.time_step;
+        let per_task = blocks_per_task(self.p.len().div_ceil(BLOCK));
         let p = &mut self.p;
         p.vel
             .par_chunks_mut(BLOCK)
@@ -310,6 +314,7 @@ impl Dem {
             .zip(p.mass.par_chunks(BLOCK))
             .zip(p.inv_inertia.par_chunks(BLOCK))
             .enumerate()
+            .with_min_len(per_task)
             .for_each(|(b, (((((vs, ws), fs), ts), ms), iis))| {
                 if reactions {
                     add_reactions(outs, reach, b, fs, ts);
@@ -351,6 +356,7 @@ impl Dem {
         let bounds = self.escape_bounds();
         let (reactions, close) = (self.pending_reactions, self.pending_kick);
         let (outs, reach) = (&self.block_out, self.reach);
+        let per_task = blocks_per_task(self.p.len().div_ceil(BLOCK));
         let p = &mut self.p;
         // Fixed blocks of plain loops over slices (the compiler keeps them tight; rayon only
         // distributes blocks).
@@ -367,6 +373,7 @@ impl Dem {
             .zip(p.inv_inertia.par_chunks(BLOCK))
             .zip(p.pos_at_build.par_chunks(BLOCK))
             .enumerate()
+            .with_min_len(per_task)
             .map(|(blk, (((((((((xs, vs), ws), vps), wps), fs), ts), ms), iis), x0s))| {
                 if reactions {
                     add_reactions(outs, reach, blk, fs, ts);
@@ -475,9 +482,10 @@ impl Dem {
             .zip(self.nl.blocks.par_iter_mut())
             .zip(outs.par_iter_mut())
             .enumerate()
-            // One block per task: rayon's default leaves of many blocks balance badly when the
-            // contact density varies with height.
-            .with_max_len(1)
+            // One block per task (or all in one on a small system): rayon's default leaves of
+            // many blocks balance badly when the contact density varies with height.
+            .with_min_len(blocks_per_task(nblocks))
+            .with_max_len(blocks_per_task(nblocks))
             .for_each(|(b, ((((f, t), w), s), out))| ctx.block(b * BLOCK, f, t, w, s, out));
         // Serial bookkeeping in block order (the reactions wait for the next parallel pass).
         let tr = std::time::Instant::now();

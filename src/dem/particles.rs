@@ -95,8 +95,40 @@ impl Particles {
     /// gathers into the spare set and swaps allocates nothing, and the insertions that follow
     /// push without reallocating; the fields are gathered side by side (one task each).
     pub fn gather_from(&mut self, src: &Particles, order: &[u32]) {
+        let Particles { pos, vel, omega, vel_pred, omega_pred, force, torque, radius, mass, inv_inertia, id, t_insert, n_tube, n_particle, pos_at_build, walls } = self;
+        // (Defined after the binding: a macro's identifiers resolve where it is defined.)
+        macro_rules! every_field {
+            ($m:ident) => {
+                $m!(pos);
+                $m!(vel);
+                $m!(omega);
+                $m!(vel_pred);
+                $m!(omega_pred);
+                $m!(force);
+                $m!(torque);
+                $m!(radius);
+                $m!(mass);
+                $m!(inv_inertia);
+                $m!(id);
+                $m!(t_insert);
+                $m!(n_tube);
+                $m!(n_particle);
+                $m!(pos_at_build);
+                $m!(walls);
+            };
+        }
+        // A small system is gathered on this thread: handing the fields out costs more.
+        if order.len() < super::grid::PARALLEL_BLOCKS * super::grid::BLOCK {
+            macro_rules! field {
+                ($dst:ident) => {
+                    $dst.clear();
+                    $dst.extend(order.iter().map(|&k| src.$dst[k as usize]));
+                };
+            }
+            every_field!(field);
+            return;
+        }
         rayon::scope(|s| {
-            let Particles { pos, vel, omega, vel_pred, omega_pred, force, torque, radius, mass, inv_inertia, id, t_insert, n_tube, n_particle, pos_at_build, walls } = self;
             macro_rules! field {
                 ($dst:ident) => {
                     s.spawn(move |_| {
@@ -105,22 +137,7 @@ impl Particles {
                     });
                 };
             }
-            field!(pos);
-            field!(vel);
-            field!(omega);
-            field!(vel_pred);
-            field!(omega_pred);
-            field!(force);
-            field!(torque);
-            field!(radius);
-            field!(mass);
-            field!(inv_inertia);
-            field!(id);
-            field!(t_insert);
-            field!(n_tube);
-            field!(n_particle);
-            field!(pos_at_build);
-            field!(walls);
+            every_field!(field);
         });
     }
 

@@ -272,7 +272,7 @@ const FINE_STEPS: u64 = 1000;
 
 /// The DEM phases `bench --dem` and `--scaling` time, in [`partlife::dem::Dem::phase_seconds`]'s
 /// order.
-const DEM_PHASES: &str = "kick–drift (+ reactions, closing kick), check, rebuild, forces, bookkeeping, settle + sample";
+const DEM_PHASES: &str = "kick–drift (+ reactions and closing kick), check, rebuild, forces, bookkeeping, settle + sample";
 
 fn main() -> ExitCode {
     let cli = Cli::parse();

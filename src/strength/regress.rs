@@ -312,9 +312,11 @@ fn fit_with(x: &[f64], design: &Design, tie: Option<(&[f64], f64)>, start: Optio
         let mut l = 0.0;
         let mut g = DVector::<f64>::zeros(np);
         let mut h = DMatrix::<f64>::zeros(np, np);
+        // Without scale columns ln b is p[k + 1] for every specimen: one exp, not n.
+        let b_common = (r == 0).then(|| p[k + 1].exp());
         for i in 0..n {
             let s: f64 = (0..=r).map(|c| p[k + 1 + c] * v(i, c)).sum();
-            let b = s.exp();
+            let b = b_common.unwrap_or_else(|| s.exp());
             // u: the residual in units of b_i; w = u (+ k t_i when a column is tied to 1/b).
             let u = (y[i] - eta[i]) / b;
             let w = u + tie.map_or(0.0, |(t, kk)| kk * t[i]);

@@ -287,7 +287,7 @@ impl NeighbourList {
     /// image along y), with the history of pairs touching now carried over from `history`. One
     /// parallel pass over fixed blocks; the row starts are summed serially (one add a particle).
     #[allow(clippy::too_many_arguments)]
-    pub fn build(grid: &Grid, pos: &[V3], radius: &[f64], cell_of: Vec<u32>, cell_start: &[u32], skin: f64, slab: f64, history: &History) -> NeighbourList {
+    pub fn build(grid: &Grid, pos: &[V3], radius: &[f64], cell_of: Vec<u32>, cells: CellStarts, skin: f64, slab: f64, history: &History) -> NeighbourList {
         let n = pos.len();
         let half = slab / 2.0;
         let nblocks = n.div_ceil(BLOCK);
@@ -307,7 +307,7 @@ impl NeighbourList {
                     // Forward cells in increasing order: rows come out sorted by j.
                     for &nc in grid.forward_cells(cell_of[i] as usize) {
                         let nc = nc as usize;
-                        let (s, e) = (cell_start[nc] as usize, cell_start[nc + 1] as usize);
+                        let (s, e) = cells.range(nc);
                         let s = s.max(i + 1);
                         for j in s..e {
                             let pj = pos[j];
@@ -349,13 +349,32 @@ impl NeighbourList {
     }
 }
 
+/// Where each cell's particles lie in the sorted order, for the cells from `base` on: cell c holds
+/// `starts[c − base]..starts[c − base + 1]`; cells outside are empty.
+#[derive(Debug, Clone, Copy)]
+pub struct CellStarts<'b> {
+    base: usize,
+    starts: &'b [u32],
+}
+
+impl CellStarts<'_> {
+    /// The sorted particles of cell `c`.
+    #[inline]
+    pub fn range(&self, c: usize) -> (usize, usize) {
+        match c.checked_sub(self.base) {
+            Some(k) if k + 1 < self.starts.len() => (self.starts[k] as usize, self.starts[k + 1] as usize),
+            _ => (0, 0),
+        }
+    }
+}
+
 /// Sorts particles by cell, leaving out those `drop` marks (indices past its end are kept):
-/// returns (order, cell of each sorted particle); the cell starts are left in `starts` (len
-/// cells + 1: cell c holds sorted particles `starts[c]..starts[c + 1]`). The cells are found in
-/// parallel; the counting sort is stable (equal cells keep their input order). `buf` is the
-/// sort's one cells-long array, kept by the caller: a large, sparse grid (a long incline, a wide
-/// box) would otherwise allocate and fault in tens of megabytes at every rebuild.
-pub fn sort_by_cell<'b>(grid: &Grid, pos: &[V3], drop: Option<&[bool]>, buf: &'b mut Vec<u32>) -> (Vec<u32>, Vec<u32>, &'b [u32]) {
+/// returns (order, cell of each sorted particle, where each cell's particles lie). The cells are
+/// found in parallel; the counting sort is stable (equal cells keep their input order) and counts
+/// only from the lowest occupied cell to the highest plus the reach of a cell's forward
+/// neighbours (less than two layers of cells), so a large, sparse grid (a long incline, a wide
+/// box) costs what its particles occupy. `buf` is the sort's array, kept by the caller.
+pub fn sort_by_cell<'b>(grid: &Grid, pos: &[V3], drop: Option<&[bool]>, buf: &'b mut Vec<u32>) -> (Vec<u32>, Vec<u32>, CellStarts<'b>) {
     const GONE: u32 = u32::MAX;
     let cells: Vec<u32> = pos
         .par_iter()
@@ -363,14 +382,18 @@ pub fn sort_by_cell<'b>(grid: &Grid, pos: &[V3], drop: Option<&[bool]>, buf: &'b
         .with_min_len(4096)
         .map(|(i, &p)| if drop.is_some_and(|d| d.get(i).copied().unwrap_or(false)) { GONE } else { grid.index(grid.coords(p)) as u32 })
         .collect();
-    // buf[c + 1] counts cell c; its prefix sums make buf[c + 1] the end of cell c; scattering
-    // from the last particle down then moves buf[c + 1] to the start of cell c.
-    let nc = grid.cells();
+    let (lo, hi) = cells.iter().filter(|&&c| c != GONE).fold((usize::MAX, 0usize), |(lo, hi), &c| (lo.min(c as usize), hi.max(c as usize)));
+    let base = if lo == usize::MAX { 0 } else { lo };
+    // Forward neighbours of cell c lie in c ..= c + 2 nx ny (the next z layer, y wrapped).
+    let top = if lo == usize::MAX { 0 } else { (hi + 2 * grid.nx * grid.ny + 1).min(grid.cells() - 1) };
+    let nc = top + 1 - base;
+    // buf[k + 1] counts cell base + k; its prefix sums make buf[k + 1] the end of that cell;
+    // scattering from the last particle down then moves buf[k + 1] to its start.
     buf.clear();
     buf.resize(nc + 2, 0);
     for &c in &cells {
         if c != GONE {
-            buf[c as usize + 1] += 1;
+            buf[c as usize - base + 1] += 1;
         }
     }
     for k in 1..nc + 1 {
@@ -382,11 +405,11 @@ pub fn sort_by_cell<'b>(grid: &Grid, pos: &[V3], drop: Option<&[bool]>, buf: &'b
     let mut sorted_cells = vec![0u32; kept];
     for (i, &c) in cells.iter().enumerate().rev() {
         if c != GONE {
-            let end = &mut buf[c as usize + 1];
+            let end = &mut buf[c as usize - base + 1];
             *end -= 1;
             order[*end as usize] = i as u32;
             sorted_cells[*end as usize] = c;
         }
     }
-    (order, sorted_cells, &buf[1..])
+    (order, sorted_cells, CellStarts { base, starts: &buf[1..] })
 }

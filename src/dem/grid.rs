@@ -2,11 +2,12 @@
 //! half neighbour list (pairs i < j within r_i + r_j + skin) rebuilt when any particle has moved
 //! more than half the skin since the last build.
 //!
-//! A rebuild is three passes: the particles' cells in parallel and a counting sort
-//! ([`sort_by_cell`]); then one parallel pass over fixed blocks of [`BLOCK`] particles that finds
-//! each row's pairs and carries the contact history of touching pairs over from the previous list
-//! ([`NeighbourList::build`]). Each block keeps its own pair storage ([`PairBlock`]), the same
-//! blocks the force loop owns, so nothing is concatenated serially.
+//! A rebuild: the particles' cells in parallel and a counting sort over the occupied span of
+//! cells ([`sort_by_cell`]); the particle arrays gathered into that order; then one parallel pass
+//! over fixed blocks of [`BLOCK`] particles that finds each row's pairs and carries the contact
+//! history of touching pairs over from the previous list ([`NeighbourList::build`]). Each block
+//! keeps its own pair storage ([`PairBlock`]), the same blocks the force loop owns, so nothing is
+//! concatenated serially.
 //!
 //! The grid also keeps, per cell, the walls (planes and tubes) within reach of a particle in
 //! that cell, so the wall loop tests a handful of candidates instead of every tube.
@@ -276,11 +277,6 @@ impl NeighbourList {
         let (s, e) = (self.start[i] as usize - base, self.start[i + 1] as usize - base);
         let blk = &self.blocks[b];
         (&blk.j[s..e], &blk.state[s..e])
-    }
-
-    /// Pairs in the list.
-    pub fn pairs(&self) -> usize {
-        self.start.last().map_or(0, |&k| k as usize)
     }
 
     /// The half list of particles already sorted by cell: j > i within r_i + r_j + skin (minimum

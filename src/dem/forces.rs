@@ -24,16 +24,36 @@ pub(super) fn kick(v: &mut V3, w: &mut V3, f: V3, t: V3, a: f64, b: f64) {
     }
 }
 
-/// Adds to one block's forces and torques (block `b`, slices `fs`, `ts`) the reactions on its
-/// particles from every block up to and including it, in block order; `reach` is the largest
-/// block offset any reaction has.
-pub(super) fn add_reactions(outs: &[BlockOut], reach: usize, b: usize, fs: &mut [V3], ts: &mut [V3]) {
-    let lo = b * BLOCK;
-    for s in b.saturating_sub(reach)..=b {
-        if let Some(list) = outs.get(s).and_then(|o| o.reactions.get(b - s)) {
-            for &(j, f, t) in list {
-                add_to(&mut fs[j as usize - lo], f);
-                add_to(&mut ts[j as usize - lo], t);
+/// What the last step left for the next pass over the particles: the force pass's reactions
+/// (bucketed per block, `reach` the largest block offset) and the closing half kick.
+pub(super) struct Pending<'a> {
+    pub(super) outs: &'a [BlockOut],
+    pub(super) reach: usize,
+    pub(super) reactions: bool,
+    pub(super) close: bool,
+    /// ½Δt.
+    pub(super) half: f64,
+}
+
+impl Pending<'_> {
+    /// Applies it to block `b`: adds the reactions on its particles from every block up to and
+    /// including it, in block order, then the closing half kick with the complete forces.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn apply(&self, b: usize, vs: &mut [V3], ws: &mut [V3], fs: &mut [V3], ts: &mut [V3], ms: &[f64], iis: &[f64]) {
+        if self.reactions {
+            let lo = b * BLOCK;
+            for s in b.saturating_sub(self.reach)..=b {
+                if let Some(list) = self.outs.get(s).and_then(|o| o.reactions.get(b - s)) {
+                    for &(j, f, t) in list {
+                        add_to(&mut fs[j as usize - lo], f);
+                        add_to(&mut ts[j as usize - lo], t);
+                    }
+                }
+            }
+        }
+        if self.close {
+            for k in 0..vs.len() {
+                kick(&mut vs[k], &mut ws[k], fs[k], ts[k], self.half / ms[k], self.half * iis[k]);
             }
         }
     }

@@ -301,9 +301,7 @@ impl Dem {
         if !self.pending_reactions && !self.pending_kick {
             return;
         }
-        let (reactions, close) = (self.pending_reactions, self.pending_kick);
-        let (outs, reach) = (&self.block_out, self.reach);
-        let half = 0.5 * self.setup.time_step;
+        let pending = Pending { outs: &self.block_out, reach: self.reach, reactions: self.pending_reactions, close: self.pending_kick, half: 0.5 * self.setup.time_step };
         let per_task = blocks_per_task(self.p.len().div_ceil(BLOCK));
         let p = &mut self.p;
         p.vel
@@ -315,16 +313,7 @@ impl Dem {
             .zip(p.inv_inertia.par_chunks(BLOCK))
             .enumerate()
             .with_min_len(per_task)
-            .for_each(|(b, (((((vs, ws), fs), ts), ms), iis))| {
-                if reactions {
-                    add_reactions(outs, reach, b, fs, ts);
-                }
-                if close {
-                    for k in 0..vs.len() {
-                        kick(&mut vs[k], &mut ws[k], fs[k], ts[k], half / ms[k], half * iis[k]);
-                    }
-                }
-            });
+            .for_each(|(b, (((((vs, ws), fs), ts), ms), iis))| pending.apply(b, vs, ws, fs, ts, ms, iis));
         self.pending_reactions = false;
         self.pending_kick = false;
     }
@@ -354,8 +343,7 @@ impl Dem {
         // displacement since the last build.
         let t0 = std::time::Instant::now();
         let bounds = self.escape_bounds();
-        let (reactions, close) = (self.pending_reactions, self.pending_kick);
-        let (outs, reach) = (&self.block_out, self.reach);
+        let pending = Pending { outs: &self.block_out, reach: self.reach, reactions: self.pending_reactions, close: self.pending_kick, half: 0.5 * self.setup.time_step };
         let per_task = blocks_per_task(self.p.len().div_ceil(BLOCK));
         let p = &mut self.p;
         // Fixed blocks of plain loops over slices (the compiler keeps them tight; rayon only
@@ -375,16 +363,12 @@ impl Dem {
             .enumerate()
             .with_min_len(per_task)
             .map(|(blk, (((((((((xs, vs), ws), vps), wps), fs), ts), ms), iis), x0s))| {
-                if reactions {
-                    add_reactions(outs, reach, blk, fs, ts);
-                }
+                // The last step's reactions and closing kick, then this step's opening kick.
+                pending.apply(blk, vs, ws, fs, ts, ms, iis);
                 let mut worst = 0.0f64;
                 for k in 0..xs.len() {
                     let (x, v, w, f, t) = (&mut xs[k], &mut vs[k], &mut ws[k], fs[k], ts[k]);
                     let (a, b) = (half / ms[k], half * iis[k]);
-                    if close {
-                        kick(v, w, f, t, a, b);
-                    }
                     kick(v, w, f, t, a, b);
                     // End-of-step prediction v(t) + Δt a(t) for the velocity-dependent forces.
                     vps[k] = [v[0] + a * f[0], v[1] + a * f[1], v[2] + a * f[2]];

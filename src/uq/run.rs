@@ -119,21 +119,17 @@ fn impacts_per_year_text(st: &super::setup::Setup) -> String {
 fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
     let st = &forms[0].setup;
     let names = [&st.materials[0].model.label, &st.materials[1].model.label];
-    let mut rows = Vec::new();
-    let mut q_rows: (Vec<String>, Vec<String>, Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
-    let mut push_q = |strength: &str, damage: DamageModel, key: &str, years: f64, q: [f64; 3], se: f64, mean: f64| {
-        q_rows.0.push(strength.into());
-        q_rows.1.push(damage.name().into());
-        q_rows.2.push(key.into());
-        q_rows.3.push(years);
-        q_rows.4.push(q[0]);
-        q_rows.5.push(q[1]);
-        q_rows.6.push(se);
-        q_rows.7.push(q[2]);
-        q_rows.8.push(mean);
-    };
-    for (k, &damage) in st.models.iter().enumerate() {
-        for (h, &years) in st.years.iter().enumerate() {
+    // One quantile row of `breakage.csv`: strength model, damage model, material key, years,
+    // (q05, median, q95), the median's Monte Carlo se, mean.
+    type QRow = (String, DamageModel, String, f64, [f64; 3], f64, f64);
+    // Every (damage model, horizon) on its own task (sorts and selections of the samples);
+    // the rows are put together in the serial order.
+    let combos: Vec<(usize, usize)> = (0..st.models.len()).flat_map(|k| (0..st.years.len()).map(move |h| (k, h))).collect();
+    let parts: Vec<(Vec<Row>, Vec<QRow>)> = combos
+        .par_iter()
+        .map(|&(k, h)| -> Result<(Vec<Row>, Vec<QRow>)> {
+            let (damage, years) = (st.models[k], st.years[h]);
+            let (mut rows, mut q_rows) = (Vec::new(), Vec::new());
             let (a, b) = (st.slot(0, h, k), st.slot(1, h, k));
             let mut fractions = Vec::new();
             for f in forms {
@@ -149,14 +145,14 @@ fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
                     let block_medians: Vec<f64> = (0..f.prop.blocks.len()).map(|bi| interpolated_quantiles(f.prop.block_values(bi, slot), &[0.5])[0]).collect();
                     median[j] = q[1];
                     band[j] = (q[0], q[2]);
-                    push_q(&f.setup.spec.name(), damage, &st.materials[j].model.key, years, [q[0], q[1], q[2]], mean_se(&block_medians).1, mean);
+                    q_rows.push((f.setup.spec.name(), damage, st.materials[j].model.key.clone(), years, [q[0], q[1], q[2]], mean_se(&block_medians).1, mean));
                 }
                 rows.push(Row { strength: f.setup.spec.name(), damage, years, worse, se, ties: f.prop.ties(a, b), median, band });
             }
             if forms.len() > 1 {
                 // The weighted mixture of the models' samples.
                 let weights: Vec<f64> = forms.iter().map(|f| f.weight).collect();
-                let ties: Vec<f64> = rows[rows.len() - forms.len()..].iter().map(|r| r.ties).collect();
+                let ties: Vec<f64> = rows.iter().map(|r| r.ties).collect();
                 let (worse, se, ties) = averaged(&weights, &fractions, &ties)?;
                 let mut median = [0.0; 2];
                 let mut band = [(0.0, 0.0); 2];
@@ -181,12 +177,18 @@ fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
                     let block_medians: Vec<f64> = (0..forms[0].prop.blocks.len()).map(|bi| weighted_quantiles(pooled(Some(bi)), &[0.5])[0]).collect();
                     median[j] = q[1];
                     band[j] = (q[0], q[2]);
-                    push_q(AVERAGED, damage, &st.materials[j].model.key, years, [q[0], q[1], q[2]], mean_se(&block_medians).1, mean);
+                    q_rows.push((AVERAGED.into(), damage, st.materials[j].model.key.clone(), years, [q[0], q[1], q[2]], mean_se(&block_medians).1, mean));
                 }
                 rows.push(Row { strength: AVERAGED.into(), damage, years, worse, se, ties, median, band });
             }
-        }
-    }
+            Ok((rows, q_rows))
+        })
+        .collect::<Result<_>>()?;
+    let (rows, q_rows): (Vec<Row>, Vec<QRow>) = parts.into_iter().fold((Vec::new(), Vec::new()), |(mut r, mut q), (pr, pq)| {
+        r.extend(pr);
+        q.extend(pq);
+        (r, q)
+    });
     // Printed lines: the primary damage model, every horizon.
     let mut lines = Vec::new();
     let primary = st.models[0];
@@ -236,15 +238,15 @@ fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
     dir.write_table(
         "breakage",
         &mut table(vec![
-            scol("strength_model", q_rows.0),
-            scol("model", q_rows.1),
-            scol("material", q_rows.2),
-            fcol("years", q_rows.3),
-            fcol("q05", q_rows.4),
-            fcol("median", q_rows.5),
-            fcol("median_mc_se", q_rows.6),
-            fcol("q95", q_rows.7),
-            fcol("mean", q_rows.8),
+            scol("strength_model", q_rows.iter().map(|q| q.0.clone()).collect()),
+            scol("model", q_rows.iter().map(|q| q.1.name().to_string()).collect()),
+            scol("material", q_rows.iter().map(|q| q.2.clone()).collect()),
+            fcol("years", q_rows.iter().map(|q| q.3).collect()),
+            fcol("q05", q_rows.iter().map(|q| q.4[0]).collect()),
+            fcol("median", q_rows.iter().map(|q| q.4[1]).collect()),
+            fcol("median_mc_se", q_rows.iter().map(|q| q.5).collect()),
+            fcol("q95", q_rows.iter().map(|q| q.4[2]).collect()),
+            fcol("mean", q_rows.iter().map(|q| q.6).collect()),
         ])?,
     )?;
     Ok(Headline { lines, rows })

@@ -71,6 +71,20 @@ impl Emulator {
             .collect()
     }
 
+    /// [`Emulator::predict`] of the outputs `outputs` only (indices, in that order): a
+    /// likelihood that reads some outputs does not pay for the others' variance solves.
+    pub fn predict_outputs(&self, theta: &[f64], outputs: &[usize]) -> Vec<(f64, f64)> {
+        let u = self.space.to_unit(theta);
+        outputs
+            .iter()
+            .map(|&o| {
+                let g = &self.gps[o];
+                let (m, v) = g.predict(&u);
+                (m, v + g.noise_variance())
+            })
+            .collect()
+    }
+
     /// Predictive means of the first `count` outputs at θ (the others are not evaluated).
     pub fn means(&self, theta: &[f64], count: usize) -> Vec<f64> {
         let u = self.space.to_unit(theta);

@@ -193,10 +193,11 @@ pub fn log_posterior(em: &Emulator, agg: &Aggregated, theta: &[f64]) -> f64 {
     if !lp.is_finite() {
         return f64::NEG_INFINITY;
     }
-    let pred = em.predict(theta);
+    // Only the observed outputs (a crush calibration on force points leaves the peak force and
+    // the fracture displacement out).
+    let pred = em.predict_outputs(theta, &agg.output);
     let mut ll = 0.0;
-    for (k, &o) in agg.output.iter().enumerate() {
-        let (m, v) = pred[o];
+    for (k, &(m, v)) in pred.iter().enumerate() {
         let s2 = agg.sd[k] * agg.sd[k] + v;
         ll -= 0.5 * ((agg.mean[k] - m).powi(2) / s2 + s2.ln());
     }

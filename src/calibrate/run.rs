@@ -193,7 +193,7 @@ impl Recording<'_> {
             let have = self.curves.lock().unwrap_or_else(|e| e.into_inner());
             thetas.iter().map(|t| t.1).filter(|t| !have.contains_key(&bits(t))).collect()
         };
-        missing.par_iter().for_each(|t| {
+        crate::model::par_runs(&missing, |t| {
             let _ = self.run(t);
         });
         let have = self.curves.lock().unwrap_or_else(|e| e.into_inner());

@@ -25,11 +25,12 @@ pub const BLOCK: usize = 256;
 /// to another thread costs about as much as doing it (small rigs, or many runs side by side).
 pub const PARALLEL_BLOCKS: usize = 8;
 
-/// Blocks per task of a pass over `nblocks` blocks: all of them below [`PARALLEL_BLOCKS`], else
-/// one (each block a task, for balance where the contact density varies with height).
+/// Blocks per task of a pass over `nblocks` blocks: all of them below [`PARALLEL_BLOCKS`] or
+/// inside one run of a batch that keeps every thread busy ([`crate::model::pass_min_len`]),
+/// else one (each block a task, for balance where the contact density varies with height).
 #[inline]
 pub fn blocks_per_task(nblocks: usize) -> usize {
-    if nblocks < PARALLEL_BLOCKS { nblocks.max(1) } else { 1 }
+    if nblocks < PARALLEL_BLOCKS || crate::model::pass_min_len(1) == usize::MAX { nblocks.max(1) } else { 1 }
 }
 
 /// The cell grid.

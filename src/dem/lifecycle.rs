@@ -54,7 +54,7 @@ impl Dem {
         // Free wall slots whose wall is no longer touched.
         let g = &self.setup.geometry;
         let p = &mut self.p;
-        p.walls.par_iter_mut().zip(p.pos.par_iter().zip(p.radius.par_iter())).with_min_len(PARALLEL_BLOCKS * BLOCK).for_each(|(slots, (&x, &r))| {
+        p.walls.par_iter_mut().zip(p.pos.par_iter().zip(p.radius.par_iter())).with_min_len(crate::model::pass_min_len(PARALLEL_BLOCKS * BLOCK)).for_each(|(slots, (&x, &r))| {
             for slot in slots.iter_mut() {
                 if slot.wall != u32::MAX && wall_contact(g, slot.wall, x, r).is_none() {
                     *slot = WallSlot::FREE;

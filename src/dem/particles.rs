@@ -118,7 +118,7 @@ impl Particles {
             };
         }
         // A small system is gathered on this thread: handing the fields out costs more.
-        if order.len() < super::grid::PARALLEL_BLOCKS * super::grid::BLOCK {
+        if order.len() < crate::model::pass_min_len(super::grid::PARALLEL_BLOCKS * super::grid::BLOCK) {
             macro_rules! field {
                 ($dst:ident) => {
                     $dst.clear();

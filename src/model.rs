@@ -102,10 +102,15 @@ pub fn par_runs<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Ve
         .collect()
 }
 
+/// Whether this thread is running one item of a full batch ([`par_runs`]).
+pub fn in_full_batch() -> bool {
+    IN_FULL_BATCH.get()
+}
+
 /// The least number of items a task of a solver's parallel pass takes: `min`, or all of them
 /// inside an item of a full batch ([`par_runs`]).
 pub fn pass_min_len(min: usize) -> usize {
-    if IN_FULL_BATCH.get() { usize::MAX } else { min }
+    if in_full_batch() { usize::MAX } else { min }
 }
 
 /// Fails with [`Error::Numerical`] if any output is not finite, naming the output and θ.

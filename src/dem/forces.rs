@@ -36,10 +36,11 @@ pub(super) struct Pending<'a> {
 }
 
 impl Pending<'_> {
-    /// Applies it to block `b`: adds the reactions on its particles from every block up to and
-    /// including it, in block order, then the closing half kick with the complete forces.
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn apply(&self, b: usize, vs: &mut [V3], ws: &mut [V3], fs: &mut [V3], ts: &mut [V3], ms: &[f64], iis: &[f64]) {
+    /// Adds to block `b`'s forces and torques the reactions on its particles from every block up
+    /// to and including it, in block order. The closing kick is then the caller's: the
+    /// kick–drift pass applies it per particle with the opening kick's factors (one division by
+    /// the mass for both), [`Pending::apply`] on its own.
+    pub(super) fn add_reactions(&self, b: usize, fs: &mut [V3], ts: &mut [V3]) {
         if self.reactions {
             let lo = b * BLOCK;
             for s in b.saturating_sub(self.reach)..=b {
@@ -51,6 +52,13 @@ impl Pending<'_> {
                 }
             }
         }
+    }
+
+    /// Applies it all to block `b`: the reactions, then the closing half kick with the complete
+    /// forces.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn apply(&self, b: usize, vs: &mut [V3], ws: &mut [V3], fs: &mut [V3], ts: &mut [V3], ms: &[f64], iis: &[f64]) {
+        self.add_reactions(b, fs, ts);
         if self.close {
             for k in 0..vs.len() {
                 kick(&mut vs[k], &mut ws[k], fs[k], ts[k], self.half / ms[k], self.half * iis[k]);

@@ -30,7 +30,7 @@ pub const PARALLEL_BLOCKS: usize = 8;
 /// else one (each block a task, for balance where the contact density varies with height).
 #[inline]
 pub fn blocks_per_task(nblocks: usize) -> usize {
-    if nblocks < PARALLEL_BLOCKS || crate::model::pass_min_len(1) == usize::MAX { nblocks.max(1) } else { 1 }
+    if nblocks < PARALLEL_BLOCKS || crate::model::in_full_batch() { nblocks.max(1) } else { 1 }
 }
 
 /// The cell grid.

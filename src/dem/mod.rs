@@ -363,12 +363,16 @@ impl Dem {
             .enumerate()
             .with_min_len(per_task)
             .map(|(blk, (((((((((xs, vs), ws), vps), wps), fs), ts), ms), iis), x0s))| {
-                // The last step's reactions and closing kick, then this step's opening kick.
-                pending.apply(blk, vs, ws, fs, ts, ms, iis);
+                // The last step's reactions, then per particle its closing kick and this step's
+                // opening kick (the same factors).
+                pending.add_reactions(blk, fs, ts);
                 let mut worst = 0.0f64;
                 for k in 0..xs.len() {
                     let (x, v, w, f, t) = (&mut xs[k], &mut vs[k], &mut ws[k], fs[k], ts[k]);
                     let (a, b) = (half / ms[k], half * iis[k]);
+                    if pending.close {
+                        kick(v, w, f, t, a, b);
+                    }
                     kick(v, w, f, t, a, b);
                     // End-of-step prediction v(t) + Δt a(t) for the velocity-dependent forces.
                     vps[k] = [v[0] + a * f[0], v[1] + a * f[1], v[2] + a * f[2]];

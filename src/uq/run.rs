@@ -184,11 +184,8 @@ fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
             Ok((rows, q_rows))
         })
         .collect::<Result<_>>()?;
-    let (rows, q_rows): (Vec<Row>, Vec<QRow>) = parts.into_iter().fold((Vec::new(), Vec::new()), |(mut r, mut q), (pr, pq)| {
-        r.extend(pr);
-        q.extend(pq);
-        (r, q)
-    });
+    let (rows, q_rows): (Vec<Vec<Row>>, Vec<Vec<QRow>>) = parts.into_iter().unzip();
+    let (rows, q_rows): (Vec<Row>, Vec<QRow>) = (rows.into_iter().flatten().collect(), q_rows.into_iter().flatten().collect());
     // Printed lines: the primary damage model, every horizon.
     let mut lines = Vec::new();
     let primary = st.models[0];

@@ -354,3 +354,45 @@ fn a_study_maps_columns_and_units_that_the_header_does_not_state() {
     assert_eq!(out.code, 2);
     assert!(out.stderr.contains("lab.toml: material[0].data.units.diameter: unknown unit \"inch\""), "{}", out.stderr);
 }
+
+/// A crush-curve file exported by lab software in German (`Probe;D [mm];Weg [µm];Kraft [N]`,
+/// semicolons, decimal commas, CRLF) is read through the calibration's `[data] columns` map as
+/// the SI file it was made from; without the map, or with a misspelled field, the study is
+/// refused with exit 2, naming the file's columns or the study key.
+#[test]
+fn a_german_curve_export_is_read_through_the_calibrations_column_map() {
+    let s = Scratch::new();
+    let si = root().join("datasets/crush_curves_gen3_rt.csv");
+    let text = std::fs::read_to_string(&si).unwrap();
+    let mut export = String::from("Probe;D [mm];Weg [µm];Kraft [N]\r\n");
+    for line in text.lines().skip(1) {
+        let f: Vec<f64> = line.split(',').skip(1).map(|v| v.parse().unwrap()).collect();
+        let id = line.split(',').next().unwrap();
+        export.push_str(&format!("{id};{};{};{}\r\n", f[0] * 1e3, f[1] * 1e6, f[2]).replace('.', ","));
+    }
+    s.write("datasets/kurven.csv", &export);
+    let want = partlife::calibrate::data::load_curves(&si).unwrap();
+    let columns: std::collections::BTreeMap<String, String> = [("displacement", "Weg [µm]"), ("force", "Kraft [N]")].into_iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+    let got = partlife::calibrate::data::load_curves_mapped(&s.path("datasets/kurven.csv"), &columns, &Default::default(), &Default::default()).unwrap();
+    assert_eq!(got.len(), want.len());
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1e-9);
+    for (g, w) in got.iter().zip(&want) {
+        assert_eq!(g.particle, w.particle);
+        assert!(close(g.diameter, w.diameter), "{} against {}", g.diameter, w.diameter);
+        assert_eq!(g.displacement.len(), w.displacement.len());
+        assert!(g.displacement.iter().zip(&w.displacement).all(|(a, b)| (a - b).abs() <= 1e-18 + 1e-12 * b.abs()), "particle {}", g.particle);
+        assert!(g.force.iter().zip(&w.force).all(|(a, b)| close(*a, *b)), "particle {}", g.particle);
+    }
+    // Through a calibration study: unmapped, the file's columns are named; misspelled, the key.
+    common::tiny_calibration(&s, "");
+    let study = s.read("studies/cal.toml").replace("crush_curves_gen3_rt.csv\"", "kurven.csv\"");
+    s.write("studies/cal.toml", &study);
+    let out = s.run(&["run", "studies/cal.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert_eq!(out.stderr.trim().lines().count(), 1, "one message: {}", out.stderr);
+    for e in ["kurven.csv", "line 1", "Weg [µm]", "Kraft [N]", "columns"] {
+        assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
+    }
+    assert!(s.report_files().is_empty(), "a refused run wrote {:?}", s.report_files());
+    s.expect_bad_study("studies/cal.toml", "kurven.csv\"", "kurven.csv\"\ncolumns = { displacment = \"Weg [µm]\", force = \"Kraft [N]\" }", &["data.columns.displacment", "unknown field", "displacement"]);
+}

@@ -90,8 +90,16 @@ pub const CURVE_FIELDS: [Field; 4] = [
 
 /// Reads a curve file; every rule broken names the file, row and column.
 pub fn load_curves(path: &Path) -> Result<Vec<Curve>> {
+    load_curves_mapped(path, &Default::default(), &Default::default(), &MapOrigin::default())
+}
+
+/// [`load_curves`] with the study's map of the file: `columns` (field → the file's header, for
+/// headers that do not name their field, e.g. `displacement = "Weg [µm]"`) and `units` (field →
+/// unit, for headers that state none), as every crush data table takes them; `origin` names the
+/// study table that holds the map.
+pub fn load_curves_mapped(path: &Path, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, origin: &MapOrigin) -> Result<Vec<Curve>> {
     let t = read_raw(&Source::file(path))?;
-    let r = resolve(&t, &CURVE_FIELDS, &Default::default(), &Default::default(), &MapOrigin::default())?;
+    let r = resolve(&t, &CURVE_FIELDS, columns, units, origin)?;
     for w in &r.provenance.warnings {
         crate::intake::warn(w);
     }

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
-use super::data::{CrushReduction, Observations, load_curves, load_observations, reduce_curves};
+use super::data::{CrushReduction, Observations, load_curves_mapped, load_observations, reduce_curves};
 use super::pipeline::PipelineOptions;
 use crate::error::{Error, Result};
 use crate::fem::model::CrushModel;
@@ -32,6 +32,13 @@ pub enum DataSpec {
         /// σ floor as a fraction of each output's mean (default 0.02).
         #[serde(default = "default_floor")]
         sigma_floor: f64,
+        /// The file's header for a field its header does not name (`particle`, `diameter`,
+        /// `displacement`, `force`), e.g. `{ displacement = "Weg [µm]", force = "Kraft [N]" }`.
+        #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+        columns: std::collections::BTreeMap<String, String>,
+        /// A field's unit where its header states none, e.g. `{ displacement = "mm" }`.
+        #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+        units: std::collections::BTreeMap<String, String>,
     },
     /// Named observations (`output, unit, value, sd`).
     Observations {
@@ -223,7 +230,7 @@ impl CalibrateStudy {
             other => other,
         };
         let (built, observations, inputs, config) = match (&self.model, &self.data) {
-            (ModelSpec::Crush { crush }, DataSpec::CrushCurves { file: data, reference_diameter, points, fraction, sigma_floor }) => {
+            (ModelSpec::Crush { crush }, DataSpec::CrushCurves { file: data, reference_diameter, points, fraction, sigma_floor, columns, units }) => {
                 if !(*points >= 2 && *points <= 40) {
                     return Err(Error::config(&file, "data.points", format!("must lie in [2, 40], got {points}")));
                 }
@@ -239,7 +246,7 @@ impl CalibrateStudy {
                     return Err(Error::config(&file, "model.crush.diameter", format!("must lie in {}, got {}", crate::data::DIAMETER.shown, crush.diameter)));
                 }
                 let path = existing(&file, "data.file", resolve(data))?;
-                let curves = load_curves(&path)?;
+                let curves = load_curves_mapped(&path, columns, units, &crate::intake::MapOrigin { file: file.clone(), key: "data".into() })?;
                 let d0 = match reference_diameter {
                     Some(d) if *d > 0.0 && d.is_finite() => *d,
                     Some(d) => return Err(Error::config(&file, "data.reference_diameter", format!("must be > 0, got {d}"))),

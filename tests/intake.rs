@@ -395,4 +395,20 @@ fn a_german_curve_export_is_read_through_the_calibrations_column_map() {
     }
     assert!(s.report_files().is_empty(), "a refused run wrote {:?}", s.report_files());
     s.expect_bad_study("studies/cal.toml", "kurven.csv\"", "kurven.csv\"\ncolumns = { displacment = \"Weg [µm]\", force = \"Kraft [N]\" }", &["data.columns.displacment", "unknown field", "displacement"]);
+    // The curve-level discrepancy study's [[data]] takes the same map: read (the run then stops
+    // at its missing calibration report, with --no-deps), or refused naming data[0].
+    let curves = std::fs::read_to_string(root().join("studies/discrepancy_curves.toml")).unwrap();
+    let mapped = curves.replacen("file = \"../datasets/crush_curves_gen3_rt.csv\"", "file = \"../datasets/kurven.csv\"\ncolumns = { displacement = \"Weg [µm]\", force = \"Kraft [N]\" }", 1);
+    assert_ne!(mapped, curves);
+    std::fs::copy(root().join("datasets/crush_curves_gen3_800c.csv"), s.path("datasets/crush_curves_gen3_800c.csv")).unwrap();
+    // Unmapped, the run stops at the file (it is read before the calibration report is looked
+    // for); mapped, it gets past it.
+    s.write("studies/curves.toml", &mapped.replacen("\ncolumns = { displacement = \"Weg [µm]\", force = \"Kraft [N]\" }", "", 1));
+    let out = s.run(&["run", "studies/curves.toml", "--quiet", "--no-deps"]);
+    assert!(out.code == 2 && out.stderr.contains("kurven.csv") && out.stderr.contains("Weg [µm]"), "{}", out.stderr);
+    s.write("studies/curves.toml", &mapped);
+    let out = s.run(&["run", "studies/curves.toml", "--quiet", "--no-deps"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(!out.stderr.contains("kurven.csv") && out.stderr.contains("calibration"), "the mapped file was read, the calibration is what is missing: {}", out.stderr);
+    s.expect_bad_study("studies/curves.toml", "columns = { displacement", "columns = { displacment", &["data[0].columns.displacment", "unknown field"]);
 }

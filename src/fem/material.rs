@@ -357,6 +357,14 @@ impl Material {
     /// compression `mu = V₀/V − 1` and the equivalent strain rate `rate_eq` (1/s, JH-2 rate term).
     #[inline]
     pub fn update(&self, st: &mut PointState, de: &[f64; 4], w_dt: f64, mu: f64, rate_eq: f64) {
+        self.trial(st, de, w_dt);
+        self.settle(st, mu, rate_eq);
+    }
+
+    /// The first half of [`Material::update`]: the deviator rotated by `w_dt` and advanced
+    /// elastically by `de` (steps 1–2).
+    #[inline]
+    pub fn trial(&self, st: &mut PointState, de: &[f64; 4], w_dt: f64) {
         // 1. Jaumann rotation of the deviator.
         let s = &mut st.s;
         if w_dt != 0.0 {
@@ -372,6 +380,12 @@ impl Material {
         s[1] += g2 * (de[1] - tr);
         s[2] += g2 * (de[2] - tr);
         s[3] += g2 * de[3];
+    }
+
+    /// The second half of [`Material::update`] after [`Material::trial`]: pressure, strength,
+    /// return and damage at compression `mu` and equivalent strain rate `rate_eq`.
+    #[inline]
+    pub fn settle(&self, st: &mut PointState, mu: f64, rate_eq: f64) {
         match self.params {
             MaterialParams::LinearElastic(_) => {
                 st.p = self.k * mu.ln_1p();

@@ -88,6 +88,8 @@ fn crush_study_writes_every_output_and_vtk_reads_it() {
     assert!(shallow < 0.0 && below > 0.01, "surface ε₁ {shallow}, subsurface ε₁ {below}");
 }
 
+/// One thread adds each element's forces into its nodes as it goes; two store them and gather
+/// per node in parallel: both sum in element order, so the curves are the same bytes.
 #[test]
 fn same_curve_on_one_and_two_threads() {
     let s = Scratch::new();

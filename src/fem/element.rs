@@ -134,7 +134,7 @@ impl Kernel {
     /// second on one core than one pass per element; splitting the material off into a third
     /// half was slower). Each element sees the same operations in the same order as in one
     /// pass, so the result is the same to the bit.
-    #[inline]
+    #[inline(always)]
     pub fn begin(&self, x: &[[f64; 2]; 4], v: &[[f64; 2]; 4], st: &mut ElementState, dt: f64) -> Option<Half> {
         let g = geometry(x, self.axisymmetric)?;
         let vol = g.area * g.rc;
@@ -185,7 +185,7 @@ impl Kernel {
 
     /// The second half of [`Kernel::update`] after [`Kernel::begin`] on the same state: the
     /// material update, bulk viscosity, internal energy and nodal forces.
-    #[inline]
+    #[inline(always)]
     pub fn finish(&self, h: &Half, st: &mut ElementState) -> ([f64; 8], f64, f64) {
         let (g, vol, de, old, old_q) = (&h.g, h.vol, &h.de, &h.old, h.old_q);
         self.material.trial(&mut st.point, de, h.w_dt);

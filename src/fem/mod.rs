@@ -164,6 +164,33 @@ const CHUNK: usize = 128;
 /// Elements whose update halves run back to back (a divisor of CHUNK).
 const BLOCK: usize = 4;
 
+/// The element updates of chunk `c` (elements `c·CHUNK…`, states `st`): each block of BLOCK
+/// elements runs the first half of the update, then the second ([`element::Kernel::begin`]: the
+/// same bits, overlapped); `forces(e, f)` takes element e's internal forces. Returns the chunk's
+/// (internal, hourglass) energy increments, or the first inverted element.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn element_chunk(kernel: &element::Kernel, elements: &[[u32; 4]], x: &[[f64; 2]], v: &[[f64; 2]], dt: f64, c: usize, st: &mut [ElementState], mut forces: impl FnMut(usize, [f64; 8])) -> std::result::Result<(f64, f64), usize> {
+    let (mut ei, mut eh) = (0.0, 0.0);
+    let mut halves = [element::Half::default(); BLOCK];
+    for (b, st) in st.chunks_mut(BLOCK).enumerate() {
+        let first = c * CHUNK + b * BLOCK;
+        for (k, (st, h)) in st.iter_mut().zip(halves.iter_mut()).enumerate() {
+            let conn = elements[first + k];
+            let xe = conn.map(|i| x[i as usize]);
+            let ve = conn.map(|i| v[i as usize]);
+            *h = kernel.begin(&xe, &ve, st, dt).ok_or(first + k)?;
+        }
+        for (k, (st, h)) in st.iter_mut().zip(&halves).enumerate() {
+            let (f, a, b) = kernel.finish(h, st);
+            forces(first + k, f);
+            ei += a;
+            eh += b;
+        }
+    }
+    Ok((ei, eh))
+}
+
 impl CrushTest {
     /// Builds the mesh and the initial state; errors before any step runs.
     pub fn new(setup: CrushSetup, file: &str) -> Result<Self> {
@@ -340,70 +367,68 @@ impl CrushTest {
             self.dt = self.stable_step();
         }
         let dt = self.dt;
-        // 1. Element pass: stresses at t from the velocities of the last half step.
+        // 1. Element pass: stresses at t from the velocities of the last half step, in chunks
+        //    of CHUNK elements (energies summed per chunk, then over the chunks in order).
+        // 2. Nodal forces, summed over each node's elements in element order, and velocities.
+        // A run that has its thread to itself (one thread, or one run of a full batch of runs)
+        // adds each element's forces into its nodes as it goes; otherwise the elements' forces
+        // are stored and each node gathers its own, in parallel. Both sum in element order: the
+        // same bits.
         let kernel = self.kernel;
         let x = if kernel.small_strain { &self.mesh.nodes } else { &self.x };
         let v = &self.v;
         let elements = &self.mesh.elements;
-        let partial: Vec<std::result::Result<(f64, f64), usize>> = self
-            .states
-            .par_chunks_mut(CHUNK)
-            .zip(self.forces.par_chunks_mut(CHUNK))
-            .enumerate()
-            .map(|(c, (st, fo))| {
-                let (mut ei, mut eh) = (0.0, 0.0);
-                // Each block of elements runs the first half of the update, then the second
-                // (element::Kernel::begin: the same bits, overlapped).
-                let mut halves = [element::Half::default(); BLOCK];
-                for (b, (st, fo)) in st.chunks_mut(BLOCK).zip(fo.chunks_mut(BLOCK)).enumerate() {
-                    for (k, (st, h)) in st.iter_mut().zip(halves.iter_mut()).enumerate() {
-                        let e = c * CHUNK + b * BLOCK + k;
-                        let conn = elements[e];
-                        let xe = conn.map(|i| x[i as usize]);
-                        let ve = conn.map(|i| v[i as usize]);
-                        *h = kernel.begin(&xe, &ve, st, dt).ok_or(e)?;
-                    }
-                    for ((st, fo), h) in st.iter_mut().zip(fo.iter_mut()).zip(&halves) {
-                        let (f, a, b) = kernel.finish(h, st);
-                        *fo = f;
-                        ei += a;
-                        eh += b;
-                    }
-                }
-                Ok((ei, eh))
-            })
-            .collect();
-        for p in partial {
-            match p {
-                Ok((a, b)) => {
-                    self.e_int += a;
-                    self.e_hg += b;
-                }
-                Err(e) => {
-                    return Err(Error::numerical(
-                        "crush FE",
-                        format!("step {}: element {e} inverted (non-positive Jacobian) at t = {:.4e} s", self.steps, self.time),
-                    ));
-                }
-            }
-        }
-        // 2. Gather nodal forces in element order and update the velocities, node by node in
-        //    parallel.
-        let (adj, start) = (&self.adj, &self.adj_start);
-        let flat: &[f64] = self.forces.as_flattened();
         let (inv_mass, fix_r, fix_z) = (&self.inv_mass, &self.fix_r, &self.fix_z);
-        self.f_node.par_iter_mut().zip(self.v.par_iter_mut()).enumerate().with_min_len(4 * CHUNK).for_each(|(i, (f, vi))| {
-            let mut s = [0.0; 2];
-            for &slot in &adj[start[i] as usize..start[i + 1] as usize] {
-                let pair = &flat[slot as usize..slot as usize + 2];
-                s[0] -= pair[0];
-                s[1] -= pair[1];
-            }
-            *f = s;
+        let velocity = |i: usize, s: [f64; 2], vi: &mut [f64; 2]| {
             let w = inv_mass[i];
             vi[0] = if fix_r[i] { 0.0 } else { vi[0] + dt * s[0] * w };
             vi[1] = if fix_z[i] { 0.0 } else { vi[1] + dt * s[1] * w };
-        });
+        };
+        let inverted = |e: usize, steps: u64, time: f64| Error::numerical("crush FE", format!("step {steps}: element {e} inverted (non-positive Jacobian) at t = {time:.4e} s"));
+        if rayon::current_num_threads() == 1 || crate::model::in_full_batch() {
+            let f_node = &mut self.f_node;
+            f_node.fill([0.0; 2]);
+            for (c, st) in self.states.chunks_mut(CHUNK).enumerate() {
+                let (ei, eh) = element_chunk(&kernel, elements, x, v, dt, c, st, |e, f| {
+                    for (k, &i) in elements[e].iter().enumerate() {
+                        let n = &mut f_node[i as usize];
+                        n[0] -= f[2 * k];
+                        n[1] -= f[2 * k + 1];
+                    }
+                })
+                .map_err(|e| inverted(e, self.steps, self.time))?;
+                self.e_int += ei;
+                self.e_hg += eh;
+            }
+            for (i, (s, vi)) in self.f_node.iter().zip(self.v.iter_mut()).enumerate() {
+                velocity(i, *s, vi);
+            }
+        } else {
+            let partial: Vec<std::result::Result<(f64, f64), usize>> = self
+                .states
+                .par_chunks_mut(CHUNK)
+                .zip(self.forces.par_chunks_mut(CHUNK))
+                .enumerate()
+                .map(|(c, (st, fo))| element_chunk(&kernel, elements, x, v, dt, c, st, |e, f| fo[e - c * CHUNK] = f))
+                .collect();
+            for p in partial {
+                let (a, b) = p.map_err(|e| inverted(e, self.steps, self.time))?;
+                self.e_int += a;
+                self.e_hg += b;
+            }
+            let (adj, start) = (&self.adj, &self.adj_start);
+            let flat: &[f64] = self.forces.as_flattened();
+            self.f_node.par_iter_mut().zip(self.v.par_iter_mut()).enumerate().with_min_len(4 * CHUNK).for_each(|(i, (f, vi))| {
+                let mut s = [0.0; 2];
+                for &slot in &adj[start[i] as usize..start[i + 1] as usize] {
+                    let pair = &flat[slot as usize..slot as usize + 2];
+                    s[0] -= pair[0];
+                    s[1] -= pair[1];
+                }
+                *f = s;
+                velocity(i, s, vi);
+            });
+        }
         // 3. Constraints, contact, positions. The held nodes' reaction in node order.
         let mut bottom = 0.0;
         for &i in &self.fixed_z {

@@ -44,9 +44,22 @@ fn matern52(a: &[f64], b: &[f64], inv_l: &[f64], s2: f64) -> f64 {
     s2 * (1.0 + r + r * r / 3.0) * (-r).exp()
 }
 
+/// The kernel matrix plus the nugget on the diagonal. The kernel is evaluated on the lower
+/// triangle and mirrored: `matern52(a, b)` and `matern52(b, a)` are the same bits (each
+/// difference is the other's exact negation), so this is the matrix evaluated entry by entry,
+/// for half the exponentials of the hyperparameter search.
 fn kernel_matrix(x: &[Vec<f64>], inv_l: &[f64], s2: f64, nugget: f64) -> DMatrix<f64> {
     let n = x.len();
-    DMatrix::from_fn(n, n, |i, j| matern52(&x[i], &x[j], inv_l, s2) + if i == j { nugget } else { 0.0 })
+    let mut k = DMatrix::zeros(n, n);
+    for j in 0..n {
+        k[(j, j)] = matern52(&x[j], &x[j], inv_l, s2) + nugget;
+        for i in j + 1..n {
+            let v = matern52(&x[i], &x[j], inv_l, s2);
+            k[(i, j)] = v;
+            k[(j, i)] = v;
+        }
+    }
+    k
 }
 
 /// Negative log marginal likelihood of standardised `y` at log-hyperparameters `h`.
@@ -164,5 +177,24 @@ impl Gp {
                 (self.y_mean + self.y_sd * mu, self.y_sd * self.y_sd / kii)
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The mirrored kernel matrix is the kernel evaluated at every entry, bit for bit.
+    #[test]
+    fn the_mirrored_kernel_matrix_is_the_entrywise_kernel() {
+        let x: Vec<Vec<f64>> = (0..23).map(|i| vec![(i as f64 * 0.37).sin().abs(), (i as f64 * 1.9).cos() * 0.5 + 0.5, (i * i % 7) as f64 / 7.0]).collect();
+        let inv_l = [3.1, 0.7, 12.0];
+        let k = kernel_matrix(&x, &inv_l, 1.7, 1e-4);
+        for i in 0..x.len() {
+            for j in 0..x.len() {
+                let want = matern52(&x[i], &x[j], &inv_l, 1.7) + if i == j { 1e-4 } else { 0.0 };
+                assert_eq!(k[(i, j)].to_bits(), want.to_bits(), "({i}, {j})");
+            }
+        }
     }
 }

@@ -6,7 +6,9 @@
 //! (`phase`), observations (`output`, `unit`, `value`, `sd`), an impact spectrum
 //! (`q<k>_v_normal_m_s`), force–displacement curves (a displacement column), a shape file
 //! (an id and roundness or sphericity, no force), else crush data. A crush file holding several
-//! materials is summarised per material; a workbook sheet by sheet.
+//! materials is summarised per material; a workbook sheet by sheet. A study's files are read as
+//! the kind the study reads them as (a calibration's curve file whose German header names no
+//! displacement, mapped by the study's `columns`, is still curves).
 //!
 //! Verified by `tests/intake.rs`.
 
@@ -69,19 +71,20 @@ fn kind_of(t: &RawTable) -> &'static str {
     }
 }
 
-/// Checks one file as `src` describes it (every sheet of a workbook when no sheet is named).
-pub fn check(src: &Source) -> Result<Vec<Checked>> {
+/// Checks one file as `src` describes it (every sheet of a workbook when no sheet is named), as
+/// the kind `kind` (`"curves"`, `"observations"`, …; None: the kind its header shows).
+pub fn check(src: &Source, kind: Option<&'static str>) -> Result<Vec<Checked>> {
     let path = src.file.as_path();
     if crate::intake::sheet::is_spreadsheet(path) && src.sheet.is_none() {
         let names = sheet_names(path)?;
         let mut out = Vec::new();
         for (k, _) in names.iter().enumerate() {
             let s = Source { sheet: Some(SheetRef::Index(k + 1)), ..src.clone() };
-            out.extend(check_table(&s)?);
+            out.extend(check_table(&s, kind)?);
         }
         return Ok(out);
     }
-    check_table(src)
+    check_table(src, kind)
 }
 
 fn sheet_names(path: &Path) -> Result<Vec<String>> {
@@ -89,7 +92,7 @@ fn sheet_names(path: &Path) -> Result<Vec<String>> {
     crate::intake::sheet::sheet_names(path, bytes)
 }
 
-fn check_table(src: &Source) -> Result<Vec<Checked>> {
+fn check_table(src: &Source, kind: Option<&'static str>) -> Result<Vec<Checked>> {
     let path = src.file.as_path();
     let t = read_raw(src)?;
     let what = match &t.origin.sheet {
@@ -97,7 +100,7 @@ fn check_table(src: &Source) -> Result<Vec<Checked>> {
         None => path.display().to_string(),
     };
     let one = |summary: String, read: Option<Provenance>| Ok(vec![Checked { what: what.clone(), summary, read }]);
-    match kind_of(&t) {
+    match kind.unwrap_or_else(|| kind_of(&t)) {
         "table1" => {
             let rows = crate::data::read_table1(path)?;
             one(format!("Table 1, {} rows ({})", rows.len(), t.format), None)

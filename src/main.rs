@@ -426,20 +426,23 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Datasets { command: DatasetsCommand::Check { files, study, sheet, header_row, material } } => {
-            let sources: Vec<partlife::intake::Source> = match study {
+            let sources: Vec<(partlife::intake::Source, Option<&'static str>)> = match study {
                 Some(path) => partlife::study::load(&path)?.data_sources(),
                 None => files
                     .into_iter()
-                    .map(|f| partlife::intake::Source {
-                        sheet: sheet.as_ref().map(|s| s.parse::<usize>().map(partlife::intake::SheetRef::Index).unwrap_or_else(|_| partlife::intake::SheetRef::Name(s.clone()))),
-                        header_row,
-                        material: material.clone(),
-                        ..partlife::intake::Source::file(f)
+                    .map(|f| {
+                        let src = partlife::intake::Source {
+                            sheet: sheet.as_ref().map(|s| s.parse::<usize>().map(partlife::intake::SheetRef::Index).unwrap_or_else(|_| partlife::intake::SheetRef::Name(s.clone()))),
+                            header_row,
+                            material: material.clone(),
+                            ..partlife::intake::Source::file(f)
+                        };
+                        (src, None)
                     })
                     .collect(),
             };
-            for src in sources {
-                for checked in partlife::inspect::check(&src)? {
+            for (src, kind) in sources {
+                for checked in partlife::inspect::check(&src, kind)? {
                     for line in checked.lines() {
                         out!("{line}");
                     }

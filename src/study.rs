@@ -91,17 +91,32 @@ impl LoadedStudy {
         }
     }
 
-    /// The crush data of its materials, each as the study describes it (files resolved relative
-    /// to the study file): what `partlife datasets check --study` reads. Kinds without
-    /// `[[material]]` read none.
-    pub fn data_sources(&self) -> Vec<crate::intake::Source> {
+    /// The data files it reads, each as the study describes it (files resolved relative to the
+    /// study file) with the kind of input the study reads it as ([`crate::inspect::check`];
+    /// None: crush data, or whatever its header shows): what `partlife datasets check --study`
+    /// reads. The crush data of its materials; a calibration's curve or observation file and a
+    /// curve-level discrepancy study's curve files, with their column and unit maps. Other
+    /// kinds read none.
+    pub fn data_sources(&self) -> Vec<(crate::intake::Source, Option<&'static str>)> {
+        use crate::intake::Source;
+        let study = &self.file.path;
+        let curves = |file: &str, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>| {
+            (Source { columns: columns.clone(), units: units.clone(), ..Source::file(resolve_relative(study, Path::new(file))) }, Some("curves"))
+        };
         let materials: &[MaterialSpec] = match &self.study {
             Study::Lifetime(s) => &s.material,
             Study::Uq(s) => &s.material,
             Study::Discrepancy(s) => &s.material,
+            Study::Calibrate(s) => {
+                return vec![match &s.data {
+                    crate::calibrate::study::DataSpec::CrushCurves { file, columns, units, .. } => curves(file, columns, units),
+                    crate::calibrate::study::DataSpec::Observations { file } => (Source::file(resolve_relative(study, Path::new(file))), Some("observations")),
+                }];
+            }
+            Study::DiscrepancyCurves(s) => return s.data.iter().map(|d| curves(&d.file, &d.columns, &d.units)).collect(),
             _ => &[],
         };
-        materials.iter().map(|m| m.data.resolved(&self.file.path)).collect()
+        materials.iter().map(|m| (m.data.resolved(study), None)).collect()
     }
 }
 

@@ -411,4 +411,16 @@ fn a_german_curve_export_is_read_through_the_calibrations_column_map() {
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(!out.stderr.contains("kurven.csv") && out.stderr.contains("calibration"), "the mapped file was read, the calibration is what is missing: {}", out.stderr);
     s.expect_bad_study("studies/curves.toml", "columns = { displacement", "columns = { displacment", &["data[0].columns.displacment", "unknown field"]);
+    // `datasets check --study` reads a calibration's curve file and a curve study's files as
+    // the study maps them (the German header alone says nothing of a displacement).
+    s.write("studies/curves.toml", &mapped);
+    s.write("studies/cal_mapped.toml", &study.replace("kurven.csv\"", "kurven.csv\"\ncolumns = { displacement = \"Weg [µm]\", force = \"Kraft [N]\" }"));
+    for (file, count) in [("studies/cal_mapped.toml", 1), ("studies/curves.toml", 2)] {
+        let out = s.run(&["datasets", "check", "--study", file]);
+        assert_eq!(out.code, 0, "{file}: {}", out.stderr);
+        assert_eq!(out.stdout.matches(": crush curves, ").count(), count, "{file}: {}", out.stdout);
+        for e in [format!("kurven.csv: crush curves, {} particles", want.len()), "`Weg [µm]` → displacement_m (µm × 1e-6)".to_string(), "decimal comma".to_string()] {
+            assert!(out.stdout.contains(&e), "{file}: lacks \"{e}\": {}", out.stdout);
+        }
+    }
 }

@@ -127,10 +127,9 @@ fn check_table(src: &Source, kind: Option<&'static str>) -> Result<Vec<Checked>>
             one(format!("impact spectrum ({}), {} rows: {}", t.format, t.rows.len(), lines.join("; ")), None)
         }
         "curves" => {
-            let curves = crate::calibrate::data::load_curves_mapped(path, &src.columns, &src.units, &MapOrigin::default())?;
+            let (curves, read) = crate::calibrate::data::curves_of(&t, path, &src.columns, &src.units, &MapOrigin::default())?;
             let d = span(range(&curves.iter().map(|c| c.diameter).collect::<Vec<_>>()), 1e6, 0);
-            let r = resolve(&t, &crate::calibrate::data::CURVE_FIELDS, &src.columns, &src.units, &MapOrigin::default())?;
-            one(format!("crush curves, {} particles, d = {d} µm, {} samples", curves.len(), t.rows.len()), Some(r.provenance.clone()))
+            one(format!("crush curves, {} particles, d = {d} µm, {} samples", curves.len(), t.rows.len()), Some(read))
         }
         "shape" => {
             let r = resolve(&t, &crate::data::SHAPE_FIELDS, &src.columns, &src.units, &MapOrigin::default())?;

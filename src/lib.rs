@@ -73,7 +73,7 @@
 //! |---|---|
 //! | [`error`] | the error enum; bad input (exit 2) vs run failure (exit 1) |
 //! | [`params`] | `Param`, `Prior`, `ParamSpace`: bounds, truncated priors, unit-cube maps |
-//! | [`model`] | `Simulator`, `OutputSpec`; `on_pool`, which runs a solver's time loop on a worker of rayon's pool; `par_runs`, a batch of runs that keeps each run's passes whole when every thread has a run (`pass_min_len`) |
+//! | [`model`] | `Simulator`, `OutputSpec`; `on_pool`, which runs a solver's time loop on a worker of rayon's pool; `par_runs`, a batch of runs that keeps each run's passes whole when every thread has a run (`pass_min_len`, `alone_on_thread`) |
 //! | [`testfns`] | analytic simulators (Ishigami) |
 //! | [`contact`] | Hertz: contact size, surface stresses, average tensile stress (explicit domain), crush, impact with η |
 //! | [`weibull`] | ASTM C1239 MLE, unbiasing, pivotal and Fisher bounds, probability plot, size scaling |

@@ -107,6 +107,14 @@ pub fn in_full_batch() -> bool {
     IN_FULL_BATCH.get()
 }
 
+/// Whether a solver running here has its thread to itself: the pool has one thread, or this is
+/// one item of a full batch. Its passes then gain nothing from being split (the crush FE adds
+/// each element's forces into its nodes as it goes instead of storing them for a parallel
+/// gather).
+pub fn alone_on_thread() -> bool {
+    rayon::current_num_threads() == 1 || in_full_batch()
+}
+
 /// The least number of items a task of a solver's parallel pass takes: `min`, or all of them
 /// inside an item of a full batch ([`par_runs`]).
 pub fn pass_min_len(min: usize) -> usize {

@@ -27,7 +27,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::fracture::{FractureDetector, FractureParams};
-use crate::intake::{Field, Kind, MapOrigin, Quantity, Source, read_raw, resolve};
+use crate::intake::{Field, Kind, MapOrigin, Provenance, Quantity, RawTable, Source, read_raw, resolve};
 use crate::model::OutputSpec;
 
 /// One measured curve.
@@ -98,8 +98,13 @@ pub fn load_curves(path: &Path) -> Result<Vec<Curve>> {
 /// unit, for headers that state none), as every crush data table takes them; `origin` names the
 /// study table that holds the map.
 pub fn load_curves_mapped(path: &Path, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, origin: &MapOrigin) -> Result<Vec<Curve>> {
-    let t = read_raw(&Source::file(path))?;
-    let r = resolve(&t, &CURVE_FIELDS, columns, units, origin)?;
+    Ok(curves_of(&read_raw(&Source::file(path))?, path, columns, units, origin)?.0)
+}
+
+/// The curves of a table already read from `path` (what [`load_curves_mapped`] does after
+/// reading it), with how its columns were read.
+pub fn curves_of(t: &RawTable, path: &Path, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, origin: &MapOrigin) -> Result<(Vec<Curve>, Provenance)> {
+    let r = resolve(t, &CURVE_FIELDS, columns, units, origin)?;
     for w in &r.provenance.warnings {
         crate::intake::warn(w);
     }
@@ -137,7 +142,7 @@ pub fn load_curves_mapped(path: &Path, columns: &std::collections::BTreeMap<Stri
     if let Some(c) = curves.iter().find(|c| c.displacement.len() < 10) {
         return Err(Error::data_file(path, format!("particle {}", c.particle), format!("{} samples: a curve needs at least 10", c.displacement.len())));
     }
-    Ok(curves)
+    Ok((curves, r.provenance))
 }
 
 /// Observations d_i with σ_i, each of model output `output[i]`.

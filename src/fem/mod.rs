@@ -385,7 +385,7 @@ impl CrushTest {
             vi[1] = if fix_z[i] { 0.0 } else { vi[1] + dt * s[1] * w };
         };
         let inverted = |e: usize, steps: u64, time: f64| Error::numerical("crush FE", format!("step {steps}: element {e} inverted (non-positive Jacobian) at t = {time:.4e} s"));
-        if rayon::current_num_threads() == 1 || crate::model::in_full_batch() {
+        if crate::model::alone_on_thread() {
             let f_node = &mut self.f_node;
             f_node.fill([0.0; 2]);
             for (c, st) in self.states.chunks_mut(CHUNK).enumerate() {

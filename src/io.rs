@@ -105,6 +105,8 @@ pub struct ReportDir {
     files: Vec<String>,
     committed: bool,
     documents: bool,
+    /// Whether dropping it uncommitted removes the directory (false for a [`ReportDir::branch`]).
+    owner: bool,
 }
 
 impl ReportDir {
@@ -116,7 +118,7 @@ impl ReportDir {
             std::fs::remove_dir_all(&tmp_path).map_err(|e| Error::write(&tmp_path, e))?;
         }
         std::fs::create_dir(&tmp_path).map_err(|e| Error::write(&tmp_path, e))?;
-        Ok(ReportDir { final_path: root.join(name), tmp_path, files: Vec::new(), committed: false, documents: true })
+        Ok(ReportDir { final_path: root.join(name), tmp_path, files: Vec::new(), committed: false, documents: true, owner: true })
     }
 
     /// Whether the commit writes `report.pdf` and `report.html` (`crate::runkit`); on by default.
@@ -158,6 +160,19 @@ impl ReportDir {
         self.write_bytes(&format!("{name}.csv"), &bytes)
     }
 
+    /// A writer into the same temporary directory with a list of files of its own, for tables
+    /// written in parallel: [`ReportDir::adopt`] appends its files, so the report lists them in
+    /// the order the caller adopts the branches whatever order they were written in. A branch
+    /// never removes the directory.
+    pub fn branch(&self) -> ReportDir {
+        ReportDir { final_path: self.final_path.clone(), tmp_path: self.tmp_path.clone(), files: Vec::new(), committed: false, documents: self.documents, owner: false }
+    }
+
+    /// Appends the files a [`ReportDir::branch`] wrote.
+    pub fn adopt(&mut self, mut branch: ReportDir) {
+        self.files.append(&mut branch.files);
+    }
+
     /// Records files written by someone else into the directory (figures).
     pub fn record(&mut self, names: impl IntoIterator<Item = String>) {
         self.files.extend(names);
@@ -165,6 +180,7 @@ impl ReportDir {
 
     /// Renames the temporary directory into place, replacing an earlier report.
     pub fn commit(mut self) -> Result<PathBuf> {
+        debug_assert!(self.owner, "a branch is adopted, not committed");
         let old = self.final_path.with_file_name(format!(
             ".{}.old-{}",
             self.final_path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
@@ -190,7 +206,7 @@ impl ReportDir {
 
 impl Drop for ReportDir {
     fn drop(&mut self) {
-        if !self.committed {
+        if self.owner && !self.committed {
             let _ = std::fs::remove_dir_all(&self.tmp_path);
         }
     }
@@ -420,6 +436,25 @@ mod tests {
         let names: Vec<_> = std::fs::read_dir(root.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names, vec![std::ffi::OsString::from("x")]);
         assert!(root.path().join("x/b.txt").exists() && !root.path().join("x/a.txt").exists());
+    }
+
+    #[test]
+    fn branches_list_their_files_in_the_order_they_are_adopted() {
+        let root = crate::io::TempDir::new("test").unwrap();
+        let mut r = ReportDir::create(root.path(), "x").unwrap();
+        r.write_bytes("first.txt", b"0").unwrap();
+        let (mut a, mut b) = (r.branch(), r.branch());
+        b.write_bytes("b.txt", b"2").unwrap();
+        a.write_bytes("a.txt", b"1").unwrap();
+        r.adopt(a);
+        // A branch dropped (here after adoption) leaves the directory and its files alone.
+        assert!(r.path().join("a.txt").exists() && r.path().join("b.txt").exists());
+        r.adopt(b);
+        assert_eq!(r.files(), ["first.txt", "a.txt", "b.txt"]);
+        let dropped = r.branch();
+        drop(dropped);
+        let done = r.commit().unwrap();
+        assert!(done.join("a.txt").exists() && done.join("b.txt").exists());
     }
 
     #[test]

@@ -7,6 +7,7 @@ use super::setup::{Setup, Shared};
 use super::study::UqStudy;
 use crate::error::Result;
 use crate::strength::NamingSettings;
+use rayon::prelude::*;
 
 /// One strength model's run: its setup, samples and predictive evidence.
 pub struct Form {
@@ -39,35 +40,51 @@ pub struct Weighed {
     pub weight_pbma: f64,
 }
 
-/// Fits, weighs and propagates every strength model of the study.
+/// Fits, weighs and propagates every strength model of the study. The weights (the models'
+/// cross-validation) and the propagation need only the fitted models: they run side by side, and
+/// the models side by side within each (every one parallel inside as well, some over few tasks).
 pub fn forms(s: &UqStudy, path: &std::path::Path, shared: &Shared, tick: &(dyn Fn() + Sync)) -> Result<Vec<Form>> {
-    weighed(s, path, shared)?
+    let setups = fitted(s, path, shared)?;
+    let (weights, props) = rayon::join(|| weigh(s, &setups), || setups.par_iter().map(|st| propagate(st, &s.propagation, s.seed, tick)).collect::<Vec<_>>());
+    let weighed = weights?;
+    setups
         .into_iter()
-        .map(|w| {
-            let prop = propagate(&w.setup, &s.propagation, s.seed, tick)?;
-            Ok(Form { setup: w.setup, prop, lpd: w.lpd, weight: w.weight, weight_pbma: w.weight_pbma })
-        })
+        .zip(weighed)
+        .zip(props)
+        .map(|((setup, (lpd, weight, weight_pbma)), prop)| Ok(Form { setup, prop: prop?, lpd, weight, weight_pbma }))
         .collect()
 }
 
 /// Fits and weighs every strength model of the study: the main study's state of knowledge
 /// (also the prior of experiment design).
 pub fn weighed(s: &UqStudy, path: &std::path::Path, shared: &Shared) -> Result<Vec<Weighed>> {
-    let specs = s.specs();
-    let setups: Vec<Setup> = specs.iter().map(|spec| Setup::new(s, path, spec, &s.contact.averaging, shared)).collect::<Result<_>>()?;
+    let setups = fitted(s, path, shared)?;
+    let weighed = weigh(s, &setups)?;
+    Ok(setups.into_iter().zip(weighed).map(|(setup, (lpd, weight, weight_pbma))| Weighed { setup, lpd, weight, weight_pbma }).collect())
+}
+
+/// Every strength model fitted to both materials, the models side by side; errors in the
+/// models' order.
+fn fitted(s: &UqStudy, path: &std::path::Path, shared: &Shared) -> Result<Vec<Setup>> {
+    let setups: Vec<Result<Setup>> = s.specs().par_iter().map(|spec| Setup::new(s, path, spec, &s.contact.averaging, shared)).collect();
+    setups.into_iter().collect()
+}
+
+/// Each model's cross-validated log densities (per material) and its stacking and pseudo-BMA
+/// weights; every (model, material) cross-validation side by side.
+fn weigh(s: &UqStudy, setups: &[Setup]) -> Result<Vec<([Vec<f64>; 2], f64, f64)>> {
+    if setups.len() < 2 {
+        return Ok(setups.iter().map(|_| ([Vec::new(), Vec::new()], 1.0, 1.0)).collect());
+    }
     let order = s.order();
-    let lpd: Vec<[Vec<f64>; 2]> = if setups.len() > 1 {
-        setups
-            .iter()
-            .map(|st| -> Result<[Vec<f64>; 2]> {
-                let f = |j: usize| crate::discrepancy::workflow::cv_scores(&st.spec, &st.materials[j].sample, &naming(s, order[j]), &st.materials[j].model.key);
-                Ok([f(0)?, f(1)?])
-            })
-            .collect::<Result<_>>()?
-    } else {
-        vec![[Vec::new(), Vec::new()]]
-    };
+    let cells: Vec<(&Setup, usize)> = setups.iter().flat_map(|st| [(st, 0), (st, 1)]).collect();
+    let scores: Vec<Result<Vec<f64>>> = cells.par_iter().map(|&(st, j)| crate::discrepancy::workflow::cv_scores(&st.spec, &st.materials[j].sample, &naming(s, order[j]), &st.materials[j].model.key)).collect();
+    let mut scores = scores.into_iter();
+    let mut lpd = Vec::with_capacity(setups.len());
+    while let (Some(a), Some(b)) = (scores.next(), scores.next()) {
+        lpd.push([a?, b?]);
+    }
     let pooled: Vec<Vec<f64>> = lpd.iter().map(|l| l[0].iter().chain(&l[1]).copied().collect()).collect();
-    let (w, wp) = if setups.len() > 1 { (crate::strength::weights::stacking(&pooled)?, crate::strength::weights::pseudo_bma(&pooled)?) } else { (vec![1.0], vec![1.0]) };
-    Ok(setups.into_iter().zip(lpd).zip(w).zip(wp).map(|(((setup, lpd), weight), weight_pbma)| Weighed { setup, lpd, weight, weight_pbma }).collect())
+    let (w, wp) = (crate::strength::weights::stacking(&pooled)?, crate::strength::weights::pseudo_bma(&pooled)?);
+    Ok(lpd.into_iter().zip(w).zip(wp).map(|((lpd, w), wp)| (lpd, w, wp)).collect())
 }

@@ -99,16 +99,20 @@ pub fn propagate(setup: &Setup, p: &Propagation, seed: u64, tick: &(dyn Fn() + S
     let d = setup.varying(Mode::Joint).len().max(1);
     let n = p.samples / p.replicates;
     let (ni, np) = (setup.inputs.len(), setup.outputs());
-    let mut blocks = Vec::with_capacity(p.replicates);
-    for r in 0..p.replicates {
-        let pts = block_points(p.method, d, n, seed, r)?;
-        let mut block = Block { n, x: vec![0.0; n * ni], p: vec![0.0; n * np] };
-        block.x.par_chunks_mut(ni).zip(block.p.par_chunks_mut(np)).zip(&pts).try_for_each(|((x, pv), u)| {
-            setup.values_into(u, Mode::Joint, x);
-            setup.evaluate_into(x, Mode::Joint, pv)
-        })?;
-        blocks.push(block);
-        tick();
-    }
-    Ok(Propagated { blocks, ni, np })
+    // The replicate blocks side by side as well as each block's samples (a block's points are
+    // drawn serially); errors in the blocks' order.
+    let blocks: Vec<Result<Block>> = (0..p.replicates)
+        .into_par_iter()
+        .map(|r| {
+            let pts = block_points(p.method, d, n, seed, r)?;
+            let mut block = Block { n, x: vec![0.0; n * ni], p: vec![0.0; n * np] };
+            block.x.par_chunks_mut(ni).zip(block.p.par_chunks_mut(np)).zip(&pts).try_for_each(|((x, pv), u)| {
+                setup.values_into(u, Mode::Joint, x);
+                setup.evaluate_into(x, Mode::Joint, pv)
+            })?;
+            tick();
+            Ok(block)
+        })
+        .collect();
+    Ok(Propagated { blocks: blocks.into_iter().collect::<Result<_>>()?, ni, np })
 }

@@ -76,20 +76,47 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     }
 
     let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
-    let headline = write_headline(&mut dir, &forms)?;
-    let attrition = super::attrition::write(&mut dir, &forms)?;
-    write_strength_models(&mut dir, &forms)?;
+    // The tables are independent of each other given the samples: they are computed side by
+    // side (each is parallel inside, but some only over a handful of tasks), each into a branch
+    // of the report directory, and listed in this order whatever order they finish in.
+    pb.set_message("tables, Sobol' indices and averaging-domain alternatives");
     let primary = &forms[0];
-    write_convergence(&mut dir, &primary.setup, &primary.prop)?;
-    write_distributions(&mut dir, &primary.setup, &primary.prop)?;
-    write_breakage_vs_velocity(&mut dir, &primary.setup, &primary.prop, s.impact.velocity_range)?;
-    pb.inc(1);
-    pb.set_message("Sobol' indices");
-    let (final_indices, outputs) = write_sobol(&mut dir, &primary.setup, s, &sens_sizes, &|| pb.inc(1))?;
-    write_inputs(&mut dir, &primary.setup)?;
-    pb.set_message("averaging-domain alternatives");
-    let averaging = write_averaging(&mut dir, s, &loaded.path, &shared, &forms)?;
-    pb.inc(1);
+    let [mut d_head, mut d_attr, mut d_prim, mut d_sobol, mut d_avg] = [(); 5].map(|_| dir.branch());
+    let ((headline, attrition), (primary_tables, (sobol, averaging))) = rayon::join(
+        || rayon::join(|| write_headline(&mut d_head, &forms), || super::attrition::write(&mut d_attr, &forms)),
+        || {
+            rayon::join(
+                || -> Result<()> {
+                    write_strength_models(&mut d_prim, &forms)?;
+                    write_convergence(&mut d_prim, &primary.setup, &primary.prop)?;
+                    write_distributions(&mut d_prim, &primary.setup, &primary.prop)?;
+                    write_breakage_vs_velocity(&mut d_prim, &primary.setup, &primary.prop, s.impact.velocity_range)?;
+                    pb.inc(1);
+                    Ok(())
+                },
+                || {
+                    rayon::join(
+                        || {
+                            let r = write_sobol(&mut d_sobol, &primary.setup, s, &sens_sizes, &|| pb.inc(1))?;
+                            write_inputs(&mut d_sobol, &primary.setup)?;
+                            Ok::<_, Error>(r)
+                        },
+                        || {
+                            let r = write_averaging(&mut d_avg, s, &loaded.path, &shared, &forms);
+                            pb.inc(1);
+                            r
+                        },
+                    )
+                },
+            )
+        },
+    );
+    let (headline, attrition) = (headline?, attrition?);
+    primary_tables?;
+    let ((final_indices, outputs), averaging) = (sobol?, averaging?);
+    for b in [d_head, d_attr, d_prim, d_sobol, d_avg] {
+        dir.adopt(b);
+    }
     let varying = primary.setup.varying(Mode::Split);
     let mut md = summary(s, &forms, &final_indices, &varying, &outputs, &headline, &averaging);
     md.push_str(&super::attrition::markdown(&attrition, &impacts_per_year_text(&primary.setup), &primary.setup.materials[0].model.label));

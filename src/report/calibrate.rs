@@ -23,13 +23,16 @@ type Drawn = (Encoded, usize);
 
 /// Draws every calibration figure in `dir`.
 pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
-    let mut figures = vec![("calibration_fit", fit(dir, width_cm)?), ("calibration_residuals", residuals(dir, width_cm)?)];
-    figures.push(("calibration_corner", corner(dir, 2.0 * width_cm)?));
-    figures.push(("calibration_trace", trace(dir, width_cm)?));
+    let mut figures: Vec<super::Figure<Drawn>> = vec![
+        ("calibration_fit", Box::new(|| fit(dir, width_cm))),
+        ("calibration_residuals", Box::new(|| residuals(dir, width_cm))),
+        ("calibration_corner", Box::new(|| corner(dir, 2.0 * width_cm))),
+        ("calibration_trace", Box::new(|| trace(dir, width_cm))),
+    ];
     if dir.join("comparison.csv").is_file() {
-        figures.push(("calibration_comparison", comparison(dir, 2.0 * width_cm)?));
+        figures.push(("calibration_comparison", Box::new(|| comparison(dir, 2.0 * width_cm))));
     }
-    super::write_figures(dir, figures)
+    super::write_figures(dir, super::draw_all(figures)?)
 }
 
 /// Display scale and unit of a parameter (Pa → GPa).

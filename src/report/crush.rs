@@ -24,14 +24,15 @@ type Drawn = (super::canvas::Encoded, usize);
 
 /// Draws every crush figure in `dir`.
 pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
-    let mut figures = vec![("crush_force_displacement", force_displacement(dir, width_cm)?)];
     let fields = Table::load(dir, "fields")?;
+    let fields = &fields;
+    let mut figures: Vec<super::Figure<Drawn>> = vec![("crush_force_displacement", Box::new(|| force_displacement(dir, width_cm)))];
     if fields.df.height() > 0 {
-        figures.push(("crush_strain_map", strain_map("crush_strain_map", &fields, width_cm, 1.0)?));
-        figures.push(("crush_strain_map_contact", strain_map("crush_strain_map_contact", &fields, width_cm, 0.35)?));
-        figures.push(("crush_depth_profile", depth_profile(dir, width_cm)?));
+        figures.push(("crush_strain_map", Box::new(|| strain_map("crush_strain_map", fields, width_cm, 1.0))));
+        figures.push(("crush_strain_map_contact", Box::new(|| strain_map("crush_strain_map_contact", fields, width_cm, 0.35))));
+        figures.push(("crush_depth_profile", Box::new(|| depth_profile(dir, width_cm))));
     }
-    super::write_figures(dir, figures)
+    super::write_figures(dir, super::draw_all(figures)?)
 }
 
 fn force_displacement(dir: &Path, width_cm: f64) -> Result<Drawn> {

@@ -180,15 +180,27 @@ pub fn pm_text(v: f64, se: f64) -> String {
 /// Draws every figure of the lifetime report in `dir` from its tables.
 pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
     let mats = Materials::load(dir)?;
-    let figures: Vec<(&str, Drawn)> = vec![
-        ("fig05_force_time", fig05_force_time(dir, &mats, width_cm)?),
-        ("fig13_stress_profile", fig13_stress_profile(dir, &mats, width_cm)?),
-        ("fig14_sigma_vs_diameter", fig14_sigma_vs_diameter(dir, &mats, width_cm)?),
-        ("fig14_weibull_cdf", fig14_weibull_cdf(dir, &mats, width_cm)?),
-        ("fig15_impact", fig15_impact(dir, &mats, width_cm)?),
-        ("fig16_breakage", fig16_breakage(dir, &mats, width_cm)?),
+    let mats = &mats;
+    let figures: Vec<Figure<Drawn>> = vec![
+        ("fig05_force_time", Box::new(|| fig05_force_time(dir, mats, width_cm))),
+        ("fig13_stress_profile", Box::new(|| fig13_stress_profile(dir, mats, width_cm))),
+        ("fig14_sigma_vs_diameter", Box::new(|| fig14_sigma_vs_diameter(dir, mats, width_cm))),
+        ("fig14_weibull_cdf", Box::new(|| fig14_weibull_cdf(dir, mats, width_cm))),
+        ("fig15_impact", Box::new(|| fig15_impact(dir, mats, width_cm))),
+        ("fig16_breakage", Box::new(|| fig16_breakage(dir, mats, width_cm))),
     ];
-    write_figures(dir, figures)
+    write_figures(dir, draw_all(figures)?)
+}
+
+/// A figure to draw: its file stem and the drawing.
+pub(crate) type Figure<'a, D> = (&'static str, Box<dyn Fn() -> Result<D> + Send + Sync + 'a>);
+
+/// Draws figures side by side (each reads its own tables and encodes its own files), returning
+/// them in the order given; the first error in that order.
+pub(crate) fn draw_all<D: Send>(figures: Vec<Figure<'_, D>>) -> Result<Vec<(&'static str, D)>> {
+    use rayon::prelude::*;
+    let drawn: Vec<Result<D>> = figures.par_iter().map(|(_, draw)| draw()).collect();
+    figures.iter().zip(drawn).map(|((name, _), d)| Ok((*name, d?))).collect()
 }
 
 /// Writes each drawn figure as `<name>.svg`, `.png` and `.pdf` into `dir`.

@@ -2,7 +2,9 @@
 //! vector PDF. Each page becomes form XObjects made by svg2pdf from SVG, fonts embedded and
 //! subset: one layer per font face (svg2pdf writes the fonts of one conversion in hash-map order,
 //! so one face per conversion keeps the bytes the same from run to run) and each figure's own
-//! SVG; pdf-writer assembles the pages, with a running title and "page k of n". Reference
+//! SVG. The conversions run side by side (each is a chunk numbered on its own) and are
+//! renumbered into the document in the pages' order; pdf-writer assembles the pages, with a
+//! running title and "page k of n". Reference
 //! dictionaries are sorted ([`canonical`]): nothing in the file depends on the time, the machine
 //! or the process, so the same document gives the same bytes. Verified by `tests/documents.rs`
 //! (pdfinfo, pdffonts, pdftotext, byte-identical rewrites).
@@ -11,6 +13,7 @@ use std::collections::HashMap;
 use std::sync::OnceLock;
 
 use pdf_writer::{Content, Finish, Name, Pdf, Rect, Ref, TextStr};
+use rayon::prelude::*;
 use svg2pdf::usvg;
 
 use super::document::Document;
@@ -95,27 +98,38 @@ pub fn render(doc: &Document) -> Result<Vec<u8>> {
     pdf.catalog(catalog).pages(tree_id);
     pdf.pages(tree_id).kids(page_ids.iter().copied()).count(pages.len() as i32);
     pdf.document_info(info).title(TextStr(&doc.title)).producer(TextStr(concat!("partlife ", env!("CARGO_PKG_VERSION"))));
-    // An SVG as a form XObject of this PDF (its objects renumbered into the document's).
-    let mut embed = |pdf: &mut Pdf, svg: &str, what: &str| -> Result<Ref> {
-        let t = usvg::Tree::from_str(svg, options()).map_err(|e| Error::Figure { name: what.to_string(), detail: format!("SVG parse: {e}") })?;
-        let (chunk, x_ref) = svg2pdf::to_chunk(&t, svg2pdf::ConversionOptions::default()).map_err(|e| Error::Figure { name: what.to_string(), detail: format!("PDF: {e:?}") })?;
+    // Every SVG (each page's layers, then its figures) converted side by side: each conversion
+    // is a chunk of its own, numbered from 1, whatever runs beside it.
+    let what = |k: usize| format!("report.pdf page {}", k + 1);
+    let svgs: Vec<(usize, &str)> = pages.iter().enumerate().flat_map(|(k, page)| page.layers.iter().map(String::as_str).chain(page.figures.iter().map(|(index, _)| lay.figures[*index].as_str())).map(move |svg| (k, svg))).collect();
+    let converted: Vec<Result<(pdf_writer::Chunk, Ref)>> = svgs
+        .par_iter()
+        .map(|&(k, svg)| {
+            let t = usvg::Tree::from_str(svg, options()).map_err(|e| Error::Figure { name: what(k), detail: format!("SVG parse: {e}") })?;
+            svg2pdf::to_chunk(&t, svg2pdf::ConversionOptions::default()).map_err(|e| Error::Figure { name: what(k), detail: format!("PDF: {e:?}") })
+        })
+        .collect();
+    let mut converted = converted.into_iter();
+    // The next conversion as a form XObject of this PDF, its objects renumbered into the
+    // document's in the pages' order (the same numbers as converting one after another).
+    let mut embed = |pdf: &mut Pdf| -> Result<Ref> {
+        let (chunk, x_ref) = converted.next().expect("one conversion per layer and figure")?;
         let mut map = HashMap::new();
         let chunk = chunk.renumber(|old| *map.entry(old).or_insert_with(|| alloc.bump()));
         pdf.extend(&chunk);
         Ok(map[&x_ref])
     };
     for (k, page) in pages.iter().enumerate() {
-        let what = format!("report.pdf page {}", k + 1);
         let mut content = Content::new();
         let mut xobjects: Vec<(String, Ref)> = Vec::new();
-        for (i, layer) in page.layers.iter().enumerate() {
-            let r = embed(&mut pdf, layer, &what)?;
+        for (i, _) in page.layers.iter().enumerate() {
+            let r = embed(&mut pdf)?;
             let name = format!("L{i}");
             content.save_state().transform([PAGE.0 as f32, 0.0, 0.0, PAGE.1 as f32, 0.0, 0.0]).x_object(Name(name.as_bytes())).restore_state();
             xobjects.push((name, r));
         }
-        for (i, (index, [x, y, w, h])) in page.figures.iter().enumerate() {
-            let r = embed(&mut pdf, &lay.figures[*index], &what)?;
+        for (i, (_, [x, y, w, h])) in page.figures.iter().enumerate() {
+            let r = embed(&mut pdf)?;
             let name = format!("F{i}");
             let (x, y, w, h) = (*x as f32, *y as f32, *w as f32, *h as f32);
             content.save_state().transform([w, 0.0, 0.0, h, x, PAGE.1 as f32 - y - h]).x_object(Name(name.as_bytes())).restore_state();

@@ -18,17 +18,17 @@ use crate::error::{Error, Result};
 
 /// Draws every figure of a temperature report in `dir` (those whose tables it has).
 pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
-    let mut figures = vec![("phase_fractions", phase_fractions(dir, width_cm)?)];
+    let mut figures: Vec<super::Figure<_>> = vec![("phase_fractions", Box::new(|| phase_fractions(dir, width_cm)))];
     if dir.join("parameters_vs_temperature.csv").is_file() {
-        figures.push(("parameters_vs_temperature", parameters(dir, width_cm)?));
+        figures.push(("parameters_vs_temperature", Box::new(|| parameters(dir, width_cm))));
     }
     if dir.join("validation.csv").is_file() {
-        figures.push(("held_out", held_out(dir, width_cm)?));
+        figures.push(("held_out", Box::new(|| held_out(dir, width_cm))));
     }
     if dir.join("lifetime_vs_temperature.csv").is_file() {
-        figures.push(("breakage_vs_temperature", breakage(dir, width_cm)?));
+        figures.push(("breakage_vs_temperature", Box::new(|| breakage(dir, width_cm))));
     }
-    super::write_figures(dir, figures)
+    super::write_figures(dir, super::draw_all(figures)?)
 }
 
 /// A parameter's name and unit as an axis label, with the value scale (Pa shown in GPa).

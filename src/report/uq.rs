@@ -52,16 +52,17 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
         Some(d) => format!("{} strength, {}", short_model(&primary), d.replace("independent", "indep.")),
         None => format!("{} strength model", short_model(&primary)),
     };
-    let figures = vec![
-        ("uq_breakage_vs_velocity", breakage_vs_velocity(dir, width_cm, labels, keys, &brief)?),
-        ("uq_distributions", distributions(dir, width_cm, labels, keys, &brief)?),
-        ("uq_convergence", convergence(dir, width_cm, labels)?),
-        ("uq_sobol", sobol(dir, 2.0 * width_cm, &shown)?),
-        ("uq_sobol_convergence", sobol_convergence(dir, width_cm)?),
-        ("uq_model_form", model_form(dir, width_cm, labels, keys, &primary)?),
-        ("uq_strength_models", strength_models(dir, 2.0 * width_cm, labels, keys)?),
+    let (brief, shown, primary) = (&brief, &shown, &primary);
+    let figures: Vec<super::Figure<Drawn>> = vec![
+        ("uq_breakage_vs_velocity", Box::new(move || breakage_vs_velocity(dir, width_cm, labels, keys, brief))),
+        ("uq_distributions", Box::new(move || distributions(dir, width_cm, labels, keys, brief))),
+        ("uq_convergence", Box::new(move || convergence(dir, width_cm, labels))),
+        ("uq_sobol", Box::new(move || sobol(dir, 2.0 * width_cm, shown))),
+        ("uq_sobol_convergence", Box::new(move || sobol_convergence(dir, width_cm))),
+        ("uq_model_form", Box::new(move || model_form(dir, width_cm, labels, keys, primary))),
+        ("uq_strength_models", Box::new(move || strength_models(dir, 2.0 * width_cm, labels, keys))),
     ];
-    super::write_figures(dir, figures)
+    super::write_figures(dir, super::draw_all(figures)?)
 }
 
 fn years_label(y: f64) -> String {

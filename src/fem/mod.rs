@@ -146,6 +146,11 @@ pub struct CrushTest {
     fix_z: Vec<bool>,
     /// The nodes with `fix_z`, ascending (the bottom reaction is summed over them in this order).
     fixed_z: Vec<u32>,
+    /// Whether a node lies on the surface (the platens may change its velocity after the
+    /// nodal pass), and those nodes once each, ascending: every other node moves in the nodal
+    /// pass itself, these after the contact.
+    on_surface: Vec<bool>,
+    surface_nodes: Vec<u32>,
     platen: contact::Platen,
     /// The bottom platen (plane strain; axisymmetric runs use the equatorial symmetry plane).
     bottom: Option<contact::Platen>,
@@ -264,6 +269,11 @@ impl CrushTest {
         let platen = contact::Platen::new(top, speed, ramp, mu);
         let bottom = (!axisymmetric).then(|| contact::Platen::bottom(low, speed, ramp, mu));
         let x = mesh.nodes.clone();
+        let mut on_surface = vec![false; nn];
+        for &i in &mesh.surface {
+            on_surface[i as usize] = true;
+        }
+        let surface_nodes = (0..nn as u32).filter(|&i| on_surface[i as usize]).collect();
         let mut t = CrushTest {
             kernel,
             x,
@@ -276,6 +286,8 @@ impl CrushTest {
             adj,
             f_node: vec![[0.0; 2]; nn],
             fixed_z: (0..nn as u32).filter(|&i| fix_z[i as usize]).collect(),
+            on_surface,
+            surface_nodes,
             fix_r,
             fix_z,
             platen,
@@ -369,7 +381,8 @@ impl CrushTest {
         let dt = self.dt;
         // 1. Element pass: stresses at t from the velocities of the last half step, in chunks
         //    of CHUNK elements (energies summed per chunk, then over the chunks in order).
-        // 2. Nodal forces, summed over each node's elements in element order, and velocities.
+        // 2. Nodal forces, summed over each node's elements in element order, velocities, and
+        //    the positions of the nodes off the surface (no contact can change their velocity).
         // A run that has its thread to itself (one thread, or one run of a full batch of runs)
         // adds each element's forces into its nodes as it goes; otherwise the elements' forces
         // are stored and each node gathers its own, in parallel. Both sum in element order: the
@@ -383,6 +396,13 @@ impl CrushTest {
             let w = inv_mass[i];
             vi[0] = if fix_r[i] { 0.0 } else { vi[0] + dt * s[0] * w };
             vi[1] = if fix_z[i] { 0.0 } else { vi[1] + dt * s[1] * w };
+        };
+        let on_surface = &self.on_surface;
+        let mv = |i: usize, vi: &[f64; 2], xi: &mut [f64; 2]| {
+            if !on_surface[i] {
+                xi[0] += dt * vi[0];
+                xi[1] += dt * vi[1];
+            }
         };
         let inverted = |e: usize, steps: u64, time: f64| Error::numerical("crush FE", format!("step {steps}: element {e} inverted (non-positive Jacobian) at t = {time:.4e} s"));
         if crate::model::alone_on_thread() {
@@ -400,8 +420,9 @@ impl CrushTest {
                 self.e_int += ei;
                 self.e_hg += eh;
             }
-            for (i, (s, vi)) in self.f_node.iter().zip(self.v.iter_mut()).enumerate() {
+            for (i, ((s, vi), xi)) in self.f_node.iter().zip(self.v.iter_mut()).zip(self.x.iter_mut()).enumerate() {
                 velocity(i, *s, vi);
+                mv(i, vi, xi);
             }
         } else {
             let partial: Vec<std::result::Result<(f64, f64), usize>> = self
@@ -418,7 +439,7 @@ impl CrushTest {
             }
             let (adj, start) = (&self.adj, &self.adj_start);
             let flat: &[f64] = self.forces.as_flattened();
-            self.f_node.par_iter_mut().zip(self.v.par_iter_mut()).enumerate().with_min_len(4 * CHUNK).for_each(|(i, (f, vi))| {
+            self.f_node.par_iter_mut().zip(self.v.par_iter_mut()).zip(self.x.par_iter_mut()).enumerate().with_min_len(4 * CHUNK).for_each(|(i, ((f, vi), xi))| {
                 let mut s = [0.0; 2];
                 for &slot in &adj[start[i] as usize..start[i + 1] as usize] {
                     let pair = &flat[slot as usize..slot as usize + 2];
@@ -427,9 +448,11 @@ impl CrushTest {
                 }
                 *f = s;
                 velocity(i, s, vi);
+                mv(i, vi, xi);
             });
         }
-        // 3. Constraints, contact, positions. The held nodes' reaction in node order.
+        // 3. Constraints, contact, the surface nodes' positions. The held nodes' reaction in
+        //    node order.
         let mut bottom = 0.0;
         for &i in &self.fixed_z {
             bottom -= self.f_node[i as usize][1] * dt;
@@ -442,11 +465,11 @@ impl CrushTest {
         // External work: each platen's impulse times its speed over the step.
         let speed = self.platen.velocity(self.time + 0.5 * dt);
         self.e_ext += top * speed + if self.bottom.is_some() { bottom * speed } else { 0.0 };
-        // Split only on fine meshes: a few thousand nodes are faster on one thread.
-        self.x.par_iter_mut().zip(self.v.par_iter()).with_min_len(64 * CHUNK).for_each(|(xi, vi)| {
+        for &i in &self.surface_nodes {
+            let (xi, vi) = (&mut self.x[i as usize], self.v[i as usize]);
             xi[0] += dt * vi[0];
             xi[1] += dt * vi[1];
-        });
+        }
         self.time = t_new;
         self.steps += 1;
         Ok((top, bottom))

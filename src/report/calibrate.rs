@@ -15,7 +15,7 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use super::canvas::{Encoded, canvas_size, colour, encode, fig_err, register_fonts, text};
-use super::panel::{Kind, Marker, Panel, Series, figure, figure_grid, padded};
+use super::panel::{Kind, Marker, Panel, Series, figure, figure_grid, figure_legend_below, padded};
 use super::{Rendered, Table};
 use crate::error::Result;
 
@@ -74,7 +74,7 @@ fn fit(dir: &Path, width_cm: f64) -> Result<Drawn> {
         let pts: Vec<(f64, f64)> = idx.iter().map(|&i| (1e6 * x[i], f[i])).collect();
         match kind[idx[0]].as_str() {
             "data" => {
-                series.push(Series::line(first_data.then(|| format!("measured, scaled to D₀ = {:.0} µm", d0 * 1e6)), pts, RGBColor(150, 150, 150), 0.6));
+                series.push(Series::line(first_data.then(|| format!("measured, D₀ = {:.0} µm", d0 * 1e6)), pts, RGBColor(150, 150, 150), 0.6));
                 first_data = false;
             }
             "posterior_draw" => {
@@ -102,18 +102,26 @@ fn fit(dir: &Path, width_cm: f64) -> Result<Drawn> {
         series.push(Series::line(None, vec![(1e6 * q05[ix], ym), (1e6 * q95[ix], ym)], colour(1), 1.2));
     }
     let xmax = x.iter().cloned().fold(0.0, f64::max) * 1e6;
-    let ymax = f.iter().cloned().fold(0.0, f64::max);
+    // Everything drawn fits: curves, points, the cross and the band's upper edge.
+    let band_top = series.iter().flat_map(|s| match &s.kind {
+        Kind::Band(upper, _) => upper.clone(),
+        _ => vec![],
+    });
+    let ymax = series.iter().flat_map(|s| s.points.iter().map(|p| p.1)).chain(band_top).fold(0.0, f64::max);
+    // Six entries: the legend below the axes (an inner one hid curves and points whatever the
+    // corner), in two columns.
+    let entries: Vec<Series> = series.iter().filter(|s| s.label.is_some()).map(|s| Series { points: vec![], ..s.clone() }).collect();
     let panel = Panel {
         x_categories: vec![],
         x_desc: "Total crush displacement δ·D₀/D (µm)".into(),
         y_desc: "Platen force F·(D₀/D)² (N)".into(),
         x_range: (0.0, xmax * 1.02),
-        y_range: (0.0, ymax * 1.45),
+        y_range: (0.0, ymax * 1.05),
         y_log: false,
         series,
-        legend: Some(SeriesLabelPosition::UpperLeft),
+        legend: None,
     };
-    figure("calibration_fit", width_cm, 0.8, &[(panel, 1.0)])
+    figure_legend_below("calibration_fit", width_cm, 0.8 + 0.035 * entries.len().div_ceil(2) as f64, &[(panel, 1.0)], &entries, 2)
 }
 
 /// Any model: each observation against its 90 % predictive interval. Velocity-profile outputs

@@ -400,7 +400,12 @@ fn calibration(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
             let inside = (0..v.len()).filter(|&i| v[i] >= lo[i] && v[i] <= hi[i]).count();
             let share = format!("{inside} of {} observations ({}) lie inside their 90 % posterior-predictive interval", v.len(), percent(inside as f64 / v.len().max(1) as f64));
             if stem == "calibration_fit" {
-                FigureNote { title: Some("Measured against calibrated".into()), caption: p(&format!("The measurements with the calibrated model at posterior draws and its 90 % posterior-predictive band: {share}.")), blocks: vec![] }
+                // Curve calibrations draw every particle scaled to one reference diameter.
+                let scaled = match Table::load(dir, "grid").ok().and_then(|g| g.f("reference_diameter_m").ok()).and_then(|d| d.first().copied()) {
+                    Some(d0) if dir.join("curves.csv").is_file() => format!(" Each particle's curve is scaled to the reference diameter D₀ = {:.0} µm (force × (D₀/D)², displacement × D₀/D).", d0 * 1e6),
+                    _ => String::new(),
+                };
+                FigureNote { title: Some("Measured against calibrated".into()), caption: p(&format!("The measurements with the calibrated model at posterior draws and its 90 % posterior-predictive band: {share}.{scaled}")), blocks: vec![] }
             } else {
                 FigureNote { title: Some("Standardised residuals".into()), caption: p(&format!("Standardised residuals (d − median)/σ of every observation with the 90 % predictive band: {share}.")), blocks: vec![] }
             }

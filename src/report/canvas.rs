@@ -1,5 +1,6 @@
 //! Figure canvas and export: plotters draws SVG; the same SVG becomes a 300-dpi PNG (resvg)
-//! and a vector PDF with embedded fonts (svg2pdf).
+//! and a vector PDF with embedded fonts (svg2pdf), its reference dictionaries sorted
+//! ([`super::pdf::canonical`]) so that a figure's bytes do not change from run to run.
 //!
 //! Text is the trap (ARCHITECTURE.md, "Figures"): usvg resolves the SVG's `font-family`
 //! through its own font database and silently drops text in a family it does not have. So one
@@ -108,7 +109,9 @@ pub fn encode(name: &str, svg: &str, size: (u32, u32), width_cm: f64) -> Result<
         svg2pdf::PageOptions { dpi: usvg_options().dpi },
     )
     .map_err(|e| Error::Figure { name: name.into(), detail: format!("PDF: {e:?}") })?;
-    Ok(Encoded { svg, png, pdf })
+    // svg2pdf writes resource dictionaries in hash-map order: sorted, the same figure gives the
+    // same bytes from run to run.
+    Ok(Encoded { svg, png, pdf: super::pdf::canonical(&pdf) })
 }
 
 /// Fails when the figure font has no glyph for a character of `text` (it would print as a

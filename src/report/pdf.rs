@@ -157,7 +157,7 @@ pub fn render(doc: &Document) -> Result<Vec<u8>> {
 /// order that changes from run to run; the order of a dictionary's entries has no meaning, so
 /// sorting them gives the same bytes for the same document. Stream data (after `stream`, its
 /// `/Length` bytes) is copied untouched.
-fn canonical(pdf: &[u8]) -> Vec<u8> {
+pub(crate) fn canonical(pdf: &[u8]) -> Vec<u8> {
     const START: &[u8] = b">>\nstream\n";
     let find = |hay: &[u8], from: usize, needle: &[u8]| hay[from..].windows(needle.len()).position(|w| w == needle).map(|i| i + from);
     let mut out = Vec::with_capacity(pdf.len());

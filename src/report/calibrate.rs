@@ -108,7 +108,7 @@ fn fit(dir: &Path, width_cm: f64) -> Result<Drawn> {
         _ => vec![],
     });
     let ymax = series.iter().flat_map(|s| s.points.iter().map(|p| p.1)).chain(band_top).fold(0.0, f64::max);
-    // Six entries: the legend below the axes (an inner one hid curves and points whatever the
+    // Up to six entries: the legend below the axes (an inner one hid curves and points whatever the
     // corner), in two columns.
     let entries: Vec<Series> = series.iter().filter(|s| s.label.is_some()).map(|s| Series { points: vec![], ..s.clone() }).collect();
     let panel = Panel {

@@ -1,6 +1,6 @@
 //! Figure canvas and export: plotters draws SVG; the same SVG becomes a 300-dpi PNG (resvg)
 //! and a vector PDF with embedded fonts (svg2pdf), its reference dictionaries sorted
-//! ([`super::pdf::canonical`]) so that a figure's bytes do not change from run to run.
+//! ([`canonical`]) so that a figure's bytes do not change from run to run.
 //!
 //! Text is the trap (ARCHITECTURE.md, "Figures"): usvg resolves the SVG's `font-family`
 //! through its own font database and silently drops text in a family it does not have. So one
@@ -111,7 +111,7 @@ pub fn encode(name: &str, svg: &str, size: (u32, u32), width_cm: f64) -> Result<
     .map_err(|e| Error::Figure { name: name.into(), detail: format!("PDF: {e:?}") })?;
     // svg2pdf writes resource dictionaries in hash-map order: sorted, the same figure gives the
     // same bytes from run to run.
-    Ok(Encoded { svg, png, pdf: super::pdf::canonical(&pdf) })
+    Ok(Encoded { svg, png, pdf: canonical(&pdf) })
 }
 
 /// Fails when the figure font has no glyph for a character of `text` (it would print as a
@@ -221,9 +221,81 @@ pub fn power_of_ten(v: &f64) -> String {
     }
 }
 
+/// The PDF with the entries of every dictionary of references in one order. svg2pdf writes the
+/// resource dictionaries of an XObject (`/xo0 40 0 R`, `/gs0 39 0 R`, …) from hash maps, in an
+/// order that changes from run to run; the order of a dictionary's entries has no meaning, so
+/// sorting them gives the same bytes for the same document. Stream data (after `stream`, its
+/// `/Length` bytes) is copied untouched.
+pub(crate) fn canonical(pdf: &[u8]) -> Vec<u8> {
+    const START: &[u8] = b">>\nstream\n";
+    let find = |hay: &[u8], from: usize, needle: &[u8]| hay[from..].windows(needle.len()).position(|w| w == needle).map(|i| i + from);
+    let mut out = Vec::with_capacity(pdf.len());
+    let mut pos = 0;
+    while pos < pdf.len() {
+        let Some(i) = find(pdf, pos, START) else {
+            out.extend(sorted_pairs(&pdf[pos..]));
+            break;
+        };
+        let data = i + START.len();
+        let text = &pdf[pos..data];
+        let length = text
+            .windows(8)
+            .rposition(|w| w == b"/Length ")
+            .and_then(|k| {
+                let digits: Vec<u8> = text[k + 8..].iter().take_while(|c| c.is_ascii_digit()).copied().collect();
+                std::str::from_utf8(&digits).ok()?.parse::<usize>().ok()
+            })
+            .unwrap_or(0);
+        out.extend(sorted_pairs(text));
+        let end = (data + length).min(pdf.len());
+        out.extend_from_slice(&pdf[data..end]);
+        pos = end;
+    }
+    out
+}
+
+/// Text of PDF objects with each run of `/name N 0 R` lines between a line ending in `<<` and a
+/// `>>` line sorted.
+fn sorted_pairs(text: &[u8]) -> Vec<u8> {
+    let is_pair = |l: &[u8]| {
+        let t = l.trim_ascii();
+        let parts: Vec<&[u8]> = t.split(|&c| c == b' ').collect();
+        parts.len() == 4 && parts[0].first() == Some(&b'/') && parts[1].iter().all(u8::is_ascii_digit) && parts[2] == b"0" && parts[3] == b"R"
+    };
+    let lines: Vec<&[u8]> = text.split(|&c| c == b'\n').collect();
+    let mut out: Vec<&[u8]> = Vec::with_capacity(lines.len());
+    let mut i = 0;
+    while i < lines.len() {
+        out.push(lines[i]);
+        if lines[i].trim_ascii_end().ends_with(b"<<") {
+            let mut j = i + 1;
+            while j < lines.len() && is_pair(lines[j]) {
+                j += 1;
+            }
+            if j > i + 2 && j < lines.len() && lines[j].trim_ascii() == b">>" {
+                let mut run: Vec<&[u8]> = lines[i + 1..j].to_vec();
+                run.sort();
+                out.extend(run);
+                i = j;
+                continue;
+            }
+        }
+        i += 1;
+    }
+    out.join(&b'\n')
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn dictionaries_of_references_are_sorted_and_streams_kept() {
+        let a = b"1 0 obj\n<<\n  /XObject <<\n    /xo1 43 0 R\n    /xo0 40 0 R\n  >>\n  /Length 9\n>>\nstream\n<<\n/b 1 0 R\nendstream\n";
+        let b = b"1 0 obj\n<<\n  /XObject <<\n    /xo0 40 0 R\n    /xo1 43 0 R\n  >>\n  /Length 9\n>>\nstream\n<<\n/b 1 0 R\nendstream\n";
+        assert_eq!(canonical(a), canonical(b));
+        assert_eq!(canonical(b), b.to_vec());
+    }
 
     #[test]
     fn labels() {

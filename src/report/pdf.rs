@@ -4,10 +4,10 @@
 //! so one face per conversion keeps the bytes the same from run to run) and each figure's own
 //! SVG. The conversions run side by side (each is a chunk numbered on its own) and are
 //! renumbered into the document in the pages' order; pdf-writer assembles the pages, with a
-//! running title and "page k of n". Reference
-//! dictionaries are sorted ([`canonical`]): nothing in the file depends on the time, the machine
-//! or the process, so the same document gives the same bytes. Verified by `tests/documents.rs`
-//! (pdfinfo, pdffonts, pdftotext, byte-identical rewrites).
+//! running title and "page k of n". Reference dictionaries are sorted
+//! ([`super::canvas::canonical`], as in every figure's PDF): nothing in the file depends on the
+//! time, the machine or the process, so the same document gives the same bytes. Verified by
+//! `tests/documents.rs` (pdfinfo, pdffonts, pdftotext, byte-identical rewrites).
 
 use std::collections::HashMap;
 use std::sync::OnceLock;
@@ -149,83 +149,5 @@ pub fn render(doc: &Document) -> Result<Vec<u8>> {
         p.finish();
         pdf.stream(content_ids[k], &content.finish());
     }
-    Ok(canonical(&pdf.finish()))
-}
-
-/// The PDF with the entries of every dictionary of references in one order. svg2pdf writes the
-/// resource dictionaries of an XObject (`/xo0 40 0 R`, `/gs0 39 0 R`, …) from hash maps, in an
-/// order that changes from run to run; the order of a dictionary's entries has no meaning, so
-/// sorting them gives the same bytes for the same document. Stream data (after `stream`, its
-/// `/Length` bytes) is copied untouched.
-pub(crate) fn canonical(pdf: &[u8]) -> Vec<u8> {
-    const START: &[u8] = b">>\nstream\n";
-    let find = |hay: &[u8], from: usize, needle: &[u8]| hay[from..].windows(needle.len()).position(|w| w == needle).map(|i| i + from);
-    let mut out = Vec::with_capacity(pdf.len());
-    let mut pos = 0;
-    while pos < pdf.len() {
-        let Some(i) = find(pdf, pos, START) else {
-            out.extend(sorted_pairs(&pdf[pos..]));
-            break;
-        };
-        let data = i + START.len();
-        let text = &pdf[pos..data];
-        let length = text
-            .windows(8)
-            .rposition(|w| w == b"/Length ")
-            .and_then(|k| {
-                let digits: Vec<u8> = text[k + 8..].iter().take_while(|c| c.is_ascii_digit()).copied().collect();
-                std::str::from_utf8(&digits).ok()?.parse::<usize>().ok()
-            })
-            .unwrap_or(0);
-        out.extend(sorted_pairs(text));
-        let end = (data + length).min(pdf.len());
-        out.extend_from_slice(&pdf[data..end]);
-        pos = end;
-    }
-    out
-}
-
-/// Text of PDF objects with each run of `/name N 0 R` lines between a line ending in `<<` and a
-/// `>>` line sorted.
-fn sorted_pairs(text: &[u8]) -> Vec<u8> {
-    let is_pair = |l: &[u8]| {
-        let t = l.trim_ascii();
-        let parts: Vec<&[u8]> = t.split(|&c| c == b' ').collect();
-        parts.len() == 4 && parts[0].first() == Some(&b'/') && parts[1].iter().all(u8::is_ascii_digit) && parts[2] == b"0" && parts[3] == b"R"
-    };
-    let lines: Vec<&[u8]> = text.split(|&c| c == b'\n').collect();
-    let mut out: Vec<&[u8]> = Vec::with_capacity(lines.len());
-    let mut i = 0;
-    while i < lines.len() {
-        out.push(lines[i]);
-        if lines[i].trim_ascii_end().ends_with(b"<<") {
-            let mut j = i + 1;
-            while j < lines.len() && is_pair(lines[j]) {
-                j += 1;
-            }
-            if j > i + 2 && j < lines.len() && lines[j].trim_ascii() == b">>" {
-                let mut run: Vec<&[u8]> = lines[i + 1..j].to_vec();
-                run.sort();
-                out.extend(run);
-                i = j;
-                continue;
-            }
-        }
-        i += 1;
-    }
-    out.join(&b'\n')
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn dictionaries_of_references_are_sorted_and_streams_kept() {
-        let a = b"1 0 obj\n<<\n  /XObject <<\n    /xo1 43 0 R\n    /xo0 40 0 R\n  >>\n  /Length 9\n>>\nstream\n<<\n/b 1 0 R\nendstream\n";
-        let b = b"1 0 obj\n<<\n  /XObject <<\n    /xo0 40 0 R\n    /xo1 43 0 R\n  >>\n  /Length 9\n>>\nstream\n<<\n/b 1 0 R\nendstream\n";
-        assert_eq!(canonical(a), canonical(b));
-        assert_eq!(canonical(b), b.to_vec());
-    }
-
+    Ok(super::canvas::canonical(&pdf.finish()))
 }

@@ -80,10 +80,8 @@ fn weigh(s: &UqStudy, setups: &[Setup]) -> Result<Vec<([Vec<f64>; 2], f64, f64)>
     let cells: Vec<(&Setup, usize)> = setups.iter().flat_map(|st| [(st, 0), (st, 1)]).collect();
     let scores: Vec<Result<Vec<f64>>> = cells.par_iter().map(|&(st, j)| crate::discrepancy::workflow::cv_scores(&st.spec, &st.materials[j].sample, &naming(s, order[j]), &st.materials[j].model.key)).collect();
     let mut scores = scores.into_iter();
-    let mut lpd = Vec::with_capacity(setups.len());
-    while let (Some(a), Some(b)) = (scores.next(), scores.next()) {
-        lpd.push([a?, b?]);
-    }
+    let mut next = || scores.next().expect("two cross-validations per model");
+    let lpd: Vec<[Vec<f64>; 2]> = setups.iter().map(|_| Ok([next()?, next()?])).collect::<Result<_>>()?;
     let pooled: Vec<Vec<f64>> = lpd.iter().map(|l| l[0].iter().chain(&l[1]).copied().collect()).collect();
     let (w, wp) = (crate::strength::weights::stacking(&pooled)?, crate::strength::weights::pseudo_bma(&pooled)?);
     Ok(lpd.into_iter().zip(w).zip(wp).map(|((lpd, w), wp)| (lpd, w, wp)).collect())

@@ -82,35 +82,29 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     pb.set_message("tables, Sobol' indices and averaging-domain alternatives");
     let primary = &forms[0];
     let [mut d_head, mut d_attr, mut d_prim, mut d_sobol, mut d_avg] = [(); 5].map(|_| dir.branch());
-    let ((headline, attrition), (primary_tables, (sobol, averaging))) = rayon::join(
-        || rayon::join(|| write_headline(&mut d_head, &forms), || super::attrition::write(&mut d_attr, &forms)),
-        || {
-            rayon::join(
-                || -> Result<()> {
-                    write_strength_models(&mut d_prim, &forms)?;
-                    write_convergence(&mut d_prim, &primary.setup, &primary.prop)?;
-                    write_distributions(&mut d_prim, &primary.setup, &primary.prop)?;
-                    write_breakage_vs_velocity(&mut d_prim, &primary.setup, &primary.prop, s.impact.velocity_range)?;
-                    pb.inc(1);
-                    Ok(())
-                },
-                || {
-                    rayon::join(
-                        || {
-                            let r = write_sobol(&mut d_sobol, &primary.setup, s, &sens_sizes, &|| pb.inc(1))?;
-                            write_inputs(&mut d_sobol, &primary.setup)?;
-                            Ok::<_, Error>(r)
-                        },
-                        || {
-                            let r = write_averaging(&mut d_avg, s, &loaded.path, &shared, &forms);
-                            pb.inc(1);
-                            r
-                        },
-                    )
-                },
-            )
-        },
-    );
+    let (mut headline, mut attrition, mut primary_tables, mut sobol, mut averaging) = (None, None, None, None, None);
+    rayon::scope(|sc| {
+        sc.spawn(|_| headline = Some(write_headline(&mut d_head, &forms)));
+        sc.spawn(|_| attrition = Some(super::attrition::write(&mut d_attr, &forms)));
+        sc.spawn(|_| {
+            primary_tables = Some((|| -> Result<()> {
+                write_strength_models(&mut d_prim, &forms)?;
+                write_convergence(&mut d_prim, &primary.setup, &primary.prop)?;
+                write_distributions(&mut d_prim, &primary.setup, &primary.prop)?;
+                write_breakage_vs_velocity(&mut d_prim, &primary.setup, &primary.prop, s.impact.velocity_range)
+            })());
+            pb.inc(1);
+        });
+        sc.spawn(|_| {
+            sobol = Some(write_sobol(&mut d_sobol, &primary.setup, s, &sens_sizes, &|| pb.inc(1)).and_then(|r| write_inputs(&mut d_sobol, &primary.setup).map(|_| r)));
+        });
+        sc.spawn(|_| {
+            averaging = Some(write_averaging(&mut d_avg, s, &loaded.path, &shared, &forms));
+            pb.inc(1);
+        });
+    });
+    let done = "every table task ran";
+    let (headline, attrition, primary_tables, sobol, averaging) = (headline.expect(done), attrition.expect(done), primary_tables.expect(done), sobol.expect(done), averaging.expect(done));
     let (headline, attrition) = (headline?, attrition?);
     primary_tables?;
     let ((final_indices, outputs), averaging) = (sobol?, averaging?);

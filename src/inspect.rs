@@ -72,19 +72,20 @@ fn kind_of(t: &RawTable) -> &'static str {
 }
 
 /// Checks one file as `src` describes it (every sheet of a workbook when no sheet is named), as
-/// the kind `kind` (`"curves"`, `"observations"`, …; None: the kind its header shows).
-pub fn check(src: &Source, kind: Option<&'static str>) -> Result<Vec<Checked>> {
+/// the kind `kind` (`"curves"`, `"observations"`, …; None: the kind its header shows); a
+/// mistake in the study's column or unit map is reported at `origin` (the study file and key).
+pub fn check(src: &Source, kind: Option<&'static str>, origin: &MapOrigin) -> Result<Vec<Checked>> {
     let path = src.file.as_path();
     if crate::intake::sheet::is_spreadsheet(path) && src.sheet.is_none() {
         let names = sheet_names(path)?;
         let mut out = Vec::new();
         for (k, _) in names.iter().enumerate() {
             let s = Source { sheet: Some(SheetRef::Index(k + 1)), ..src.clone() };
-            out.extend(check_table(&s, kind)?);
+            out.extend(check_table(&s, kind, origin)?);
         }
         return Ok(out);
     }
-    check_table(src, kind)
+    check_table(src, kind, origin)
 }
 
 fn sheet_names(path: &Path) -> Result<Vec<String>> {
@@ -92,7 +93,7 @@ fn sheet_names(path: &Path) -> Result<Vec<String>> {
     crate::intake::sheet::sheet_names(path, bytes)
 }
 
-fn check_table(src: &Source, kind: Option<&'static str>) -> Result<Vec<Checked>> {
+fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin) -> Result<Vec<Checked>> {
     let path = src.file.as_path();
     let t = read_raw(src)?;
     let what = match &t.origin.sheet {
@@ -127,12 +128,12 @@ fn check_table(src: &Source, kind: Option<&'static str>) -> Result<Vec<Checked>>
             one(format!("impact spectrum ({}), {} rows: {}", t.format, t.rows.len(), lines.join("; ")), None)
         }
         "curves" => {
-            let (curves, read) = crate::calibrate::data::curves_of(&t, path, &src.columns, &src.units, &MapOrigin::default())?;
+            let (curves, read) = crate::calibrate::data::curves_of(&t, path, &src.columns, &src.units, origin)?;
             let d = span(range(&curves.iter().map(|c| c.diameter).collect::<Vec<_>>()), 1e6, 0);
             one(format!("crush curves, {} particles, d = {d} µm, {} samples", curves.len(), t.rows.len()), Some(read))
         }
         "shape" => {
-            let r = resolve(&t, &crate::data::SHAPE_FIELDS, &src.columns, &src.units, &MapOrigin::default())?;
+            let r = resolve(&t, &crate::data::SHAPE_FIELDS, &src.columns, &src.units, origin)?;
             for row in 0..t.rows.len() {
                 r.need_text("id", row)?;
                 for k in ["roundness", "sphericity", "temperature", "impacts"] {
@@ -143,7 +144,7 @@ fn check_table(src: &Source, kind: Option<&'static str>) -> Result<Vec<Checked>>
         }
         _ => {
             // A campaign file with several materials is checked material by material.
-            let r = resolve(&t, &crate::data::CRUSH_FIELDS, &src.columns, &src.units, &MapOrigin::default())?;
+            let r = resolve(&t, &crate::data::CRUSH_FIELDS, &src.columns, &src.units, origin)?;
             let mut materials: Vec<String> = Vec::new();
             if src.material.is_none() && r.has("material") {
                 for row in 0..t.rows.len() {
@@ -160,7 +161,7 @@ fn check_table(src: &Source, kind: Option<&'static str>) -> Result<Vec<Checked>>
             let mut out = Vec::new();
             for m in materials {
                 let s = Source { material: (!m.is_empty()).then_some(m.clone()), ..src.clone() };
-                let d = crate::data::read_crush_source(&s, &MapOrigin::default())?;
+                let d = crate::data::read_crush_source(&s, origin)?;
                 let (dia, force) = (span(range(&d.diameters()), 1e6, 0), span(range(&d.forces()), 1.0, 1));
                 let label = if d.material().is_empty() { "no material column".to_string() } else { format!("material \"{}\"", d.material()) };
                 out.push(Checked {

@@ -426,7 +426,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Datasets { command: DatasetsCommand::Check { files, study, sheet, header_row, material } } => {
-            let sources: Vec<(partlife::intake::Source, Option<&'static str>)> = match study {
+            let sources: Vec<(partlife::intake::Source, Option<&'static str>, partlife::intake::MapOrigin)> = match study {
                 Some(path) => partlife::study::load(&path)?.data_sources(),
                 None => files
                     .into_iter()
@@ -437,12 +437,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                             material: material.clone(),
                             ..partlife::intake::Source::file(f)
                         };
-                        (src, None)
+                        (src, None, partlife::intake::MapOrigin::default())
                     })
                     .collect(),
             };
-            for (src, kind) in sources {
-                for checked in partlife::inspect::check(&src, kind)? {
+            for (src, kind, origin) in sources {
+                for checked in partlife::inspect::check(&src, kind, &origin)? {
                     for line in checked.lines() {
                         out!("{line}");
                     }

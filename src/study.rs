@@ -95,13 +95,14 @@ impl LoadedStudy {
     /// study file) with the kind of input the study reads it as ([`crate::inspect::check`];
     /// None: crush data, or whatever its header shows): what `partlife datasets check --study`
     /// reads. The crush data of its materials; a calibration's curve or observation file and a
-    /// curve-level discrepancy study's curve files, with their column and unit maps. Other
-    /// kinds read none.
-    pub fn data_sources(&self) -> Vec<(crate::intake::Source, Option<&'static str>)> {
-        use crate::intake::Source;
+    /// curve-level discrepancy study's curve files, with their column and unit maps and where
+    /// the study holds each map (its key, for messages about the map). Other kinds read none.
+    pub fn data_sources(&self) -> Vec<(crate::intake::Source, Option<&'static str>, crate::intake::MapOrigin)> {
+        use crate::intake::{MapOrigin, Source};
         let study = &self.file.path;
-        let curves = |file: &str, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>| {
-            (Source { columns: columns.clone(), units: units.clone(), ..Source::file(resolve_relative(study, Path::new(file))) }, Some("curves"))
+        let origin = |key: String| MapOrigin { file: study.display().to_string(), key };
+        let curves = |file: &str, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, key: String| {
+            (Source { columns: columns.clone(), units: units.clone(), ..Source::file(resolve_relative(study, Path::new(file))) }, Some("curves"), origin(key))
         };
         let materials: &[MaterialSpec] = match &self.study {
             Study::Lifetime(s) => &s.material,
@@ -109,14 +110,14 @@ impl LoadedStudy {
             Study::Discrepancy(s) => &s.material,
             Study::Calibrate(s) => {
                 return vec![match &s.data {
-                    crate::calibrate::study::DataSpec::CrushCurves { file, columns, units, .. } => curves(file, columns, units),
-                    crate::calibrate::study::DataSpec::Observations { file } => (Source::file(resolve_relative(study, Path::new(file))), Some("observations")),
+                    crate::calibrate::study::DataSpec::CrushCurves { file, columns, units, .. } => curves(file, columns, units, "data".into()),
+                    crate::calibrate::study::DataSpec::Observations { file } => (Source::file(resolve_relative(study, Path::new(file))), Some("observations"), origin("data".into())),
                 }];
             }
-            Study::DiscrepancyCurves(s) => return s.data.iter().map(|d| curves(&d.file, &d.columns, &d.units)).collect(),
+            Study::DiscrepancyCurves(s) => return s.data.iter().enumerate().map(|(i, d)| curves(&d.file, &d.columns, &d.units, format!("data[{i}]"))).collect(),
             _ => &[],
         };
-        materials.iter().map(|m| (m.data.resolved(study), None)).collect()
+        materials.iter().enumerate().map(|(k, m)| (m.data.resolved(study), None, origin(format!("material[{k}].data")))).collect()
     }
 }
 

@@ -423,4 +423,12 @@ fn a_german_curve_export_is_read_through_the_calibrations_column_map() {
             assert!(out.stdout.contains(&e), "{file}: lacks \"{e}\": {}", out.stdout);
         }
     }
+    // A misspelled map key: `datasets check --study` names the study file and the key, as the
+    // run does (it said "<study>: columns.displacment").
+    for (file, key) in [("studies/cal_mapped.toml", "data.columns.displacment"), ("studies/curves.toml", "data[0].columns.displacment")] {
+        s.write(file, &s.read(file).replacen("columns = { displacement", "columns = { displacment", 1));
+        let out = s.run(&["datasets", "check", "--study", file]);
+        assert_eq!(out.code, 2, "{file}: {}", out.stderr);
+        assert!(out.stderr.contains(&format!("{file}: {key}: unknown field")), "{file}: {}", out.stderr);
+    }
 }

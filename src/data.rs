@@ -25,6 +25,13 @@
 //! A second file joined by id (a shape analyser's export) may supply the optional fields
 //! ([`read_crush_source`]); a field in both files is refused.
 //!
+//! What the rows say of their forces is declared by the study and never passed over
+//! ([`crate::intake::observed`]): a `broken` column (a particle that did not break by the rig's
+//! limit holds the highest force reached), force classes (`interval`), a `count` column, or
+//! what the rows at the file's highest force are (`at_highest`). An undeclared yes/no or count
+//! column, or a pile-up of rows at the highest force, is refused with the key to declare. A row
+//! counting k particles becomes k particles (ids `A#1` … `A#k`).
+//!
 //! Every numeric column of every input file has a plausibility range ([`Plausible`], listed
 //! with the reasons in `datasets/README.md`), in SI, applied after conversion: a value outside it
 //! is a unit slip or a corrupt cell, and would otherwise travel on as an infinite contact radius
@@ -77,6 +84,10 @@ pub struct CrushData {
     pub sheet: Option<String>,
     /// The factor columns the study declares (`factors` of its `[[material]]`), per record.
     pub factors: crate::intake::factors::FactorColumns,
+    /// What the rows say of their forces, in newtons (None: every particle broke at its
+    /// `crush_force_n`): a particle that did not break by the rig's limit, a force class
+    /// ([`crate::obs`]; the study declares the columns: `broken`, `count`, `interval`).
+    pub censoring: Option<crate::obs::Censoring>,
 }
 
 impl CrushData {
@@ -84,7 +95,13 @@ impl CrushData {
     /// form, header on line 1.
     pub fn new(path: impl Into<PathBuf>, records: Vec<CrushRecord>) -> CrushData {
         let places = (0..records.len()).map(|k| (k, k + 2)).collect();
-        CrushData { path: path.into(), records, provenance: Provenance::default(), places, sheet: None, factors: Vec::new() }
+        CrushData { path: path.into(), records, provenance: Provenance::default(), places, sheet: None, factors: Vec::new(), censoring: None }
+    }
+
+    /// The forces (N) as observations: each particle's `crush_force_n` with what its row says of
+    /// it.
+    pub fn observed(&self) -> crate::obs::Observations {
+        crate::obs::Observations { x: self.forces(), censoring: self.censoring.clone() }
     }
 
     /// An error about record `k` and a column.
@@ -132,6 +149,13 @@ pub const CRUSH_FIELDS: [Field; 8] = [
     Field { key: "temperature", column: "temperature_c", kind: Kind::Number(Quantity::Temperature), synonyms: &["t", "temp", "test_temperature"], required: false, plausible: Some(TEMPERATURE) },
     Field { key: "impacts", column: "impacts", kind: Kind::Number(Quantity::Count), synonyms: &["prior_impacts", "n_impacts"], required: false, plausible: Some(IMPACTS) },
 ];
+
+/// The crush force's class ends, read in place of `crush_force` when the study declares
+/// `interval` ([`crate::intake::observed`]).
+pub const CRUSH_FORCE_ENDS: (Field, Field) = (
+    Field { key: "crush_force_lower", column: "crush_force_lower_n", kind: Kind::Number(Quantity::Force), synonyms: &[], required: true, plausible: Some(CRUSH_FORCE) },
+    Field { key: "crush_force_upper", column: "crush_force_upper_n", kind: Kind::Number(Quantity::Force), synonyms: &[], required: true, plausible: Some(CRUSH_FORCE) },
+);
 
 /// The fields a shape file may supply (joined by id): the optional measurements.
 const JOINABLE: [&str; 4] = ["roundness", "sphericity", "temperature", "impacts"];
@@ -191,7 +215,8 @@ pub fn read_crush_source(src: &Source, origin: &MapOrigin) -> Result<CrushData> 
 pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factors::Factors, origin: &MapOrigin) -> Result<CrushData> {
     let path = src.file.as_path();
     let table = read_raw(src)?;
-    let r = resolve(&table, &CRUSH_FIELDS, &src.columns, &src.units, origin)?;
+    let ((fields, columns, units), ends) = crate::intake::observed::fields_for(&table, &CRUSH_FIELDS, "crush_force", CRUSH_FORCE_ENDS, src, origin)?;
+    let r = resolve(&table, &fields, &columns, &units, origin)?;
     if table.rows.is_empty() {
         return Err(Error::data_file(path, table.origin.sheet.as_ref().map(|s| format!("sheet \"{s}\"")).unwrap_or_else(|| "file".into()), "no data rows"));
     }
@@ -205,11 +230,12 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
     let mut provenance = r.provenance.clone();
     provenance.rows = rows.len();
     provenance.filter = filter;
+    let mut values = crate::intake::observed::read_rows(&r, &rows, "crush_force", ends, src, origin, &mut provenance)?;
 
     let mut seen: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
     let mut records = Vec::with_capacity(rows.len());
     let mut places = Vec::with_capacity(rows.len());
-    for &row in &rows {
+    for (k, &row) in rows.iter().enumerate() {
         let id = r.need_text("id", row)?;
         if let Some(&first) = seen.get(&id) {
             return Err(r.error(row, "id", format!("duplicate id \"{id}\" (also on {})", table.place(first, None))));
@@ -225,7 +251,7 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
             id,
             material: r.text("material", row).or_else(|| wanted.map(str::to_string)).unwrap_or_default(),
             diameter_m: r.need_number("diameter", row)?,
-            crush_force_n: r.need_number("crush_force", row)?,
+            crush_force_n: values[k].value,
             roundness: r.number("roundness", row)?,
             sphericity: r.number("sphericity", row)?,
             temperature_c: r.number("temperature", row)?,
@@ -233,11 +259,16 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
         });
         places.push((row, table.lines[row]));
         let rec = &records[records.len() - 1];
-        if let Some(rule) = NOMINAL_STRENGTH.broken(nominal_strength(rec.crush_force_n, rec.diameter_m)) {
-            return Err(r.error(row, "crush_force", format!("{rule}, from F = {} N and d = {} m: check the force and diameter units", shown(rec.crush_force_n), shown(rec.diameter_m))));
+        for f in [rec.crush_force_n, values[k].upper].into_iter().filter(|f| f.is_finite()) {
+            if let Some(rule) = NOMINAL_STRENGTH.broken(nominal_strength(f, rec.diameter_m)) {
+                let key = ends.map_or("crush_force", |e| if f == rec.crush_force_n { e.lower } else { e.upper });
+                return Err(r.error(row, key, format!("{rule}, from F = {} N and d = {} m: check the force and diameter units", shown(f), shown(rec.diameter_m))));
+            }
         }
     }
     let mut factors = crate::intake::factors::read_factors(&table, &rows, factor_spec, &mut provenance, origin, path)?;
+    crate::intake::observed::check_unused(&table, &rows, &mut provenance, src, origin)?;
+    crate::intake::observed::pile_up(&r, &rows, &values, "crush_force", src, origin, "force")?;
     if let Some(shape) = &src.shape {
         let rows_of_ids: Vec<(usize, String)> = records.iter().enumerate().map(|(k, rec)| (k, rec.id.clone())).collect();
         let main_name = table.origin.sheet.as_ref().map(|s| format!("{} sheet \"{s}\"", path.display())).unwrap_or_else(|| path.display().to_string());
@@ -262,6 +293,7 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
         for (_, values) in factors.iter_mut() {
             values.keep(&kept);
         }
+        values = kept.iter().map(|&k| values[k]).collect();
         for (k, srow) in pairs {
             joined_places.push(places[k]);
             let mut rec = records[k].clone();
@@ -295,10 +327,48 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
             return Err(Error::data_file(path, "file", "no particle is in both files: the join by id keeps nothing"));
         }
     }
+    // Rows counting several particles become that many; then what the rows say.
+    let named: Vec<String> = places.iter().map(|(row, _)| table.place(*row, None)).collect();
+    let (specimens, line) = crate::intake::observed::expansion(&values, &named);
+    if let Some(line) = line {
+        let counts: Vec<usize> = values.iter().map(|v| v.count).collect();
+        // Specimens of one row are consecutive: the j-th of a row counting several is `id#j`.
+        let (mut last, mut j) = (usize::MAX, 0);
+        records = specimens
+            .iter()
+            .map(|&k| {
+                if k != last {
+                    (last, j) = (k, 0);
+                }
+                j += 1;
+                let mut rec = records[k].clone();
+                if counts[k] > 1 {
+                    rec.id = format!("{}#{j}", rec.id);
+                }
+                rec
+            })
+            .collect();
+        places = specimens.iter().map(|&k| places[k]).collect();
+        for (_, v) in factors.iter_mut() {
+            v.keep(&specimens);
+        }
+        values = specimens.iter().map(|&k| values[k]).collect();
+        provenance.observed.push(format!("count column `{}`: {line}", src.count.as_deref().unwrap_or("")));
+        provenance.rows = records.len();
+    }
+    let kinds: Vec<crate::obs::Censor> = values.iter().map(|v| v.kind).collect();
+    let x: Vec<f64> = values.iter().map(|v| v.value).collect();
+    let censoring = crate::obs::Censoring::of_rows(kinds, &x, values.iter().map(|v| v.upper).collect());
+    if let Some(c) = &censoring {
+        provenance.observed.push(crate::obs::Obs { x: &x, censoring: Some(c) }.tally().describe("particles"));
+    }
+    if records.is_empty() {
+        return Err(Error::data_file(path, "file", "no particle is left: every row counts 0"));
+    }
     for w in provenance.warnings.iter().chain(provenance.joined.iter().flat_map(|j| &j.warnings)) {
         crate::intake::warn(w);
     }
-    Ok(CrushData { path: path.to_path_buf(), records, provenance, places, sheet: table.origin.sheet.clone(), factors })
+    Ok(CrushData { path: path.to_path_buf(), records, provenance, places, sheet: table.origin.sheet.clone(), factors, censoring })
 }
 
 /// Numeric properties of Table 1, each stored as `<name>_min`, `<name>_max`, `<name>_qualifier`.

@@ -144,7 +144,8 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin) -> 
         }
         _ => {
             // A campaign file with several materials is checked material by material.
-            let r = resolve(&t, &crate::data::CRUSH_FIELDS, &src.columns, &src.units, origin)?;
+            let ((fields, columns, units), _) = crate::intake::observed::fields_for(&t, &crate::data::CRUSH_FIELDS, "crush_force", crate::data::CRUSH_FORCE_ENDS, src, origin)?;
+            let r = resolve(&t, &fields, &columns, &units, origin)?;
             let mut materials: Vec<String> = Vec::new();
             if src.material.is_none() && r.has("material") {
                 for row in 0..t.rows.len() {
@@ -166,7 +167,10 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin) -> 
                 let label = if d.material().is_empty() { "no material column".to_string() } else { format!("material \"{}\"", d.material()) };
                 out.push(Checked {
                     what: if s.material.is_some() && src.material.is_none() { format!("{what} [{m}]") } else { what.clone() },
-                    summary: format!("crush data, {label}, {} particle{}, d = {dia} µm, F = {force} N", d.records.len(), if d.records.len() == 1 { "" } else { "s" }),
+                    summary: match &d.censoring {
+                        None => format!("crush data, {label}, {} particle{}, d = {dia} µm, F = {force} N", d.records.len(), if d.records.len() == 1 { "" } else { "s" }),
+                        Some(c) => format!("crush data, {label}, {}, d = {dia} µm, F = {force} N", crate::obs::Obs { x: &d.forces(), censoring: Some(c) }.tally().describe("particles")),
+                    },
                     read: Some(d.provenance),
                 });
             }

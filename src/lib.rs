@@ -58,7 +58,7 @@
 //!  4  lifetime · model · weibull     P_N and damage laws; the Simulator seam; ASTM C1239
 //!  3  contact · design · io · params · stats
 //!  2  intake                         every tabular input: encodings, delimiters, spreadsheets, units, columns, joins
-//!  1  error · fracture
+//!  1  error · fracture · obs             errors; the first force drop of a curve; what a strength row says (censoring)
 //! ```
 //!
 //! Study modules reach the layers below only: the shared run helpers are in [`runkit`], the
@@ -72,6 +72,7 @@
 //! | module | what |
 //! |---|---|
 //! | [`error`] | the error enum; bad input (exit 2) vs run failure (exit 1) |
+//! | [`obs`] | observations, not bare strengths: each row exact, right-censored (did not break by its value), left-censored or an interval (a class), counts expanded to specimens; each row's limits, so a bootstrap redraw is censored as the campaign censored it (`Obs::censor`); ln P of a row under any law; randomised probability-integral transforms |
 //! | [`params`] | `Param`, `Prior`, `ParamSpace`: bounds, truncated priors, unit-cube maps |
 //! | [`model`] | `Simulator`, `OutputSpec`; `on_pool`, which runs a solver's time loop on a worker of rayon's pool; `par_runs`, a batch of runs that keeps each run's passes whole when every thread has a run (`pass_min_len`, `alone_on_thread`) |
 //! | [`testfns`] | analytic simulators (Ishigami) |
@@ -90,7 +91,7 @@
 //! | [`experiments`] | decision-driven experiment design: preposterior analysis by importance reweighting (probability of correct selection, EVSI, expected posterior bands and model weights, reserve-sample fallback) and resample-move where reweighting degenerates (`experiments::smc`: adaptive tempering, diagonal-pCN moves of the samples, plans evaluated test after test, greedy steps on carried posteriors); the main study's state of knowledge as weighted samples; candidates: crush tests (sieve fraction, shape measured or not, temperature; optionally the discrepancy naming loop's verdict on the pooled data), single- and repeated-impact breakage tests, η and impact-velocity measurements; the `experiments` study: ranked plans, greedy or exhaustive budget allocation, report |
 //! | [`temperature`] | the `temperature` study: the phase-fraction table (Fig. 2 style), the temperature laws of the calibrated parameters with bands next to the calibrated states, the discrepancy workflow's softening term beside them, held-out crush curves at another temperature predicted through the crush FE from the laws (and from each calibrated state as it is) with their coverage judged against the intervals' nominal level, and the main study's breakage against operating temperature with Table 1's softening temperatures |
 //! | [`uq`] | the main study (`kind = "uq"`): strength models as a model-form choice with stacking weights, Monte Carlo propagation through each material's `LifetimeModel`, damage models and averaging domains side by side, Sobol' indices with bootstrap intervals, attrition in a plant engineer's units (`uq::attrition`); optionally at operating temperatures through the laws of [`thermal`]. Independent work runs side by side (the models' fits, cross-validations and propagations; the tables, each into a `ReportDir::branch` adopted in a fixed order) |
-//! | [`intake`] | the one data intake of every tabular input: bytes → text (UTF-8, BOM, UTF-16, Windows-1252) → table (delimiter and decimal mark sniffed, header row; or one sheet of .xlsx/.xls/.xlsb/.ods via calamine) → columns resolved to fields (study map, then name + unit grammar) → SI values (exact decimal conversion) → plausibility; material filter, join by id, recorded factor columns of any file (`factors`), the provenance record; whether a file is a synthetic stand-in (the generator's settings or an export manifest beside it); a minimal .xlsx/.ods writer |
+//! | [`intake`] | the one data intake of every tabular input: bytes → text (UTF-8, BOM, UTF-16, Windows-1252) → table (delimiter and decimal mark sniffed, header row; or one sheet of .xlsx/.xls/.xlsb/.ods via calamine) → columns resolved to fields (study map, then name + unit grammar) → SI values (exact decimal conversion) → plausibility; material filter, join by id, recorded factor columns of any file (`factors`), what the rows say of themselves (`observed`: a `broken` column, a `count` column, classes, the rows at the highest value; undeclared yes/no and count columns and pile-ups refused), the provenance record; whether a file is a synthetic stand-in (the generator's settings or an export manifest beside it); a minimal .xlsx/.ods writer |
 //! | [`data`] | crush datasets (with the factor columns a study declares) and Table 1 through the intake, with row/column-precise validation; the plausibility range of every numeric input column, and of the derived strength |
 //! | [`lab`] | the example lab exports of `datasets/examples/` (a semicolon CSV and a workbook) from the SI crush files |
 //! | [`inspect`] | what `partlife datasets check` says of a file: its kind, how it was read, a summary of its values |
@@ -134,6 +135,7 @@ pub mod lifetime;
 pub mod lifetime_study;
 pub mod micro;
 pub mod model;
+pub mod obs;
 pub mod phases;
 pub mod params;
 pub mod report;

@@ -166,6 +166,7 @@ pub fn read_phases(path: &Path) -> Result<PhaseTable> {
 /// [`read_phases`] as a study describes the file, with the record of how it was read.
 pub fn read_phases_source(src: &Source) -> Result<(PhaseTable, Provenance)> {
     let path = src.file.as_path();
+    src.refuse_rows(&path.display().to_string(), "data", "a phase-fraction table")?;
     let raw = read_raw(src)?;
     let r = resolve(&raw, &PHASE_FIELDS, &src.columns, &src.units, &MapOrigin::default())?;
     let bases: Vec<Basis> = [Basis::Volume, Basis::Mole, Basis::Mass].into_iter().filter(|b| r.has(b.column())).collect();

@@ -251,6 +251,30 @@ pub fn fisher_bounds(fit: &WeibullFit, data: &[f64], confidence: f64) -> Result<
     })
 }
 
+impl FisherBounds {
+    /// The same bounds from the covariance of (ln σ̂_θ, ln b̂), b = 1/m — what the Weibull
+    /// regression's observed information gives, censored rows included: se(σ̂) = σ̂ sd(ln σ̂),
+    /// se(m̂) = m̂ sd(ln b̂), corr(m̂, σ̂) = −corr(ln b̂, ln σ̂). At the MLE this is the same
+    /// matrix as [`fisher_bounds`] transformed (the gradient vanishes there).
+    pub fn from_log_cov(law: Weibull, [var_ln_scale, var_ln_b, cov]: [f64; 3], confidence: f64) -> Result<FisherBounds> {
+        check_confidence(confidence)?;
+        if !(var_ln_scale > 0.0 && var_ln_b > 0.0) {
+            return Err(Error::numerical("Weibull Fisher matrix", format!("not positive definite: variances {var_ln_scale}, {var_ln_b}")));
+        }
+        let (m, eta) = (law.shape, law.scale);
+        let z = std_normal_quantile(0.5 + 0.5 * confidence);
+        let (sm, se) = (m * var_ln_b.sqrt(), eta * var_ln_scale.sqrt());
+        Ok(FisherBounds {
+            shape_se: sm,
+            scale_se: se,
+            correlation: -cov / (var_ln_scale * var_ln_b).sqrt(),
+            confidence,
+            shape: (m * (-z * sm / m).exp(), m * (z * sm / m).exp()),
+            scale: (eta * (-z * se / eta).exp(), eta * (z * se / eta).exp()),
+        })
+    }
+}
+
 fn std_normal_quantile(p: f64) -> f64 {
     Normal::new(0.0, 1.0).map(|n| n.inverse_cdf(p)).unwrap_or(f64::NAN)
 }
@@ -391,6 +415,102 @@ pub fn probability_plot(data: &[f64]) -> Vec<(f64, f64)> {
     x.into_iter().enumerate().map(|(i, v)| (v, (i as f64 + 0.5) / n)).collect()
 }
 
+/// A probability-plot point of one row of a censored sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlotPoint {
+    /// Where it is drawn: an exact row's value, a censored row's limit, an interval's upper end.
+    pub x: f64,
+    /// Its plotting position F.
+    pub f: f64,
+    /// What the row says.
+    pub kind: crate::obs::Censor,
+}
+
+/// Plotting positions of observations of any kind: C1239 §8.5's F_i = (i − 0.5)/N for a
+/// complete sample; otherwise from the nonparametric maximum-likelihood estimate F̂ of the
+/// CDF (Turnbull 1976, self-consistency iterations on the rows' values and limits; with right
+/// censoring only it is the Kaplan–Meier estimate): an exact row at F̂(x−) + (r − ½)/k·ΔF̂(x)
+/// (the r-th of k rows tied at x; (i − 0.5)/N again without censoring), a censored row at its
+/// limit with F̂ there, an interval row at its upper end with F̂ there. Sorted by x.
+pub fn probability_plot_observed(obs: crate::obs::Obs) -> Vec<PlotPoint> {
+    use crate::obs::Censor;
+    if obs.complete() {
+        return probability_plot(obs.x).into_iter().map(|(x, f)| PlotPoint { x, f, kind: Censor::Exact }).collect();
+    }
+    let n = obs.len();
+    // Support: every exact value, interval end and limit; the mass beyond them sits at +∞.
+    let mut support: Vec<f64> = (0..n).flat_map(|i| [obs.x[i], obs.upper(i)]).filter(|v| v.is_finite()).collect();
+    support.sort_by(f64::total_cmp);
+    support.dedup();
+    let m = support.len();
+    let at = |v: f64| support.partition_point(|s| *s < v);
+    // Each row's admissible support points, a range [lo, hi) of 0..=m (m: +∞).
+    let range: Vec<(usize, usize)> = (0..n)
+        .map(|i| {
+            let x = obs.x[i];
+            match obs.kind(i) {
+                Censor::Exact => (at(x), at(x) + 1),
+                Censor::Right => (support.partition_point(|s| *s <= x), m + 1),
+                Censor::Left => (0, at(x) + 1),
+                Censor::Interval => (support.partition_point(|s| *s <= x), at(obs.upper(i)) + 1),
+            }
+        })
+        .collect();
+    let mut p = vec![1.0 / (m + 1) as f64; m + 1];
+    let mut next = vec![0.0; m + 2];
+    let mut prefix = vec![0.0; m + 2];
+    for _ in 0..20_000 {
+        for j in 0..=m {
+            prefix[j + 1] = prefix[j] + p[j];
+        }
+        next.iter_mut().for_each(|v| *v = 0.0);
+        for &(lo, hi) in &range {
+            let den = prefix[hi] - prefix[lo];
+            if den > 0.0 {
+                next[lo] += 1.0 / den;
+                next[hi] -= 1.0 / den;
+            }
+        }
+        let mut change = 0.0f64;
+        let mut w = 0.0;
+        for j in 0..=m {
+            w += next[j];
+            let q = p[j] * w / n as f64;
+            change = change.max((q - p[j]).abs());
+            p[j] = q;
+        }
+        if change < 1e-13 {
+            break;
+        }
+    }
+    let mut cdf = vec![0.0; m + 1];
+    let mut acc = 0.0;
+    for j in 0..m {
+        acc += p[j];
+        cdf[j] = acc;
+    }
+    let below = |j: usize| if j == 0 { 0.0 } else { cdf[j - 1] };
+    let mut out = Vec::with_capacity(n);
+    // Exact rows, tied ones spread over their step of F̂.
+    let mut exact: Vec<f64> = (0..n).filter(|&i| obs.kind(i) == Censor::Exact).map(|i| obs.x[i]).collect();
+    exact.sort_by(f64::total_cmp);
+    let mut g = 0;
+    while g < exact.len() {
+        let v = exact[g];
+        let c = exact[g..].iter().take_while(|w| **w == v).count();
+        let j = at(v);
+        let (f0, f1) = (below(j), cdf[j]);
+        out.extend((0..c).map(|r| PlotPoint { x: v, f: f0 + (r as f64 + 0.5) / c as f64 * (f1 - f0), kind: Censor::Exact }));
+        g += c;
+    }
+    for i in (0..n).filter(|&i| obs.kind(i) != Censor::Exact) {
+        let x = if obs.kind(i) == Censor::Interval { obs.upper(i) } else { obs.x[i] };
+        out.push(PlotPoint { x, f: cdf[at(x)], kind: obs.kind(i) });
+    }
+    out.sort_by(|a, b| a.x.total_cmp(&b.x));
+    out
+}
+
 /// Weibull scale for another effective size: σ_θ2 = σ_θ1 (size1/size2)^(1/m), where size is an
 /// effective volume or area (ASTM C1683).
 pub fn scale_for_size(scale: f64, shape: f64, size_from: f64, size_to: f64) -> f64 {
@@ -478,6 +598,23 @@ mod tests {
         for c in [cm, cs] {
             assert!((c as f64 - 360.0).abs() < 24.0, "coverage {c}/400");
         }
+    }
+
+    #[test]
+    fn censored_plotting_positions_follow_kaplan_meier() {
+        use crate::obs::{Censor, Censoring, Obs};
+        // 1, 2+ (did not break by 2), 3, 4: Kaplan–Meier F̂ = 1/4 from 1, 5/8 from 3, 1 from 4.
+        let x = [3.0, 2.0, 1.0, 4.0];
+        let c = Censoring::of_rows(vec![Censor::Exact, Censor::Right, Censor::Exact, Censor::Exact], &x, vec![f64::NAN; 4]).unwrap();
+        let p = probability_plot_observed(Obs { x: &x, censoring: Some(&c) });
+        let got: Vec<(f64, f64, Censor)> = p.iter().map(|q| (q.x, q.f, q.kind)).collect();
+        let want = [(1.0, 0.125, Censor::Exact), (2.0, 0.25, Censor::Right), (3.0, 0.4375, Censor::Exact), (4.0, 0.8125, Censor::Exact)];
+        for (g, w) in got.iter().zip(&want) {
+            assert!(g.0 == w.0 && (g.1 - w.1).abs() < 1e-9 && g.2 == w.2, "{got:?}");
+        }
+        // A complete sample keeps C1239's (i − 0.5)/N.
+        let q = probability_plot_observed(Obs::exact(&x));
+        assert_eq!(q.iter().map(|p| p.f).collect::<Vec<_>>(), [0.125, 0.375, 0.625, 0.875]);
     }
 
     #[test]

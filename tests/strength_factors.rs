@@ -13,6 +13,7 @@
 //! studies use 499) so that the sweeps fit in CI.
 
 use partlife::discrepancy::workflow::{analyse, names};
+use partlife::obs::Obs;
 use partlife::strength::factors::{Factor, Form, SizeMeasure};
 use partlife::strength::regress::draw_particles;
 use partlife::strength::{Effect, NamingSettings, Sample};
@@ -59,7 +60,7 @@ fn sample_full(c: &Campaign, effect: impl Fn(usize) -> f64, modulus: impl Fn(usi
     // One draw per row, in row order: draw_particles picks rows at random, so draw each row's
     // strength from a one-row population.
     let strength: Vec<f64> = (0..N).map(|i| draw_particles(&ln_scale[i..=i], modulus(i), 1, rng)[0].1.exp()).collect();
-    let mut s = Sample { source: "synthetic".into(), strength, ..Sample::default() };
+    let mut s = Sample { source: "synthetic".into(), strength: strength.into_iter().collect(), ..Sample::default() };
     s.covariates.push(("length".into(), c.length.iter().map(|v| Some(*v)).collect()));
     s.covariates.push(("rate".into(), c.rate.iter().map(|v| Some(*v)).collect()));
     s.levels.push(("batch".into(), c.batch.clone()));
@@ -128,7 +129,7 @@ fn sweep_full(reps: usize, seed: u64, hidden: Option<(&Effect, f64)>, effect: im
                 let m = &o.stages[1].model;
                 let (b, se) = m.coefficient(e).unwrap();
                 wald += usize::from((b - beta).abs() <= 1.645 * se);
-                let band = m.profile_band(&s.strength, e, 0.90).map(|p| (p, m.pivotal_band(e, 0.90, 999, seed ^ r as u64).unwrap()));
+                let band = m.profile_band(s.strength.view(), e, 0.90).map(|p| (p, m.pivotal_band(e, 0.90, 999, seed ^ r as u64).unwrap()));
                 if let Some(((plo, phi), _)) = band {
                     profile += usize::from(plo <= beta && beta <= phi);
                 }
@@ -287,7 +288,7 @@ fn real(file: &str, strength: &str, filter: Option<&str>) -> Vec<f64> {
     let factors = if file.starts_with("bader_priest") { Factors::Typed([("gauge_length_mm".to_string(), partlife::strength::factors::FactorType::Numeric)].into()) } else { Factors::default() };
     let s = read_specimens(&src, None, &factors, &MapOrigin { file: "test".into(), key: "data".into() }).unwrap();
     let keep: Vec<usize> = (0..s.sample.strength.len()).filter(|&i| filter.is_none_or(|f| s.sample.covariates.first().is_some_and(|(_, v)| v[i] == Some(f.parse().unwrap())))).collect();
-    keep.iter().map(|&i| s.sample.strength[i]).collect()
+    keep.iter().map(|&i| s.sample.strength.x[i]).collect()
 }
 
 #[test]
@@ -300,7 +301,7 @@ fn two_parameter_fits_of_the_real_data_equal_the_reliability_package() {
             s => real("bader_priest_carbon_fibres.csv", "strength_gpa", Some(s.trim_start_matches("carbon_").trim_end_matches("mm"))),
         };
         assert_eq!(x.len(), n, "{set}");
-        let f = fit(&x, &Design::default()).unwrap();
+        let f = fit(Obs::exact(&x), &Design::default()).unwrap();
         // Log-likelihood in Pa = in GPa − n ln 10⁹ (the density of x scales by 1/10⁹).
         let ours = f.loglik + n as f64 * 1e9f64.ln();
         assert!((ours - loglik).abs() < 1e-6, "{set}: ℓ {ours} vs reliability {loglik}");
@@ -415,7 +416,7 @@ fn two_population_fits_of_the_real_data_against_the_reliability_package() {
             _ => real("bader_priest_carbon_fibres.csv", "strength_gpa", None),
         };
         let kind = if law == "mixture" { Populations::Mixture } else { Populations::Competing };
-        let f = fit(kind, &x).unwrap();
+        let f = fit(kind, Obs::exact(&x)).unwrap();
         let ours = f.loglik + x.len() as f64 * 1e9f64.ln();
         eprintln!("{set} {law}: ours ℓ = {ours:.10} ({:?}), reliability {peer:.10}; p = {:.6}, first = ({:.6e}, {:.6}), second = ({:.6e}, {:.6})", f.identifiable, f.p, f.first.0, f.first.1, f.second.0, f.second.1);
         // Never below the peer's optimum; equal to 1e-6 where both reach the same one.
@@ -623,7 +624,7 @@ const UNEVEN: [(&str, usize); 9] = [("K1", 25), ("K2", 20), ("K3", 15), ("K4", 1
 fn uneven_sample(offset: impl Fn(usize) -> f64, noise: bool, rng: &mut ChaCha8Rng) -> Sample {
     let batch: Vec<usize> = UNEVEN.iter().enumerate().flat_map(|(b, (_, k))| std::iter::repeat_n(b, *k)).collect();
     let strength: Vec<f64> = batch.iter().map(|&b| draw_particles(&[(400e6f64).ln() + offset(b)], M, 1, rng)[0].1.exp()).collect();
-    let mut s = Sample { source: "synthetic".into(), strength, ..Sample::default() };
+    let mut s = Sample { source: "synthetic".into(), strength: strength.into_iter().collect(), ..Sample::default() };
     s.levels.push(("batch".into(), batch.iter().map(|&b| UNEVEN[b].0.to_string()).collect()));
     s.factors = vec![Factor { column: "batch".into(), form: Form::Levels }];
     if noise {
@@ -780,7 +781,7 @@ fn jahanmir(batch: Option<&str>) -> Vec<f64> {
     src.units.insert("strength".into(), "MPa".into());
     let s = read_specimens(&src, None, &Factors::Typed([("batch".to_string(), FactorType::Categorical)].into()), &MapOrigin { file: "test".into(), key: "data".into() }).unwrap();
     let levels = &s.sample.levels[0].1;
-    (0..levels.len()).filter(|&i| batch.is_none_or(|b| levels[i] == b)).map(|i| s.sample.strength[i]).collect()
+    (0..levels.len()).filter(|&i| batch.is_none_or(|b| levels[i] == b)).map(|i| s.sample.strength.x[i]).collect()
 }
 
 /// The `reliability` package on the Jahanmir bars (tests/bench/reliability/fit.py; original units):
@@ -801,13 +802,13 @@ fn fits_of_the_jahanmir_bars_against_the_reliability_package() {
     for (set, n, m, scale, loglik) in PEER_JAHANMIR {
         let x = jahanmir(if set == "all" { None } else { Some(set) });
         assert_eq!(x.len(), n, "{set}");
-        let f = fit(&x, &Design::default()).unwrap();
+        let f = fit(Obs::exact(&x), &Design::default()).unwrap();
         assert!((in_mpa(f.loglik, n) - loglik).abs() < 1e-6, "{set}: ℓ {} vs {loglik}", in_mpa(f.loglik, n));
         assert!((f.shape() / m - 1.0).abs() < 1e-6 && (f.mu.exp() / 1e6 / scale - 1.0).abs() < 1e-6, "{set}: m {} scale {}", f.shape(), f.mu.exp());
     }
     let x = jahanmir(None);
     for (law, peer) in PEER_JAHANMIR_FLAWS {
-        let f = fit_law(if law == "mixture" { Populations::Mixture } else { Populations::Competing }, &x).unwrap();
+        let f = fit_law(if law == "mixture" { Populations::Mixture } else { Populations::Competing }, Obs::exact(&x)).unwrap();
         let ours = in_mpa(f.loglik, x.len());
         eprintln!("jahanmir {law}: ours ℓ = {ours:.10} ({:?}), reliability {peer:.10}; p = {:.6}, first = ({:.6e}, {:.6}), second = ({:.6e}, {:.6})", f.identifiable, f.p, f.first.0, f.first.1, f.second.0, f.second.1);
         assert!(ours >= peer - 1e-6, "{law}: ℓ {ours} below reliability's {peer}");

@@ -119,7 +119,7 @@ fn bench_chain() -> Result<LifetimeChain> {
     let sphere = Sphere { diameter: 0.9e-3, density: 3600.0, elastic: e };
     let w = Weibull::new(7.0, 800e6)?;
     let mut rng = ChaCha8Rng::seed_from_u64(3);
-    let sample = Sample { source: "bench".into(), strength: (0..50).map(|_| w.sample(&mut rng)).collect(), particles: true, ..Sample::default() };
+    let sample = Sample { source: "bench".into(), strength: crate::obs::Observations::exact((0..50).map(|_| w.sample(&mut rng)).collect()), particles: true, ..Sample::default() };
     let fit = StrengthFit::new(&sample, &[], 5.0, "bench")?;
     let population = Population { source: "declared".into(), particles: vec![crate::strength::Particle { diameter_m: 0.9e-3, roundness: None, sphericity: None, temperature_c: None }], sampled: false, ..Population::default() };
     let model = LifetimeModel::new("bench", "bench", sphere, Elastic::new(210e9, 0.3)?, AveragingDomain::default(), fit, population)?;
@@ -353,12 +353,14 @@ pub fn strength_factors_speed(n: usize) -> Result<(f64, Vec<String>, usize)> {
     let batch: Vec<String> = (0..n).map(|i| ["A", "B", "C"][(i / 2) % 3].to_string()).collect();
     let furnace: Vec<String> = (0..n).map(|_| ["F1", "F2"][rng.random_range(0..2)].to_string()).collect();
     let operator: Vec<String> = (0..n).map(|_| format!("O{}", rng.random_range(0..4))).collect();
-    s.strength = (0..n)
-        .map(|i| {
-            let scale = 380e6 * (volume[i] / 4.0).powf(-0.1) * if batch[i] == "B" { 0.85 } else { 1.0 };
-            Weibull::new(10.0, scale).map(|w| w.sample(&mut rng))
-        })
-        .collect::<Result<_>>()?;
+    s.strength = crate::obs::Observations::exact(
+        (0..n)
+            .map(|i| {
+                let scale = 380e6 * (volume[i] / 4.0).powf(-0.1) * if batch[i] == "B" { 0.85 } else { 1.0 };
+                Weibull::new(10.0, scale).map(|w| w.sample(&mut rng))
+            })
+            .collect::<Result<_>>()?,
+    );
     for (name, v) in [("volume", volume), ("rate", rate), ("other", other)] {
         s.covariates.push((name.into(), v.into_iter().map(Some).collect()));
     }

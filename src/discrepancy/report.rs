@@ -261,20 +261,27 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
                 cols.entry("material".into()).or_default().push(r.key.clone());
                 cols.entry("id".into()).or_default().push(r.ids[i].clone());
                 cols.entry("stage".into()).or_default().push(stage.into());
-                let x = r.sample.strength[i];
+                let x = r.sample.strength.x[i];
+                let obs = r.sample.strength.view();
                 num.entry("strength_pa".into()).or_default().push(x);
+                cols.entry("observed".into()).or_default().push(obs.kind(i).name().into());
                 // With a modulus per level, each specimen's standardised residual is carried onto
                 // the reference level's modulus, so the adjusted strengths share one law.
                 // A two-population law: the strengths with the scale effects beside it taken out
                 // (on the law's curve at the reference level).
-                let adjusted = if let Some(l) = &st.model.law {
-                    x * (-l.shift(&st.model.columns, i)).exp()
-                } else if st.model.scale_columns.is_empty() {
-                    x * (centre - st.model.reg.ln_scale(&d, i)).exp()
-                } else {
-                    (centre + st.model.reg.b * (x.ln() - st.model.reg.ln_scale(&d, i)) / st.model.reg.b_at(&d, i)).exp()
+                let adjust = |x: f64| {
+                    if let Some(l) = &st.model.law {
+                        x * (-l.shift(&st.model.columns, i)).exp()
+                    } else if st.model.scale_columns.is_empty() {
+                        x * (centre - st.model.reg.ln_scale(&d, i)).exp()
+                    } else {
+                        (centre + st.model.reg.b * (x.ln() - st.model.reg.ln_scale(&d, i)) / st.model.reg.b_at(&d, i)).exp()
+                    }
                 };
-                num.entry("adjusted_pa".into()).or_default().push(adjusted);
+                num.entry("adjusted_pa".into()).or_default().push(adjust(x));
+                // An interval's upper end (NaN for the other rows), as read and adjusted alike.
+                num.entry("upper_pa".into()).or_default().push(obs.upper(i));
+                num.entry("adjusted_upper_pa".into()).or_default().push(adjust(obs.upper(i)));
                 num.entry("residual".into()).or_default().push(st.residuals[i]);
                 for name in &numeric_names {
                     let v = r.sample.covariates.iter().find(|(n, _)| n == name).and_then(|(_, v)| v[i]).unwrap_or(f64::NAN);
@@ -287,8 +294,8 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
             }
         }
     }
-    let mut columns = vec![scol("material", cols.remove("material").unwrap_or_default()), scol("id", cols.remove("id").unwrap_or_default()), scol("stage", cols.remove("stage").unwrap_or_default())];
-    for k in ["strength_pa", "adjusted_pa", "residual"].iter().map(|s| s.to_string()).chain(numeric_names) {
+    let mut columns = vec![scol("material", cols.remove("material").unwrap_or_default()), scol("id", cols.remove("id").unwrap_or_default()), scol("stage", cols.remove("stage").unwrap_or_default()), scol("observed", cols.remove("observed").unwrap_or_default())];
+    for k in ["strength_pa", "upper_pa", "adjusted_pa", "adjusted_upper_pa", "residual"].iter().map(|s| s.to_string()).chain(numeric_names) {
         let v = num.remove(&k).unwrap_or_default();
         columns.push(fcol(&k, v));
     }
@@ -380,6 +387,13 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         let (b, a) = (r.outcome.before(), r.outcome.after());
         let what = if r.crush.is_some() { "particles" } else { "specimens" };
         md.push_str(&format!("\n## {} ({} {what}, `{}`)\n\n", r.label, r.sample.strength.len(), r.path.display()));
+        let tally = r.sample.strength.view().tally();
+        if !tally.complete() {
+            md.push_str(&format!(
+                "**{}.** Each is fitted as what its row says (a specimen that did not break by its value adds the probability of surviving it, not a break there); the residuals of censored rows are randomised within what they allow (Dunn & Smyth 1996), and every bootstrap redraw is censored as the campaign censored its row.\n\n",
+                tally.describe(what)
+            ));
+        }
         md.push_str(&format!("**Effects named, in order: {}.**\n\n", names(&r.outcome.named)));
         md.push_str("| model | Weibull m | AD (p) | KS (p) | gap G |\n|---|---|---|---|---|\n");
         for (i, st) in r.outcome.stages.iter().enumerate() {
@@ -466,6 +480,7 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                 (true, false) => format!("Anderson–Darling p = {:.3}", a.p_ad),
                 _ => format!("Kolmogorov–Smirnov p = {:.3}", a.p_ks),
             };
+            let tests = if tally.complete() { tests } else { format!("{tests} of the randomised quantile residuals") };
             let tried: Vec<String> = r.outcome.evidence.iter().filter(|e| e.round == 0 && e.skipped.is_none() && matches!(e.candidate, crate::strength::Effect::Populations(_))).map(|e| e.candidate.name().replace('_', " ")).collect();
             let explained = match (r.outcome.named.is_empty(), tried.is_empty()) {
                 (true, true) => "and nothing recorded in the data explains the misfit".to_string(),
@@ -490,7 +505,12 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             md.push_str(&format!("\n**The Weibull law fits these data poorly** ({tests}, parametric bootstrap), {explained}: the departure lies in the shape of the distribution, not in a factor the data carry.\n"));
         }
         if let Some(spec) = &r.crush {
-        let how = if r.outcome.after().model.pivotal() { "pivotal bootstrap of its parameters" } else { "pivotal bootstrap of the base model's parameters, parametric bootstrap (refits) of the final model's" };
+        let how = match (r.outcome.before().model.pivotal(), r.outcome.after().model.pivotal(), r.outcome.after().model.location_scale()) {
+            (true, true, _) => "pivotal bootstrap of its parameters",
+            (true, false, _) => "pivotal bootstrap of the base model's parameters, parametric bootstrap (refits) of the final model's",
+            (false, _, true) => "parametric bootstrap in pivotal form, each redraw censored as the campaign censored its row",
+            (false, _, false) => "parametric bootstrap in pivotal form of the base model, refits of the final model's, each redraw censored as the campaign censored its row",
+        };
         md.push_str(&format!(
             "\n**Lifetime at {} m/s, η = {}, {} impacts a year** (particles with E = {} GPa, ν = {}, ρ = {} kg/m³; population of the measured particles; 90 % band of the strength model's joint draws — {how} — and Bayesian bootstrap of the population):\n\n| horizon | base model | final model |\n|---|---|---|\n",
             s.impact.reference_velocity_m_s,

@@ -4,7 +4,12 @@
 //! 1. **diagnoses** it: quantile residuals r_i = Φ⁻¹(F_i(x_i)), their Spearman trend against
 //!    every covariate with a permutation p-value, the tertile of largest departure, and AD/KS
 //!    statistics whose p-values come from the round's parametric bootstrap (each replicate
-//!    refits the current model);
+//!    refits the current model). A censored or interval row's residual is randomised within
+//!    what the row allows (Dunn & Smyth 1996: F(x) + V[1 − F(x)] for a specimen that did not
+//!    break by x, V uniform, seeded), so the AD and KS statistics are those of randomised
+//!    quantile residuals; the bootstrap censors each redraw as the campaign did
+//!    ([`crate::obs::Obs::censor`]) and randomises its residuals the same way, so their
+//!    p-values hold under censoring;
 //! 2. **fits every remaining candidate** ([`crate::strength::effects`]) on top of it and scores it by
 //!    * the likelihood ratio Λ = 2(ℓ_cand − ℓ_current), calibrated by the same bootstrap:
 //!      B samples drawn from the fitted current model at the observed covariates, each
@@ -41,6 +46,7 @@ use super::gof::{CovariateFinding, ad_ks_of_u, covariate_findings, level_finding
 use crate::strength::factors::{Factor, Form, WeakestLink, weakest_link};
 use crate::error::{Error, Result};
 use crate::strength::fit::{cv_pointwise, folds};
+use crate::obs::Obs;
 use crate::strength::{Effect, ModelFit, NamingSettings, Sample, Term, fit_model, fit_model_near};
 
 /// Fewest particles the workflow accepts.
@@ -155,8 +161,12 @@ pub fn validate(sample: &Sample) -> Result<()> {
     if n < MIN_PARTICLES {
         return Err(data_err(sample, "all rows".into(), format!("{n} particles are too few to diagnose a strength model (at least {MIN_PARTICLES} are needed)")));
     }
-    if let Some(i) = sample.strength.iter().position(|v| !(v.is_finite() && *v > 0.0)) {
-        return Err(data_err(sample, format!("row {} (line {})", i + 1, i + 2), format!("the strength at break must be finite and > 0 (got {})", sample.strength[i])));
+    if let Some(i) = sample.strength.x.iter().position(|v| !(v.is_finite() && *v > 0.0)) {
+        return Err(data_err(sample, format!("row {} (line {})", i + 1, i + 2), format!("the strength at break must be finite and > 0 (got {})", sample.strength.x[i])));
+    }
+    let tally = sample.strength.view().tally();
+    if tally.right == n {
+        return Err(data_err(sample, "all rows".into(), format!("none of the {n} specimens broke (every row says it did not break by its value): no strength law can be fitted")));
     }
     for (name, col) in &sample.covariates {
         if col.len() != n {
@@ -234,15 +244,27 @@ fn from_one_df_scale(l1: f64, df: usize) -> f64 {
 }
 
 /// K-fold cross-validated log score of a model (None if a training fit fails).
-fn cv_log_score(x: &[f64], terms: &[(Effect, Term)], folds: &[usize], k: usize) -> Option<f64> {
+fn cv_log_score(x: Obs, terms: &[(Effect, Term)], folds: &[usize], k: usize) -> Option<f64> {
     cv_pointwise(x, terms, folds, k).map(|v| v.iter().sum())
 }
 
-/// Quantile residuals and probability-integral transforms of `x` under a fitted model.
-pub fn residuals(fit: &ModelFit, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
-    let u: Vec<f64> = (0..x.len()).map(|i| fit.cdf(i, x[i])).collect();
+/// Quantile residuals and probability-integral transforms of `x` under a fitted model; a
+/// censored or interval row's transform randomised within what the row allows
+/// ([`Obs::pit`], V from a ChaCha8 stream of `seed`; a complete sample draws nothing).
+pub fn residuals(fit: &ModelFit, x: Obs, seed: u64) -> (Vec<f64>, Vec<f64>) {
+    use rand::{Rng, SeedableRng};
+    let mut rng = (!x.complete()).then(|| rand_chacha::ChaCha8Rng::seed_from_u64(seed));
+    let u: Vec<f64> = (0..x.len())
+        .map(|i| {
+            let v = rng.as_mut().map_or(0.0, |r| r.random::<f64>());
+            x.pit(i, |s| fit.cdf(i, s), v)
+        })
+        .collect();
     (normal_scores(u.iter().copied()), u)
 }
+
+/// Seed of the randomised residuals of the observed sample (one draw for every round).
+const RESIDUAL_SEED: u64 = 0x5E51_D0A1;
 
 /// What one bootstrap replicate returns: (AD*, KS*, Λ* per candidate).
 type Replicate = (f64, f64, Vec<f64>);
@@ -267,7 +289,7 @@ pub fn names(sample: &Sample, settings: &NamingSettings) -> Result<Vec<Effect>> 
 /// test empty and computes no pivotal band or size test ([`names`]).
 fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool) -> Result<Outcome> {
     validate(sample)?;
-    let x = &sample.strength;
+    let x = sample.strength.view();
     let n = x.len();
     let (covs, level_cols, skipped_covariates) = diagnosable(sample);
     let cov_refs: Vec<(&str, Vec<f64>)> = covs.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
@@ -319,8 +341,9 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
         let reps: Vec<Option<Replicate>> = (0..settings.bootstrap)
             .into_par_iter()
             .map(|r| {
-                let (xs, m0) = model.bootstrap_refit(&current, seed, r)?;
-                let (_, u) = residuals(&m0, &xs);
+                let (xs, m0) = model.bootstrap_refit(x, &current, seed, r)?;
+                let (_, u) = residuals(&m0, xs.view(), settings.seed ^ RESIDUAL_SEED ^ ((r as u64 + 1) << 20));
+                let xs = xs.view();
                 let (ad, ks) = ad_ks_of_u(u);
                 let l: Vec<f64> = remaining
                     .iter()
@@ -331,7 +354,7 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
                         }
                         let mut terms = current.clone();
                         terms.push((c.clone(), t.clone()));
-                        fit_model_near(&xs, &terms, e.as_ref()).map_or(f64::NAN, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0))
+                        fit_model_near(xs, &terms, e.as_ref()).map_or(f64::NAN, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0))
                     })
                     .collect();
                 Some((ad, ks, l))
@@ -345,7 +368,7 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
         let p_of = |count: usize| (1 + count) as f64 / (b + 1.0);
 
         // Diagnosis of the current model.
-        let (res, u) = residuals(&model, x);
+        let (res, u) = residuals(&model, x, settings.seed ^ RESIDUAL_SEED);
         let (ad, ks) = ad_ks_of_u(u);
         let p_ad = p_of(reps.iter().filter(|r| r.0 >= ad).count());
         let p_ks = p_of(reps.iter().filter(|r| r.1 >= ks).count());
@@ -507,7 +530,7 @@ pub fn unclaimed(spec: &crate::strength::StrengthSpec, samples: &[&Sample]) -> O
 /// the selection is part of what is validated. An explicit effect whose covariate is missing is
 /// an error naming `material`, the file and the column.
 pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings: &NamingSettings, material: &str) -> Result<Vec<f64>> {
-    let x = &sample.strength;
+    let x = sample.strength.view();
     let n = x.len();
     if n < MIN_PARTICLES {
         return Err(data_err(sample, "all rows".into(), format!("material `{material}`: {n} crush tests are too few to weigh strength models by cross-validation (at least {MIN_PARTICLES})")));
@@ -534,9 +557,9 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
                 let sub = sample.rows(&train, sample.source.clone());
                 let named = names(&sub, settings)?;
                 let terms = terms_for(&named)?;
-                let fit = fit_model(&sub.strength, &crate::strength::fit::subset(&terms, &train)).map_err(|_| failed())?;
+                let fit = fit_model(sub.strength.view(), &crate::strength::fit::subset(&terms, &train)).map_err(|_| failed())?;
                 for i in (0..n).filter(|&i| fold[i] == f) {
-                    out[i] = crate::strength::fit::predict_ln_density(&fit, &terms, i, x[i]);
+                    out[i] = crate::strength::fit::predict_ln_prob(&fit, &terms, x, i);
                 }
             }
             if out.iter().all(|v| v.is_finite()) { Ok(out) } else { Err(failed()) }
@@ -546,7 +569,7 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
 
 /// The reported parameter of a fitted candidate (symbol, value, standard error), what it
 /// means, and for a size measure the weakest-link test.
-fn describe(c: &Effect, t: &Term, m: &ModelFit, x: &[f64]) -> ((String, f64, f64), String, Option<WeakestLink>) {
+fn describe(c: &Effect, t: &Term, m: &ModelFit, x: Obs) -> ((String, f64, f64), String, Option<WeakestLink>) {
     if let (Some(law), Effect::Populations(_)) = (&m.law, c) {
         let what = match &law.identifiable {
             Ok(()) => law.describe(),

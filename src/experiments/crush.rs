@@ -311,7 +311,7 @@ impl Experiment for CrushTest {
         let n = self.naming.as_ref()?;
         let mut pooled = n.sample.clone();
         pooled.source = format!("{} + {} simulated particles", n.sample.source, data.len());
-        pooled.strength.extend(data.iter().map(|&(_, ln_s)| ln_s.exp()));
+        pooled.strength.append_exact(data.iter().map(|&(_, ln_s)| ln_s.exp()));
         for ((name, column), (_, base)) in pooled.covariates.iter_mut().zip(&n.sample.covariates) {
             let at_test = (*name == Effect::Temperature.covariate()).then_some(n.temperature_c).flatten();
             column.extend(data.iter().map(|&(i, _)| at_test.or(base[self.rows[i]])));
@@ -343,7 +343,7 @@ mod tests {
     fn a_naming_loop_that_fails_scores_zero_and_is_counted_as_a_failure() {
         // Five particles are too few for the loop. The truth's model has no effects, which a
         // failure read as "named nothing" would match (it scored 1 before).
-        let few = Sample { source: "few".into(), strength: vec![1.0e8, 1.2e8, 0.9e8, 1.1e8, 0.95e8], particles: true, ..Sample::default() };
+        let few = Sample { source: "few".into(), strength: crate::obs::Observations::exact(vec![1.0e8, 1.2e8, 0.9e8, 1.1e8, 0.95e8]), particles: true, ..Sample::default() };
         assert_eq!(naming_test(few).score(&vec![(0, 18.4), (1, 18.5)], 0, 0), Some(Score { value: 0.0, failed: true }));
         // Forty Weibull-like strengths without covariates: the loop runs, names nothing, and
         // that is the truth's model.

@@ -195,6 +195,13 @@ pub struct Provenance {
     /// Warnings (likely misspelt headers); also printed.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// Headers the study lists in `ignore`: looked at and left out on purpose.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub ignored: Vec<String>,
+    /// What the rows say of themselves, as read ([`super::observed`]): rows counting several
+    /// specimens, specimens that did not break by their limit, classes.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub observed: Vec<String>,
 }
 
 impl Provenance {
@@ -204,7 +211,8 @@ impl Provenance {
         for c in &self.columns {
             let mut s = if c.source == c.field { format!("`{}`", c.source) } else { format!("`{}` → {}", c.source, c.field) };
             if !c.conversion.is_empty() {
-                s.push_str(&format!(" ({} {})", c.unit, c.conversion));
+                let said: Vec<&str> = [c.unit.as_str(), c.conversion.as_str()].into_iter().filter(|t| !t.is_empty()).collect();
+                s.push_str(&format!(" ({})", said.join(" ")));
             }
             if c.found_by == "study" {
                 s.push_str(" [mapped by the study]");
@@ -214,9 +222,13 @@ impl Provenance {
         if !self.unused.is_empty() {
             parts.push(format!("not used: {}", self.unused.iter().map(|u| format!("`{u}`")).collect::<Vec<_>>().join(", ")));
         }
+        if !self.ignored.is_empty() {
+            parts.push(format!("ignored as the study says: {}", self.ignored.iter().map(|u| format!("`{u}`")).collect::<Vec<_>>().join(", ")));
+        }
         if let Some(f) = &self.filter {
             parts.push(f.clone());
         }
+        parts.extend(self.observed.iter().cloned());
         let mut out = parts.join("; ");
         for j in &self.joined {
             let file = if j.file == self.file { String::new() } else { format!("{}, ", j.file) };

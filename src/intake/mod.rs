@@ -25,6 +25,7 @@
 pub mod columns;
 pub mod decimal;
 pub mod factors;
+pub mod observed;
 pub mod sheet;
 pub mod table;
 pub mod text;
@@ -84,6 +85,23 @@ pub struct Source {
     /// refuses them; `"inner"` keeps the common ids and lists the others in the manifest).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub join: Option<JoinMode>,
+    /// The column saying whether each specimen broke (crush and strength files;
+    /// [`observed`]): `broken = { column = "gebrochen", yes = "ja", no = "nein" }`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub broken: Option<observed::Broken>,
+    /// The column counting the specimens each row stands for (`count = "Anzahl"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub count: Option<String>,
+    /// Classes instead of values: `interval = { lower = "von [MPa]", upper = "bis [MPa]" }`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interval: Option<observed::Interval>,
+    /// What the rows at the file's highest value are, where no column says it
+    /// (`"not_broken"`: the rig's limit; `"broken"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at_highest: Option<observed::AtHighest>,
+    /// Columns that say nothing of the strength, looked at and left out on purpose.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ignore: Vec<String>,
 }
 
 impl Source {
@@ -140,7 +158,10 @@ impl Source {
             }
             j.validate_at(file, &format!("{key}.shape"), true)?;
         }
-        Ok(())
+        if nested {
+            return self.refuse_rows(file, key, "a shape file");
+        }
+        self.validate_rows(file, key)
     }
 }
 

@@ -6,7 +6,13 @@
 //! 1. read and validate the crush data;
 //! 2. Hertz contact at the force at break with R = d/2 → a, δ, p0, σ_max, σ̄ (`particles.csv`);
 //! 3. Weibull MLE of σ̄, C1239 unbiasing and pivotal bounds, Fisher (log-Wald) bounds
-//!    (`weibull_fits.csv`), probability-plot points and the CDF with its pivotal band;
+//!    (`weibull_fits.csv`), probability-plot points and the CDF with its pivotal band. Where
+//!    particles did not break by the rig's limit (or broke within a force class) the sample is
+//!    censored: the MLE is the censored one, the bounds and band come from the parametric
+//!    bootstrap that censors each redraw as the campaign did (in pivotal form), the modulus is
+//!    unbiased by those refits, the Fisher bounds from the censored likelihood's information,
+//!    the plotting positions from the Kaplan–Meier/Turnbull estimate (censored points marked);
+//!    `weibull_fits.csv` says which (`bound_method`, `unbiasing`);
 //! 4. power-law trend of σ̄ with diameter (`size_trend.csv`);
 //! 5. the radial stress profile of the median particle (`stress_profile*.csv`);
 //! 6. the strength model of the `[strength]` section (the deliverable's by default, or explicit
@@ -202,6 +208,12 @@ struct MaterialRun {
     /// σ̄ at break (Pa), per particle: `at_break[i].mean_tensile`, projected once because the
     /// Weibull fit, bounds and plots take a slice.
     sigma_bar: Vec<f64>,
+    /// σ̄ as observations: what each particle's row says (broke at it, did not break by it, …).
+    observed: crate::obs::Observations,
+    /// How the bounds and the unbiasing factor were obtained (`weibull_fits.csv`).
+    bound_method: &'static str,
+    /// How the modulus was unbiased.
+    unbiasing: &'static str,
     fit: WeibullFit,
     pivotal: PivotalBounds,
     fisher: FisherBounds,
@@ -216,6 +228,15 @@ struct MaterialRun {
     /// The strength model as a Simulator.
     chain: LifetimeChain,
 }
+
+/// `bound_method` of a complete sample.
+const PIVOTAL_BOUNDS: &str = "pivotal Monte Carlo (Thoman-Bain-Antle, ASTM C1239)";
+/// `bound_method` of a censored sample.
+const CENSORED_BOUNDS: &str = "parametric bootstrap censoring each redraw as the campaign did, in pivotal form (C1239's pivots are for complete samples)";
+/// `unbiasing` of a complete sample.
+const C1239_UNBIASING: &str = "ASTM C1239 unbiasing factor (complete sample)";
+/// `unbiasing` of a censored sample.
+const CENSORED_UNBIASING: &str = "bias factor of the censored bootstrap refits (C1239's factor is for complete samples)";
 
 /// Seed of the pivotal simulation for sample size n (depends on the study seed and n only).
 fn pivotal_seed(seed: u64, n: usize) -> u64 {
@@ -245,22 +266,41 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
         pb.set_message(format!("{}: contact stresses and Weibull fit", m.label));
         let at_break = contact_at_break(&data, &m.elastic, &s.contact)?;
         let sigma_bar: Vec<f64> = at_break.iter().map(|c| c.mean_tensile).collect();
-        let fit = fit_mle(&sigma_bar).map_err(|e| {
-            Error::data_file(&data.path, "all rows", format!("Weibull fit of the average tensile stress failed: {e}"))
-        })?;
+        let sample = sample_of(&data, &m.elastic, &s.contact)?;
+        let failed = |e: Error| Error::data_file(&data.path, "all rows", format!("Weibull fit of the average tensile stress failed: {e}"));
+        let (fit, pivotal, fisher, draws, bound_method, unbiasing) = if sample.strength.view().complete() {
+            let fit = fit_mle(&sigma_bar).map_err(failed)?;
+            let piv = simulate_pivotal(fit.n, s.weibull.pivotal_samples, pivotal_seed(s.seed, fit.n))?;
+            *evaluations.entry("weibull_pivotal_fits".into()).or_default() += s.weibull.pivotal_samples as u64;
+            let pivotal = piv.bounds(&fit, s.weibull.confidence)?;
+            let fisher = fisher_bounds(&fit, &sigma_bar, s.weibull.confidence)?;
+            let draws = piv.draws(&fit);
+            (fit, pivotal, fisher, draws, PIVOTAL_BOUNDS, C1239_UNBIASING)
+        } else {
+            // A censored sample (module docs): the deliverable's two-parameter law fitted with
+            // what each row says, bounds from the bootstrap that censors as the campaign did.
+            let base = StrengthFit::new(&sample, &[], s.strength.naming.gamma, &m.key).map_err(failed)?;
+            let reg = &base.model.reg;
+            let mle = Weibull::new(reg.shape(), reg.mu.exp())?;
+            let fit = WeibullFit { n: sample.strength.len(), mle, log_likelihood: reg.loglik };
+            let boot = base.draws(crate::strength::Uncertainty::Bootstrap, s.weibull.pivotal_samples, pivotal_seed(s.seed, fit.n))?;
+            *evaluations.entry("weibull_censored_bootstrap_fits".into()).or_default() += s.weibull.pivotal_samples as u64;
+            let draws: Vec<Weibull> = boot.iter().map(|p| Weibull { shape: p.shape, scale: p.mu.exp() }).collect();
+            let a = 0.5 * (1.0 - s.weibull.confidence);
+            let q = |v: Vec<f64>| crate::stats::interpolated_quantiles(v, &[a, 1.0 - a]);
+            let (qm, qs) = (q(draws.iter().map(|w| w.shape).collect()), q(draws.iter().map(|w| w.scale).collect()));
+            let uf = base.unbiased_shape(&boot) / mle.shape;
+            let pivotal = PivotalBounds { unbiasing_factor: uf, shape_unbiased: uf * mle.shape, confidence: s.weibull.confidence, shape: (qm[0], qm[1]), scale: (qs[0], qs[1]) };
+            let fisher = FisherBounds::from_log_cov(mle, reg.location_scale_cov, s.weibull.confidence).map_err(failed)?;
+            (fit, pivotal, fisher, draws, CENSORED_BOUNDS, CENSORED_UNBIASING)
+        };
         pb.inc(1);
-        let piv = simulate_pivotal(fit.n, s.weibull.pivotal_samples, pivotal_seed(s.seed, fit.n))?;
-        *evaluations.entry("weibull_pivotal_fits".into()).or_default() += s.weibull.pivotal_samples as u64;
-        let pivotal = piv.bounds(&fit, s.weibull.confidence)?;
-        let fisher = fisher_bounds(&fit, &sigma_bar, s.weibull.confidence)?;
         let shape = match s.weibull.shape_estimate {
             ShapeEstimate::Mle => fit.mle.shape,
             ShapeEstimate::Unbiased => pivotal.shape_unbiased,
         };
         let strength = Weibull::new(shape, fit.mle.scale)?;
-        let draws = piv.draws(&fit);
         // The strength model: the deliverable's unless the study names effects.
-        let sample = sample_of(&data, &m.elastic, &s.contact)?;
         let naming = crate::strength::NamingSettings { seed: s.seed.wrapping_add(7919 * index as u64), ..s.strength.naming.clone() };
         let effects = crate::discrepancy::workflow::resolve(&s.strength.effects, &sample, &naming)?;
         let sfit = StrengthFit::new(&sample, &effects, s.strength.naming.gamma, &m.key)?;
@@ -288,6 +328,9 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
             data,
             at_break,
             sigma_bar,
+            observed: sample.strength.clone(),
+            bound_method,
+            unbiasing,
             fit,
             pivotal,
             fisher,

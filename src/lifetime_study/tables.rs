@@ -10,7 +10,7 @@ use crate::lifetime::impacts_in;
 use crate::model::Simulator;
 use crate::stats::fit_line;
 use crate::strength::ParameterSummary;
-use crate::weibull::{probability_plot, sorted_quantile};
+use crate::weibull::{probability_plot_observed, sorted_quantile};
 
 use super::{LifetimeStudy, MaterialRun, pivotal_seed};
 
@@ -26,7 +26,7 @@ pub(super) fn write_particles(dir: &mut ReportDir, runs: &[MaterialRun]) -> Resu
         .collect();
     let text = |f: &dyn Fn(&Row) -> String| rows.iter().map(f).collect::<Vec<_>>();
     let num = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).collect::<Vec<_>>();
-    let mut df = table(vec![
+    let mut columns = vec![
         scol("material_key", text(&|r| r.0.key.clone())),
         scol("material", text(&|r| r.0.label.clone())),
         scol("id", text(&|r| r.1.id.clone())),
@@ -40,7 +40,21 @@ pub(super) fn write_particles(dir: &mut ReportDir, runs: &[MaterialRun]) -> Resu
         fcol("peak_pressure_pa", num(&|r| r.2.peak_pressure)),
         fcol("max_tensile_pa", num(&|r| r.2.max_tensile)),
         fcol("sigma_bar_pa", num(&|r| r.2.mean_tensile)),
-    ])?;
+    ];
+    // What each particle's row says (broke at its force, did not break by it, …) and a force
+    // class's upper end: only where some row is not an exact break.
+    if runs.iter().any(|r| r.data.censoring.is_some()) {
+        let obs: Vec<(crate::obs::Censor, f64)> = runs
+            .iter()
+            .flat_map(|run| {
+                let o = crate::obs::Obs { x: &[], censoring: run.data.censoring.as_ref() };
+                (0..run.data.records.len()).map(move |i| (o.kind(i), o.upper(i)))
+            })
+            .collect();
+        columns.push(scol("observed", obs.iter().map(|o| o.0.name().to_string()).collect()));
+        columns.push(fcol("crush_force_upper_n", obs.iter().map(|o| o.1).collect()));
+    }
+    let mut df = table(columns)?;
     dir.write_table("particles", &mut df)
 }
 
@@ -61,7 +75,10 @@ pub(super) fn write_weibull(dir: &mut ReportDir, runs: &[MaterialRun], s: &Lifet
         fcol("shape_upper", get(&|r| r.pivotal.shape.1)),
         fcol("scale_lower_pa", get(&|r| r.pivotal.scale.0)),
         fcol("scale_upper_pa", get(&|r| r.pivotal.scale.1)),
-        scol("bound_method", repeat("pivotal Monte Carlo (Thoman-Bain-Antle, ASTM C1239)", n)),
+        scol("bound_method", runs.iter().map(|r| r.bound_method.to_string()).collect()),
+        scol("unbiasing", runs.iter().map(|r| r.unbiasing.to_string()).collect()),
+        ucol("not_broken", runs.iter().map(|r| r.observed.view().tally().right as u64).collect()),
+        ucol("censored_or_classes", runs.iter().map(|r| { let t = r.observed.view().tally(); (t.right + t.left + t.interval) as u64 }).collect()),
         fcol("fisher_shape_se", get(&|r| r.fisher.shape_se)),
         fcol("fisher_scale_se_pa", get(&|r| r.fisher.scale_se)),
         fcol("fisher_shape_lower", get(&|r| r.fisher.shape.0)),
@@ -73,17 +90,19 @@ pub(super) fn write_weibull(dir: &mut ReportDir, runs: &[MaterialRun], s: &Lifet
     ])?;
     dir.write_table("weibull_fits", &mut fits)?;
 
-    // Probability-plot points.
-    let (mut k, mut l, mut x, mut f) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    // Probability-plot points: C1239's ranks, or the Kaplan–Meier/Turnbull positions of a
+    // censored sample with each point's kind (a censored point is drawn as one).
+    let (mut k, mut l, mut x, mut f, mut o) = (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for r in runs {
-        for (xi, fi) in probability_plot(&r.sigma_bar) {
+        for p in probability_plot_observed(r.observed.view()) {
             k.push(r.key.clone());
             l.push(r.label.clone());
-            x.push(xi);
-            f.push(fi);
+            x.push(p.x);
+            f.push(p.f);
+            o.push(p.kind.name().to_string());
         }
     }
-    let mut pts = table(vec![scol("material_key", k), scol("material", l), fcol("sigma_bar_pa", x), fcol("cdf_rank", f)])?;
+    let mut pts = table(vec![scol("material_key", k), scol("material", l), fcol("sigma_bar_pa", x), fcol("cdf_rank", f), scol("observed", o)])?;
     dir.write_table("weibull_points", &mut pts)?;
 
     // CDF curve with the pivotal band, on a common stress grid.
@@ -121,14 +140,34 @@ pub(super) fn write_weibull(dir: &mut ReportDir, runs: &[MaterialRun], s: &Lifet
     dir.write_table("weibull_cdf", &mut cdf)
 }
 
+/// `method` of the size trend of a complete sample.
+const LEAST_SQUARES: &str = "least squares on ln σ̄";
+/// `method` of the size trend of a censored sample.
+const CENSORED_REGRESSION: &str = "Weibull regression on ln d with the censored rows (median line)";
+
 pub(super) fn write_size_trend(dir: &mut ReportDir, runs: &[MaterialRun]) -> Result<()> {
     // Power law σ̄ = e^c d^b: a straight line in log–log coordinates.
     let mut rows: Vec<[f64; 7]> = Vec::new();
+    let mut methods = Vec::new();
     for r in runs {
         let d = r.data.diameters();
         let x: Vec<f64> = d.iter().map(|d| d.ln()).collect();
-        let y: Vec<f64> = r.sigma_bar.iter().map(|s| s.ln()).collect();
-        let f = fit_line(&x, &y)?;
+        let f = if r.observed.view().complete() {
+            methods.push(LEAST_SQUARES);
+            let y: Vec<f64> = r.sigma_bar.iter().map(|s| s.ln()).collect();
+            fit_line(&x, &y)?
+        } else {
+            // A censored σ̄ is a bound, not a strength, and a force limit censors the larger
+            // particles first: least squares on the broken ones alone would bend the line. The
+            // Weibull regression of σ̄ on ln d with every row as it says (its median line:
+            // ln σ̃ = μ + b ln ln 2 + β ln d; Wald p of β; no correlation coefficient).
+            methods.push(CENSORED_REGRESSION);
+            let cols = vec![x.clone()];
+            let reg = crate::strength::regress::fit(r.observed.view(), &crate::strength::regress::Design { columns: &cols, ..Default::default() })?;
+            let z = reg.beta[0] / reg.beta_se[0];
+            let p = 2.0 * statrs::distribution::ContinuousCDF::sf(&statrs::distribution::Normal::standard(), z.abs());
+            crate::stats::LineFit { intercept: reg.mu + reg.b * std::f64::consts::LN_2.ln(), slope: reg.beta[0], slope_se: reg.beta_se[0], r: f64::NAN, p_value: p }
+        };
         rows.push([
             f.slope,
             f.slope_se,
@@ -150,6 +189,7 @@ pub(super) fn write_size_trend(dir: &mut ReportDir, runs: &[MaterialRun]) -> Res
         fcol("p_value", col(4)),
         fcol("diameter_min_m", col(5)),
         fcol("diameter_max_m", col(6)),
+        scol("method", methods.iter().map(|m| m.to_string()).collect()),
     ])?;
     dir.write_table("size_trend", &mut df)
 }

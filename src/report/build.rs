@@ -134,7 +134,16 @@ fn inputs(m: &Value) -> Vec<Block> {
             }
             let unused: Vec<String> = r.get("unused").and_then(Value::as_array).map(|u| u.iter().filter_map(|x| x.as_str().map(String::from)).collect()).unwrap_or_default();
             if !unused.is_empty() {
-                kv.push(("columns not used".into(), unused.join(", ")));
+                kv.push(("columns not used".into(), format!("{} (read by no field of the file's kind and no declaration of the study)", unused.join(", "))));
+            }
+            let list = |k: &str| -> Vec<String> { r.get(k).and_then(Value::as_array).map(|u| u.iter().filter_map(|x| x.as_str().map(String::from)).collect()).unwrap_or_default() };
+            let ignored = list("ignored");
+            if !ignored.is_empty() {
+                kv.push(("columns ignored".into(), format!("{} (the study's `ignore`)", ignored.join(", "))));
+            }
+            let observed = list("observed");
+            if !observed.is_empty() {
+                kv.push(("what the rows say".into(), observed.join("; ")));
             }
         }
         blocks.push(Block::KeyValues(kv));

@@ -214,6 +214,15 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
     };
     let t = Table::load(dir, "residuals")?;
     let (mat, stage, raw, adj) = (t.s("material")?, t.s("stage")?, t.f("strength_pa")?, t.f("adjusted_pa")?);
+    // What each row says and an interval's upper end (reports without censoring lack them).
+    let observed = t.s("observed").ok();
+    let (raw_up, adj_up) = (t.f("upper_pa").ok(), t.f("adjusted_upper_pa").ok());
+    let kind_of = |i: usize| match observed.as_ref().map_or("exact", |o| o[i].as_str()) {
+        "right" => crate::obs::Censor::Right,
+        "left" => crate::obs::Censor::Left,
+        "interval" => crate::obs::Censor::Interval,
+        _ => crate::obs::Censor::Exact,
+    };
     let fits = Table::load(dir, "fits")?;
     let (fm, fs, fe, shape, scale) = (fits.s("material")?, fits.s("stage")?, fits.s("effects")?, fits.f("weibull_modulus")?, fits.f("scale_pa")?);
     // The final stage's modulus range (a modulus per level).
@@ -239,12 +248,26 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
     let mut xs = Vec::new();
     let mut lines = Vec::new();
     let mut curves = Vec::new();
+    // Censored points of each stage, drawn after both stages' breaks (the legend lists those first).
+    let mut rings = Vec::new();
     for (si, st) in ["before", "after"].iter().enumerate() {
-        let mut v: Vec<f64> = (0..mat.len()).filter(|&i| mat[i] == key && stage[i] == *st).map(|i| if si == 0 { raw[i] } else { adj[i] } / 1e6).collect();
-        v.sort_by(f64::total_cmp);
-        let n = v.len() as f64;
-        let pts: Vec<(f64, f64)> = v.iter().enumerate().map(|(i, x)| (x.ln(), (-(1.0 - (i as f64 + 0.5) / n).ln()).ln())).collect();
-        xs.extend(pts.iter().map(|p| p.0));
+        // Plotting positions: C1239's (i − 0.5)/N, or Kaplan–Meier/Turnbull where rows are
+        // censored (drawn as open circles).
+        let rows: Vec<usize> = (0..mat.len()).filter(|&i| mat[i] == key && stage[i] == *st).collect();
+        let v: Vec<f64> = rows.iter().map(|&i| if si == 0 { raw[i] } else { adj[i] } / 1e6).collect();
+        let up: Vec<f64> = rows.iter().map(|&i| if si == 0 { raw_up.as_ref() } else { adj_up.as_ref() }.map_or(f64::NAN, |u| u[i] / 1e6)).collect();
+        let kinds: Vec<crate::obs::Censor> = rows.iter().map(|&i| kind_of(i)).collect();
+        let censoring = kinds.iter().any(|k| *k != crate::obs::Censor::Exact).then(|| crate::obs::Censoring { kind: kinds.clone(), upper: up, scheme: Default::default() });
+        let positions = crate::weibull::probability_plot_observed(crate::obs::Obs { x: &v, censoring: censoring.as_ref() });
+        let at = |p: &crate::weibull::PlotPoint| (p.x.ln(), (-(-p.f).ln_1p()).ln());
+        let pts: Vec<(f64, f64)> = positions.iter().filter(|p| p.kind == crate::obs::Censor::Exact && p.f < 1.0).map(at).collect();
+        let open: Vec<(f64, f64)> = positions.iter().filter(|p| p.kind != crate::obs::Censor::Exact && p.f > 0.0 && p.f < 1.0).map(at).collect();
+        let open_kinds: Vec<&str> = positions.iter().filter(|p| p.kind != crate::obs::Censor::Exact).map(|p| p.kind.name()).collect();
+        xs.extend(pts.iter().chain(&open).map(|p| p.0));
+        if !open.is_empty() {
+            let colour_st = if si == 0 { GREY } else { c };
+            rings.push(Series { label: Some(format!("{}: {}", if si == 0 { "base" } else { "final" }, super::censored_words(open_kinds.into_iter()))), points: open, colour: colour_st, kind: Kind::Markers(Marker::Ring, 1.6) });
+        }
         let Some(j) = (0..fm.len()).find(|&i| fm[i] == key && fs[i] == *st) else { continue };
         let (m, s) = (shape[j], (scale[j] / 1e6).ln());
         if pts.is_empty() {
@@ -268,6 +291,7 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
         series.push(Series { label: Some(label), points: pts, colour: colour_st, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 1.6) });
         lines.push((m, s, colour_st));
     }
+    series.extend(rings);
     let xr = padded(xs.iter().copied(), 0.05, 0.05);
     for (m, s, colour_st) in lines {
         series.push(Series::line(None, vec![(xr.0, m * (xr.0 - s)), (xr.1, m * (xr.1 - s))], colour_st, 1.0));

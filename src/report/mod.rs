@@ -335,17 +335,29 @@ fn fig14_sigma_vs_diameter(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn
     let t = Table::load(dir, "particles")?;
     let trend = Table::load(dir, "size_trend")?;
     let (d, sb) = (t.f("diameter_m")?, t.f("sigma_bar_pa")?);
+    // What each particle's row says (reports without censoring have no column: every one broke).
+    let observed = t.s("observed").ok();
+    let broke = |i: usize| observed.as_ref().is_none_or(|o| o[i] == "exact");
     let tkeys = trend.s("material_key")?;
     let (b, se, c0, rr, lo, hi) = (trend.f("exponent")?, trend.f("exponent_se")?, trend.f("ln_prefactor")?, trend.f("pearson_r_log")?, trend.f("diameter_min_m")?, trend.f("diameter_max_m")?);
     let mut series = Vec::new();
     for (key, idx) in t.groups()? {
         let c = mats.colour(&key);
+        let (yes, no): (Vec<usize>, Vec<usize>) = idx.iter().partition(|&&i| broke(i));
         series.push(Series {
-            label: Some(format!("{} (n = {})", mats.label(&key), idx.len())),
-            points: zip(pick(&d, &idx).iter().map(|x| x * 1e3).collect(), pick(&sb, &idx).iter().map(|s| s / 1e6).collect()),
+            label: Some(format!("{} (n = {})", mats.label(&key), yes.len())),
+            points: zip(pick(&d, &yes).iter().map(|x| x * 1e3).collect(), pick(&sb, &yes).iter().map(|s| s / 1e6).collect()),
             colour: c,
             kind: Kind::Markers(mats.marker(&key), 2.0),
         });
+        if !no.is_empty() {
+            series.push(Series {
+                label: Some(format!("{}: σ̄ at the limit, not broken (n = {})", mats.label(&key), no.len())),
+                points: zip(pick(&d, &no).iter().map(|x| x * 1e3).collect(), pick(&sb, &no).iter().map(|s| s / 1e6).collect()),
+                colour: c,
+                kind: Kind::Markers(Marker::Ring, 2.0),
+            });
+        }
         if let Some(j) = tkeys.iter().position(|k| *k == key) {
             let line: Vec<(f64, f64)> = (0..=40)
                 .map(|i| {
@@ -353,8 +365,10 @@ fn fig14_sigma_vs_diameter(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn
                     (x * 1e3, (c0[j] + b[j] * x.ln()).exp() / 1e6)
                 })
                 .collect();
+            // A censored sample's line is the Weibull regression's median (no r).
+            let how = if rr[j].is_finite() { format!(", r = {:.2}", rr[j]) } else { ", censored regression".to_string() };
             series.push(Series::line(
-                Some(format!("fit σ̄ ∝ d^({:.2} ± {:.2}), r = {:.2}", b[j], se[j], rr[j]).replace('-', "−")),
+                Some(format!("fit σ̄ ∝ d^({:.2} ± {:.2}){how}", b[j], se[j]).replace('-', "−")),
                 line,
                 c,
                 1.0,
@@ -379,6 +393,11 @@ fn fig14_weibull_cdf(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
     let cdf = Table::load(dir, "weibull_cdf")?;
     let fits = Table::load(dir, "weibull_fits")?;
     let (px, pf) = (pts.f("sigma_bar_pa")?, pts.f("cdf_rank")?);
+    // Each point's kind (reports without censoring have no column: every one broke).
+    let observed = pts.s("observed").ok();
+    let kind_of = |i: usize| observed.as_ref().map_or("exact", |o| o[i].as_str());
+    let censored = (0..px.len()).any(|i| kind_of(i) != "exact");
+    let bootstrap = fits.s("bound_method").is_ok_and(|m| m.iter().any(|v| v.contains("bootstrap")));
     let (cx, cy, cl, cu) = (cdf.f("sigma_pa")?, cdf.f("cdf")?, cdf.f("cdf_lower")?, cdf.f("cdf_upper")?);
     let fkeys = fits.s("material_key")?;
     let (shape, scale, conf) = (fits.f("shape_used")?, fits.f("scale_pa")?, fits.f("confidence")?);
@@ -392,7 +411,7 @@ fn fig14_weibull_cdf(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
         let j = fkeys.iter().position(|k| *k == key).unwrap_or(0);
         if n == 0 {
             series.push(Series {
-                label: Some(format!("{:.0} % pivotal confidence band", 100.0 * conf[j])),
+                label: Some(format!("{:.0} % {} confidence band", 100.0 * conf[j], if bootstrap { "bootstrap" } else { "pivotal" })),
                 points: vec![],
                 colour: RGBColor(120, 120, 120),
                 kind: Kind::Band(vec![], 0.35),
@@ -412,17 +431,26 @@ fn fig14_weibull_cdf(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
         ));
     }
     for (key, idx) in pts.groups()? {
+        let (yes, no): (Vec<usize>, Vec<usize>) = idx.iter().partition(|&&i| kind_of(i) == "exact");
         series.push(Series {
             label: Some(format!("{} data", mats.label(&key))),
-            points: zip(pick(&px, &idx).iter().map(|v| v / 1e6).collect(), pick(&pf, &idx)),
+            points: zip(pick(&px, &yes).iter().map(|v| v / 1e6).collect(), pick(&pf, &yes)),
             colour: mats.colour(&key),
             kind: Kind::Markers(mats.marker(&key), 1.8),
         });
+        if !no.is_empty() {
+            series.push(Series {
+                label: Some(format!("{}: {}", mats.label(&key), censored_words(no.iter().map(|&i| kind_of(i))))),
+                points: zip(pick(&px, &no).iter().map(|v| v / 1e6).collect(), pick(&pf, &no)),
+                colour: mats.colour(&key),
+                kind: Kind::Markers(Marker::Ring, 1.8),
+            });
+        }
     }
     let p = Panel {
         x_categories: vec![],
         x_desc: "σ̄ at break (MPa)".into(),
-        y_desc: "Breaking probability, data at (i − 0.5)/N".into(),
+        y_desc: if censored { "Breaking probability (Kaplan–Meier)".into() } else { "Breaking probability, data at (i − 0.5)/N".into() },
         x_range: xr,
         y_range: (0.0, 1.0),
         y_log: false,
@@ -430,6 +458,27 @@ fn fig14_weibull_cdf(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
         legend: Some(SeriesLabelPosition::UpperLeft),
     };
     figure("fig14_weibull_cdf", w, 0.8, &[(p, 1.0)])
+}
+
+/// What a series of censored probability-plot points is, from the kinds it holds
+/// (`not broken (censored)`, `class ends` …).
+pub(crate) fn censored_words<'a>(kinds: impl Iterator<Item = &'a str>) -> String {
+    let mut seen: Vec<&str> = Vec::new();
+    for k in kinds {
+        if !seen.contains(&k) {
+            seen.push(k);
+        }
+    }
+    let words: Vec<&str> = seen
+        .iter()
+        .map(|k| match *k {
+            "right" => "not broken (censored)",
+            "left" => "broke below (censored)",
+            "interval" => "class ends",
+            _ => "censored",
+        })
+        .collect();
+    words.join("; ")
 }
 
 fn fig15_impact(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {

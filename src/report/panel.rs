@@ -18,6 +18,9 @@ pub enum Marker {
     Triangle,
     /// Diagonal cross.
     Cross,
+    /// Open circle: a specimen that did not break by its value, or broke within a class
+    /// (censored).
+    Ring,
 }
 
 /// How a series is drawn.
@@ -355,6 +358,7 @@ where
         Marker::Circle => Circle::new(at, r, filled).into_dyn(),
         Marker::Triangle => TriangleMarker::new(at, r * 13 / 10, filled).into_dyn(),
         Marker::Cross => Cross::new(at, r, open).into_dyn(),
+        Marker::Ring => Circle::new(at, r, open).into_dyn(),
     }
 }
 

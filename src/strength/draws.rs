@@ -22,6 +22,16 @@
 //! profiles a Tavares–King damage ratio is not location-scale in it; its draws are a plain
 //! parametric bootstrap (refits of samples drawn from the fitted model).
 //!
+//! **Censored samples.** The pivots are exact for complete samples (and type II censoring); a
+//! sample with specimens that did not break by a recorded limit, or broke within a class, is
+//! type I censored, and (b̂/b, …) then depend on where the limits sit relative to the unknown
+//! law. Such a sample's pivots are simulated at the fitted law instead: samples drawn from it,
+//! each redraw censored as the campaign censored its row ([`crate::obs::Obs::censor`]), refitted,
+//! and the refits (b*, μ*, β*) taken as draws of the pivots — b = b̂²/b*,
+//! μ = μ̂ − b̂(μ* − μ̂)/b*, β = β̂ − b̂(β* − β̂)/b* (the parametric bootstrap in pivotal form,
+//! exact again where the censoring is type II). Its modulus is corrected for bias by those
+//! refits (m̂²/E[m̂*]), not by C1239's unbiasing factor, which is for complete samples.
+//!
 //! [`Uncertainty::Bayesian`] samples the posterior with the prior flat in (μ, β, ln b) — the
 //! right-invariant prior of a location-scale model, ∝ 1/(m σ_θ) without effects — by the
 //! ensemble sampler ([`crate::calibrate::mcmc`]); the damage ratio, if any, gets a prior flat in
@@ -85,6 +95,13 @@ impl Params {
 impl ModelFit {
     /// Whether its bootstrap draws are pivotal ([`StrengthFit::pivotal`]).
     pub fn pivotal(&self) -> bool {
+        self.complete && self.location_scale()
+    }
+
+    /// Whether the model is location-scale in all its parameters (one modulus, no penalty, no
+    /// profiled damage ratio, the Weibull law): its bootstrap draws are in pivotal form, exact
+    /// for a complete sample, simulated at the fit under censoring (module docs).
+    pub fn location_scale(&self) -> bool {
         self.damage_ratio.is_none() && self.scale_columns.is_empty() && self.penalty.iter().all(|l| *l == 0.0) && self.law.is_none()
     }
 
@@ -103,7 +120,7 @@ impl ModelFit {
                 // that fails (vanishingly rare) is replaced by the next sample of its stream.
                 for _ in 0..20 {
                     let x: Vec<f64> = (0..m.n).map(|_| rand_distr::Exp1.sample(&mut rng)).collect();
-                    if let Ok(u) = fit(&x, &design) {
+                    if let Ok(u) = fit(crate::obs::Obs::exact(&x), &design) {
                         let mut p = Params::base(u.b / b_hat, mu_hat - b_hat * u.mu / u.b);
                         for (j, b) in p.beta.iter_mut().enumerate().take(m.reg.beta.len()) {
                             *b = m.reg.beta[j] - b_hat * u.beta[j] / u.b;
@@ -142,8 +159,9 @@ impl StrengthFit {
 
     /// Whether the bootstrap draws are pivotal (m = m̂/q) rather than plain refits (m = m̂*): the
     /// pivots are exact for a location-scale model — one modulus, no penalty, no profiled damage
-    /// ratio. A modulus per level or partially pooled levels are not location-scale in all their
-    /// parameters; their draws are the plain parametric bootstrap.
+    /// ratio — fitted to a complete sample. A modulus per level or partially pooled levels are
+    /// not location-scale in all their parameters, and type I censoring breaks the pivots; their
+    /// draws are the plain parametric bootstrap (module docs).
     pub fn pivotal(&self) -> bool {
         self.model.pivotal()
     }
@@ -155,7 +173,7 @@ impl StrengthFit {
     pub fn unbiased_shape(&self, draws: &[Params]) -> f64 {
         let m = self.model.shape();
         let k = draws.len() as f64;
-        if self.pivotal() { m * k / draws.iter().map(|d| m / d.shape).sum::<f64>() } else { m * m * k / draws.iter().map(|d| d.shape).sum::<f64>() }
+        if self.model.location_scale() { m * k / draws.iter().map(|d| m / d.shape).sum::<f64>() } else { m * m * k / draws.iter().map(|d| d.shape).sum::<f64>() }
     }
 
     /// `k` joint draws of the parameters (seeded; independent of the thread count).
@@ -165,6 +183,7 @@ impl StrengthFit {
         }
         match how {
             Uncertainty::Bootstrap if self.pivotal() => self.pivotal_draws(k, seed),
+            Uncertainty::Bootstrap if self.model.location_scale() => Ok(self.bootstrap_draws(k, seed)?.iter().map(|d| self.pivotal_form(d)).collect()),
             Uncertainty::Bootstrap => self.bootstrap_draws(k, seed),
             Uncertainty::Bayesian => self.posterior_draws(k, seed),
         }
@@ -175,12 +194,24 @@ impl StrengthFit {
         self.model.pivotal_params(k, seed)
     }
 
+    /// A refit (b*, μ*, β*) of a sample drawn from the fit, taken as a draw of the pivots
+    /// (module docs): b = b̂²/b*, μ = μ̂ − b̂(μ* − μ̂)/b*, β = β̂ − b̂(β* − β̂)/b*.
+    fn pivotal_form(&self, refit: &Params) -> Params {
+        let (b_hat, mu_hat) = (self.model.reg.b, self.model.reg.mu);
+        let b_star = 1.0 / refit.shape;
+        let mut p = Params::base(1.0 / (b_hat * b_hat / b_star), mu_hat - b_hat * (refit.mu - mu_hat) / b_star);
+        for (j, b) in p.beta.iter_mut().enumerate().take(self.model.reg.beta.len()) {
+            *b = self.model.reg.beta[j] - b_hat * (refit.beta[j] - self.model.reg.beta[j]) / b_star;
+        }
+        p
+    }
+
     /// Plain parametric bootstrap (models with a profiled damage ratio, a modulus per level or
-    /// partially pooled levels).
+    /// partially pooled levels; censored samples, each redraw censored as its row was).
     fn bootstrap_draws(&self, k: usize, seed: u64) -> Result<Vec<Params>> {
         let out: Vec<Option<Params>> = (0..k)
             .into_par_iter()
-            .map(|r| (0..20).find_map(|attempt| self.model.bootstrap_refit(&self.terms, seed ^ ((attempt as u64) << 40), r).map(|(_, f)| Params::of(&f))))
+            .map(|r| (0..20).find_map(|attempt| self.model.bootstrap_refit(self.data.view(), &self.terms, seed ^ ((attempt as u64) << 40), r).map(|(_, f)| Params::of(&f))))
             .collect();
         collect(out, "parametric bootstrap")
     }
@@ -195,7 +226,9 @@ impl StrengthFit {
         let ns = m.scale_columns.len();
         let damage = m.damage_ratio.is_some();
         let dim = 2 + nl + ns + usize::from(damage);
-        let y: Vec<f64> = self.data.iter().map(|x| x.ln()).collect();
+        let obs = self.data.view();
+        let complete = obs.complete();
+        let y: Vec<f64> = obs.x.iter().map(|x| x.ln()).collect();
         let damage_terms = self.terms.iter().find_map(|(_, t)| match t {
             super::effects::Term::Damage { impacts, gamma } => Some((impacts.clone(), *gamma)),
             _ => None,
@@ -230,8 +263,13 @@ impl StrengthFit {
                 for j in 0..ns {
                     lb += t[2 + nl + j] * m.scale_columns[j][i];
                 }
-                let w = (yi - ls) / lb.exp();
-                l += -lb + w - w.exp();
+                if complete {
+                    let w = (yi - ls) / lb.exp();
+                    l += -lb + w - w.exp();
+                } else {
+                    // What the row says (a censored row's ln S, …), plus the exact row's y.
+                    l += super::regress::ln_prob(obs, i, ls, lb.exp()) + if obs.kind(i) == crate::obs::Censor::Exact { *yi } else { 0.0 };
+                }
             }
             if l.is_finite() { l } else { f64::NEG_INFINITY }
         };

@@ -256,7 +256,7 @@ impl WeakestLink {
 /// (`others`) refitted under the tie ([`crate::strength::regress::fit_tied`]) — against the free
 /// fit's ℓ and α ± se. The likelihood ratio has one degree of freedom (α free against α = k/m).
 #[allow(clippy::too_many_arguments)]
-pub fn weakest_link(x: &[f64], z: &[f64], others: &crate::strength::regress::Design, k: f64, free_loglik: f64, alpha: f64, alpha_se: f64, free_shape: f64) -> WeakestLink {
+pub fn weakest_link(x: crate::obs::Obs, z: &[f64], others: &crate::strength::regress::Design, k: f64, free_loglik: f64, alpha: f64, alpha_se: f64, free_shape: f64) -> WeakestLink {
     let (loglik_tied, shape_tied) = match crate::strength::regress::fit_tied(x, others, (z, k)) {
         Ok(r) => (r.loglik, r.shape()),
         Err(_) => (f64::NAN, f64::NAN),
@@ -269,6 +269,7 @@ pub fn weakest_link(x: &[f64], z: &[f64], others: &crate::strength::regress::Des
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::obs::Obs;
     use crate::strength::regress::{Design, fit};
     use crate::weibull::Weibull;
     use rand::SeedableRng;
@@ -313,14 +314,14 @@ mod tests {
         // The tied regression reaches the maximum of the profile over m (scanned finely).
         let best_profile = (0..20001).map(|j| tied_profile(&y, &z, 1.0, 2.0 + 10.0 * j as f64 / 20000.0)).fold(f64::NEG_INFINITY, f64::max);
         let cols = vec![z.clone()];
-        let free = fit(&x, &Design { columns: &cols, ..Design::default() }).unwrap();
-        let w = weakest_link(&x, &z, &Design::default(), 1.0, free.loglik, -free.beta[0], free.beta_se[0], free.shape());
+        let free = fit(Obs::exact(&x), &Design { columns: &cols, ..Design::default() }).unwrap();
+        let w = weakest_link(Obs::exact(&x), &z, &Design::default(), 1.0, free.loglik, -free.beta[0], free.beta_se[0], free.shape());
         assert!((w.loglik_tied - best_profile).abs() < 1e-6, "tied fit {} vs profile maximum {best_profile}", w.loglik_tied);
         assert!(w.loglik_tied <= free.loglik + 1e-9 && w.supported, "{w:?}");
         // Data with α = 3/m at k = 1 reject the relation.
         let x3: Vec<f64> = z.iter().map(|&zi| Weibull::new(6.0, 3.0 * (-3.0 * zi / 6.0).exp()).unwrap().sample(&mut rng)).collect();
-        let free = fit(&x3, &Design { columns: &cols, ..Design::default() }).unwrap();
-        let w = weakest_link(&x3, &z, &Design::default(), 1.0, free.loglik, -free.beta[0], free.beta_se[0], free.shape());
+        let free = fit(Obs::exact(&x3), &Design { columns: &cols, ..Design::default() }).unwrap();
+        let w = weakest_link(Obs::exact(&x3), &z, &Design::default(), 1.0, free.loglik, -free.beta[0], free.beta_se[0], free.shape());
         assert!(!w.supported && w.alpha > w.predicted, "{w:?}");
         assert!(w.sentence(1.0).contains("stronger than weakest-link"));
     }

@@ -20,6 +20,7 @@ use super::mle::fit_at;
 use crate::contact::{ContactOptions, ContactState, ContactStress, Elastic, Hertz, TensileZone};
 use crate::data::CrushData;
 use crate::error::{Error, Result};
+use crate::obs::{Obs, Observations};
 
 /// Strengths and covariates of one sample: a crush sample reduced to σ̄ at break, or a
 /// strength file's specimens with their recorded factors.
@@ -27,8 +28,9 @@ use crate::error::{Error, Result};
 pub struct Sample {
     /// Where it came from (for messages).
     pub source: String,
-    /// σ̄ at break, or the specimen strength (Pa), per specimen.
-    pub strength: Vec<f64>,
+    /// σ̄ at break, or the specimen strength (Pa), per specimen, with what each row says of it
+    /// (broke at it; did not break by it; broke within a class — [`crate::obs`]).
+    pub strength: Observations,
     /// Numeric covariate columns by name (`None`: empty cell).
     pub covariates: Vec<(String, Vec<Option<f64>>)>,
     /// Categorical factor columns by name: each specimen's level.
@@ -80,7 +82,7 @@ impl Sample {
     pub fn rows(&self, rows: &[usize], source: String) -> Sample {
         Sample {
             source,
-            strength: rows.iter().map(|&i| self.strength[i]).collect(),
+            strength: self.strength.rows(rows),
             covariates: self.covariates.iter().map(|(c, v)| (c.clone(), rows.iter().map(|&i| v[i]).collect())).collect(),
             levels: self.levels.iter().map(|(c, v)| (c.clone(), rows.iter().map(|&i| v[i].clone()).collect())).collect(),
             factors: self.factors.clone(),
@@ -113,13 +115,30 @@ pub fn contact_at_break(data: &CrushData, elastic: &Elastic, contact: &ContactOp
 
 /// Strengths (σ̄ at break) and covariates of a crush dataset, with the factor columns its study
 /// declares (numeric ones beside the particle covariates, categorical ones as levels) and their
-/// candidate effects.
+/// candidate effects. A particle that did not break by the rig's limit, or broke within a
+/// force class, keeps what its row says: its limits and class edges become σ̄ at those forces,
+/// particle by particle ([`crate::obs`]).
 pub fn sample_of(data: &CrushData, elastic: &Elastic, contact: &ContactOptions) -> Result<Sample> {
     let at = contact_at_break(data, elastic, contact)?;
     let r = &data.records;
+    let zone = TensileZone::new(elastic.poisson_ratio);
+    let sigma_at = |k: usize, force: f64| -> f64 {
+        if force == r[k].crush_force_n {
+            return at[k].mean_tensile;
+        }
+        let radius = 0.5 * r[k].diameter_m;
+        let hertz = Hertz::sphere_on_flat(elastic, &contact.platen, radius);
+        ContactStress { hertz, zone, domain: contact.averaging, particle_radius: radius }.at_force(force).map_or(f64::NAN, |s| s.mean_tensile)
+    };
+    let strength = data.observed().map(sigma_at);
+    if let Some(c) = &strength.censoring
+        && let Some(k) = (0..r.len()).find(|&k| c.kind[k] == crate::obs::Censor::Interval && !(c.upper[k] > strength.x[k]))
+    {
+        return Err(data.error(k, "crush_force_n", format!("the class's σ̄ at its upper force is not above its σ̄ at its lower force ({} and {} Pa)", c.upper[k], strength.x[k])));
+    }
     let mut s = Sample {
         source: data.path.display().to_string(),
-        strength: at.iter().map(|c| c.mean_tensile).collect(),
+        strength,
         covariates: vec![
             ("diameter_m".into(), r.iter().map(|x| Some(x.diameter_m)).collect()),
             ("roundness".into(), r.iter().map(|x| x.roundness).collect()),
@@ -138,29 +157,31 @@ pub fn sample_of(data: &CrushData, elastic: &Elastic, contact: &ContactOptions) 
 
 impl ModelFit {
     /// Parametric-bootstrap replicate `r` (its own ChaCha8 stream of `seed`): strengths drawn
-    /// from this model at the sample's covariates, refitted with `terms` (the model's own terms
-    /// or more). None if the refit fails.
-    pub fn bootstrap_refit(&self, terms: &[(Effect, Term)], seed: u64, r: usize) -> Option<(Vec<f64>, ModelFit)> {
+    /// from this model at the sample's covariates, censored as the campaign censored each row
+    /// of `x` (the observations fitted: [`Obs::censor`]), refitted with `terms` (the model's
+    /// own terms or more). None if the refit fails.
+    pub fn bootstrap_refit(&self, x: Obs, terms: &[(Effect, Term)], seed: u64, r: usize) -> Option<(Observations, ModelFit)> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(r as u64 + 1);
-        let xs = match &self.law {
+        let drawn = match &self.law {
             Some(l) => (0..self.n).map(|i| l.sample(&mut rng) * l.shift(&self.columns, i).exp()).collect(),
             None => self.reg.sample(&self.design(), self.n, &mut rng),
         };
-        let refit = fit_model_near(&xs, terms, Some(self)).ok()?;
+        let xs = x.censor(drawn);
+        let refit = fit_model_near(xs.view(), terms, Some(self)).ok()?;
         Some((xs, refit))
     }
 }
 
 /// Fits the base model plus `terms` to the strengths `x`.
-pub fn fit_model(x: &[f64], terms: &[(Effect, Term)]) -> Result<ModelFit> {
+pub fn fit_model(x: Obs, terms: &[(Effect, Term)]) -> Result<ModelFit> {
     fit_model_near(x, terms, None)
 }
 
 /// [`fit_model`] near a fit to similar data (a bootstrap refit): the damage ratio's profile
 /// search and each pooled factor's τ search then start at the hint's values, which is several
 /// times faster (the full search runs when the optimum leaves the local bracket).
-pub fn fit_model_near(x: &[f64], terms: &[(Effect, Term)], hint: Option<&ModelFit>) -> Result<ModelFit> {
+pub fn fit_model_near(x: Obs, terms: &[(Effect, Term)], hint: Option<&ModelFit>) -> Result<ModelFit> {
     let ratio = hint.and_then(|h| h.damage_ratio);
     let pooled = terms.iter().filter(|(_, t)| matches!(t, Term::Pooled { .. })).count();
     if pooled == 0 {
@@ -218,15 +239,16 @@ pub fn predict_b(fit: &ModelFit, terms: &[(Effect, Term)], i: usize) -> f64 {
     ln_b.exp()
 }
 
-/// Log density of specimen i's strength x under a model fitted on other rows (its law's, or the
-/// Weibull regression's at [`predict_ln_scale`]).
-pub fn predict_ln_density(fit: &ModelFit, terms: &[(Effect, Term)], i: usize, x: f64) -> f64 {
+/// ln P(row i of `x`) under a model fitted on other rows (its law's, or the Weibull
+/// regression's at [`predict_ln_scale`]): the log density of an exact row, the log probability
+/// of what a censored or interval row says ([`Obs::ln_prob`]).
+pub fn predict_ln_prob(fit: &ModelFit, terms: &[(Effect, Term)], x: Obs, i: usize) -> f64 {
     match &fit.law {
         Some(l) => {
             let eta = linear_predictor(&l.beta, fit, terms, i);
-            l.ln_pdf(x * (-eta).exp()) - eta
+            x.ln_prob(i, |v| l.ln_pdf(v * (-eta).exp()) - eta, |v| l.ln_sf(v * (-eta).exp()))
         }
-        None => fit.reg.ln_density_with(predict_ln_scale(fit, terms, i), predict_b(fit, terms, i), x),
+        None => super::regress::ln_prob(x, i, predict_ln_scale(fit, terms, i), predict_b(fit, terms, i)),
     }
 }
 
@@ -262,16 +284,17 @@ pub fn folds(n: usize, k: usize, seed: u64) -> Vec<usize> {
     f
 }
 
-/// K-fold cross-validated log density of every particle: particle i scored under the model with
-/// `terms` fitted to the other folds (plug-in maximum likelihood). None if a training fit fails.
-pub fn cv_pointwise(x: &[f64], terms: &[(Effect, Term)], folds: &[usize], k: usize) -> Option<Vec<f64>> {
+/// K-fold cross-validated log score of every particle: particle i's row scored
+/// ([`predict_ln_prob`]) under the model with `terms` fitted to the other folds (plug-in
+/// maximum likelihood). None if a training fit fails.
+pub fn cv_pointwise(x: Obs, terms: &[(Effect, Term)], folds: &[usize], k: usize) -> Option<Vec<f64>> {
     let mut out = vec![f64::NAN; x.len()];
     for f in 0..k {
         let train: Vec<usize> = (0..x.len()).filter(|&i| folds[i] != f).collect();
-        let xt: Vec<f64> = train.iter().map(|&i| x[i]).collect();
-        let fit = fit_model(&xt, &subset(terms, &train)).ok()?;
+        let xt = x.rows(&train);
+        let fit = fit_model(xt.view(), &subset(terms, &train)).ok()?;
         for i in (0..x.len()).filter(|&i| folds[i] == f) {
-            out[i] = predict_ln_density(&fit, terms, i, x[i]);
+            out[i] = predict_ln_prob(&fit, terms, x, i);
         }
     }
     out.iter().all(|v| v.is_finite()).then_some(out)
@@ -294,8 +317,8 @@ pub struct StrengthFit {
     pub centre: Vec<f64>,
     /// The sample's source (file), for messages.
     pub source: String,
-    /// The fitted strengths σ̄ at break (Pa).
-    pub data: Vec<f64>,
+    /// The fitted strengths σ̄ at break (Pa), with what each row says of its value.
+    pub data: Observations,
 }
 
 /// What one regression (β) or scale (γ) column of a fitted model is: its effect and, for a
@@ -322,7 +345,7 @@ impl StrengthFit {
             })?;
             terms.push((e.clone(), t));
         }
-        let model = fit_model(&sample.strength, &terms).map_err(|err| Error::Data {
+        let model = fit_model(sample.strength.view(), &terms).map_err(|err| Error::Data {
             file: sample.source.clone(),
             location: "all rows".into(),
             rule: format!("material `{material}`: the strength model ({}) could not be fitted: {err}", names(effects)),
@@ -473,7 +496,7 @@ mod tests {
             .collect();
         let c = Sample { covariates: vec![("impacts".to_string(), impacts.iter().map(|&k| Some(k as f64)).collect())], ..Sample::default() };
         let t = c.term(&Effect::Damage, 5.0).unwrap();
-        let m = fit_model(&x, &[(Effect::Damage, t)]).unwrap();
+        let m = fit_model(Obs::exact(&x), &[(Effect::Damage, t)]).unwrap();
         let r = m.damage_ratio.unwrap();
         assert!((r / 0.05 - 1.0).abs() < 0.25, "x = {r}");
         assert!((m.shape() - 15.0).abs() < 1.5);
@@ -481,7 +504,7 @@ mod tests {
 
     #[test]
     fn a_missing_covariate_names_material_file_and_column() {
-        let s = Sample { source: "d.csv".into(), strength: vec![1e9; 12], covariates: vec![("roundness".into(), vec![None; 12])], ..Sample::default() };
+        let s = Sample { source: "d.csv".into(), strength: Observations::exact(vec![1e9; 12]), covariates: vec![("roundness".into(), vec![None; 12])], ..Sample::default() };
         let e = StrengthFit::new(&s, &[Effect::Roundness], 5.0, "gen4").unwrap_err().to_string();
         assert!(e.contains("d.csv") && e.contains("column roundness") && e.contains("gen4"), "{e}");
     }

@@ -26,6 +26,19 @@
 //!            w_j = h_j / (h_1 + h_2),  h_j = (m_j/σ_j)(x/σ_j)^(m_j−1)
 //! ```
 //!
+//! **Censored and grouped rows** ([`crate::obs`]) add ln S, ln F or ln[S(x) − S(x_u)] of the law
+//! (S = p S₁ + (1 − p) S₂ for the mixture, S₁ S₂ for competing risks), from ln S and its
+//! gradient (with r_j the shares of p_j S_j in S for the mixture):
+//!
+//! ```text
+//! ∂ ln S/∂ ln σ_j = r_j m_j e_j     ∂ ln S/∂ ln m_j = −r_j m_j y_j e_j     ∂ ln S/∂ logit p = r_1 − p
+//! right: ∇ℓ = ∇ ln S(x)     left: ∇ℓ = −[S/(1 − S)] ∇ ln S(x)
+//! interval: ∇ℓ = [∇ ln S(x) − ρ ∇ ln S(x_u)]/(1 − ρ),  ρ = S(x_u)/S(x)
+//! ```
+//!
+//! (r_j = 1 for competing risks.) The starts split the rows' points ([`crate::obs::Obs::point`])
+//! as if they were breaks; only the starts do.
+//!
 //! Moduli are kept in [[`M_MIN`], [`M_MAX`]]: a mixture's likelihood is unbounded as a component
 //! collapses onto one specimen with m → ∞.
 //!
@@ -62,6 +75,7 @@ use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::obs::{Censor, Obs, ln_one_minus_exp};
 use crate::weibull::fit_mle;
 
 /// Number of starts.
@@ -145,15 +159,96 @@ fn ln_weibull_pdf(x: f64, s: f64, m: f64) -> f64 {
     m.ln() - s.ln() + (m - 1.0) * z.ln() - z.powf(m)
 }
 
-/// Log-likelihood at unconstrained θ of the strengths whose logarithms (x scaled by its median)
-/// are `lnx`, and its gradient in `g` (−∞, gradient unset, where the likelihood is not finite).
-/// θ is the law's coordinates followed by one β per column of `z`: row i's scales are shifted
-/// by η_i = Σ_k β_k z_k,i, so ℓ_i = ℓ_law(ln x_i − η_i) − η_i and ∂ℓ_i/∂η_i = Σ_j ∂ℓ_i/∂ ln σ_j.
-fn loglik_grad(kind: Populations, lnx: &[f64], z: &[Vec<f64>], t: &[f64], g: &mut [f64]) -> f64 {
+/// The rows' log values (x scaled by its median), what each row says, and an interval's upper
+/// log value: what the likelihood reads.
+struct Rows<'a> {
+    lnx: &'a [f64],
+    /// Each row's kind (empty: every row exact).
+    kind: &'a [Censor],
+    /// ln of an interval's upper end (NaN for the other rows; empty without censoring).
+    lnu: &'a [f64],
+}
+
+impl Rows<'_> {
+    fn exact(&self, i: usize) -> bool {
+        self.kind.is_empty() || self.kind[i] == Censor::Exact
+    }
+}
+
+/// ln S at ln x (less the row's shift) and its gradient: the law's coordinates in `gs[..k0]`,
+/// ∂/∂η (= Σ_j ∂/∂ ln σ_j) in `gs[k0]`.
+fn ln_sf_grad(kind: Populations, lx: f64, t: &[f64], gs: &mut [f64; 6]) -> f64 {
+    let k0 = kind.parameters();
+    gs.iter_mut().for_each(|v| *v = 0.0);
+    match kind {
+        Populations::Mixture => {
+            let p = 1.0 / (1.0 + (-t[0]).exp());
+            let lw = [-(1.0 + (-t[0]).exp()).ln(), -(1.0 + t[0].exp()).ln()];
+            let (u, m) = ([t[1], t[3]], [t[2].exp(), t[4].exp()]);
+            let (y, e) = standardised(lx, u, m);
+            let (ls, r) = log_sum_and_shares([lw[0] - e[0], lw[1] - e[1]]);
+            gs[0] = r[0] - p;
+            for j in 0..2 {
+                gs[1 + 2 * j] = r[j] * m[j] * e[j];
+                gs[2 + 2 * j] = -r[j] * m[j] * y[j] * e[j];
+                gs[k0] += r[j] * m[j] * e[j];
+            }
+            ls
+        }
+        Populations::Competing => {
+            let (u, m) = ([t[0], t[2]], [t[1].exp(), t[3].exp()]);
+            let (y, e) = standardised(lx, u, m);
+            for j in 0..2 {
+                gs[2 * j] = m[j] * e[j];
+                gs[2 * j + 1] = -m[j] * y[j] * e[j];
+                gs[k0] += m[j] * e[j];
+            }
+            -e[0] - e[1]
+        }
+    }
+}
+
+/// A censored or interval row's ℓ and its gradient into `g` (the law's coordinates, then one β
+/// per column of `z`; module docs).
+fn censored_row(kind: Populations, rows: &Rows, i: usize, h: f64, z: &[Vec<f64>], t: &[f64], g: &mut [f64]) -> f64 {
+    let k0 = kind.parameters();
+    let (mut ga, mut gb) = ([0.0; 6], [0.0; 6]);
+    let (l, wa, wb) = match rows.kind[i] {
+        Censor::Right => (ln_sf_grad(kind, rows.lnx[i] - h, t, &mut ga), 1.0, 0.0),
+        Censor::Left => {
+            let lb = ln_sf_grad(kind, rows.lnx[i] - h, t, &mut gb);
+            let l = ln_one_minus_exp(lb);
+            (l, 0.0, -(lb - l).exp())
+        }
+        Censor::Interval => {
+            let la = ln_sf_grad(kind, rows.lnx[i] - h, t, &mut ga);
+            let lb = ln_sf_grad(kind, rows.lnu[i] - h, t, &mut gb);
+            let rho = (lb - la).exp();
+            (la + ln_one_minus_exp(lb - la), 1.0 / (1.0 - rho), -rho / (1.0 - rho))
+        }
+        Censor::Exact => unreachable!("exact rows are the density's"),
+    };
+    for c in 0..k0 {
+        g[c] += wa * ga[c] + wb * gb[c];
+    }
+    let geta = wa * ga[k0] + wb * gb[k0];
+    for (k, col) in z.iter().enumerate() {
+        g[k0 + k] += geta * col[i];
+    }
+    l
+}
+
+/// Log-likelihood at unconstrained θ of the rows `rows`, and its gradient in `g` (−∞,
+/// gradient unset, where the likelihood is not finite). θ is the law's coordinates followed by
+/// one β per column of `z`: row i's scales are shifted by η_i = Σ_k β_k z_k,i, so an exact row's
+/// ℓ_i = ℓ_law(ln x_i − η_i) − η_i and ∂ℓ_i/∂η_i = Σ_j ∂ℓ_i/∂ ln σ_j; a censored row's ℓ is ln S,
+/// ln F or a class's probability of the shifted law ([`censored_row`]).
+fn loglik_grad(kind: Populations, rows: &Rows, z: &[Vec<f64>], t: &[f64], g: &mut [f64]) -> f64 {
     g.iter_mut().for_each(|v| *v = 0.0);
     let mut l = 0.0;
     let k0 = kind.parameters();
     let eta = |i: usize| shift_at(z, &t[k0..], i);
+    let lnx = rows.lnx;
     match kind {
         Populations::Mixture => {
             let p = 1.0 / (1.0 + (-t[0]).exp());
@@ -162,6 +257,10 @@ fn loglik_grad(kind: Populations, lnx: &[f64], z: &[Vec<f64>], t: &[f64], g: &mu
             let m = [v[0].exp(), v[1].exp()];
             for (i, &lx0) in lnx.iter().enumerate() {
                 let h = eta(i);
+                if !rows.exact(i) {
+                    l += censored_row(kind, rows, i, h, z, t, g);
+                    continue;
+                }
                 let (y, e) = standardised(lx0 - h, u, m);
                 let a = [0, 1].map(|j| lw[j] + v[j] - u[j] + (m[j] - 1.0) * y[j] - e[j]);
                 // ln(e^a₀ + e^a₁) and the responsibilities from one exponential.
@@ -187,6 +286,10 @@ fn loglik_grad(kind: Populations, lnx: &[f64], z: &[Vec<f64>], t: &[f64], g: &mu
             let m = [v[0].exp(), v[1].exp()];
             for (i, &lx0) in lnx.iter().enumerate() {
                 let h = eta(i);
+                if !rows.exact(i) {
+                    l += censored_row(kind, rows, i, h, z, t, g);
+                    continue;
+                }
                 let (y, e) = standardised(lx0 - h, u, m);
                 let lh = [0, 1].map(|j| v[j] - u[j] + (m[j] - 1.0) * y[j]);
                 let (lht, share) = log_sum_and_shares(lh);
@@ -247,14 +350,14 @@ fn bounds(kind: Populations, columns: usize) -> Vec<(f64, f64)> {
 /// points out of the box are held there (the active set), and the inverse-Hessian estimate is
 /// reset whenever the active set changes. Stops when the free gradient is below 10⁻⁹ per
 /// specimen or three steps in a row gain less than 10⁻¹³ |ℓ|.
-fn bfgs(kind: Populations, lnx: &[f64], z: &[Vec<f64>], start: &[f64], b: &[(f64, f64)]) -> (Vec<f64>, f64) {
+fn bfgs(kind: Populations, rows: &Rows, z: &[Vec<f64>], start: &[f64], b: &[(f64, f64)]) -> (Vec<f64>, f64) {
     let k = b.len();
-    let n = lnx.len() as f64;
+    let n = rows.lnx.len() as f64;
     let project = |t: &mut [f64]| t.iter_mut().zip(b).for_each(|(v, (lo, hi))| *v = v.clamp(*lo, *hi));
     let mut t = start.to_vec();
     project(&mut t);
     let mut g = vec![0.0; k];
-    let mut l = loglik_grad(kind, lnx, z, &t, &mut g);
+    let mut l = loglik_grad(kind, rows, z, &t, &mut g);
     if !l.is_finite() {
         return (t, l);
     }
@@ -284,7 +387,7 @@ fn bfgs(kind: Populations, lnx: &[f64], z: &[Vec<f64>], start: &[f64], b: &[(f64
                 t_new[i] = t[i] + alpha * d[i];
             }
             project(&mut t_new);
-            let l_new = loglik_grad(kind, lnx, z, &t_new, &mut g_new);
+            let l_new = loglik_grad(kind, rows, z, &t_new, &mut g_new);
             let gained: f64 = t_new.iter().zip(&t).zip(&free).map(|((a, b), gi)| (a - b) * gi).sum();
             if l_new.is_finite() && l_new >= l + 1e-4 * gained.min(alpha * slope) {
                 accepted = Some(l_new);
@@ -329,31 +432,42 @@ fn bfgs(kind: Populations, lnx: &[f64], z: &[Vec<f64>], start: &[f64], b: &[(f64
 
 /// Fits a two-population law to strengths `x` (all > 0): the best of [`STARTS`] starts, with
 /// the identifiability verdict.
-pub fn fit(kind: Populations, x: &[f64]) -> Result<FlawFit> {
+pub fn fit(kind: Populations, x: Obs) -> Result<FlawFit> {
     fit_shifted(kind, x, &[])
+}
+
+/// The likelihood's view of `x` scaled by `med`: log values, kinds, upper log values.
+fn scaled(x: Obs, med: f64) -> (Vec<f64>, Vec<Censor>, Vec<f64>) {
+    let lnx = x.x.iter().map(|v| (v / med).ln()).collect();
+    if x.complete() {
+        return (lnx, Vec::new(), Vec::new());
+    }
+    let n = x.len();
+    ((lnx), (0..n).map(|i| x.kind(i)).collect(), (0..n).map(|i| (x.upper(i) / med).ln()).collect())
 }
 
 /// [`fit`] with both populations' scales shifted row by row by the scale effects of the columns
 /// `z` (ln σ_j,i = ln σ_j + Σ_k β_k z_k,i: a batch or a loading rate acts on every flaw alike).
 /// The starts put β at the one-law Weibull regression's and split the strengths so adjusted.
-pub fn fit_shifted(kind: Populations, x: &[f64], z: &[Vec<f64>]) -> Result<FlawFit> {
+pub fn fit_shifted(kind: Populations, x: Obs, z: &[Vec<f64>]) -> Result<FlawFit> {
     let n = x.len();
     if n < 10 {
         return Err(Error::numerical("flaw populations", format!("{n} specimens are too few for a two-population law (at least 10)")));
     }
-    if let Some(v) = x.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+    if let Some(v) = x.x.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
         return Err(Error::numerical("flaw populations", format!("strengths must be finite and > 0 (got {v})")));
     }
-    // The one-law regression's β, and the strengths adjusted by it.
+    // The one-law regression's β, and the rows' points adjusted by it (the starts only).
     let beta0: Vec<f64> = if z.is_empty() { Vec::new() } else { crate::strength::regress::fit(x, &crate::strength::regress::Design { columns: z, ..Default::default() })?.beta };
-    let adjusted: Vec<f64> = (0..n).map(|i| x[i] * (-shift_at(z, &beta0, i)).exp()).collect();
+    let adjusted: Vec<f64> = (0..n).map(|i| x.point(i) * (-shift_at(z, &beta0, i)).exp()).collect();
     let mut sorted = adjusted.clone();
     sorted.sort_by(f64::total_cmp);
     let med = crate::stats::median(&adjusted);
     let xs: Vec<f64> = adjusted.iter().map(|v| v / med).collect();
     let sorted_s: Vec<f64> = sorted.iter().map(|v| v / med).collect();
     let one = fit_mle(&xs)?.mle;
-    let lnx: Vec<f64> = x.iter().map(|v| (v / med).ln()).collect();
+    let (lnx, kinds, lnu) = scaled(x, med);
+    let rows = Rows { lnx: &lnx, kind: &kinds, lnu: &lnu };
     let k0 = kind.parameters();
     // Starts: splits at quantiles, each part's own MLE; the one-population fit with a weaker
     // second population.
@@ -375,7 +489,7 @@ pub fn fit_shifted(kind: Populations, x: &[f64], z: &[Vec<f64>]) -> Result<FlawF
             Populations::Competing => vec![st[1].ln(), st[2].clamp(M_MIN * 1.01, M_MAX * 0.99).ln(), st[3].ln(), st[4].clamp(M_MIN * 1.01, M_MAX * 0.99).ln()],
         };
         t.extend(&beta0);
-        let (t, l) = bfgs(kind, &lnx, z, &t, &bounds(kind, z.len()));
+        let (t, l) = bfgs(kind, &rows, z, &t, &bounds(kind, z.len()));
         if l.is_finite() {
             optima.push((t, l));
         }
@@ -393,8 +507,9 @@ pub fn fit_shifted(kind: Populations, x: &[f64], z: &[Vec<f64>]) -> Result<FlawF
     };
     let (p, first, second) = law(&best.0);
     let beta = best.0[k0..].to_vec();
-    // The identifiability checks look at the strengths with the fitted shifts taken out.
-    let x: Vec<f64> = (0..n).map(|i| x[i] * (-shift_at(z, &beta, i)).exp()).collect();
+    // The identifiability checks look at the rows' points with the fitted shifts taken out.
+    let exact_rows = (0..n).filter(|&i| rows.exact(i)).count();
+    let x: Vec<f64> = (0..n).map(|i| x.point(i) * (-shift_at(z, &beta, i)).exp()).collect();
     let same = |a: (f64, f64), b: (f64, f64)| (a.0.ln() - b.0.ln()).abs() < 0.05 && (a.1.ln() - b.1.ln()).abs() < 0.1;
     let mut why: Option<String> = None;
     if let Some(m) = [first.1, second.1].into_iter().find(|m| *m > 0.98 * M_MAX || *m < 1.02 * M_MIN) {
@@ -426,7 +541,8 @@ pub fn fit_shifted(kind: Populations, x: &[f64], z: &[Vec<f64>]) -> Result<FlawF
             }
         }
     }
-    Ok(FlawFit { kind, p, first, second, beta, loglik: best.1 - n as f64 * med.ln(), identifiable: why.map_or(Ok(()), Err) })
+    // An exact row's density of x/med is med times its density of x; a probability is unitless.
+    Ok(FlawFit { kind, p, first, second, beta, loglik: best.1 - exact_rows as f64 * med.ln(), identifiable: why.map_or(Ok(()), Err) })
 }
 
 impl FlawFit {
@@ -437,12 +553,14 @@ impl FlawFit {
     /// other parameters re-maximised at each v (warm-started BFGS). An end that reaches the
     /// search box (p → 0 or 1, m at [`M_MIN`] or [`M_MAX`]) is that bound. None if the fit is
     /// not identified.
-    pub fn profile_band(&self, x: &[f64], z: &[Vec<f64>], level: f64) -> Option<(f64, f64)> {
+    pub fn profile_band(&self, x: Obs, z: &[Vec<f64>], level: f64) -> Option<(f64, f64)> {
         if self.identifiable.is_err() || !(level > 0.0 && level < 1.0) {
             return None;
         }
-        let med = crate::stats::median(x);
-        let lnx: Vec<f64> = x.iter().map(|v| (v / med).ln()).collect();
+        let points: Vec<f64> = (0..x.len()).map(|i| x.point(i)).collect();
+        let med = crate::stats::median(&points);
+        let (lnx, kinds, lnu) = scaled(x, med);
+        let rows = Rows { lnx: &lnx, kind: &kinds, lnu: &lnu };
         let (s1, m1, s2, m2) = ((self.first.0 / med).ln(), self.first.1.ln(), (self.second.0 / med).ln(), self.second.1.ln());
         let (mut start, k) = match self.kind {
             Populations::Mixture => (vec![(self.p / (1.0 - self.p)).ln(), s1, m1, s2, m2], 0),
@@ -450,7 +568,7 @@ impl FlawFit {
         };
         start.extend(&self.beta);
         let full = bounds(self.kind, z.len());
-        let (best_t, best) = bfgs(self.kind, &lnx, z, &start, &full);
+        let (best_t, best) = bfgs(self.kind, &rows, z, &start, &full);
         let drop = statrs::distribution::ChiSquared::new(1.0).ok().map(|c| 0.5 * statrs::distribution::ContinuousCDF::inverse_cdf(&c, level))?;
         let target = best - drop;
         // max ℓ with coordinate k fixed at v, warm-started from `from`.
@@ -459,7 +577,7 @@ impl FlawFit {
             b[k] = (v, v);
             let mut t = from.to_vec();
             t[k] = v;
-            bfgs(self.kind, &lnx, z, &t, &b)
+            bfgs(self.kind, &rows, z, &t, &b)
         };
         let natural = |v: f64| if self.kind == Populations::Mixture { 1.0 / (1.0 + (-v).exp()) } else { v.exp() };
         // Warm-started from the last point found inside.
@@ -508,6 +626,19 @@ impl FlawFit {
         }
     }
 
+    /// Log survival function ln S(x) = ln[1 − F(x)] (at the reference of any scale effects),
+    /// without cancellation in either tail.
+    pub fn ln_sf(&self, x: f64) -> f64 {
+        let h = |(s, m): (f64, f64)| (x / s).powf(m);
+        match self.kind {
+            Populations::Mixture => {
+                let (a, b) = (self.p.ln() - h(self.first), (1.0 - self.p).ln() - h(self.second));
+                log_sum_and_shares([a, b]).0
+            }
+            Populations::Competing => -h(self.first) - h(self.second),
+        }
+    }
+
     /// The fitted law in words (strengths in the data's units, Pa for a strength file).
     pub fn describe(&self) -> String {
         let pop = |(s, m): (f64, f64)| format!("σ = {:.1} MPa, m = {m:.2}", s / 1e6);
@@ -545,18 +676,43 @@ mod tests {
     fn the_analytic_gradient_equals_central_differences() {
         let x = [0.6f64, 0.8, 0.9, 1.0, 1.05, 1.1, 1.3, 0.4].map(f64::ln);
         let z = vec![vec![0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.5, -1.0]];
-        for (kind, t) in [(Populations::Mixture, vec![0.3, -0.2, 1.5, 0.1, 2.2, 0.15]), (Populations::Competing, vec![-0.1, 1.2, 0.2, 2.5, -0.2])] {
-            let mut g = vec![0.0; t.len()];
-            let mut scratch = g.clone();
-            loglik_grad(kind, &x, &z, &t, &mut g);
-            for k in 0..t.len() {
-                let (mut a, mut b) = (t.clone(), t.clone());
-                a[k] += 1e-6;
-                b[k] -= 1e-6;
-                let fd = (loglik_grad(kind, &x, &z, &a, &mut scratch) - loglik_grad(kind, &x, &z, &b, &mut scratch)) / 2e-6;
-                assert!((fd - g[k]).abs() < 1e-6 * (1.0 + fd.abs()), "{kind:?} coordinate {k}: analytic {} vs difference {fd}", g[k]);
+        // Every row exact, then rows of every kind (right, left, interval among exact ones).
+        let kinds = [Censor::Exact, Censor::Right, Censor::Exact, Censor::Left, Censor::Interval, Censor::Exact, Censor::Right, Censor::Interval];
+        let upper = [f64::NAN, f64::NAN, f64::NAN, f64::NAN, 1.2f64.ln(), f64::NAN, f64::NAN, 0.7f64.ln()];
+        for rows in [Rows { lnx: &x, kind: &[], lnu: &[] }, Rows { lnx: &x, kind: &kinds, lnu: &upper }] {
+            for (kind, t) in [(Populations::Mixture, vec![0.3, -0.2, 1.5, 0.1, 2.2, 0.15]), (Populations::Competing, vec![-0.1, 1.2, 0.2, 2.5, -0.2])] {
+                let mut g = vec![0.0; t.len()];
+                let mut scratch = g.clone();
+                let l = loglik_grad(kind, &rows, &z, &t, &mut g);
+                assert!(l.is_finite());
+                for k in 0..t.len() {
+                    let (mut a, mut b) = (t.clone(), t.clone());
+                    a[k] += 1e-6;
+                    b[k] -= 1e-6;
+                    let fd = (loglik_grad(kind, &rows, &z, &a, &mut scratch) - loglik_grad(kind, &rows, &z, &b, &mut scratch)) / 2e-6;
+                    assert!((fd - g[k]).abs() < 1e-6 * (1.0 + fd.abs()), "{kind:?} coordinate {k}: analytic {} vs difference {fd}", g[k]);
+                }
             }
         }
+    }
+
+    #[test]
+    fn a_censored_row_adds_the_law_s_survival_and_a_class_its_probability() {
+        // ℓ of a right-censored row is ln S of the law, of an interval row ln[S(a) − S(b)]:
+        // the fitted law's own functions at its optimum reproduce the fit's ℓ.
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let cr = FlawFit { kind: Populations::Competing, p: 1.0, first: (1.0, 3.0), second: (1.3, 20.0), beta: Vec::new(), loglik: 0.0, identifiable: Ok(()) };
+        let x: Vec<f64> = (0..300).map(|_| cr.sample(&mut rng)).collect();
+        let n = x.len();
+        let kind: Vec<Censor> = x.iter().map(|v| if *v > 1.2 { Censor::Right } else if *v < 0.5 { Censor::Interval } else { Censor::Exact }).collect();
+        let obs: Vec<f64> = x.iter().map(|v| if *v > 1.2 { 1.2 } else if *v < 0.5 { 0.9 * v } else { *v }).collect();
+        let upper: Vec<f64> = x.iter().map(|v| if *v < 0.5 { 1.1 * v } else { f64::NAN }).collect();
+        let c = crate::obs::Censoring { kind, upper, scheme: Default::default() };
+        let o = Obs { x: &obs, censoring: Some(&c) };
+        let f = fit(Populations::Competing, o).unwrap();
+        let l: f64 = (0..n).map(|i| o.ln_prob(i, |v| f.ln_pdf(v), |v| f.ln_sf(v))).sum();
+        assert!((f.loglik - l).abs() < 1e-8 * l.abs(), "{} vs {l}", f.loglik);
+        assert!((f.first.1 - 3.0).abs() < 1.0, "{f:?}");
     }
 
     #[test]
@@ -564,18 +720,18 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let mix = FlawFit { kind: Populations::Mixture, p: 0.3, first: (1.0, 12.0), second: (2.0, 10.0), beta: Vec::new(), loglik: 0.0, identifiable: Ok(()) };
         let x: Vec<f64> = (0..600).map(|_| mix.sample(&mut rng)).collect();
-        let f = fit(Populations::Mixture, &x).unwrap();
+        let f = fit(Populations::Mixture, Obs::exact(&x)).unwrap();
         assert!(f.identifiable.is_ok(), "{f:?}");
         assert!((f.p - 0.3).abs() < 0.06 && (f.first.0 - 1.0).abs() < 0.05 && (f.second.0 - 2.0).abs() < 0.05, "{f:?}");
         let cr = FlawFit { kind: Populations::Competing, p: 1.0, first: (1.0, 3.0), second: (1.3, 20.0), beta: Vec::new(), loglik: 0.0, identifiable: Ok(()) };
         let x: Vec<f64> = (0..800).map(|_| cr.sample(&mut rng)).collect();
-        let f = fit(Populations::Competing, &x).unwrap();
+        let f = fit(Populations::Competing, Obs::exact(&x)).unwrap();
         assert!(f.identifiable.is_ok(), "{f:?}");
         assert!((f.first.1 - 3.0).abs() < 0.6 && (f.second.1 - 20.0).abs() < 8.0, "{f:?}");
         // One Weibull population fitted as a mixture.
         let one = FlawFit { kind: Populations::Competing, p: 1.0, first: (1.0, 8.0), second: (1.0, 8.0), beta: Vec::new(), loglik: 0.0, identifiable: Ok(()) };
         let y: Vec<f64> = (0..400).map(|_| one.sample(&mut rng)).collect();
-        let g = fit(Populations::Mixture, &y).unwrap();
+        let g = fit(Populations::Mixture, Obs::exact(&y)).unwrap();
         assert!(g.identifiable.is_err(), "one Weibull population must not be reported as two: {g:?}");
     }
 }

@@ -8,6 +8,7 @@
 use super::effects::{Effect, Term};
 use super::regress::{Design, RegFit, fit, fit_from};
 use crate::error::{Error, Result};
+use crate::obs::Obs;
 use crate::lifetime::damage::tk_ratio_path;
 use crate::stats::golden_max;
 
@@ -36,6 +37,9 @@ pub struct ModelFit {
     pub damage_ratio: Option<f64>,
     /// Number of particles fitted.
     pub n: usize,
+    /// Whether every specimen fitted broke at its recorded value (no censored or interval row):
+    /// C1239's pivots and unbiasing factor assume it.
+    pub complete: bool,
     /// A two-population law in place of the Weibull law (then `reg` is the plain two-parameter
     /// fit, kept for the reference scale, and the likelihood, CDF and draws are the law's; the
     /// linear effects beside it shift both populations' scales by the law's own β over
@@ -139,7 +143,7 @@ impl ModelFit {
     /// fitted strengths; [`super::regress::profile_interval`]); for a two-population law the
     /// interval of its reported parameter ([`super::flaws::FlawFit::profile_band`]); None for a
     /// categorical factor, a modulus per level and damage.
-    pub fn profile_band(&self, x: &[f64], c: &Effect, level: f64) -> Option<(f64, f64)> {
+    pub fn profile_band(&self, x: Obs, c: &Effect, level: f64) -> Option<(f64, f64)> {
         if let Some(l) = &self.law {
             return if matches!(c, Effect::Populations(_)) { l.profile_band(x, &self.columns, level) } else { None };
         }
@@ -172,7 +176,7 @@ impl ModelFit {
 }
 
 /// [`super::fit::fit_model_near`] with each pooled factor's spread fixed at e^(ln_tau).
-pub(super) fn fit_at(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>, ln_tau: &[f64], start: Option<&RegFit>) -> Result<ModelFit> {
+pub(super) fn fit_at(x: Obs, terms: &[(Effect, Term)], hint: Option<f64>, ln_tau: &[f64], start: Option<&RegFit>) -> Result<ModelFit> {
     let mut columns = Vec::new();
     let mut damage = None;
     let mut effects = Vec::new();
@@ -200,7 +204,7 @@ pub(super) fn fit_at(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>, ln_
         let law = crate::strength::flaws::fit_shifted(kind, x, &columns)?;
         let reg = fit(x, &Design::default())?;
         let k = effects.len();
-        return Ok(ModelFit { effects, widths, scale_widths: vec![0; k], scale_columns: Vec::new(), penalty: vec![0.0; columns.len()], reg, columns, offset: None, damage_ratio: None, n: x.len(), law: Some(law) });
+        return Ok(ModelFit { effects, widths, scale_widths: vec![0; k], scale_columns: Vec::new(), penalty: vec![0.0; columns.len()], reg, columns, offset: None, damage_ratio: None, n: x.len(), complete: x.complete(), law: Some(law) });
     }
     let mut scale_columns = Vec::new();
     let mut scale_widths = Vec::new();
@@ -239,7 +243,7 @@ pub(super) fn fit_at(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>, ln_
     // Linear effects first in `effects`' β order; damage (if any) is profiled.
     let Some((impacts, gamma)) = damage else {
         let reg = fit_from(x, &Design { columns: &columns, offset: None, scale_columns: &scale_columns, penalty: &penalty }, start)?;
-        return Ok(ModelFit { effects, widths, scale_widths, scale_columns, penalty, reg, columns, offset: None, damage_ratio: None, n: x.len(), law: None });
+        return Ok(ModelFit { effects, widths, scale_widths, scale_columns, penalty, reg, columns, offset: None, damage_ratio: None, n: x.len(), complete: x.complete(), law: None });
     };
     let n_max = impacts.iter().copied().max().unwrap_or(0);
     // One Tavares–King trajectory per trial ratio serves every particle.
@@ -279,6 +283,6 @@ pub(super) fn fit_at(x: &[f64], terms: &[(Effect, Term)], hint: Option<f64>, ln_
     let off = offsets(lx).ok_or_else(|| Error::numerical("damage effect", "the fitted ratio breaks a particle"))?;
     let reg = fit(x, &Design { columns: &columns, offset: Some(&off), scale_columns: &scale_columns, penalty: &penalty })?;
     // `effects` keeps damage wherever it was added; β follow the linear effects' order.
-    Ok(ModelFit { effects, widths, scale_widths, scale_columns, penalty, reg, columns, offset: Some(off), damage_ratio: Some(lx.exp()), n: x.len(), law: None })
+    Ok(ModelFit { effects, widths, scale_widths, scale_columns, penalty, reg, columns, offset: Some(off), damage_ratio: Some(lx.exp()), n: x.len(), complete: x.complete(), law: None })
 }
 

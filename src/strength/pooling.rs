@@ -16,12 +16,13 @@ use super::effects::{Effect, Term};
 use super::mle::{ModelFit, fit_at};
 use super::regress::RegFit;
 use crate::error::{Error, Result};
+use crate::obs::Obs;
 use crate::stats::golden_max;
 
 /// The model with `pooled` partially pooled factors among `terms`, each τ at its marginal-
 /// likelihood maximum; `ratio` the damage-ratio hint, `hint` a fit to similar data (its τ start
 /// the search and its optimum the Newton iteration).
-pub(super) fn fit_pooled(x: &[f64], terms: &[(Effect, Term)], ratio: Option<f64>, hint: Option<&ModelFit>, pooled: usize) -> Result<ModelFit> {
+pub(super) fn fit_pooled(x: Obs, terms: &[(Effect, Term)], ratio: Option<f64>, hint: Option<&ModelFit>, pooled: usize) -> Result<ModelFit> {
     // τ of each pooled factor by the Laplace marginal likelihood; several pooled factors are
     // tuned one at a time, twice round.
     // Each trial τ's Newton iteration starts from the previous trial's optimum (the first from
@@ -92,7 +93,7 @@ impl ModelFit {
     /// any other pooled factor's τ) held at the fit's, τ searched in [10⁻³, 3] as in the fit; an
     /// end reaching that range is its bound. None if `c` is not partially pooled in this fit or
     /// the model has a profiled damage ratio.
-    pub fn tau_band(&self, x: &[f64], c: &Effect, level: f64) -> Option<(f64, f64)> {
+    pub fn tau_band(&self, x: Obs, c: &Effect, level: f64) -> Option<(f64, f64)> {
         use statrs::distribution::{ChiSquared, ContinuousCDF};
         let r = self.beta_range(c).filter(|r| !r.is_empty())?;
         if self.damage_ratio.is_some() || self.law.is_some() || !self.penalty.get(r.start).is_some_and(|l| *l > 0.0) {
@@ -143,28 +144,28 @@ mod tests {
         use crate::strength::factors::{Factor, Form};
         let (x, g) = three_batches();
         let e = Effect::Factor(Factor { column: "g".into(), form: Form::Levels });
-        let s = Sample { strength: x.clone(), levels: vec![("g".into(), g.clone())], ..Sample::default() };
+        let s = Sample { strength: crate::obs::Observations::exact(x.clone()), levels: vec![("g".into(), g.clone())], ..Sample::default() };
         let t = s.term(&e, 5.0).unwrap();
         assert!(matches!(t, Term::Pooled { .. }), "a level of 2 specimens is pooled");
         let terms = vec![(e.clone(), t)];
         // τ → ∞: the fixed-effects fit (one scale per level); τ → 0: the base model.
-        let wide = fit_at(&x, &terms, None, &[(50.0f64).ln()], None).unwrap();
+        let wide = fit_at(Obs::exact(&x), &terms, None, &[(50.0f64).ln()], None).unwrap();
         let fixed: Vec<Vec<f64>> = ["B", "C"].iter().map(|l| g.iter().map(|v| f64::from(u8::from(v == l))).collect()).collect();
-        let fixed = fit(&x, &Design { columns: &fixed, ..Design::default() }).unwrap();
+        let fixed = fit(Obs::exact(&x), &Design { columns: &fixed, ..Design::default() }).unwrap();
         assert!((wide.reg.loglik - fixed.loglik).abs() < 1e-3, "{} vs {}", wide.reg.loglik, fixed.loglik);
         assert!((wide.reg.edf_penalised - 2.0).abs() < 1e-3, "edf {}", wide.reg.edf_penalised);
-        let narrow = fit_at(&x, &terms, None, &[(1e-4f64).ln()], None).unwrap();
-        let base = fit(&x, &Design::default()).unwrap();
+        let narrow = fit_at(Obs::exact(&x), &terms, None, &[(1e-4f64).ln()], None).unwrap();
+        let base = fit(Obs::exact(&x), &Design::default()).unwrap();
         assert!((narrow.reg.loglik - base.loglik).abs() < 1e-3 && narrow.reg.edf_penalised < 0.01);
         // The fitted τ's model lies between the two, counted at its effective df.
-        let m = fit_model(&x, &terms).unwrap();
+        let m = fit_model(Obs::exact(&x), &terms).unwrap();
         assert!(m.reg.loglik >= base.loglik - 1e-9 && m.reg.loglik <= fixed.loglik + 1e-9);
         assert_eq!(m.parameters(), 4);
         assert!(m.effective_parameters() > 2.0 && m.effective_parameters() < 4.0, "{}", m.effective_parameters());
         // The Laplace marginal at τ = 0.1 against a 3-D quadrature over the level offsets with μ
         // and b at the penalised mode: ln ∫ exp ℓ(δ) Π N(δ_l; 0, τ²) dδ.
         let tau = 0.1f64;
-        let at = fit_at(&x, &terms, None, &[tau.ln()], None).unwrap();
+        let at = fit_at(Obs::exact(&x), &terms, None, &[tau.ln()], None).unwrap();
         let (mu, b) = (at.reg.mu, at.reg.b);
         let level: Vec<usize> = g.iter().map(|v| ["A", "B", "C"].iter().position(|l| l == v).unwrap()).collect();
         let loglik = |d: [f64; 3]| -> f64 { x.iter().zip(&level).map(|(xi, &l)| crate::strength::regress::ln_density_of_log(xi.ln(), mu + d[l], b) - xi.ln()).sum() };

@@ -26,6 +26,11 @@
 //!   [`FEW_LEVELS`] distinct values (codes of a batch or a lab?), which are refused with the
 //!   question, never guessed.
 //!
+//! * What the rows say of their strengths — a `broken` column (specimens that did not break by
+//!   the highest stress reached), strength classes (`interval = { lower, upper }`), a `count`
+//!   column — is declared in the `data` table and never passed over
+//!   ([`crate::intake::observed`]); a row counting k specimens becomes k specimens.
+//!
 //! Bad input is refused naming the file, row (and line), column and rule; exit 2.
 
 use std::path::PathBuf;
@@ -35,6 +40,7 @@ use serde::{Deserialize, Serialize};
 use super::factors::{Factor, Form, SizeMeasure};
 use super::fit::Sample;
 use crate::error::{Error, Result};
+use crate::obs::Observations;
 pub use crate::intake::factors::{FEW_LEVELS, FactorType, Factors};
 use crate::intake::factors::{declared_columns, read_factors, table_key};
 use crate::intake::{ColumnRecord, Field, Kind, MapOrigin, Plausible, Provenance, Quantity, Source, read_raw, resolve, select};
@@ -61,6 +67,12 @@ pub const STRENGTH_FIELDS: [Field; 3] = [
         plausible: Some(SPECIMEN_STRENGTH),
     },
 ];
+
+/// The strength's class ends, read in place of `strength` when the study declares `interval`.
+pub const STRENGTH_ENDS: (Field, Field) = (
+    Field { key: "strength_lower", column: "strength_lower_pa", kind: Kind::Number(Quantity::Stress), synonyms: &[], required: true, plausible: Some(SPECIMEN_STRENGTH) },
+    Field { key: "strength_upper", column: "strength_upper_pa", kind: Kind::Number(Quantity::Stress), synonyms: &[], required: true, plausible: Some(SPECIMEN_STRENGTH) },
+);
 
 /// A declared size measure.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -92,7 +104,8 @@ pub struct Specimens {
 pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, origin: &MapOrigin) -> Result<Specimens> {
     let path = src.file.as_path();
     let table = read_raw(src)?;
-    let r = resolve(&table, &STRENGTH_FIELDS, &src.columns, &src.units, origin)?;
+    let ((fields, columns, units), ends) = crate::intake::observed::fields_for(&table, &STRENGTH_FIELDS, "strength", STRENGTH_ENDS, src, origin)?;
+    let r = resolve(&table, &fields, &columns, &units, origin)?;
     if table.rows.is_empty() {
         return Err(Error::data_file(path, "file", "no data rows"));
     }
@@ -101,9 +114,9 @@ pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, 
     provenance.rows = rows.len();
     provenance.filter = filter;
 
+    let values = crate::intake::observed::read_rows(&r, &rows, "strength", ends, src, origin, &mut provenance)?;
     let mut ids = Vec::with_capacity(rows.len());
     let mut seen: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
-    let mut strength = Vec::with_capacity(rows.len());
     for &row in &rows {
         let id = if r.has("id") { r.need_text("id", row)? } else { format!("line {}", table.lines[row]) };
         if r.has("id") {
@@ -113,11 +126,10 @@ pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, 
             seen.insert(id.clone(), row);
         }
         ids.push(id);
-        strength.push(r.need_number("strength", row)?);
     }
 
     // The size measure first, then the factors (a factor may not be the size column).
-    let mut sample = Sample { source: path.display().to_string(), strength, ..Sample::default() };
+    let mut sample = Sample { source: path.display().to_string(), strength: Observations::exact(values.iter().map(|v| v.value).collect()), ..Sample::default() };
     if let Some(s) = size {
         let c = declared_columns(&table, &provenance, &[(format!("{}.size.column", table_key(origin)), s.column.clone())], origin, path)?[0].1;
         let v: Vec<f64> = rows.iter().map(|&row| table.need_number(row, c)).collect::<Result<_>>()?;
@@ -129,7 +141,39 @@ pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, 
         provenance.columns.push(ColumnRecord { source: table.headers[c].clone(), field: s.column.clone(), unit: "as in the file".into(), conversion: format!("size measure: {} (ratios only)", s.measure.describe()), found_by: "study".into() });
         provenance.unused.retain(|u| *u != table.headers[c]);
     }
-    let columns = read_factors(&table, &rows, factors, &mut provenance, origin, path)?;
+    let mut columns = read_factors(&table, &rows, factors, &mut provenance, origin, path)?;
+    crate::intake::observed::check_unused(&table, &rows, &mut provenance, src, origin)?;
+    crate::intake::observed::pile_up(&r, &rows, &values, "strength", src, origin, "strength")?;
+    // Rows counting several specimens become that many (ids `A#1` … `A#k`); then what the rows say.
+    let named: Vec<String> = rows.iter().map(|&row| table.place(row, None)).collect();
+    let (specimens, line) = crate::intake::observed::expansion(&values, &named);
+    let counts: Vec<usize> = values.iter().map(|v| v.count).collect();
+    let values: Vec<crate::intake::observed::RowValue> = specimens.iter().map(|&k| values[k]).collect();
+    if let Some(line) = line {
+        let (mut last, mut j) = (usize::MAX, 0);
+        ids = specimens
+            .iter()
+            .map(|&k| {
+                if k != last {
+                    (last, j) = (k, 0);
+                }
+                j += 1;
+                if counts[k] > 1 { format!("{}#{j}", ids[k]) } else { ids[k].clone() }
+            })
+            .collect();
+        sample.covariates = sample.covariates.iter().map(|(n, v)| (n.clone(), specimens.iter().map(|&k| v[k]).collect())).collect();
+        for (_, v) in columns.iter_mut() {
+            v.keep(&specimens);
+        }
+        provenance.observed.push(format!("count column `{}`: {line}", src.count.as_deref().unwrap_or("")));
+        provenance.rows = specimens.len();
+    }
+    let x: Vec<f64> = values.iter().map(|v| v.value).collect();
+    let censoring = crate::obs::Censoring::of_rows(values.iter().map(|v| v.kind).collect(), &x, values.iter().map(|v| v.upper).collect());
+    if let Some(c) = &censoring {
+        provenance.observed.push(crate::obs::Obs { x: &x, censoring: Some(c) }.tally().describe("specimens"));
+    }
+    sample.strength = Observations { x, censoring };
     sample.add_factors(&columns);
     Ok(Specimens { path: path.to_path_buf(), provenance, ids, sample })
 }
@@ -152,7 +196,7 @@ mod tests {
         let body = "id;sigma_f [MPa];L [mm];batch;rate\nA;312,5;10;B1;0,5\nB;298;20;B2;1,5\nC;305;10;B1;2,5\nD;290;20;B2;3,5\n";
         let s = read(body, Some(SizeSpec { column: "L".into(), measure: SizeMeasure::GaugeLength }), Factors::Names(vec!["batch".into(), "rate".into()]), &[]).unwrap();
         assert_eq!(s.ids, ["A", "B", "C", "D"]);
-        assert_eq!(s.sample.strength[0], 312.5e6);
+        assert_eq!(s.sample.strength.x[0], 312.5e6);
         assert_eq!(s.sample.covariates[0], ("L".to_string(), vec![Some(10.0), Some(20.0), Some(10.0), Some(20.0)]));
         assert_eq!(s.sample.levels[0].1, ["B1", "B2", "B1", "B2"]);
         let names: Vec<String> = s.sample.factors.iter().map(|f| f.name()).collect();

@@ -57,6 +57,13 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
         primary_damage.label(),
         crate::intake::synthetic_sentence("crush data", &st.materials.iter().map(|m| (m.model.label.as_str(), m.path.as_path())).collect::<Vec<_>>())
     ));
+    // What the crush files' rows say beyond a break (specimens not broken by the rig, classes).
+    for m in &st.materials {
+        let t = m.sample.strength.view().tally();
+        if !t.complete() {
+            md.push_str(&format!("**{}**: {}. Fitted as what the rows say, with bands from the bootstrap that censors each redraw as the campaign did.\n\n", m.model.label, t.describe("particles")));
+        }
+    }
     if let (Some(th), Some(op)) = (&st.thermal, &s.operating) {
         let range = |i: usize| {
             let m = &st.inputs[i].marginal;

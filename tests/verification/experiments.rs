@@ -253,7 +253,8 @@ fn nested_widths(state: &partlife::experiments::State, j: usize, n: usize, draws
             let s = &state.samples[draw.truth];
             let (p, _) = state.forms[s.form].setup.params(j, &s.x, Mode::Joint);
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed + d as u64);
-            let mut pooled = measured.clone();
+            assert!(measured.view().complete(), "the shipped crush data are complete");
+            let mut pooled = measured.x.clone();
             pooled.extend((0..n).map(|_| p.mu.exp() * (-rng.random::<f64>().max(f64::MIN_POSITIVE).ln()).powf(1.0 / p.shape)));
             let b = pivots.bounds(&fit_mle(&pooled).unwrap(), 0.90).unwrap();
             b.shape.1 - b.shape.0

@@ -117,7 +117,7 @@ fn population_breakage_with_size_and_roundness_is_the_sum_by_hand() {
     let x: Vec<f64> = (0..n).map(|i| Weibull::new(15.0, 9e8 * (d[i] / 0.9e-3f64).powf(-0.5) * r[i].powf(2.0 / 3.0)).unwrap().sample(&mut rng)).collect();
     let sample = Sample {
         source: "t".into(),
-        strength: x,
+        strength: partlife::obs::Observations::exact(x),
         covariates: vec![("diameter_m".into(), d.iter().map(|v| Some(*v)).collect()), ("roundness".into(), r.iter().map(|v| Some(*v)).collect())],
         particles: true,
         ..Sample::default()
@@ -161,7 +161,7 @@ fn without_effects_the_pivotal_draws_are_c1239() {
     let truth = Weibull::new(9.0, 700e6).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(4);
     let data: Vec<f64> = (0..50).map(|_| truth.sample(&mut rng)).collect();
-    let sample = Sample { source: "t".into(), strength: data.clone(), covariates: vec![], particles: true, ..Sample::default() };
+    let sample = Sample { source: "t".into(), strength: partlife::obs::Observations::exact(data.clone()), covariates: vec![], particles: true, ..Sample::default() };
     let fit = StrengthFit::new(&sample, &[], 5.0, "t").unwrap();
     let ours = fit.draws(Uncertainty::Bootstrap, 20000, 11).unwrap();
     let c1239 = simulate_pivotal(50, 20000, 12).unwrap().draws(&fit_mle(&data).unwrap());
@@ -184,7 +184,7 @@ fn bootstrap_and_bayesian_draws_agree_on_a_large_sample_with_a_size_effect() {
     let n = 400;
     let d: Vec<f64> = (0..n).map(|_| rng.random_range(0.6e-3..1.2e-3)).collect();
     let x: Vec<f64> = d.iter().map(|&di| Weibull::new(12.0, 8e8 * (di / 0.9e-3f64).powf(-0.5)).unwrap().sample(&mut rng)).collect();
-    let sample = Sample { source: "t".into(), strength: x, covariates: vec![("diameter_m".into(), d.iter().map(|v| Some(*v)).collect())], particles: true, ..Sample::default() };
+    let sample = Sample { source: "t".into(), strength: partlife::obs::Observations::exact(x), covariates: vec![("diameter_m".into(), d.iter().map(|v| Some(*v)).collect())], particles: true, ..Sample::default() };
     let fit = StrengthFit::new(&sample, &[Effect::Size], 5.0, "t").unwrap();
     let boot = fit.draws(Uncertainty::Bootstrap, 4000, 1).unwrap();
     let bayes = fit.draws(Uncertainty::Bayesian, 4000, 2).unwrap();

@@ -296,13 +296,29 @@ fn lifetime(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
             "Strength against particle size (deliverable Fig. 14, left)",
             format!(
                 "σ̄ at break against particle diameter with a power-law fit σ̄ ∝ d^b: {}.",
-                per_material(dir, "size_trend", &|t, i| Ok(format!("b = {} ± {:.2} (r = {}, p = {})", minus(t.f("exponent")?[i]), t.f("exponent_se")?[i], minus(t.f("pearson_r_log")?[i]), prob_text(t.f("p_value")?[i]))))?
+                per_material(dir, "size_trend", &|t, i| {
+                    let r = t.f("pearson_r_log")?[i];
+                    Ok(if r.is_finite() {
+                        format!("b = {} ± {:.2} (r = {}, p = {})", minus(t.f("exponent")?[i]), t.f("exponent_se")?[i], minus(r), prob_text(t.f("p_value")?[i]))
+                    } else {
+                        format!("b = {} ± {:.2} (Weibull regression with the particles not broken by the limit as censored, open circles; median line; Wald p = {})", minus(t.f("exponent")?[i]), t.f("exponent_se")?[i], prob_text(t.f("p_value")?[i]))
+                    })
+                })?
             ),
         ),
         "fig14_weibull_cdf" => note(
             "Weibull strength distribution (deliverable Fig. 14, right)",
             format!(
-                "Breaking probability against σ̄ at break: the data at (i − 0.5)/N, the fitted Weibull law (ASTM C1239) and its pivotal confidence band: {}.",
+                "Breaking probability against σ̄ at break: {}: {}.",
+                {
+                    // A censored sample (weibull_points `observed`; older reports lack it).
+                    let censored = Table::load(dir, "weibull_points")?.s("observed").is_ok_and(|o| o.iter().any(|k| k != "exact"));
+                    if censored {
+                        "the data at Kaplan–Meier positions (open circles: not broken by the rig's limit, or broke within a class), the Weibull law fitted with them as censored and its confidence band from the bootstrap that censors each redraw as the campaign did"
+                    } else {
+                        "the data at (i − 0.5)/N, the fitted Weibull law (ASTM C1239) and its pivotal confidence band"
+                    }
+                },
                 per_material(dir, "weibull_fits", &|t, i| Ok(format!(
                     "N = {:.0}, m = {:.2} ({:.0} % bounds {:.2}–{:.2}), σθ = {:.0} MPa",
                     t.f("n")?[i],

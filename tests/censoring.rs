@@ -1,0 +1,316 @@
+//! What the data say about themselves (issue 52): specimens that did not break, rows that count
+//! several, classes. A crush-rig workbook as a lab exports it — German headers, a `gebrochen`
+//! column, the force column holding the highest load reached for the particles the rig did not
+//! break — is refused until the study declares the column, and then fitted as censored; the
+//! bootstrap bands cover the generator's truth; dropping the unbroken particles, what users do
+//! by hand, is biased; a grouped table is its expanded specimens.
+
+mod common;
+
+use common::{Scratch, table_f64, table_text};
+use partlife::intake::write::{Sheet, Value, xlsx};
+use partlife::obs::{Censor, Censoring, Obs, Observations};
+use partlife::strength::regress::{Design, fit};
+use partlife::weibull::Weibull;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+/// The generator's modulus of σ̄ (the issue's workbook: truth 11.5).
+const TRUE_M: f64 = 11.5;
+
+/// Generator settings: 60 plain BL-like particles (no hidden effect), σ̄ Weibull with m = 11.5.
+fn generator(seed: u64) -> String {
+    format!(
+        r#"seed = {seed}
+platen = {{ youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }}
+[[material]]
+file = "lab.csv"
+label = "BL 16/30"
+id_prefix = "BL"
+count = 60
+temperature_c = 20.0
+elastic = {{ youngs_modulus_pa = 112e9, poisson_ratio = 0.25 }}
+diameter = {{ mean = 0.00089, sd = 0.00014, min = 0.00059, max = 0.00119 }}
+roundness = {{ mean = 0.72, sd = 0.05 }}
+sphericity = {{ mean = 0.87, sd = 0.04 }}
+[material.nature]
+strength_shape = {TRUE_M}
+strength_scale_pa = 1.99e9
+reference_diameter_m = 0.0009
+size_exponent = 0.0
+curvature_exponent = 0.0
+[material.measurement]
+force_rel_sd = 0.0
+force_resolution_n = 0.1
+diameter_sd_m = 0.0
+diameter_resolution_m = 1e-6
+shape_sd = 0.01
+shape_resolution = 0.001
+"#
+    )
+}
+
+/// The rig's limit and the workbook of `s`: 60 particles, the 10 strongest not broken by the
+/// limit (their force cell holds the limit, `gebrochen` = nein), an operator column.
+fn lab_workbook(s: &Scratch, seed: u64) -> f64 {
+    s.write("datasets/lab_generator.toml", &generator(seed));
+    let settings = partlife::synth::SynthSettings::load(&s.path("datasets/lab_generator.toml")).unwrap();
+    let particles = partlife::synth::generate(&settings, 0).unwrap();
+    let mut forces: Vec<f64> = particles.iter().map(|p| p.record.crush_force_n).collect();
+    forces.sort_by(f64::total_cmp);
+    // The limit between the 50th and 51st force, at the rig's 0.1 N steps: ten above it.
+    let limit = (5.0 * (forces[49] + forces[50])).round() / 10.0;
+    assert!(forces[49] < limit && limit < forces[50], "forces {} and {} share the limit {limit}", forces[49], forces[50]);
+    let mut rows = vec![["Probe", "D [mm]", "Fmax [N]", "gebrochen", "Prüfer"].iter().map(|h| Value::Text(h.to_string())).collect::<Vec<_>>()];
+    for (k, p) in particles.iter().enumerate() {
+        let r = &p.record;
+        let broke = r.crush_force_n <= limit;
+        rows.push(vec![
+            Value::Text(r.id.clone()),
+            Value::Number((r.diameter_m * 1e6).round() / 1e3),
+            Value::Number(if broke { r.crush_force_n } else { limit }),
+            Value::Text(if broke { "ja" } else { "nein" }.into()),
+            Value::Text(["Schulz", "Meier"][k % 2].into()),
+        ]);
+    }
+    let bytes = xlsx(&[Sheet { name: "Bruchversuche".into(), rows, merged: vec![] }]).unwrap();
+    std::fs::write(s.path("datasets/lab.xlsx"), bytes).unwrap();
+    limit
+}
+
+/// A lifetime study of the workbook, its `data` table as given.
+fn lifetime_study(data: &str) -> String {
+    format!(
+        r#"# Purpose: the lab workbook's Weibull law. Good result: the band covers the truth.
+kind = "lifetime"
+seed = 7
+[contact]
+platen = {{ youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }}
+averaging = {{ measure = "line", outer = "contact_multiple", kappa = 2.0 }}
+[impact]
+target = {{ youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }}
+velocity_points = 21
+[weibull]
+pivotal_samples = 2000
+[[material]]
+key = "lab"
+label = "BL 16/30 (lab)"
+data = {data}
+elastic = {{ youngs_modulus_pa = 112e9, poisson_ratio = 0.25 }}
+density_kg_m3 = 3060
+"#
+    )
+}
+
+const BROKEN: &str = r#"{ file = "../datasets/lab.xlsx", broken = { column = "gebrochen", yes = "ja", no = "nein" } }"#;
+
+#[test]
+fn an_undeclared_broken_column_or_a_pile_up_at_the_rig_limit_is_refused_with_the_key_to_declare() {
+    let s = Scratch::new();
+    let limit = lab_workbook(&s, 11);
+    s.write("studies/lab.toml", &lifetime_study(r#"{ file = "../datasets/lab.xlsx" }"#));
+    let out = s.run(&["run", "studies/lab.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("lab.xlsx") && out.stderr.contains("column gebrochen") && out.stderr.contains(r#"material[0].data.broken = { column = "gebrochen", yes = "ja", no = "nein" }"#), "{}", out.stderr);
+    assert!(!out.stderr.contains("panicked") && s.report_files().is_empty());
+    // Ignoring the column leaves ten particles at the file's highest force: asked about.
+    s.write("studies/lab.toml", &lifetime_study(r#"{ file = "../datasets/lab.xlsx", ignore = ["gebrochen"] }"#));
+    let out = s.run(&["run", "studies/lab.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains(&format!("10 of 60 specimens hold the file's highest force, {limit} N")) && out.stderr.contains("material[0].data.at_highest = \"not_broken\""), "{}", out.stderr);
+    // A value the declaration does not name is refused with its row.
+    s.write("studies/lab.toml", &lifetime_study(r#"{ file = "../datasets/lab.xlsx", broken = { column = "gebrochen", yes = "ja", no = "nicht" } }"#));
+    let out = s.run(&["run", "studies/lab.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("holds \"nein\"") && out.stderr.contains("sheet \"Bruchversuche\""), "{}", out.stderr);
+}
+
+#[test]
+fn the_lab_workbook_once_declared_gives_the_modulus_band_of_the_truth_and_breaks_at_the_limit_do_not() {
+    let s = Scratch::new();
+    lab_workbook(&s, 11);
+    s.write("studies/lab.toml", &lifetime_study(BROKEN));
+    let out = s.run(&["run", "studies/lab.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let fits = s.path("reports/lab/weibull_fits.csv");
+    let (m, lo, hi) = (table_f64(&fits, "shape_mle")[0], table_f64(&fits, "shape_lower")[0], table_f64(&fits, "shape_upper")[0]);
+    assert_eq!(table_f64(&fits, "not_broken")[0], 10.0);
+    assert!(table_text(&fits, "bound_method")[0].contains("bootstrap") && table_text(&fits, "unbiasing")[0].contains("censored"));
+    assert!(lo <= TRUE_M && TRUE_M <= hi, "90 % band [{lo}, {hi}] of m = {m} misses the truth {TRUE_M}");
+    // The plotting positions mark the ten as not broken; the particles table says it per row.
+    assert_eq!(table_text(&s.path("reports/lab/weibull_points.csv"), "observed").iter().filter(|k| *k == "right").count(), 10);
+    assert_eq!(table_text(&s.path("reports/lab/particles.csv"), "observed").iter().filter(|k| *k == "right").count(), 10);
+    // Taken as breaks at the limit (what partlife did before), the modulus comes out higher
+    // (the bias over many campaigns is in the next test).
+    s.write("studies/lab.toml", &lifetime_study(r#"{ file = "../datasets/lab.xlsx", ignore = ["gebrochen"], at_highest = "broken" }"#));
+    let out = s.run(&["run", "studies/lab.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let m_breaks = table_f64(&s.path("reports/lab/weibull_fits.csv"), "shape_mle")[0];
+    assert!(m_breaks > m, "as breaks m = {m_breaks}, censored m = {m}");
+}
+
+#[test]
+fn the_naming_loop_names_no_shape_misfit_once_the_unbroken_particles_are_declared() {
+    let s = Scratch::new();
+    lab_workbook(&s, 11);
+    let study = format!(
+        r#"# Purpose: the naming loop on the lab workbook. Good result: nothing named, no misfit.
+kind = "discrepancy"
+seed = 5
+[contact]
+platen = {{ youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }}
+averaging = {{ measure = "line", outer = "contact_multiple", kappa = 2.0 }}
+[discrepancy]
+bootstrap = 199
+permutations = 199
+[lifetime]
+bootstrap = 50
+[power]
+particles = [20]
+replicates = 2
+bootstrap = 99
+[[material]]
+key = "lab"
+label = "BL 16/30 (lab)"
+data = {BROKEN}
+elastic = {{ youngs_modulus_pa = 112e9, poisson_ratio = 0.25 }}
+density_kg_m3 = 3060
+"#
+    );
+    s.write("studies/lab_naming.toml", &study);
+    let out = s.run(&["run", "studies/lab_naming.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let v: serde_json::Value = serde_json::from_str(&s.read("reports/lab_naming/verdict.json")).unwrap();
+    assert_eq!(v["effects_named"]["lab"].as_array().map(|a| a.len()), Some(0), "{}", v["evidence"]);
+    let summary = s.read("reports/lab_naming/summary.md");
+    assert!(!summary.contains("fits these data poorly"), "{summary}");
+    assert!(summary.contains("10 did not break by their limit (right-censored)"), "{summary}");
+}
+
+/// `n` draws of Weibull(m, 1) right-censored at `limit(i)`: the censored observations and the
+/// values of the broken rows.
+fn campaign(rng: &mut ChaCha8Rng, n: usize, m: f64, limit: impl Fn(usize, &mut ChaCha8Rng) -> f64) -> (Observations, Vec<f64>) {
+    let w = Weibull::new(m, 1.0).unwrap();
+    let mut x = Vec::with_capacity(n);
+    let mut kind = Vec::with_capacity(n);
+    for i in 0..n {
+        let (v, l) = (w.sample(rng), limit(i, rng));
+        x.push(v.min(l));
+        kind.push(if v > l { Censor::Right } else { Censor::Exact });
+    }
+    let broken: Vec<f64> = (0..n).filter(|&i| kind[i] == Censor::Exact).map(|i| x[i]).collect();
+    let censoring = Censoring::of_rows(kind, &x, vec![f64::NAN; n]);
+    (Observations { x, censoring }, broken)
+}
+
+#[test]
+fn dropping_the_unbroken_specimens_by_hand_or_taking_them_as_breaks_is_biased_and_the_censored_fit_is_not() {
+    // 200 campaigns of 60 specimens, m = 11.5, σ_θ = 1, the rig's limit at the truth's 80 %
+    // quantile (about 20 % not broken). Mean ln σ̂ over the campaigns, with its standard error.
+    let mut rng = ChaCha8Rng::seed_from_u64(52);
+    let limit = (-(0.2f64).ln()).powf(1.0 / TRUE_M);
+    let (mut cens, mut drop, mut excess) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..200 {
+        let (o, broken) = campaign(&mut rng, 60, TRUE_M, |_, _| limit);
+        let c = fit(o.view(), &Design::default()).unwrap();
+        cens.push(c.mu);
+        drop.push(fit(Obs::exact(&broken), &Design::default()).unwrap().mu);
+        // The unbroken ones taken as breaks at the limit (partlife before this issue): m̂ of
+        // that complete sample over the censored fit's, campaign by campaign.
+        excess.push(fit(Obs::exact(&o.x), &Design::default()).unwrap().shape() / c.shape() - 1.0);
+    }
+    let stats = |v: &[f64]| {
+        let k = v.len() as f64;
+        let mean = v.iter().sum::<f64>() / k;
+        (mean, (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (k - 1.0) / k).sqrt())
+    };
+    let ((mc, sc), (md, sd)) = (stats(&cens), stats(&drop));
+    // ln σ_θ = 0: the censored fit within 3 standard errors; dropping lowers the scale by more
+    // than 10 standard errors (the strongest fifth is gone).
+    assert!(mc.abs() < 3.0 * sc, "censored mean ln σ̂ = {mc} ± {sc}");
+    assert!(md < -10.0 * sd && md < -0.02, "dropped mean ln σ̂ = {md} ± {sd}");
+    // Breaks at the limit overstate the modulus, by more than 10 standard errors of the mean
+    // paired excess.
+    let (me, se) = stats(&excess);
+    eprintln!("censored ln σ̂ {mc} ± {sc}; dropped {md} ± {sd}; as breaks m̂ excess {me} ± {se}");
+    assert!(me > 10.0 * se, "m̂ as breaks over the censored m̂: {me} ± {se}");
+}
+
+#[test]
+fn censored_bootstrap_bands_cover_the_truth_at_their_level_fixed_and_random_limits() {
+    // 400 campaigns of 40 specimens per setting (10 % and 30 % censored at a fixed limit, and
+    // at random limits): the 90 % bands of m and σ_θ from the bootstrap that censors as the
+    // campaign did, in pivotal form, cover in 85–95 % of them. Binomial(400, 0.9): that window
+    // is ±3.3 sd, so a band at its level fails it about once in a thousand.
+    let campaigns = 400;
+    use partlife::strength::{Sample, StrengthFit, Uncertainty};
+    let q = |p: f64| (-(1.0 - p).ln()).powf(1.0 / TRUE_M);
+    for (setting, share, random) in [("10 % fixed", 0.10, false), ("30 % fixed", 0.30, false), ("30 % random", 0.30, true)] {
+        let mut rng = ChaCha8Rng::seed_from_u64(520 + (100.0 * share) as u64 + u64::from(random));
+        let (mut cm, mut cs) = (0, 0);
+        for c in 0..campaigns {
+            // Random limits: each specimen's own, uniform between the truth's 50 and 100 %
+            // quantiles (about 30 % censored).
+            let (o, _) = campaign(&mut rng, 40, TRUE_M, |_, r| if random { q(rand::Rng::random_range(r, 0.5..0.999)) } else { q(1.0 - share) });
+            let sample = Sample { source: format!("campaign {c}"), strength: o, ..Sample::default() };
+            let f = StrengthFit::new(&sample, &[], 5.0, "x").unwrap();
+            let d = f.draws(Uncertainty::Bootstrap, 400, 1000 + c as u64).unwrap();
+            let band = |v: Vec<f64>| partlife::stats::interpolated_quantiles(v, &[0.05, 0.95]);
+            let (bm, bs) = (band(d.iter().map(|p| p.shape).collect()), band(d.iter().map(|p| p.mu).collect()));
+            cm += usize::from(bm[0] <= TRUE_M && TRUE_M <= bm[1]);
+            cs += usize::from(bs[0] <= 0.0 && 0.0 <= bs[1]);
+        }
+        let window = (85 * campaigns / 100)..=(95 * campaigns / 100);
+        eprintln!("{setting}: m covered in {cm}, σ_θ in {cs} of {campaigns}");
+        assert!(window.contains(&cm) && window.contains(&cs), "{setting}: m covered in {cm}, σ_θ in {cs} of {campaigns}");
+    }
+}
+
+#[test]
+fn a_grouped_table_is_its_expanded_specimens_and_narrow_classes_are_the_exact_fit() {
+    // 389 specimens of Weibull(17.6, 500 MPa) in classes: the grouped file (one row per class
+    // with a count) reads as 389 interval specimens and fits as the hand-expanded intervals
+    // do, to the bit; with classes 0.01 MPa wide the fit is the exact data's.
+    let dir = partlife::io::TempDir::new("grouped").unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(389);
+    let w = Weibull::new(17.6, 500e6).unwrap();
+    let x: Vec<f64> = (0..389).map(|_| w.sample(&mut rng)).collect();
+    for width_mpa in [20.0, 0.01] {
+        let edge = |v: f64| (v / 1e6 / width_mpa).floor() * width_mpa;
+        let mut classes: std::collections::BTreeMap<i64, usize> = std::collections::BTreeMap::new();
+        for v in &x {
+            *classes.entry((edge(*v) / width_mpa).round() as i64).or_default() += 1;
+        }
+        let mut body = String::from("von [MPa];bis [MPa];Anzahl\n");
+        for (k, n) in &classes {
+            let lo = *k as f64 * width_mpa;
+            body.push_str(&format!("{};{};{n}\n", format!("{lo:.2}").replace('.', ","), format!("{:.2}", lo + width_mpa).replace('.', ",")));
+        }
+        let p = dir.path().join(format!("grouped_{width_mpa}.csv"));
+        std::fs::write(&p, body).unwrap();
+        let mut src = partlife::intake::Source::file(&p);
+        src.interval = Some(partlife::intake::observed::Interval { lower: "von".into(), upper: "bis".into(), unit: None });
+        src.count = Some("Anzahl".into());
+        let read = partlife::strength::specimens::read_specimens(&src, None, &Default::default(), &Default::default()).unwrap();
+        let o = read.sample.strength.view();
+        assert_eq!((o.len(), o.tally().interval), (389, 389));
+        assert!(read.provenance.observed.iter().any(|l| l.contains(&format!("{} rows → 389 specimens", classes.len()))), "{:?}", read.provenance.observed);
+        let grouped = fit(o, &Design::default()).unwrap();
+        // Expanded by hand: each specimen its class.
+        let lower: Vec<f64> = x.iter().map(|v| (edge(*v) * 1e6 * 100.0).round() / 100.0).collect();
+        let mut order: Vec<usize> = (0..389).collect();
+        order.sort_by(|&a, &b| lower[a].total_cmp(&lower[b]));
+        let lo: Vec<f64> = order.iter().map(|&i| lower[i]).collect();
+        let hi: Vec<f64> = lo.iter().map(|v| v + width_mpa * 1e6).collect();
+        let by_hand = Censoring::of_rows(vec![Censor::Interval; 389], &lo, hi).unwrap();
+        let expanded = fit(Obs { x: &lo, censoring: Some(&by_hand) }, &Design::default()).unwrap();
+        assert!((grouped.loglik - expanded.loglik).abs() < 1e-9 * expanded.loglik.abs() && (grouped.shape() / expanded.shape() - 1.0).abs() < 1e-9, "{} vs {}", grouped.shape(), expanded.shape());
+        if width_mpa < 1.0 {
+            let exact = fit(Obs::exact(&x), &Design::default()).unwrap();
+            assert!((grouped.shape() / exact.shape() - 1.0).abs() < 1e-3 && (grouped.mu - exact.mu).abs() < 1e-5, "narrow classes m = {} vs exact {}", grouped.shape(), exact.shape());
+        } else {
+            // Wide classes lose information, not the law: m within 2 of the truth.
+            assert!((grouped.shape() - 17.6).abs() < 2.0, "m = {}", grouped.shape());
+        }
+    }
+}

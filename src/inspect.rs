@@ -5,7 +5,8 @@
 //! The kind is recognised from the header: Table 1 (`size_um_min`), a phase-fraction table
 //! (`phase`), observations (`output`, `unit`, `value`, `sd`), an impact spectrum
 //! (`q<k>_v_normal_m_s`), force–displacement curves (a displacement column), a shape file
-//! (an id and roundness or sphericity, no force), else crush data. A crush file holding several
+//! (an id and roundness or sphericity, no force), a strength file (a column named as a strength
+//! or stating a stress unit, no force), else crush data. A crush file holding several
 //! materials is summarised per material; a workbook sheet by sheet. A study's files are read as
 //! the kind the study reads them as (a calibration's curve file whose German header names no
 //! displacement, mapped by the study's `columns`, is still curves).
@@ -49,6 +50,12 @@ fn span((lo, hi): (f64, f64), scale: f64, places: usize) -> String {
     if a == b { a } else { format!("{a}–{b}") }
 }
 
+/// The folded names a strength column goes by (the strength file's field).
+fn strength_names() -> Vec<String> {
+    let f = &crate::strength::specimens::STRENGTH_FIELDS[2];
+    [f.key, f.column].into_iter().chain(f.synonyms.iter().copied()).map(crate::intake::units::fold).collect()
+}
+
 /// The kind of table a header shows (module docs).
 fn kind_of(t: &RawTable) -> &'static str {
     let has = |n: &str| t.column(n).is_some();
@@ -66,6 +73,8 @@ fn kind_of(t: &RawTable) -> &'static str {
         "curves"
     } else if any(&["roundness", "sphericity", "wadellroundness", "b/l"]) && !any(&["crushforce", "f", "fmax", "force", "load", "breakingforce", "peakforce", "crushingforce"]) {
         "shape"
+    } else if !any(&["crushforce", "f", "fmax", "force", "load", "breakingforce", "peakforce", "crushingforce"]) && (strength_names().iter().any(|n| folded.contains(n)) || t.headers.iter().any(|h| crate::intake::units::parse_header(h).unit.is_some_and(|u| crate::intake::units::unit_of(crate::intake::Quantity::Stress, &u).is_some()))) {
+        "strength"
     } else {
         "crush"
     }
@@ -126,6 +135,19 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin) -> 
                 lines.push(format!("{target} row {row}: median {:.2} m/s", q.iter().find(|x| x.0 >= 0.5).map_or(f64::NAN, |x| x.1)));
             }
             one(format!("impact spectrum ({}), {} rows: {}", t.format, t.rows.len(), lines.join("; ")), None)
+        }
+        "strength" => {
+            // Two stress columns and no strength: classes, which the study must declare.
+            let stress: Vec<&String> = t.headers.iter().filter(|h| crate::intake::units::parse_header(h).unit.is_some_and(|u| crate::intake::units::unit_of(crate::intake::Quantity::Stress, &u).is_some())).collect();
+            let named = t.headers.iter().any(|h| strength_names().contains(&crate::intake::units::fold(&crate::intake::units::parse_header(h).name)));
+            if src.interval.is_none() && !named && stress.len() >= 2 {
+                return Err(t.header_error(None, format!("holds stress columns {} and no strength column: if they are classes, say which ends they are in the study's data table: interval = {{ lower = \"{}\", upper = \"{}\" }} (and count = \"…\" for a column of specimens per class)", stress.iter().map(|h| format!("`{h}`")).collect::<Vec<_>>().join(", "), stress[0], stress[1])));
+            }
+            let s = crate::strength::specimens::read_specimens(src, None, &crate::intake::factors::Factors::default(), origin)?;
+            let o = s.sample.strength.view();
+            let (lo, hi) = range(o.x);
+            let n = if o.complete() { format!("{} specimen{}", o.len(), if o.len() == 1 { "" } else { "s" }) } else { o.tally().describe("specimens") };
+            one(format!("strength data, {n}, strength = {} MPa", span((lo, hi), 1e-6, 1)), Some(s.provenance))
         }
         "curves" => {
             let (curves, read) = crate::calibrate::data::curves_of(&t, path, &src.columns, &src.units, origin)?;

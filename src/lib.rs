@@ -47,8 +47,8 @@
 //! 15  study                          kind → schema + validation
 //! 14  experiments · temperature      experiment design on the main study's state of knowledge; temperature across the chain
 //! 13  lifetime_study · uq            the lifetime study; the main study
-//! 12  discrepancy                    the naming loop, KOH, the curve level
-//! 11  strength · inspect             the one lifetime model (its Bayesian draws use calibrate::mcmc); what `datasets check` says of a file
+//! 12  discrepancy · inspect          the naming loop, KOH, the curve level; what `datasets check` says of a file (strength files through strength::specimens)
+//! 11  strength                       the one lifetime model (its Bayesian draws use calibrate::mcmc)
 //! 10  calibrate                      LSQ, MCMC, emulator, calibration studies, curve generator
 //!  9  dem · fem · micro              the solvers with their studies (micro: microstructure micromechanics)
 //!  8  runkit · synth · thermal       run helpers; the crush-data generator; parameters against temperature

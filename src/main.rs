@@ -534,8 +534,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 d.loop_s,
                 d.report_s
             );
-            let (secs, named, candidates) = partlife::bench::strength_factors_speed(500)?;
+            let (secs, named, candidates) = partlife::bench::strength_factors_speed(500, 0.0)?;
             out!("naming loop on a strength file of 500 specimens with 6 recorded factors (size, 2 numeric, 3 categorical) and both two-population laws ({candidates} candidates; named: {}), 499 bootstrap replicates per round and 999 permutations per residual test: {secs:.2} s (goal < 10 s)", named.join(", "));
+            let (secs, named, _) = partlife::bench::strength_factors_speed(500, 0.2)?;
+            out!("the same with the strongest 20 % not broken by the rig's limit (right-censored; named: {}): {secs:.2} s (goal < 15 s)", named.join(", "));
+            let (complete, censored) = partlife::bench::censored_fit_speed()?;
+            out!("one two-parameter fit of 500 strengths: complete {:.1} µs, 20 % censored {:.1} µs ({:.2}×; goal ≤ 2×)", complete * 1e6, censored * 1e6, censored / complete);
             // The curve level needs the calibration's report (its emulator runs).
             match partlife::bench::curve_discrepancy_speed()? {
                 Some((study, headlines, secs)) => out!("curve-level discrepancy loop ({}): {} — {secs:.1} s including the 5 FE runs of the curvature table (goal < 15 min)", study.display(), headlines.join("; ")),

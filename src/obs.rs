@@ -18,8 +18,11 @@
 //! **Redrawing as the campaign censored** ([`Obs::censor`]). A parametric bootstrap of a
 //! censored sample must censor each redraw as the campaign did (type I censoring at the
 //! recorded limits), or its spread is that of a complete sample. Each row carries its limits
-//! ([`Scheme`]): a right-censored row its own limit; an exact row the campaign's rig limit, the
-//! largest recorded right limit of its file (none where the file has no unbroken specimen); a
+//! ([`Scheme`]): a right-censored row its own limit; an exact row the campaign's rig limit (none
+//! where the file has no unbroken specimen) — or, where the recorded limits differ (random
+//! censoring: each test stopped at its own load), a limit drawn for each redraw from the
+//! limits' distribution estimated by the reverse Kaplan–Meier estimate (the limits are the
+//! events, the breaks censor them; Efron 1981), given that it lay above the row's own break; a
 //! left-censored row its own limit; an interval row the class edges of its file, so a redraw
 //! falls into the class that holds it (below the lowest edge: left-censored there; above the
 //! highest: right-censored there). The limits are in the row's own units: a crush file's rig
@@ -64,6 +67,10 @@ pub struct Scheme {
     pub left: Vec<f64>,
     /// Class edges per row, ascending (empty for a row that is not an interval).
     pub edges: Vec<Vec<f64>>,
+    /// Where the recorded right limits differ: per exact row, the limits a redraw's limit is
+    /// drawn from with their probabilities (∞ for no limit), in the row's units; empty for a
+    /// row whose limit is `right` (every row, when the file has one limit).
+    pub right_draws: Vec<Vec<(f64, f64)>>,
 }
 
 /// What the rows of a sample say beyond their values (absent: every row is exact).
@@ -123,14 +130,15 @@ impl Tally {
     /// In words: `60 specimens: 50 broke at a recorded value, 10 did not break by their limit`.
     pub fn describe(&self, what: &str) -> String {
         let mut parts = Vec::new();
+        let their = |k: usize| if k == 1 { "its" } else { "their" };
         if self.exact > 0 {
             parts.push(format!("{} broke at a recorded value", self.exact));
         }
         if self.right > 0 {
-            parts.push(format!("{} did not break by their limit (right-censored)", self.right));
+            parts.push(format!("{} did not break by {} limit (right-censored)", self.right, their(self.right)));
         }
         if self.left > 0 {
-            parts.push(format!("{} broke at or below their limit (left-censored)", self.left));
+            parts.push(format!("{} broke at or below {} limit (left-censored)", self.left, their(self.left)));
         }
         if self.interval > 0 {
             parts.push(format!("{} broke within a class (interval)", self.interval));
@@ -152,6 +160,7 @@ impl Censoring {
         let n = kind.len();
         let rig = (0..n).filter(|&i| kind[i] == Censor::Right).map(|i| x[i]).fold(f64::NEG_INFINITY, f64::max);
         let rig = if rig.is_finite() { rig } else { f64::INFINITY };
+        let right_draws = random_limits(&kind, x);
         let mut ends: Vec<f64> = (0..n).filter(|&i| kind[i] == Censor::Interval).flat_map(|i| [x[i], upper[i]]).collect();
         ends.sort_by(f64::total_cmp);
         ends.dedup();
@@ -159,9 +168,54 @@ impl Censoring {
             right: (0..n).map(|i| if kind[i] == Censor::Right { x[i] } else { rig }).collect(),
             left: (0..n).map(|i| if kind[i] == Censor::Left { x[i] } else { 0.0 }).collect(),
             edges: (0..n).map(|i| if kind[i] == Censor::Interval { ends.clone() } else { Vec::new() }).collect(),
+            right_draws,
         };
         Some(Censoring { kind, upper, scheme: Arc::new(scheme) })
     }
+}
+
+/// The limits an exact row's redraw is censored at where the recorded right limits differ
+/// (module docs): the reverse Kaplan–Meier estimate Ĝ of the limits — right-censored rows'
+/// limits are its events, exact rows' values censor it (a break at x says the limit lay above
+/// x) — and for each exact row Ĝ given a limit above its value, with the mass Ĝ leaves beyond
+/// the largest recorded limit as no limit (∞). Empty for every row where the file has one
+/// recorded limit or none (the rig's limit is then every exact row's), and for other rows.
+fn random_limits(kind: &[Censor], x: &[f64]) -> Vec<Vec<(f64, f64)>> {
+    let n = kind.len();
+    let mut limits: Vec<f64> = (0..n).filter(|&i| kind[i] == Censor::Right).map(|i| x[i]).collect();
+    limits.sort_by(f64::total_cmp);
+    limits.dedup();
+    if limits.len() < 2 {
+        return vec![Vec::new(); n];
+    }
+    // Ĝ's masses at the distinct limits: at risk at u, every row whose value (a limit or a
+    // break, both for exact and left rows) is ≥ u.
+    let times: Vec<f64> = (0..n).filter(|&i| matches!(kind[i], Censor::Right | Censor::Exact)).map(|i| x[i]).collect();
+    let mut survive = 1.0;
+    let mut mass = Vec::with_capacity(limits.len());
+    for &u in &limits {
+        let at_risk = times.iter().filter(|t| **t >= u).count() as f64;
+        let events = (0..n).filter(|&i| kind[i] == Censor::Right && x[i] == u).count() as f64;
+        let next = survive * (1.0 - events / at_risk);
+        mass.push((u, survive - next));
+        survive = next;
+    }
+    (0..n)
+        .map(|i| {
+            if kind[i] != Censor::Exact {
+                return Vec::new();
+            }
+            let mut choices: Vec<(f64, f64)> = mass.iter().copied().filter(|(u, p)| *u > x[i] && *p > 0.0).collect();
+            if survive > 0.0 {
+                choices.push((f64::INFINITY, survive));
+            }
+            let total: f64 = choices.iter().map(|c| c.1).sum();
+            if total > 0.0 {
+                choices.iter_mut().for_each(|c| c.1 /= total);
+            }
+            choices
+        })
+        .collect()
 }
 
 /// The rows of a table whose row i counts `counts[i]` specimens, one entry per specimen (row i
@@ -209,6 +263,7 @@ impl Observations {
             s.right.extend(std::iter::repeat_n(f64::INFINITY, added));
             s.left.extend(std::iter::repeat_n(0.0, added));
             s.edges.extend(std::iter::repeat_n(Vec::new(), added));
+            s.right_draws.extend(std::iter::repeat_n(Vec::new(), added));
             c.scheme = Arc::new(s);
         }
     }
@@ -224,6 +279,7 @@ impl Observations {
                 right: c.scheme.right.iter().enumerate().map(|(i, v)| if v.is_finite() { f(i, *v) } else { *v }).collect(),
                 left: c.scheme.left.iter().enumerate().map(|(i, v)| if *v > 0.0 { f(i, *v) } else { *v }).collect(),
                 edges: c.scheme.edges.iter().enumerate().map(|(i, e)| e.iter().map(|v| f(i, *v)).collect()).collect(),
+                right_draws: c.scheme.right_draws.iter().enumerate().map(|(i, d)| d.iter().map(|&(v, p)| (if v.is_finite() { f(i, v) } else { v }, p)).collect()).collect(),
             }),
         });
         Observations { x, censoring }
@@ -299,14 +355,16 @@ impl<'a> Obs<'a> {
                 right: rows.iter().map(|&i| c.scheme.right[i]).collect(),
                 left: rows.iter().map(|&i| c.scheme.left[i]).collect(),
                 edges: rows.iter().map(|&i| c.scheme.edges[i].clone()).collect(),
+                right_draws: rows.iter().map(|&i| c.scheme.right_draws[i].clone()).collect(),
             }),
         });
         Observations { x, censoring }
     }
 
     /// The values of one redraw, one per row, censored as the campaign censored each row
-    /// (module docs). Without censoring, the values themselves.
-    pub fn censor(&self, redraw: Vec<f64>) -> Observations {
+    /// (module docs); an exact row's limit drawn from `rng` where the recorded limits differ
+    /// (nothing is drawn otherwise). Without censoring, the values themselves.
+    pub fn censor<R: rand::Rng + ?Sized>(&self, redraw: Vec<f64>, rng: &mut R) -> Observations {
         let Some(c) = self.censoring else { return Observations::exact(redraw) };
         let n = redraw.len();
         let mut x = Vec::with_capacity(n);
@@ -331,15 +389,18 @@ impl<'a> Obs<'a> {
                         kind.push(Censor::Right);
                     }
                 }
-            } else if v > s.right[i] {
-                x.push(s.right[i]);
-                kind.push(Censor::Right);
-            } else if v <= s.left[i] {
-                x.push(s.left[i]);
-                kind.push(Censor::Left);
             } else {
-                x.push(v);
-                kind.push(Censor::Exact);
+                let limit = draw_limit(&s.right_draws[i], s.right[i], rng);
+                if v > limit {
+                    x.push(limit);
+                    kind.push(Censor::Right);
+                } else if v <= s.left[i] {
+                    x.push(s.left[i]);
+                    kind.push(Censor::Left);
+                } else {
+                    x.push(v);
+                    kind.push(Censor::Exact);
+                }
             }
         }
         Observations { x, censoring: Some(Censoring { kind, upper, scheme: c.scheme.clone() }) }
@@ -387,6 +448,26 @@ impl<'a> Obs<'a> {
     }
 }
 
+/// A redraw's right limit: `fixed`, or one of `choices` (limit, probability) by inversion of a
+/// uniform from `rng` where there are several.
+fn draw_limit<R: rand::Rng + ?Sized>(choices: &[(f64, f64)], fixed: f64, rng: &mut R) -> f64 {
+    match choices {
+        [] => fixed,
+        [(only, _)] => *only,
+        _ => {
+            let u: f64 = rng.random();
+            let mut acc = 0.0;
+            for &(v, p) in choices {
+                acc += p;
+                if u < acc {
+                    return v;
+                }
+            }
+            choices[choices.len() - 1].0
+        }
+    }
+}
+
 /// ln(1 − e^a) for a ≤ 0, without cancellation (Mächler 2012): ln(−expm1(a)) near 0,
 /// ln1p(−e^a) below −ln 2.
 pub fn ln_one_minus_exp(a: f64) -> f64 {
@@ -396,12 +477,13 @@ pub fn ln_one_minus_exp(a: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::SeedableRng;
 
     fn scheme() -> Censoring {
         Censoring {
             kind: vec![Censor::Exact, Censor::Right, Censor::Left, Censor::Interval],
             upper: vec![f64::NAN, f64::NAN, f64::NAN, 3.0],
-            scheme: Arc::new(Scheme { right: vec![5.0, 5.0, f64::INFINITY, f64::INFINITY], left: vec![0.0, 0.0, 1.0, 0.0], edges: vec![vec![], vec![], vec![], vec![1.0, 2.0, 3.0, 4.0]] }),
+            scheme: Arc::new(Scheme { right: vec![5.0, 5.0, f64::INFINITY, f64::INFINITY], left: vec![0.0, 0.0, 1.0, 0.0], edges: vec![vec![], vec![], vec![], vec![1.0, 2.0, 3.0, 4.0]], right_draws: vec![Vec::new(); 4] }),
         }
     }
 
@@ -412,15 +494,15 @@ mod tests {
         let o = Obs { x: &x, censoring: Some(&c) };
         // Row 0 beyond the rig limit: right at 5; row 1 below it: exact; row 2 under its
         // left limit: left at 1; row 3 in the class [3, 4).
-        let r = o.censor(vec![6.0, 4.5, 0.5, 3.5]);
+        let r = o.censor(vec![6.0, 4.5, 0.5, 3.5], &mut rand::rng());
         assert_eq!(r.x, [5.0, 4.5, 1.0, 3.0]);
         let rc = r.censoring.as_ref().unwrap();
         assert_eq!(rc.kind, [Censor::Right, Censor::Exact, Censor::Left, Censor::Interval]);
         assert_eq!(rc.upper[3], 4.0);
         // Outside every class: left below the lowest edge, right above the highest.
-        let r = o.censor(vec![1.0, 1.0, 2.0, 0.2]);
+        let r = o.censor(vec![1.0, 1.0, 2.0, 0.2], &mut rand::rng());
         assert_eq!((r.x[3], r.censoring.as_ref().unwrap().kind[3]), (1.0, Censor::Left));
-        let r = o.censor(vec![1.0, 1.0, 2.0, 9.0]);
+        let r = o.censor(vec![1.0, 1.0, 2.0, 9.0], &mut rand::rng());
         assert_eq!((r.x[3], r.censoring.as_ref().unwrap().kind[3]), (4.0, Censor::Right));
         assert_eq!(o.tally(), Tally { exact: 1, right: 1, left: 1, interval: 1 });
     }
@@ -453,6 +535,29 @@ mod tests {
         assert!(c.scheme.edges[0].is_empty());
         assert_eq!(Censoring::of_rows(vec![Censor::Exact; 2], &[1.0, 2.0], vec![f64::NAN; 2]), None);
         assert_eq!(expand(&[2, 0, 1]), [0, 0, 2]);
+    }
+
+    #[test]
+    fn with_limits_of_their_own_an_exact_row_s_limit_follows_the_reverse_kaplan_meier_estimate() {
+        // Breaks at 1 and 3, limits 2, 4 and 5: Ĝ has at risk 4 at 2 (one event: 1/4), 2 at 4
+        // (3/4 · 1/2 = 3/8) and 1 at 5 (the rest, 3/8). The break at 1 may have been stopped at
+        // 2, 4 or 5 in those proportions; the break at 3 at 4 or 5, one half each.
+        let kind = vec![Censor::Exact, Censor::Right, Censor::Exact, Censor::Right, Censor::Right];
+        let x = [1.0, 2.0, 3.0, 4.0, 5.0];
+        let c = Censoring::of_rows(kind, &x, vec![f64::NAN; 5]).unwrap();
+        let close = |a: &[(f64, f64)], b: &[(f64, f64)]| a.len() == b.len() && a.iter().zip(b).all(|(p, q)| p.0 == q.0 && (p.1 - q.1).abs() < 1e-12);
+        assert!(close(&c.scheme.right_draws[0], &[(2.0, 0.25), (4.0, 0.375), (5.0, 0.375)]), "{:?}", c.scheme.right_draws[0]);
+        assert!(close(&c.scheme.right_draws[2], &[(4.0, 0.5), (5.0, 0.5)]), "{:?}", c.scheme.right_draws[2]);
+        assert!(c.scheme.right_draws[1].is_empty());
+        // One recorded limit (twice): every exact row's is the rig's, nothing is drawn.
+        let one = Censoring::of_rows(vec![Censor::Exact, Censor::Right, Censor::Right], &[1.0, 4.0, 4.0], vec![f64::NAN; 3]).unwrap();
+        assert!(one.scheme.right_draws.iter().all(|d| d.is_empty()) && one.scheme.right[0] == 4.0);
+        // Redraws of row 0 at 4.5 are censored at 2 or 4 in 62.5 % of them.
+        let o = Obs { x: &x, censoring: Some(&c) };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let k = 20_000;
+        let cut = (0..k).filter(|_| o.censor(vec![4.5, 1.0, 1.0, 1.0, 1.0], &mut rng).censoring.unwrap().kind[0] == Censor::Right).count();
+        assert!((cut as f64 / k as f64 - 0.625).abs() < 0.015, "{cut} of {k}");
     }
 
     #[test]

@@ -117,7 +117,11 @@ impl LoadedStudy {
             Study::DiscrepancyCurves(s) => return s.data.iter().enumerate().map(|(i, d)| curves(&d.file, &d.columns, &d.units, format!("data[{i}]"))).collect(),
             _ => &[],
         };
-        materials.iter().enumerate().map(|(k, m)| (m.data.resolved(study), None, origin(format!("material[{k}].data")))).collect()
+        let mut out: Vec<_> = materials.iter().enumerate().map(|(k, m)| (m.data.resolved(study), None, origin(format!("material[{k}].data")))).collect();
+        if let Study::Discrepancy(s) = &self.study {
+            out.extend(s.strength.iter().enumerate().map(|(k, set)| (set.data.resolved(study), Some("strength"), origin(format!("strength[{k}].data")))));
+        }
+        out
     }
 }
 

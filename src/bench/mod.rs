@@ -342,8 +342,9 @@ pub fn uq_speed(study: &Path) -> Result<UqSpeed> {
 /// two decades; an irrelevant number) and three categorical (batch of three with batch B 15 %
 /// weaker, furnace of two, operator of four) — and the two flaw-population laws, at the shipped settings (499 bootstrap
 /// replicates per round, 999 permutations per residual test, ten folds): (seconds, named,
-/// number of candidates).
-pub fn strength_factors_speed(n: usize) -> Result<(f64, Vec<String>, usize)> {
+/// number of candidates). With `censored` > 0 that share of the specimens, the strongest, did not
+/// break by the rig's limit (right-censored there, type I).
+pub fn strength_factors_speed(n: usize, censored: f64) -> Result<(f64, Vec<String>, usize)> {
     use crate::strength::factors::{Factor, FactorType, Form, SizeMeasure, candidates_of};
     let mut rng = ChaCha8Rng::seed_from_u64(33);
     let mut s = Sample { source: "bench".into(), ..Sample::default() };
@@ -378,9 +379,43 @@ pub fn strength_factors_speed(n: usize) -> Result<(f64, Vec<String>, usize)> {
     }
     // And the two flaw-population laws, on by default for strength files.
     s.populations = vec![crate::strength::flaws::Populations::Mixture, crate::strength::flaws::Populations::Competing];
+    if censored > 0.0 {
+        s.strength = censored_at_quantile(&s.strength.x, censored);
+    }
     let start = Instant::now();
     let outcome = crate::discrepancy::workflow::analyse(&s, &crate::strength::NamingSettings::default(), true)?;
     Ok((start.elapsed().as_secs_f64(), outcome.named.iter().map(|e| e.name()).collect(), s.factors.len() + s.populations.len()))
+}
+
+/// `x` right-censored at its (1 − `share`) sample quantile, the rig's limit: the values above it
+/// did not break by it.
+fn censored_at_quantile(x: &[f64], share: f64) -> crate::obs::Observations {
+    let mut sorted = x.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let limit = crate::stats::sorted_quantile(&sorted, 1.0 - share);
+    let kind: Vec<crate::obs::Censor> = x.iter().map(|v| if *v > limit { crate::obs::Censor::Right } else { crate::obs::Censor::Exact }).collect();
+    let values: Vec<f64> = x.iter().map(|v| v.min(limit)).collect();
+    let censoring = crate::obs::Censoring::of_rows(kind, &values, vec![f64::NAN; x.len()]);
+    crate::obs::Observations { x: values, censoring }
+}
+
+/// Seconds per two-parameter Weibull fit of 500 strengths (Newton on the regression without
+/// effects), complete and with the strongest 20 % right-censored at the rig's limit: the cost of
+/// censoring (goal: at most twice).
+pub fn censored_fit_speed() -> Result<(f64, f64)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(52);
+    let w = Weibull::new(11.5, 300e6)?;
+    let x: Vec<f64> = (0..500).map(|_| w.sample(&mut rng)).collect();
+    let c = censored_at_quantile(&x, 0.2);
+    let time = |o: crate::obs::Obs| -> Result<f64> {
+        let reps = 2000;
+        let start = Instant::now();
+        for _ in 0..reps {
+            std::hint::black_box(crate::strength::regress::fit(std::hint::black_box(o), &Default::default())?);
+        }
+        Ok(start.elapsed().as_secs_f64() / reps as f64)
+    };
+    Ok((time(crate::obs::Obs::exact(&x))?, time(c.view())?))
 }
 
 /// Speed of the discrepancy workflow on 100 particles.

@@ -390,8 +390,19 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         let tally = r.sample.strength.view().tally();
         if !tally.complete() {
             md.push_str(&format!(
-                "**{}.** Each is fitted as what its row says (a specimen that did not break by its value adds the probability of surviving it, not a break there); the residuals of censored rows are randomised within what they allow (Dunn & Smyth 1996), and every bootstrap redraw is censored as the campaign censored its row.\n\n",
-                tally.describe(what)
+                "**{}.** Each is fitted as what its row says ({}); the residuals of those rows are randomised within what they allow (Dunn & Smyth 1996), and every bootstrap redraw is censored as the campaign censored its row{}.\n\n",
+                tally.describe(what),
+                [
+                    (tally.right > 0, "a specimen that did not break by its value adds the probability of surviving it, not a break there"),
+                    (tally.left > 0, "one that broke at or below its value the probability of breaking by it"),
+                    (tally.interval > 0, "one counted in a class the probability of breaking within it"),
+                ]
+                .iter()
+                .filter(|(on, _)| *on)
+                .map(|(_, w)| *w)
+                .collect::<Vec<_>>()
+                .join("; "),
+                if tally.interval > 0 { " (a class redraw falls into the class that holds it)" } else { "" }
             ));
         }
         md.push_str(&format!("**Effects named, in order: {}.**\n\n", names(&r.outcome.named)));

@@ -145,7 +145,7 @@ fn power_study(sample: &Sample, outcome: &Outcome, settings: &NamingSettings, p:
                     }
                     let covariates = sample.covariates.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i]).collect())).collect();
                     // Each drawn particle censored as its row was (the campaign's rig limit, its classes).
-                    let strength = sample.strength.rows(&rows_drawn).view().censor(strength);
+                    let strength = sample.strength.rows(&rows_drawn).view().censor(strength, &mut rng);
                     let synthetic = Sample { source: format!("power replicate {r}"), strength, covariates, levels: sample.levels.iter().map(|(k, v)| (k.clone(), rows_drawn.iter().map(|&i| v[i].clone()).collect())).collect(), factors: sample.factors.clone(), particles: sample.particles, populations: sample.populations.clone() };
                     let s = NamingSettings { bootstrap: p.bootstrap, seed: settings.seed ^ (r as u64 + 1), ..settings.clone() };
                     let named = names(&synthetic, &s).unwrap_or_default();

@@ -377,7 +377,7 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
             return Err(Error::data_file(
                 &table.origin.path,
                 format!("column {h}"),
-                format!("holds yes/no values ({shown}) that the study does not use: if it says which specimens broke, declare it: {key}broken = {{ column = \"{h}\", yes = \"{yes}\", no = \"{no}\" }} (yes: broke at the row's value; no: did not break by it); if it is a recorded factor, declare it in `factors`; if it says nothing of the strength, {key}ignore = [\"{h}\"]"),
+                format!("holds yes/no values ({shown}) that nothing declares: if it says which specimens broke, declare it: {key}broken = {{ column = \"{h}\", yes = \"{yes}\", no = \"{no}\" }} (yes: broke at the row's value; no: did not break by it); if it is a recorded factor, declare it in `factors`; if it says nothing of the strength, {key}ignore = [\"{h}\"]"),
             ));
         }
         let whole = cells.iter().all(|cell| {
@@ -392,7 +392,7 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
             return Err(Error::data_file(
                 &table.origin.path,
                 format!("column {h}"),
-                format!("holds whole numbers under a count's name, and the study does not use it: if each row stands for that many specimens, declare it: {key}count = \"{h}\"; if it is something else, {key}ignore = [\"{h}\"]"),
+                format!("holds whole numbers under a count's name, and nothing declares it: if each row stands for that many specimens, declare it: {key}count = \"{h}\"; if it is something else, {key}ignore = [\"{h}\"]"),
             ));
         }
     }

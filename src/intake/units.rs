@@ -7,7 +7,7 @@
 //! |---|---|---|
 //! | length | m | m, mm, µm (`um`, `μm`) |
 //! | force | N | N, kN, mN, kgf (`kp`; × 9.80665 N), lbf (× 4.4482216152605 N) |
-//! | stress | Pa | Pa, kPa, MPa (`N/mm²`, `N/mm2`), GPa, psi (lbf/in² = 6894.757… Pa), ksi |
+//! | stress | Pa | Pa, kPa, MPa (`N/mm²`, `N/mm2`, `MN/m²`), GPa, kgf/mm² (`kp/mm²`; × 9.80665e6 Pa), psi (`lbf/in²`, `lb/in²` = 6894.757… Pa), ksi |
 //! | temperature | °C | °C (`degC`, `C`, `ºC`), K (− 273.15) |
 //! | velocity | m/s | m/s, mm/s |
 //! | ratio | – | `-`, `1`, or none; `%` (× 0.01) |
@@ -151,7 +151,7 @@ const fn unit(symbol: &'static str, quantity: Quantity, scale: &'static str, spe
 }
 
 /// Every unit the intake knows (module docs). No two spellings collide without case.
-pub const UNITS: [Unit; 21] = [
+pub const UNITS: [Unit; 22] = [
     unit("m", Quantity::Length, "1", &["m"]),
     unit("mm", Quantity::Length, "1e-3", &["mm"]),
     unit("µm", Quantity::Length, "1e-6", &["µm", "um", "μm", "micron", "microns"]),
@@ -162,9 +162,10 @@ pub const UNITS: [Unit; 21] = [
     unit("lbf", Quantity::Force, "4.4482216152605", &["lbf"]),
     unit("Pa", Quantity::Stress, "1", &["pa"]),
     unit("kPa", Quantity::Stress, "1e3", &["kpa"]),
-    unit("MPa", Quantity::Stress, "1e6", &["mpa", "n/mm²", "n/mm2", "n/mm^2"]),
+    unit("MPa", Quantity::Stress, "1e6", &["mpa", "n/mm²", "n/mm2", "n/mm^2", "mn/m²", "mn/m2", "mn/m^2"]),
     unit("GPa", Quantity::Stress, "1e9", &["gpa"]),
-    Unit { symbol: "psi", quantity: Quantity::Stress, scale: "4.4482216152605e8", divisor: 64516, offset: "0", spellings: &["psi"] },
+    unit("kgf/mm²", Quantity::Stress, "9.80665e6", &["kgf/mm²", "kgf/mm2", "kgf/mm^2", "kp/mm²", "kp/mm2", "kp/mm^2"]),
+    Unit { symbol: "psi", quantity: Quantity::Stress, scale: "4.4482216152605e8", divisor: 64516, offset: "0", spellings: &["psi", "lbf/in²", "lbf/in2", "lbf/in^2", "lb/in²", "lb/in2", "lb/in^2"] },
     Unit { symbol: "ksi", quantity: Quantity::Stress, scale: "4.4482216152605e11", divisor: 64516, offset: "0", spellings: &["ksi"] },
     unit("°C", Quantity::Temperature, "1", &["°c", "ºc", "degc", "c", "celsius", "deg c", "° c"]),
     Unit { symbol: "K", quantity: Quantity::Temperature, scale: "1", divisor: 1, offset: "-273.15", spellings: &["k", "kelvin"] },
@@ -282,6 +283,11 @@ mod tests {
         assert_eq!(unit_of(Quantity::Force, "KGF").unwrap().symbol, "kgf");
         assert_eq!(unit_of(Quantity::Stress, "MPa").unwrap().symbol, "MPa");
         assert_eq!(unit_of(Quantity::Stress, "N/mm²").unwrap().symbol, "MPa");
+        // The stress units of older strength tables.
+        assert_eq!(unit_of(Quantity::Stress, "MN/m²").unwrap().symbol, "MPa");
+        assert_eq!(unit_of(Quantity::Stress, "kp/mm2").unwrap().symbol, "kgf/mm²");
+        assert_eq!(unit_of(Quantity::Stress, "lbf/in²").unwrap().symbol, "psi");
+        assert_eq!(unit_of(Quantity::Stress, "kgf/mm²").unwrap().conversion().apply("1.5"), Some(14.709975e6));
         assert_eq!(unit_of(Quantity::Length, "um").unwrap().symbol, "µm");
         assert_eq!(unit_of(Quantity::Temperature, "K").unwrap().offset, "-273.15");
         assert!(unit_of(Quantity::Length, "N").is_none());

@@ -389,8 +389,11 @@ pub(super) fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &Lifet
             w => format!(" (m and σ_θ at {w})"),
         };
         let predicted = if model.population.predicted.is_empty() { String::new() } else { format!(" predicted for {};", model.population.predicted.join(", ")) };
+        // What the rows said beyond a break (particles not broken by the rig, classes).
+        let tally = r.observed.view().tally();
+        let rows = if tally.complete() { String::new() } else { format!(" ({}; m from the censored likelihood, bounds from the censored bootstrap)", tally.describe("particles")) };
         let mut line = format!(
-            "{}: N = {}, m = {:.2} (MLE {:.2}, {:.0} % {what} {lo:.2}–{hi:.2}), σ_θ = {:.0} MPa{reference}; effects: {effects};{predicted} at {v} m/s:",
+            "{}: N = {}{rows}, m = {:.2} (MLE {:.2}, {:.0} % {what} {lo:.2}–{hi:.2}), σ_θ = {:.0} MPa{reference}; effects: {effects};{predicted} at {v} m/s:",
             r.label,
             r.fit.n,
             r.params.shape,

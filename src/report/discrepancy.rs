@@ -266,7 +266,7 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
         xs.extend(pts.iter().chain(&open).map(|p| p.0));
         if !open.is_empty() {
             let colour_st = if si == 0 { GREY } else { c };
-            rings.push(Series { label: Some(format!("{}: {}", if si == 0 { "base" } else { "final" }, super::censored_words(open_kinds.into_iter()))), points: open, colour: colour_st, kind: Kind::Markers(Marker::Ring, 1.6) });
+            rings.push(Series { label: Some(format!("{}: {}", if si == 0 { "base" } else { "final" }, super::censored_words(open_kinds.into_iter()))), points: open, colour: colour_st, kind: Kind::Markers(Marker::Ring, 2.8) });
         }
         let Some(j) = (0..fm.len()).find(|&i| fm[i] == key && fs[i] == *st) else { continue };
         let (m, s) = (shape[j], (scale[j] / 1e6).ln());

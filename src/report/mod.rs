@@ -443,7 +443,8 @@ fn fig14_weibull_cdf(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
                 label: Some(format!("{}: {}", mats.label(&key), censored_words(no.iter().map(|&i| kind_of(i))))),
                 points: zip(pick(&px, &no).iter().map(|v| v / 1e6).collect(), pick(&pf, &no)),
                 colour: mats.colour(&key),
-                kind: Kind::Markers(Marker::Ring, 1.8),
+                // Larger than a break's marker, so a ring beside a break stays visible.
+                kind: Kind::Markers(Marker::Ring, 3.0),
             });
         }
     }
@@ -472,13 +473,13 @@ pub(crate) fn censored_words<'a>(kinds: impl Iterator<Item = &'a str>) -> String
     let words: Vec<&str> = seen
         .iter()
         .map(|k| match *k {
-            "right" => "not broken (censored)",
-            "left" => "broke below (censored)",
+            "right" => "not broken",
+            "left" => "broke below",
             "interval" => "class ends",
             _ => "censored",
         })
         .collect();
-    words.join("; ")
+    words.join(", ")
 }
 
 fn fig15_impact(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {

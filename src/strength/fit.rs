@@ -167,7 +167,7 @@ impl ModelFit {
             Some(l) => (0..self.n).map(|i| l.sample(&mut rng) * l.shift(&self.columns, i).exp()).collect(),
             None => self.reg.sample(&self.design(), self.n, &mut rng),
         };
-        let xs = x.censor(drawn);
+        let xs = x.censor(drawn, &mut rng);
         let refit = fit_model_near(xs.view(), terms, Some(self)).ok()?;
         Some((xs, refit))
     }

@@ -680,7 +680,7 @@ mod tests {
         let n = x.len();
         crate::obs::Observations {
             x: x.iter().map(|v| v.min(limit)).collect(),
-            censoring: Some(crate::obs::Censoring { kind, upper: vec![f64::NAN; n], scheme: std::sync::Arc::new(crate::obs::Scheme { right: vec![limit; n], left: vec![0.0; n], edges: vec![Vec::new(); n] }) }),
+            censoring: Some(crate::obs::Censoring { kind, upper: vec![f64::NAN; n], scheme: std::sync::Arc::new(crate::obs::Scheme { right: vec![limit; n], left: vec![0.0; n], edges: vec![Vec::new(); n], right_draws: vec![Vec::new(); n] }) }),
         }
     }
 

@@ -19,6 +19,8 @@
 //! * [`specimens`]: strength data as input — a file of specimen strengths with a size measure
 //!   and recorded factors, read through the intake into a [`Sample`] the naming loop takes
 //!   like a crush sample.
+//! * [`loglik`]: one row's log-likelihood (a break, a specimen not broken by its value, one that
+//!   broke below it or within a class) and its derivatives, for the regression's Newton steps.
 //! * [`fit`]: the crush sample (σ̄ at break per particle and its covariates), the
 //!   maximum-likelihood fit of the Weibull regression ([`regress`]) with the model's effects
 //!   (the fitted model and its fit at given terms: [`mle`]; the spread of partially pooled
@@ -44,6 +46,7 @@ pub mod effects;
 pub mod factors;
 pub mod fit;
 pub mod flaws;
+pub mod loglik;
 pub mod mle;
 pub mod model;
 pub mod options;

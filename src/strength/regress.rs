@@ -15,13 +15,9 @@
 //! ℓ = Σ_i [ −ln b + w_i − e^(w_i) − y_i ],   w_i = (y_i − ln σ_i)/b.
 //! ```
 //!
-//! **Censored and grouped rows** ([`crate::obs`]). A row that did not break by its value adds
-//! ln S = −e^w instead (right-censored); one that broke at or below it ln F = ln(1 − e^(−e^w))
-//! (left-censored); one that broke between two values ln[S(x) − S(x_u)] = −A + ln(1 − e^(−D)),
-//! A = e^(w), D = e^(w_u) − e^(w) (interval). Written as ℓ_i = −c_i s + φ(w_i, w_u,i) with c_i = 1
-//! for an exact row only, every row's gradient and Hessian in (η_i, s) follow from φ's first and
-//! second derivatives and ∂w/∂η = −1/b, ∂w/∂s = −u, ∂²w/∂η∂s = 1/b, ∂²w/∂s² = u
-//! ([`row_terms`]; unit test: central differences of ℓ for every kind).
+//! **Censored and grouped rows** ([`crate::obs`]) add the log-probability of what they say
+//! instead of the log density; each row's ℓ and its derivatives in (η_i, s) are
+//! [`super::loglik::row_terms`].
 //!
 //! It is maximised by Newton's method in (μ, β, s = ln b) with the analytic gradient and Hessian
 //! (step halving until ℓ rises; a Levenberg shift when −H is not positive definite), starting
@@ -55,8 +51,10 @@
 use nalgebra::{DMatrix, DVector};
 use rand::Rng;
 
+pub use super::loglik::{ln_density_of_log, ln_prob};
+use super::loglik::row_terms;
 use crate::error::{Error, Result};
-use crate::obs::{Censor, Obs, ln_one_minus_exp};
+use crate::obs::{Censor, Obs};
 
 /// Euler–Mascheroni constant: E[w] = −γ for the standard minimum-Gumbel w.
 const EULER_GAMMA: f64 = 0.577_215_664_901_532_9;
@@ -72,79 +70,6 @@ pub struct Design<'a> {
     pub scale_columns: &'a [Vec<f64>],
     /// Ridge precision of each column (empty or one per column; 0: unpenalised).
     pub penalty: &'a [f64],
-}
-
-/// Log density of y = ln x for Weibull strength x with scale e^ln_scale and modulus 1/b: y is
-/// minimum-Gumbel with location ln_scale and scale b, ln f = −ln b + w − e^w with
-/// w = (y − ln_scale)/b (the crate's one copy; the density of x subtracts y).
-pub fn ln_density_of_log(y: f64, ln_scale: f64, b: f64) -> f64 {
-    let w = (y - ln_scale) / b;
-    -b.ln() + w - w.exp()
-}
-
-/// ln P(row i of `x`) for Weibull strength with scale e^ln_scale and modulus 1/b, in the units
-/// of x: the density for an exact row, the survival, CDF or class probability for a censored
-/// or interval one ([`Obs::ln_prob`]).
-pub fn ln_prob(x: Obs, i: usize, ln_scale: f64, b: f64) -> f64 {
-    let w = |v: f64| (v.ln() - ln_scale) / b;
-    x.ln_prob(i, |v| ln_density_of_log(v.ln(), ln_scale, b) - v.ln(), |v| -w(v).exp())
-}
-
-/// One row's log-likelihood and its derivatives in the location η and s = ln b (module docs):
-/// `[ℓ, ∂ℓ/∂η, ∂ℓ/∂s, ∂²ℓ/∂η², ∂²ℓ/∂η∂s, ∂²ℓ/∂s²]`, for a row of kind `kind` whose log
-/// values (less any offset) are `ya` (the value, or an interval's lower end) and `yb` (an
-/// interval's upper end), at b = e^s; `shift` adds to both standardised values (the tied size
-/// column, k t_i). ℓ omits the exact row's −y (a constant).
-#[inline]
-pub fn row_terms(kind: Censor, ya: f64, yb: f64, eta: f64, s: f64, b: f64, shift: f64) -> [f64; 6] {
-    // φ's derivatives in its arguments (w_a, w_b), then the chain rule.
-    let (l, exact, u, d1, d2): (f64, bool, [f64; 2], [f64; 2], [[f64; 2]; 2]) = match kind {
-        Censor::Exact => {
-            let u = (ya - eta) / b;
-            let ew = (u + shift).exp();
-            (u + shift - ew, true, [u, 0.0], [1.0 - ew, 0.0], [[-ew, 0.0], [0.0, 0.0]])
-        }
-        Censor::Right => {
-            let u = (ya - eta) / b;
-            let a = (u + shift).exp();
-            (-a, false, [u, 0.0], [-a, 0.0], [[-a, 0.0], [0.0, 0.0]])
-        }
-        Censor::Left => {
-            let u = (ya - eta) / b;
-            let w = u + shift;
-            let a = w.exp();
-            // φ = ln(1 − e^(−A)); φ' = A q, φ'' = A q (1 − A − A q), q = 1/(e^A − 1).
-            let aq = if a < 1e-300 { 1.0 } else if a > 700.0 { 0.0 } else { a / a.exp_m1() };
-            (ln_one_minus_exp(-a), false, [u, 0.0], [aq, 0.0], [[aq * (1.0 - a - aq), 0.0], [0.0, 0.0]])
-        }
-        Censor::Interval => {
-            let (ua, ub) = ((ya - eta) / b, (yb - eta) / b);
-            let a = (ua + shift).exp();
-            // D = e^(w_b) − e^(w_a) = A (e^(w_b − w_a) − 1), without cancellation.
-            let d = a * ((yb - ya) / b).exp_m1();
-            let bb = a + d;
-            let q = if d > 700.0 { 0.0 } else { 1.0 / d.exp_m1() };
-            let (qa, qb) = (a * q, if q == 0.0 { 0.0 } else { bb * q });
-            let l = -a + ln_one_minus_exp(-d);
-            let d1 = [-a - qa, qb];
-            let d2 = [[-(a + qa) * (1.0 + a * q), qa * bb * (1.0 + q)], [qa * bb * (1.0 + q), qb * (1.0 - bb * (1.0 + q))]];
-            (l, false, [ua, ub], d1, d2)
-        }
-    };
-    let (mut g1, mut g2, mut hee, mut hes, mut hss) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for a in 0..2 {
-        g1 += d1[a];
-        g2 += d1[a] * u[a];
-        hes += d1[a];
-        hss += d1[a] * u[a];
-        for c in 0..2 {
-            hee += d2[a][c];
-            hes += d2[a][c] * u[c];
-            hss += d2[a][c] * u[a] * u[c];
-        }
-    }
-    let c = if exact { 1.0 } else { 0.0 };
-    [l - c * s, -g1 / b, -c - g2, hee / (b * b), hes / b, hss]
 }
 
 /// New crushed particles drawn from a population of rows: each particle's row uniformly with
@@ -368,7 +293,6 @@ fn fit_with(x: Obs, design: &Design, tie: Option<(&[f64], f64)>, start: Option<&
     // start takes one point per row (Obs::point).
     let off = |i: usize| design.offset.map_or(0.0, |o| o[i]);
     let kinds: Vec<Censor> = (0..n).map(|i| x.kind(i)).collect();
-    let complete = kinds.iter().all(|k| *k == Censor::Exact);
     let y: Vec<f64> = (0..n).map(|i| x.x[i].ln() - off(i)).collect();
     let y_upper: Vec<f64> = (0..n).map(|i| if kinds[i] == Censor::Interval { x.upper(i).ln() - off(i) } else { f64::NAN }).collect();
     let y_start: Vec<f64> = (0..n).map(|i| x.point(i).ln() - off(i)).collect();
@@ -411,14 +335,7 @@ fn fit_with(x: Obs, design: &Design, tie: Option<(&[f64], f64)>, start: Option<&
             // The row's ℓ and its derivatives in (η_i, s_i); w = u (+ k t_i when a column is
             // tied to 1/b).
             let shift = tie.map_or(0.0, |(t, kk)| kk * t[i]);
-            let [li, ge, gs, hee, hes, hs] = if complete {
-                // The exact row, inline (the common case; row_terms gives the same numbers).
-                let u = (y[i] - eta[i]) / b;
-                let ew = (u + shift).exp();
-                [-s + u + shift - ew, (ew - 1.0) / b, -1.0 - u + u * ew, -ew / (b * b), -(u * ew + ew - 1.0) / b, u - u * ew - u * u * ew]
-            } else {
-                row_terms(kinds[i], y[i], y_upper[i], eta[i], s, b, shift)
-            };
+            let [li, ge, gs, hee, hes, hs] = row_terms(kinds[i], y[i], y_upper[i], eta[i], s, b, shift);
             l += li;
             let zi = z.row(i);
             for a in 0..=k {
@@ -645,32 +562,6 @@ mod tests {
             if n == 2000 {
                 let w = 1.644_854 * f.beta_se[0];
                 assert!(((hi - lo) / (2.0 * w) - 1.0).abs() < 0.03, "{lo} {hi} vs ±{w}");
-            }
-        }
-    }
-
-    #[test]
-    fn every_kind_of_row_has_the_derivatives_of_its_likelihood() {
-        // Central differences of ℓ in (η, s) against row_terms, for each kind and a tie shift.
-        for (kind, ya, yb) in [(Censor::Exact, 0.3, f64::NAN), (Censor::Right, 0.2, f64::NAN), (Censor::Left, -0.1, f64::NAN), (Censor::Interval, -0.2, 0.05), (Censor::Interval, 0.1, 0.1004)] {
-            for shift in [0.0, 0.4] {
-                let at = |eta: f64, s: f64| row_terms(kind, ya, yb, eta, s, s.exp(), shift);
-                let (eta, s) = (0.05, (0.12f64).ln());
-                let t = at(eta, s);
-                let h = 1e-5;
-                let fd = |f: &dyn Fn(f64, f64) -> f64| [(f(eta + h, s) - f(eta - h, s)) / (2.0 * h), (f(eta, s + h) - f(eta, s - h)) / (2.0 * h)];
-                let g = fd(&|e, s| at(e, s)[0]);
-                let he = fd(&|e, s| at(e, s)[1]);
-                let hs = fd(&|e, s| at(e, s)[2]);
-                let close = |a: f64, b: f64| (a - b).abs() < 1e-5 * (1.0 + a.abs());
-                assert!(close(t[1], g[0]) && close(t[2], g[1]), "{kind:?}: gradient {:?} vs {g:?}", &t[1..3]);
-                assert!(close(t[3], he[0]) && close(t[4], he[1]) && close(t[4], hs[0]) && close(t[5], hs[1]), "{kind:?}: Hessian {:?} vs {he:?} {hs:?}", &t[3..]);
-                // The value is the kind's log-probability (ln_prob), less the exact row's −y.
-                let x = [ya.exp()];
-                let c = crate::obs::Censoring { kind: vec![kind], upper: vec![yb.exp()], scheme: Default::default() };
-                let lp = ln_prob(Obs { x: &x, censoring: Some(&c) }, 0, eta - shift * s.exp(), s.exp());
-                let y = if kind == Censor::Exact { ya } else { 0.0 };
-                assert!((t[0] - y - lp).abs() < 1e-12 * (1.0 + lp.abs()), "{kind:?}: {} vs {lp}", t[0] - y);
             }
         }
     }

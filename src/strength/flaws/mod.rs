@@ -17,27 +17,9 @@
 //! scaled by its median — by a box-constrained BFGS with the analytic gradient (below) from
 //! [`STARTS`] deterministic starts: the two components split at the 20, 35, 50, 65 and 80 %
 //! quantiles, each half given its own Weibull MLE, and the one-population fit with a component
-//! two and five times weaker. With y_j = ln x − ln σ_j and e_j = (x/σ_j)^m_j:
-//!
-//! ```text
-//! ∂ ln f_j/∂ ln σ_j = m_j (e_j − 1)          ∂ ln f_j/∂ ln m_j = 1 + m_j y_j (1 − e_j)
-//! mixture:   ∂ℓ_i/∂θ_j = r_j ∂ ln f_j/∂θ_j,  ∂ℓ_i/∂ logit p = r_1 − p,   r_j = p_j f_j / f
-//! competing: ∂ℓ_i/∂ ln σ_j = m_j (e_j − w_j),  ∂ℓ_i/∂ ln m_j = w_j (1 + m_j y_j) − m_j y_j e_j,
-//!            w_j = h_j / (h_1 + h_2),  h_j = (m_j/σ_j)(x/σ_j)^(m_j−1)
-//! ```
-//!
-//! **Censored and grouped rows** ([`crate::obs`]) add ln S, ln F or ln[S(x) − S(x_u)] of the law
-//! (S = p S₁ + (1 − p) S₂ for the mixture, S₁ S₂ for competing risks), from ln S and its
-//! gradient (with r_j the shares of p_j S_j in S for the mixture):
-//!
-//! ```text
-//! ∂ ln S/∂ ln σ_j = r_j m_j e_j     ∂ ln S/∂ ln m_j = −r_j m_j y_j e_j     ∂ ln S/∂ logit p = r_1 − p
-//! right: ∇ℓ = ∇ ln S(x)     left: ∇ℓ = −[S/(1 − S)] ∇ ln S(x)
-//! interval: ∇ℓ = [∇ ln S(x) − ρ ∇ ln S(x_u)]/(1 − ρ),  ρ = S(x_u)/S(x)
-//! ```
-//!
-//! (r_j = 1 for competing risks.) The starts split the rows' points ([`crate::obs::Obs::point`])
-//! as if they were breaks; only the starts do.
+//! two and five times weaker (the likelihood, its gradient and the rows that do not say a
+//! break: [`likelihood`]). The starts split the rows' points ([`crate::obs::Obs::point`]) as if
+//! they were breaks; only the starts do.
 //!
 //! Moduli are kept in [[`M_MIN`], [`M_MAX`]]: a mixture's likelihood is unbounded as a component
 //! collapses onto one specimen with m → ∞.
@@ -74,8 +56,11 @@
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
+mod likelihood;
+
+use likelihood::{Rows, log_sum_and_shares, loglik_grad, scaled, shift_at};
 use crate::error::{Error, Result};
-use crate::obs::{Censor, Obs, ln_one_minus_exp};
+use crate::obs::Obs;
 use crate::weibull::fit_mle;
 
 /// Number of starts.
@@ -157,180 +142,6 @@ pub struct FlawFit {
 fn ln_weibull_pdf(x: f64, s: f64, m: f64) -> f64 {
     let z = x / s;
     m.ln() - s.ln() + (m - 1.0) * z.ln() - z.powf(m)
-}
-
-/// The rows' log values (x scaled by its median), what each row says, and an interval's upper
-/// log value: what the likelihood reads.
-struct Rows<'a> {
-    lnx: &'a [f64],
-    /// Each row's kind (empty: every row exact).
-    kind: &'a [Censor],
-    /// ln of an interval's upper end (NaN for the other rows; empty without censoring).
-    lnu: &'a [f64],
-}
-
-impl Rows<'_> {
-    fn exact(&self, i: usize) -> bool {
-        self.kind.is_empty() || self.kind[i] == Censor::Exact
-    }
-}
-
-/// ln S at ln x (less the row's shift) and its gradient: the law's coordinates in `gs[..k0]`,
-/// ∂/∂η (= Σ_j ∂/∂ ln σ_j) in `gs[k0]`.
-fn ln_sf_grad(kind: Populations, lx: f64, t: &[f64], gs: &mut [f64; 6]) -> f64 {
-    let k0 = kind.parameters();
-    gs.iter_mut().for_each(|v| *v = 0.0);
-    match kind {
-        Populations::Mixture => {
-            let p = 1.0 / (1.0 + (-t[0]).exp());
-            let lw = [-(1.0 + (-t[0]).exp()).ln(), -(1.0 + t[0].exp()).ln()];
-            let (u, m) = ([t[1], t[3]], [t[2].exp(), t[4].exp()]);
-            let (y, e) = standardised(lx, u, m);
-            let (ls, r) = log_sum_and_shares([lw[0] - e[0], lw[1] - e[1]]);
-            gs[0] = r[0] - p;
-            for j in 0..2 {
-                gs[1 + 2 * j] = r[j] * m[j] * e[j];
-                gs[2 + 2 * j] = -r[j] * m[j] * y[j] * e[j];
-                gs[k0] += r[j] * m[j] * e[j];
-            }
-            ls
-        }
-        Populations::Competing => {
-            let (u, m) = ([t[0], t[2]], [t[1].exp(), t[3].exp()]);
-            let (y, e) = standardised(lx, u, m);
-            for j in 0..2 {
-                gs[2 * j] = m[j] * e[j];
-                gs[2 * j + 1] = -m[j] * y[j] * e[j];
-                gs[k0] += m[j] * e[j];
-            }
-            -e[0] - e[1]
-        }
-    }
-}
-
-/// A censored or interval row's ℓ and its gradient into `g` (the law's coordinates, then one β
-/// per column of `z`; module docs).
-fn censored_row(kind: Populations, rows: &Rows, i: usize, h: f64, z: &[Vec<f64>], t: &[f64], g: &mut [f64]) -> f64 {
-    let k0 = kind.parameters();
-    let (mut ga, mut gb) = ([0.0; 6], [0.0; 6]);
-    let (l, wa, wb) = match rows.kind[i] {
-        Censor::Right => (ln_sf_grad(kind, rows.lnx[i] - h, t, &mut ga), 1.0, 0.0),
-        Censor::Left => {
-            let lb = ln_sf_grad(kind, rows.lnx[i] - h, t, &mut gb);
-            let l = ln_one_minus_exp(lb);
-            (l, 0.0, -(lb - l).exp())
-        }
-        Censor::Interval => {
-            let la = ln_sf_grad(kind, rows.lnx[i] - h, t, &mut ga);
-            let lb = ln_sf_grad(kind, rows.lnu[i] - h, t, &mut gb);
-            let rho = (lb - la).exp();
-            (la + ln_one_minus_exp(lb - la), 1.0 / (1.0 - rho), -rho / (1.0 - rho))
-        }
-        Censor::Exact => unreachable!("exact rows are the density's"),
-    };
-    for c in 0..k0 {
-        g[c] += wa * ga[c] + wb * gb[c];
-    }
-    let geta = wa * ga[k0] + wb * gb[k0];
-    for (k, col) in z.iter().enumerate() {
-        g[k0 + k] += geta * col[i];
-    }
-    l
-}
-
-/// Log-likelihood at unconstrained θ of the rows `rows`, and its gradient in `g` (−∞,
-/// gradient unset, where the likelihood is not finite). θ is the law's coordinates followed by
-/// one β per column of `z`: row i's scales are shifted by η_i = Σ_k β_k z_k,i, so an exact row's
-/// ℓ_i = ℓ_law(ln x_i − η_i) − η_i and ∂ℓ_i/∂η_i = Σ_j ∂ℓ_i/∂ ln σ_j; a censored row's ℓ is ln S,
-/// ln F or a class's probability of the shifted law ([`censored_row`]).
-fn loglik_grad(kind: Populations, rows: &Rows, z: &[Vec<f64>], t: &[f64], g: &mut [f64]) -> f64 {
-    g.iter_mut().for_each(|v| *v = 0.0);
-    let mut l = 0.0;
-    let k0 = kind.parameters();
-    let eta = |i: usize| shift_at(z, &t[k0..], i);
-    let lnx = rows.lnx;
-    match kind {
-        Populations::Mixture => {
-            let p = 1.0 / (1.0 + (-t[0]).exp());
-            let lw = [-(1.0 + (-t[0]).exp()).ln(), -(1.0 + t[0].exp()).ln()];
-            let (u, v) = ([t[1], t[3]], [t[2], t[4]]);
-            let m = [v[0].exp(), v[1].exp()];
-            for (i, &lx0) in lnx.iter().enumerate() {
-                let h = eta(i);
-                if !rows.exact(i) {
-                    l += censored_row(kind, rows, i, h, z, t, g);
-                    continue;
-                }
-                let (y, e) = standardised(lx0 - h, u, m);
-                let a = [0, 1].map(|j| lw[j] + v[j] - u[j] + (m[j] - 1.0) * y[j] - e[j]);
-                // ln(e^a₀ + e^a₁) and the responsibilities from one exponential.
-                let (li, r) = log_sum_and_shares(a);
-                l += li - h;
-                g[0] += r[0] - p;
-                let mut gu = 0.0;
-                for j in 0..2 {
-                    if r[j] > 0.0 {
-                        let du = r[j] * m[j] * (e[j] - 1.0);
-                        g[1 + 2 * j] += du;
-                        gu += du;
-                        g[2 + 2 * j] += r[j] * (1.0 + m[j] * y[j] * (1.0 - e[j]));
-                    }
-                }
-                for (k, c) in z.iter().enumerate() {
-                    g[k0 + k] += gu * c[i];
-                }
-            }
-        }
-        Populations::Competing => {
-            let (u, v) = ([t[0], t[2]], [t[1], t[3]]);
-            let m = [v[0].exp(), v[1].exp()];
-            for (i, &lx0) in lnx.iter().enumerate() {
-                let h = eta(i);
-                if !rows.exact(i) {
-                    l += censored_row(kind, rows, i, h, z, t, g);
-                    continue;
-                }
-                let (y, e) = standardised(lx0 - h, u, m);
-                let lh = [0, 1].map(|j| v[j] - u[j] + (m[j] - 1.0) * y[j]);
-                let (lht, share) = log_sum_and_shares(lh);
-                l += lht - e[0] - e[1] - h;
-                let mut gu = 0.0;
-                for j in 0..2 {
-                    let w = share[j];
-                    let du = m[j] * (e[j] - w);
-                    g[2 * j] += du;
-                    gu += du;
-                    g[2 * j + 1] += w * (1.0 + m[j] * y[j]) - m[j] * y[j] * e[j];
-                }
-                for (k, c) in z.iter().enumerate() {
-                    g[k0 + k] += gu * c[i];
-                }
-            }
-        }
-    }
-    if l.is_finite() && g.iter().all(|v| v.is_finite()) { l } else { f64::NEG_INFINITY }
-}
-
-/// Row i's scale shift η_i = Σ_k β_k z_k,i.
-fn shift_at(z: &[Vec<f64>], beta: &[f64], i: usize) -> f64 {
-    z.iter().zip(beta).map(|(c, b)| b * c[i]).sum()
-}
-
-/// y_j = ln x − ln σ_j and e_j = e^(m_j y_j) = (x/σ_j)^m_j of both populations at ln x.
-#[inline]
-fn standardised(lx: f64, u: [f64; 2], m: [f64; 2]) -> ([f64; 2], [f64; 2]) {
-    let y = [lx - u[0], lx - u[1]];
-    (y, [(m[0] * y[0]).exp(), (m[1] * y[1]).exp()])
-}
-
-/// ln(e^a₀ + e^a₁) and the shares e^(a_j) / (e^a₀ + e^a₁), from one exponential.
-fn log_sum_and_shares(a: [f64; 2]) -> (f64, [f64; 2]) {
-    let (hi, lo) = if a[0] >= a[1] { (0, 1) } else { (1, 0) };
-    let q = (a[lo] - a[hi]).exp();
-    let mut share = [0.0; 2];
-    share[hi] = 1.0 / (1.0 + q);
-    share[lo] = q * share[hi];
-    (a[hi] + q.ln_1p(), share)
 }
 
 /// The box the search stays in: scales within e^±20 of the median, the mixture's logit weight
@@ -434,16 +245,6 @@ fn bfgs(kind: Populations, rows: &Rows, z: &[Vec<f64>], start: &[f64], b: &[(f64
 /// the identifiability verdict.
 pub fn fit(kind: Populations, x: Obs) -> Result<FlawFit> {
     fit_shifted(kind, x, &[])
-}
-
-/// The likelihood's view of `x` scaled by `med`: log values, kinds, upper log values.
-fn scaled(x: Obs, med: f64) -> (Vec<f64>, Vec<Censor>, Vec<f64>) {
-    let lnx = x.x.iter().map(|v| (v / med).ln()).collect();
-    if x.complete() {
-        return (lnx, Vec::new(), Vec::new());
-    }
-    let n = x.len();
-    ((lnx), (0..n).map(|i| x.kind(i)).collect(), (0..n).map(|i| (x.upper(i) / med).ln()).collect())
 }
 
 /// [`fit`] with both populations' scales shifted row by row by the scale effects of the columns
@@ -669,32 +470,9 @@ impl FlawFit {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::obs::Censor;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
-
-    #[test]
-    fn the_analytic_gradient_equals_central_differences() {
-        let x = [0.6f64, 0.8, 0.9, 1.0, 1.05, 1.1, 1.3, 0.4].map(f64::ln);
-        let z = vec![vec![0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.5, -1.0]];
-        // Every row exact, then rows of every kind (right, left, interval among exact ones).
-        let kinds = [Censor::Exact, Censor::Right, Censor::Exact, Censor::Left, Censor::Interval, Censor::Exact, Censor::Right, Censor::Interval];
-        let upper = [f64::NAN, f64::NAN, f64::NAN, f64::NAN, 1.2f64.ln(), f64::NAN, f64::NAN, 0.7f64.ln()];
-        for rows in [Rows { lnx: &x, kind: &[], lnu: &[] }, Rows { lnx: &x, kind: &kinds, lnu: &upper }] {
-            for (kind, t) in [(Populations::Mixture, vec![0.3, -0.2, 1.5, 0.1, 2.2, 0.15]), (Populations::Competing, vec![-0.1, 1.2, 0.2, 2.5, -0.2])] {
-                let mut g = vec![0.0; t.len()];
-                let mut scratch = g.clone();
-                let l = loglik_grad(kind, &rows, &z, &t, &mut g);
-                assert!(l.is_finite());
-                for k in 0..t.len() {
-                    let (mut a, mut b) = (t.clone(), t.clone());
-                    a[k] += 1e-6;
-                    b[k] -= 1e-6;
-                    let fd = (loglik_grad(kind, &rows, &z, &a, &mut scratch) - loglik_grad(kind, &rows, &z, &b, &mut scratch)) / 2e-6;
-                    assert!((fd - g[k]).abs() < 1e-6 * (1.0 + fd.abs()), "{kind:?} coordinate {k}: analytic {} vs difference {fd}", g[k]);
-                }
-            }
-        }
-    }
 
     #[test]
     fn a_censored_row_adds_the_law_s_survival_and_a_class_its_probability() {

@@ -329,39 +329,24 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
     }
     // Rows counting several particles become that many; then what the rows say.
     let named: Vec<String> = places.iter().map(|(row, _)| table.place(*row, None)).collect();
-    let (specimens, line) = crate::intake::observed::expansion(&values, &named);
-    if let Some(line) = line {
-        let counts: Vec<usize> = values.iter().map(|v| v.count).collect();
-        // Specimens of one row are consecutive: the j-th of a row counting several is `id#j`.
-        let (mut last, mut j) = (usize::MAX, 0);
-        records = specimens
+    let sp = crate::intake::observed::specimens(&values, &named, src, &mut provenance, "particles");
+    if sp.rows.len() != records.len() || sp.rows.iter().enumerate().any(|(i, &k)| i != k) {
+        records = sp
+            .rows
             .iter()
-            .map(|&k| {
-                if k != last {
-                    (last, j) = (k, 0);
-                }
-                j += 1;
+            .enumerate()
+            .map(|(i, &k)| {
                 let mut rec = records[k].clone();
-                if counts[k] > 1 {
-                    rec.id = format!("{}#{j}", rec.id);
-                }
+                rec.id = sp.id(i, &rec.id);
                 rec
             })
             .collect();
-        places = specimens.iter().map(|&k| places[k]).collect();
+        places = sp.rows.iter().map(|&k| places[k]).collect();
         for (_, v) in factors.iter_mut() {
-            v.keep(&specimens);
+            v.keep(&sp.rows);
         }
-        values = specimens.iter().map(|&k| values[k]).collect();
-        provenance.observed.push(format!("count column `{}`: {line}", src.count.as_deref().unwrap_or("")));
-        provenance.rows = records.len();
     }
-    let kinds: Vec<crate::obs::Censor> = values.iter().map(|v| v.kind).collect();
-    let x: Vec<f64> = values.iter().map(|v| v.value).collect();
-    let censoring = crate::obs::Censoring::of_rows(kinds, &x, values.iter().map(|v| v.upper).collect());
-    if let Some(c) = &censoring {
-        provenance.observed.push(crate::obs::Obs { x: &x, censoring: Some(c) }.tally().describe("particles"));
-    }
+    let censoring = sp.observations.censoring;
     if records.is_empty() {
         return Err(Error::data_file(path, "file", "no particle is left: every row counts 0"));
     }

@@ -61,6 +61,7 @@ fn kind_of(t: &RawTable) -> &'static str {
     let has = |n: &str| t.column(n).is_some();
     let folded: Vec<String> = t.headers.iter().map(|h| crate::intake::units::fold(&crate::intake::units::parse_header(h).name)).collect();
     let any = |names: &[&str]| folded.iter().any(|f| names.contains(&f.as_str()));
+    let strength = strength_names();
     if has("size_um_min") {
         "table1"
     } else if has("phase") {
@@ -73,7 +74,7 @@ fn kind_of(t: &RawTable) -> &'static str {
         "curves"
     } else if any(&["roundness", "sphericity", "wadellroundness", "b/l"]) && !any(&["crushforce", "f", "fmax", "force", "load", "breakingforce", "peakforce", "crushingforce"]) {
         "shape"
-    } else if !any(&["crushforce", "f", "fmax", "force", "load", "breakingforce", "peakforce", "crushingforce"]) && (strength_names().iter().any(|n| folded.contains(n)) || t.headers.iter().any(|h| crate::intake::units::parse_header(h).unit.is_some_and(|u| crate::intake::units::unit_of(crate::intake::Quantity::Stress, &u).is_some()))) {
+    } else if !any(&["crushforce", "f", "fmax", "force", "load", "breakingforce", "peakforce", "crushingforce"]) && (strength.iter().any(|n| folded.contains(n)) || t.headers.iter().any(|h| crate::intake::units::parse_header(h).unit.is_some_and(|u| crate::intake::units::unit_of(crate::intake::Quantity::Stress, &u).is_some()))) {
         "strength"
     } else {
         "crush"
@@ -139,7 +140,8 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin) -> 
         "strength" => {
             // Two stress columns and no strength: classes, which the study must declare.
             let stress: Vec<&String> = t.headers.iter().filter(|h| crate::intake::units::parse_header(h).unit.is_some_and(|u| crate::intake::units::unit_of(crate::intake::Quantity::Stress, &u).is_some())).collect();
-            let named = t.headers.iter().any(|h| strength_names().contains(&crate::intake::units::fold(&crate::intake::units::parse_header(h).name)));
+            let names = strength_names();
+            let named = t.headers.iter().any(|h| names.contains(&crate::intake::units::fold(&crate::intake::units::parse_header(h).name)));
             if src.interval.is_none() && !named && stress.len() >= 2 {
                 return Err(t.header_error(None, format!("holds stress columns {} and no strength column: if they are classes, say which ends they are in the study's data table: interval = {{ lower = \"{}\", upper = \"{}\" }} (and count = \"…\" for a column of specimens per class)", stress.iter().map(|h| format!("`{h}`")).collect::<Vec<_>>().join(", "), stress[0], stress[1])));
             }

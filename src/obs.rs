@@ -56,6 +56,22 @@ impl Censor {
             Censor::Interval => "interval",
         }
     }
+
+    /// The kind [`Censor::name`] writes, read back from a table (None for anything else).
+    pub fn parse(s: &str) -> Option<Censor> {
+        [Censor::Exact, Censor::Right, Censor::Left, Censor::Interval].into_iter().find(|k| k.name() == s)
+    }
+
+    /// Words for a plot's legend: what a point of this kind is (`not broken`, `broke below`,
+    /// `class ends`, `broke`).
+    pub fn plotted(self) -> &'static str {
+        match self {
+            Censor::Exact => "broke",
+            Censor::Right => "not broken",
+            Censor::Left => "broke below",
+            Censor::Interval => "class ends",
+        }
+    }
 }
 
 /// How a redraw of each row is censored (module docs): limits in the row's own units.

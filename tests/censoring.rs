@@ -18,35 +18,17 @@ use rand_chacha::ChaCha8Rng;
 /// The generator's modulus of σ̄ (the issue's workbook: truth 11.5).
 const TRUE_M: f64 = 11.5;
 
-/// Generator settings: 60 plain BL-like particles (no hidden effect), σ̄ Weibull with m = 11.5.
+/// Generator settings: 60 plain BL-like particles (no hidden effect), σ̄ Weibull with m = 11.5,
+/// forces and diameters read without error (the shared generator, edited).
 fn generator(seed: u64) -> String {
-    format!(
-        r#"seed = {seed}
-platen = {{ youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }}
-[[material]]
-file = "lab.csv"
-label = "BL 16/30"
-id_prefix = "BL"
-count = 60
-temperature_c = 20.0
-elastic = {{ youngs_modulus_pa = 112e9, poisson_ratio = 0.25 }}
-diameter = {{ mean = 0.00089, sd = 0.00014, min = 0.00059, max = 0.00119 }}
-roundness = {{ mean = 0.72, sd = 0.05 }}
-sphericity = {{ mean = 0.87, sd = 0.04 }}
-[material.nature]
-strength_shape = {TRUE_M}
-strength_scale_pa = 1.99e9
-reference_diameter_m = 0.0009
-size_exponent = 0.0
-curvature_exponent = 0.0
-[material.measurement]
-force_rel_sd = 0.0
-force_resolution_n = 0.1
-diameter_sd_m = 0.0
-diameter_resolution_m = 1e-6
-shape_sd = 0.01
-shape_resolution = 0.001
-"#
+    common::edited(
+        &common::bl_generator(0.0, 0.0, 60, seed, "20.0", ""),
+        &[
+            ("strength_shape = 22.0", &format!("strength_shape = {TRUE_M}")),
+            ("file = \"hidden.csv\"", "file = \"lab.csv\""),
+            ("force_rel_sd = 0.01", "force_rel_sd = 0.0"),
+            ("diameter_sd_m = 5e-6", "diameter_sd_m = 0.0"),
+        ],
     )
 }
 
@@ -78,27 +60,38 @@ fn lab_workbook(s: &Scratch, seed: u64) -> f64 {
     limit
 }
 
-/// A lifetime study of the workbook, its `data` table as given.
-fn lifetime_study(data: &str) -> String {
+/// The `[contact]` table both studies of the workbook share.
+const CONTACT: &str = r#"[contact]
+platen = { youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }
+averaging = { measure = "line", outer = "contact_multiple", kappa = 2.0 }"#;
+
+/// The workbook's material, its `data` table as given.
+fn lab_material(data: &str) -> String {
     format!(
-        r#"# Purpose: the lab workbook's Weibull law. Good result: the band covers the truth.
-kind = "lifetime"
-seed = 7
-[contact]
-platen = {{ youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }}
-averaging = {{ measure = "line", outer = "contact_multiple", kappa = 2.0 }}
-[impact]
-target = {{ youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }}
-velocity_points = 21
-[weibull]
-pivotal_samples = 2000
-[[material]]
+        r#"[[material]]
 key = "lab"
 label = "BL 16/30 (lab)"
 data = {data}
 elastic = {{ youngs_modulus_pa = 112e9, poisson_ratio = 0.25 }}
 density_kg_m3 = 3060
 "#
+    )
+}
+
+/// A lifetime study of the workbook, its `data` table as given.
+fn lifetime_study(data: &str) -> String {
+    format!(
+        r#"# Purpose: the lab workbook's Weibull law. Good result: the band covers the truth.
+kind = "lifetime"
+seed = 7
+{CONTACT}
+[impact]
+target = {{ youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }}
+velocity_points = 21
+[weibull]
+pivotal_samples = 2000
+{}"#,
+        lab_material(data)
     )
 }
 
@@ -157,9 +150,7 @@ fn the_naming_loop_names_no_shape_misfit_once_the_unbroken_particles_are_declare
         r#"# Purpose: the naming loop on the lab workbook. Good result: nothing named, no misfit.
 kind = "discrepancy"
 seed = 5
-[contact]
-platen = {{ youngs_modulus_pa = 210e9, poisson_ratio = 0.3 }}
-averaging = {{ measure = "line", outer = "contact_multiple", kappa = 2.0 }}
+{CONTACT}
 [discrepancy]
 bootstrap = 199
 permutations = 199
@@ -169,13 +160,8 @@ bootstrap = 50
 particles = [20]
 replicates = 2
 bootstrap = 99
-[[material]]
-key = "lab"
-label = "BL 16/30 (lab)"
-data = {BROKEN}
-elastic = {{ youngs_modulus_pa = 112e9, poisson_ratio = 0.25 }}
-density_kg_m3 = 3060
-"#
+{}"#,
+        lab_material(BROKEN)
     );
     s.write("studies/lab_naming.toml", &study);
     let out = s.run(&["run", "studies/lab_naming.toml", "--quiet"]);

@@ -399,17 +399,62 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
     Ok(())
 }
 
-/// Expands rows that count several specimens: the index of each specimen's row, and the line of
-/// the provenance record (`count column `Anzahl`: 10 rows → 389 specimens; dropped (count 0): rows 4, 7`).
-pub fn expansion(values: &[RowValue], places: &[String]) -> (Vec<usize>, Option<String>) {
+/// The specimens a file's rows stand for: a row counting k becomes k specimens, and what each
+/// says (exact, censored, interval) becomes the observations' censoring. Records in
+/// `provenance` the expansion (`count column `Anzahl`: 10 rows → 389 specimens; dropped
+/// (counting 0): row 4`) and the tally of what the specimens say; `noun` names them
+/// (`particles`, `specimens`).
+pub fn specimens(values: &[RowValue], places: &[String], src: &Source, provenance: &mut Provenance, noun: &str) -> Specimens {
     let counts: Vec<usize> = values.iter().map(|v| v.count).collect();
-    if counts.iter().all(|k| *k == 1) {
-        return ((0..values.len()).collect(), None);
+    let (rows, copy) = if counts.iter().all(|k| *k == 1) {
+        ((0..values.len()).collect(), vec![None; values.len()])
+    } else {
+        let rows = crate::obs::expand(&counts);
+        // Specimens of one row are consecutive: the j-th of a row counting several is `id#j`.
+        let (mut last, mut j) = (usize::MAX, 0);
+        let copy = rows
+            .iter()
+            .map(|&k| {
+                if k != last {
+                    (last, j) = (k, 0);
+                }
+                j += 1;
+                (counts[k] > 1).then_some(j)
+            })
+            .collect();
+        let zero: Vec<&str> = counts.iter().zip(places).filter(|(k, _)| **k == 0).map(|(_, p)| p.as_str()).collect();
+        let dropped = if zero.is_empty() { String::new() } else { format!("; dropped (counting 0): {}", zero.join(", ")) };
+        provenance.observed.push(format!("count column `{}`: {} rows → {} {noun}{dropped}", src.count.as_deref().unwrap_or(""), values.len(), rows.len()));
+        provenance.rows = rows.len();
+        (rows, copy)
+    };
+    let x: Vec<f64> = rows.iter().map(|&k| values[k].value).collect();
+    let censoring = crate::obs::Censoring::of_rows(rows.iter().map(|&k| values[k].kind).collect(), &x, rows.iter().map(|&k| values[k].upper).collect());
+    if let Some(c) = &censoring {
+        provenance.observed.push(crate::obs::Obs { x: &x, censoring: Some(c) }.tally().describe(noun));
     }
-    let idx = crate::obs::expand(&counts);
-    let zero: Vec<&str> = counts.iter().zip(places).filter(|(k, _)| **k == 0).map(|(_, p)| p.as_str()).collect();
-    let dropped = if zero.is_empty() { String::new() } else { format!("; dropped (counting 0): {}", zero.join(", ")) };
-    (idx.clone(), Some(format!("{} rows → {} specimens{dropped}", values.len(), idx.len())))
+    Specimens { rows, copy, observations: crate::obs::Observations { x, censoring } }
+}
+
+/// A file's rows as specimens ([`specimens`]): a row counting k stands k times.
+#[derive(Debug, Clone)]
+pub struct Specimens {
+    /// The row (index into the rows read) each specimen comes from.
+    pub rows: Vec<usize>,
+    /// Each specimen's number within its row, where the row counts several (`id#j`).
+    pub copy: Vec<Option<usize>>,
+    /// The specimens' values and what each says (exact, censored, interval).
+    pub observations: crate::obs::Observations,
+}
+
+impl Specimens {
+    /// Specimen `i`'s id from its row's: `A` or, of a row counting several, `A#j`.
+    pub fn id(&self, i: usize, row_id: &str) -> String {
+        match self.copy[i] {
+            Some(j) => format!("{row_id}#{j}"),
+            None => row_id.to_string(),
+        }
+    }
 }
 
 #[cfg(test)]

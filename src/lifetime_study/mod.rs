@@ -268,6 +268,8 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
         let sigma_bar: Vec<f64> = at_break.iter().map(|c| c.mean_tensile).collect();
         let sample = sample_of(&data, &m.elastic, &s.contact)?;
         let failed = |e: Error| Error::data_file(&data.path, "all rows", format!("Weibull fit of the average tensile stress failed: {e}"));
+        // The censored branch's no-effect fit, kept for the strength model when it has no effects.
+        let mut base_fit = None;
         let (fit, pivotal, fisher, draws, bound_method, unbiasing) = if sample.strength.view().complete() {
             let fit = fit_mle(&sigma_bar).map_err(failed)?;
             let piv = simulate_pivotal(fit.n, s.weibull.pivotal_samples, pivotal_seed(s.seed, fit.n))?;
@@ -292,6 +294,7 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
             let uf = base.unbiased_shape(&boot) / mle.shape;
             let pivotal = PivotalBounds { unbiasing_factor: uf, shape_unbiased: uf * mle.shape, confidence: s.weibull.confidence, shape: (qm[0], qm[1]), scale: (qs[0], qs[1]) };
             let fisher = FisherBounds::from_log_cov(mle, reg.location_scale_cov, s.weibull.confidence).map_err(failed)?;
+            base_fit = Some(base);
             (fit, pivotal, fisher, draws, CENSORED_BOUNDS, CENSORED_UNBIASING)
         };
         pb.inc(1);
@@ -303,7 +306,10 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
         // The strength model: the deliverable's unless the study names effects.
         let naming = crate::strength::NamingSettings { seed: s.seed.wrapping_add(7919 * index as u64), ..s.strength.naming.clone() };
         let effects = crate::discrepancy::workflow::resolve(&s.strength.effects, &sample, &naming)?;
-        let sfit = StrengthFit::new(&sample, &effects, s.strength.naming.gamma, &m.key)?;
+        let sfit = match base_fit {
+            Some(base) if effects.is_empty() => base,
+            _ => StrengthFit::new(&sample, &effects, s.strength.naming.gamma, &m.key)?,
+        };
         samples.push(sample.clone());
         let population = crate::strength::Population::of_material(m, index, &data, &loaded.path, s.seed)?;
         let model = LifetimeModel::new(&m.key, &m.label, m.sphere(&data), s.impact.target, s.contact.averaging, sfit, population).map_err(|e| e.in_study(&loaded.path.display().to_string(), &format!("material[{index}]")))?;

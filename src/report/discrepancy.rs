@@ -217,12 +217,7 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
     // What each row says and an interval's upper end (reports without censoring lack them).
     let observed = t.s("observed").ok();
     let (raw_up, adj_up) = (t.f("upper_pa").ok(), t.f("adjusted_upper_pa").ok());
-    let kind_of = |i: usize| match observed.as_ref().map_or("exact", |o| o[i].as_str()) {
-        "right" => crate::obs::Censor::Right,
-        "left" => crate::obs::Censor::Left,
-        "interval" => crate::obs::Censor::Interval,
-        _ => crate::obs::Censor::Exact,
-    };
+    let kind_of = |i: usize| observed.as_ref().and_then(|o| crate::obs::Censor::parse(&o[i])).unwrap_or(crate::obs::Censor::Exact);
     let fits = Table::load(dir, "fits")?;
     let (fm, fs, fe, shape, scale) = (fits.s("material")?, fits.s("stage")?, fits.s("effects")?, fits.f("weibull_modulus")?, fits.f("scale_pa")?);
     // The final stage's modulus range (a modulus per level).
@@ -262,7 +257,7 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
         let at = |p: &crate::weibull::PlotPoint| (p.x.ln(), (-(-p.f).ln_1p()).ln());
         let pts: Vec<(f64, f64)> = positions.iter().filter(|p| p.kind == crate::obs::Censor::Exact && p.f < 1.0).map(at).collect();
         let open: Vec<(f64, f64)> = positions.iter().filter(|p| p.kind != crate::obs::Censor::Exact && p.f > 0.0 && p.f < 1.0).map(at).collect();
-        let open_kinds: Vec<&str> = positions.iter().filter(|p| p.kind != crate::obs::Censor::Exact).map(|p| p.kind.name()).collect();
+        let open_kinds: Vec<crate::obs::Censor> = positions.iter().filter(|p| p.kind != crate::obs::Censor::Exact).map(|p| p.kind).collect();
         xs.extend(pts.iter().chain(&open).map(|p| p.0));
         if !open.is_empty() {
             let colour_st = if si == 0 { GREY } else { c };

@@ -38,6 +38,7 @@ use plotters::prelude::SeriesLabelPosition;
 use plotters::style::{BLACK, RGBColor};
 
 use crate::error::{Error, Result};
+use crate::obs::Censor;
 use crate::io::{col_f64, col_str, read_table, write_atomic};
 use canvas::{Encoded, colour};
 use panel::{Kind, Marker, Panel, Series, figure, padded};
@@ -337,7 +338,7 @@ fn fig14_sigma_vs_diameter(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn
     let (d, sb) = (t.f("diameter_m")?, t.f("sigma_bar_pa")?);
     // What each particle's row says (reports without censoring have no column: every one broke).
     let observed = t.s("observed").ok();
-    let broke = |i: usize| observed.as_ref().is_none_or(|o| o[i] == "exact");
+    let broke = |i: usize| observed.as_ref().is_none_or(|o| Censor::parse(&o[i]) == Some(Censor::Exact));
     let tkeys = trend.s("material_key")?;
     let (b, se, c0, rr, lo, hi) = (trend.f("exponent")?, trend.f("exponent_se")?, trend.f("ln_prefactor")?, trend.f("pearson_r_log")?, trend.f("diameter_min_m")?, trend.f("diameter_max_m")?);
     let mut series = Vec::new();
@@ -395,8 +396,8 @@ fn fig14_weibull_cdf(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
     let (px, pf) = (pts.f("sigma_bar_pa")?, pts.f("cdf_rank")?);
     // Each point's kind (reports without censoring have no column: every one broke).
     let observed = pts.s("observed").ok();
-    let kind_of = |i: usize| observed.as_ref().map_or("exact", |o| o[i].as_str());
-    let censored = (0..px.len()).any(|i| kind_of(i) != "exact");
+    let kind_of = |i: usize| observed.as_ref().and_then(|o| Censor::parse(&o[i])).unwrap_or(Censor::Exact);
+    let censored = (0..px.len()).any(|i| kind_of(i) != Censor::Exact);
     let bootstrap = fits.s("bound_method").is_ok_and(|m| m.iter().any(|v| v.contains("bootstrap")));
     let (cx, cy, cl, cu) = (cdf.f("sigma_pa")?, cdf.f("cdf")?, cdf.f("cdf_lower")?, cdf.f("cdf_upper")?);
     let fkeys = fits.s("material_key")?;
@@ -431,7 +432,7 @@ fn fig14_weibull_cdf(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
         ));
     }
     for (key, idx) in pts.groups()? {
-        let (yes, no): (Vec<usize>, Vec<usize>) = idx.iter().partition(|&&i| kind_of(i) == "exact");
+        let (yes, no): (Vec<usize>, Vec<usize>) = idx.iter().partition(|&&i| kind_of(i) == Censor::Exact);
         series.push(Series {
             label: Some(format!("{} data", mats.label(&key))),
             points: zip(pick(&px, &yes).iter().map(|v| v / 1e6).collect(), pick(&pf, &yes)),
@@ -461,25 +462,16 @@ fn fig14_weibull_cdf(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
     figure("fig14_weibull_cdf", w, 0.8, &[(p, 1.0)])
 }
 
-/// What a series of censored probability-plot points is, from the kinds it holds
-/// (`not broken (censored)`, `class ends` …).
-pub(crate) fn censored_words<'a>(kinds: impl Iterator<Item = &'a str>) -> String {
-    let mut seen: Vec<&str> = Vec::new();
+/// What a series of censored probability-plot points is, from the kinds it holds, in the
+/// order first seen (`not broken, class ends`).
+pub(crate) fn censored_words(kinds: impl Iterator<Item = Censor>) -> String {
+    let mut seen: Vec<Censor> = Vec::new();
     for k in kinds {
         if !seen.contains(&k) {
             seen.push(k);
         }
     }
-    let words: Vec<&str> = seen
-        .iter()
-        .map(|k| match *k {
-            "right" => "not broken",
-            "left" => "broke below",
-            "interval" => "class ends",
-            _ => "censored",
-        })
-        .collect();
-    words.join(", ")
+    seen.iter().map(|k| k.plotted()).collect::<Vec<_>>().join(", ")
 }
 
 fn fig15_impact(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {

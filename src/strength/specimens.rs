@@ -146,34 +146,15 @@ pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, 
     crate::intake::observed::pile_up(&r, &rows, &values, "strength", src, origin, "strength")?;
     // Rows counting several specimens become that many (ids `A#1` … `A#k`); then what the rows say.
     let named: Vec<String> = rows.iter().map(|&row| table.place(row, None)).collect();
-    let (specimens, line) = crate::intake::observed::expansion(&values, &named);
-    let counts: Vec<usize> = values.iter().map(|v| v.count).collect();
-    let values: Vec<crate::intake::observed::RowValue> = specimens.iter().map(|&k| values[k]).collect();
-    if let Some(line) = line {
-        let (mut last, mut j) = (usize::MAX, 0);
-        ids = specimens
-            .iter()
-            .map(|&k| {
-                if k != last {
-                    (last, j) = (k, 0);
-                }
-                j += 1;
-                if counts[k] > 1 { format!("{}#{j}", ids[k]) } else { ids[k].clone() }
-            })
-            .collect();
-        sample.covariates = sample.covariates.iter().map(|(n, v)| (n.clone(), specimens.iter().map(|&k| v[k]).collect())).collect();
+    let sp = crate::intake::observed::specimens(&values, &named, src, &mut provenance, "specimens");
+    if sp.rows.len() != rows.len() || sp.rows.iter().enumerate().any(|(i, &k)| i != k) {
+        ids = sp.rows.iter().enumerate().map(|(i, &k)| sp.id(i, &ids[k])).collect();
+        sample.covariates = sample.covariates.iter().map(|(n, v)| (n.clone(), sp.rows.iter().map(|&k| v[k]).collect())).collect();
         for (_, v) in columns.iter_mut() {
-            v.keep(&specimens);
+            v.keep(&sp.rows);
         }
-        provenance.observed.push(format!("count column `{}`: {line}", src.count.as_deref().unwrap_or("")));
-        provenance.rows = specimens.len();
     }
-    let x: Vec<f64> = values.iter().map(|v| v.value).collect();
-    let censoring = crate::obs::Censoring::of_rows(values.iter().map(|v| v.kind).collect(), &x, values.iter().map(|v| v.upper).collect());
-    if let Some(c) = &censoring {
-        provenance.observed.push(crate::obs::Obs { x: &x, censoring: Some(c) }.tally().describe("specimens"));
-    }
-    sample.strength = Observations { x, censoring };
+    sample.strength = sp.observations;
     sample.add_factors(&columns);
     Ok(Specimens { path: path.to_path_buf(), provenance, ids, sample })
 }

@@ -61,7 +61,11 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
     for m in &st.materials {
         let t = m.sample.strength.view().tally();
         if !t.complete() {
-            md.push_str(&format!("**{}**: {}. Fitted as what the rows say, with bands from the bootstrap that censors each redraw as the campaign did.\n\n", m.model.label, t.describe("particles")));
+            let bands = match s.strength.uncertainty {
+                crate::strength::Uncertainty::Bootstrap => "bands from the bootstrap that censors each redraw as the campaign did",
+                crate::strength::Uncertainty::Bayesian => "bands from the posterior of the censored likelihood",
+            };
+            md.push_str(&format!("**{}**: {}. Fitted as what the rows say, with {bands}.\n\n", m.model.label, t.describe("particles")));
         }
     }
     if let (Some(th), Some(op)) = (&st.thermal, &s.operating) {

@@ -19,7 +19,7 @@
 //! | `crush_force` | `crush_force_n` | f, fmax, force, load, breaking_force, peak_force, crushing_force | force | required, in [10⁻⁶, 10⁵] N ([`CRUSH_FORCE`]) |
 //! | `roundness` | `roundness` | wadell_roundness | – or % | optional; empty cell = unknown; else in [0.01, 1] ([`ROUNDNESS`]) |
 //! | `sphericity` | `sphericity` | b/l | – or % | optional; empty cell = unknown; else in [0.01, 1] ([`SPHERICITY`]) |
-//! | `temperature` | `temperature_c` | t, temp, test_temperature | temperature | optional; empty cell = unknown; else in [−273.15, 2100] °C ([`TEMPERATURE`]) |
+//! | `temperature` | `temperature_c` | t, temp, test_temperature | temperature | a number in [−273.15, 2100] °C ([`TEMPERATURE`]); no column or an empty cell: the study's `data.temperature_c`, else the file is refused |
 //! | `impacts` | `impacts` | prior_impacts, n_impacts | count | optional: impacts before the crush test; empty = unknown; else a whole number in [0, 10⁶] ([`IMPACTS`]) |
 //!
 //! A second file joined by id (a shape analyser's export) may supply the optional fields
@@ -172,8 +172,8 @@ pub const CRUSH_FORCE: Plausible = Plausible { what: "crush force", lo: 1e-6, hi
 pub const ROUNDNESS: Plausible = Plausible { what: "roundness", lo: 0.01, hi: 1.0, shown: "[0.01, 1]", why: "at most 1 by definition; below 0.01 the grain is a shard, and the contact curvature roundness^q leaves the floating-point range" };
 /// Sphericity.
 pub const SPHERICITY: Plausible = Plausible { what: "sphericity", lo: 0.01, hi: 1.0, shown: "[0.01, 1]", why: "at most 1 by definition; below 0.01 the grain is a needle or flake, not a flowing particle" };
-/// Test temperature.
-pub const TEMPERATURE: Plausible = Plausible { what: "temperature", lo: -273.15, hi: 2100.0, shown: "[-273.15, 2100] °C", why: "from absolute zero to the melting point of alumina (2072 °C), above which no ceramic particle is solid" };
+/// Test temperature (the intake's, which checks a study's `temperature_c` against it).
+pub use crate::intake::observed::TEMPERATURE;
 /// Impacts before a crush test (also a whole number).
 pub const IMPACTS: Plausible = Plausible { what: "impacts", lo: 0.0, hi: 1e6, shown: "[0, 1e6]", why: "10⁶ impacts are over a thousand years at 730 a year" };
 /// Force of a crush curve sample (a small negative value is the load cell's zero offset).
@@ -269,6 +269,8 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
     let mut factors = crate::intake::factors::read_factors(&table, &rows, factor_spec, &mut provenance, origin, path)?;
     crate::intake::observed::check_unused(&table, &rows, &mut provenance, src, origin)?;
     crate::intake::observed::pile_up(&r, &rows, &values, "crush_force", src, origin, "force")?;
+    // The temperature column, of this file or (below) of the joined shape file.
+    let mut temperature_column = r.column("temperature").map(|c| format!("`{}`", table.headers[c]));
     if let Some(shape) = &src.shape {
         let rows_of_ids: Vec<(usize, String)> = records.iter().enumerate().map(|(k, rec)| (k, rec.id.clone())).collect();
         let main_name = table.origin.sheet.as_ref().map(|s| format!("{} sheet \"{s}\"", path.display())).unwrap_or_else(|| path.display().to_string());
@@ -287,6 +289,9 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
         }
         let (srows, sfilter) = select(&sr, "material", wanted.filter(|_| sr.has("material")), &shape_origin, "material")?;
         let (pairs, dropped) = join(&rows_of_ids, &sr, "id", &srows, shape.join.unwrap_or(JoinMode::Exact), &main_name)?;
+        if let Some(c) = sr.column("temperature") {
+            temperature_column = Some(format!("`{}` of {}", st.headers[c], shape.file.display()));
+        }
         let mut joined = Vec::with_capacity(pairs.len());
         let mut joined_places = Vec::with_capacity(pairs.len());
         let kept: Vec<usize> = pairs.iter().map(|(k, _)| *k).collect();
@@ -326,6 +331,18 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
         if records.is_empty() {
             return Err(Error::data_file(path, "file", "no particle is in both files: the join by id keeps nothing"));
         }
+    }
+    // Every particle's test temperature: its row's, else the study's.
+    let temperatures = crate::intake::observed::test_temperatures(
+        &records.iter().map(|rec| rec.temperature_c).collect::<Vec<_>>(),
+        &|k| table.place(places[k].0, r.column("temperature")),
+        temperature_column.as_deref(),
+        src,
+        origin,
+        &mut provenance,
+    )?;
+    for (rec, t) in records.iter_mut().zip(temperatures) {
+        rec.temperature_c = Some(t);
     }
     // Rows counting several particles become that many; then what the rows say.
     let named: Vec<String> = places.iter().map(|(row, _)| table.place(*row, None)).collect();
@@ -454,12 +471,36 @@ mod tests {
     }
 
     #[test]
+    fn every_particle_has_a_test_temperature_from_its_row_or_the_study() {
+        let dir = crate::io::TempDir::new("temperature").unwrap();
+        let origin = MapOrigin { file: "s.toml".into(), key: "material[1].data".into() };
+        // No column and no key: refused, naming the key to declare.
+        let p = write(dir.path(), "a.csv", "id,diameter_m,crush_force_n\nA1,0.0009,120.5\nA2,0.001,99\n");
+        let e = read_crush_source(&Source::file(&p), &origin).unwrap_err().to_string();
+        assert!(e.contains("a.csv") && e.contains("states no test temperature") && e.contains("material[1].data.temperature_c = 20"), "{e}");
+        // The study's value for every row.
+        let d = read_crush_source(&Source { temperature_c: Some(800.0), ..Source::file(&p) }, &origin).unwrap();
+        assert!(d.records.iter().all(|r| r.temperature_c == Some(800.0)));
+        assert!(d.provenance.observed.iter().any(|l| l == "test temperature: 800 °C (the study's material[1].data.temperature_c)"), "{:?}", d.provenance.observed);
+        // A column with an empty cell: refused at that row; the study's value fills it.
+        let p = write(dir.path(), "b.csv", "id,diameter_m,crush_force_n,T [°C]\nA1,0.0009,120.5,800\nA2,0.001,99,\nA3,0.001,90,20\n");
+        let e = read_crush_source(&Source::file(&p), &origin).unwrap_err().to_string();
+        assert!(e.contains("row 2 (line 3), column T [°C]") && e.contains("has no test temperature"), "{e}");
+        let d = read_crush_source(&Source { temperature_c: Some(20.0), ..Source::file(&p) }, &origin).unwrap();
+        assert_eq!(d.records.iter().map(|r| r.temperature_c.unwrap()).collect::<Vec<_>>(), [800.0, 20.0, 20.0]);
+        assert!(d.provenance.observed.iter().any(|l| l == "test temperature: 20 °C (2) and 800 °C (1) (column `T [°C]`; 1 empty cells from the study's material[1].data.temperature_c)"), "{:?}", d.provenance.observed);
+        // A key outside the physical range is refused before reading.
+        let e = Source { temperature_c: Some(-300.0), ..Source::file(&p) }.validate("s.toml", "material[1].data").unwrap_err().to_string();
+        assert!(e.contains("material[1].data.temperature_c") && e.contains("[-273.15, 2100] °C"), "{e}");
+    }
+
+    #[test]
     fn reads_a_valid_file_with_optional_cells() {
         let dir = crate::io::TempDir::new("test").unwrap();
         let p = write(
             dir.path(),
             "a.csv",
-            "id,material,diameter_m,crush_force_n,roundness\nA1,X,0.0009,120.5,0.8\nA2,X,0.001,99,\n",
+            "id,material,diameter_m,crush_force_n,roundness,temperature_c\nA1,X,0.0009,120.5,0.8,20\nA2,X,0.001,99,,20\n",
         );
         let d = read_crush(&p).unwrap();
         assert_eq!(d.records.len(), 2);

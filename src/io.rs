@@ -394,6 +394,9 @@ pub struct Manifest {
     pub evaluations: BTreeMap<String, u64>,
     /// Failed evaluations (θ and message).
     pub failures: Vec<String>,
+    /// What the run found in its inputs that a reader must know (absent when none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// Files of the report, relative to its directory.
     pub outputs: Vec<String>,
 }

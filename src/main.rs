@@ -87,6 +87,14 @@ enum Command {
         /// With --data (required): the particles' apparent density (kg/m³), e.g. 3600.
         #[arg(long, requires = "data", value_name = "KG_M3")]
         density_kg_m3: Option<f64>,
+        /// With --data: the test temperature (°C) of rows whose file gives none (no temperature
+        /// column, or an empty cell); a file that states none is otherwise refused.
+        #[arg(long, requires = "data", value_name = "CELSIUS")]
+        temperature_c: Option<f64>,
+        /// With --data: the temperature (°C) the lifetime is for where the loop names temperature
+        /// softening (required when the file's tests span several temperatures).
+        #[arg(long, requires = "data", value_name = "CELSIUS")]
+        operating_temperature_c: Option<f64>,
         /// Root directory of the reports (as for `run`): the report goes to
         /// <root>/<study name>/ (<root>/discrepancy-<file stem>/ with --data), and a curve-level
         /// study finds its calibration's report under the same root.
@@ -255,6 +263,9 @@ enum DatasetsCommand {
         /// Only the rows of this material (a campaign file holding several).
         #[arg(long)]
         material: Option<String>,
+        /// The test temperature (°C) of rows whose file gives none (crush and strength files).
+        #[arg(long, conflicts_with = "study", value_name = "CELSIUS")]
+        temperature_c: Option<f64>,
     },
 }
 
@@ -307,14 +318,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             out!("wrote {} in {:.2} s", summary.report_dir.display(), summary.wall_time_s);
         }
-        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, youngs_modulus_pa, poisson_ratio, density_kg_m3, reports_dir, quiet, no_deps, no_document } => {
+        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, youngs_modulus_pa, poisson_ratio, density_kg_m3, temperature_c, operating_temperature_c, reports_dir, quiet, no_deps, no_document } => {
             let loaded = match (&study, &data) {
                 (_, Some(d)) => {
                     let (Some(e), Some(nu), Some(rho)) = (youngs_modulus_pa, poisson_ratio, density_kg_m3) else {
                         let missing: Vec<&str> = [("--youngs-modulus-pa", youngs_modulus_pa), ("--poisson-ratio", poisson_ratio), ("--density-kg-m3", density_kg_m3)].iter().filter(|(_, v)| v.is_none()).map(|(k, _)| *k).collect();
                         return Err(partlife::Error::config("--data", missing.join(", "), "the lifetime needs the particles' elastic constants and density, which set the impact stress (no material is assumed): give --youngs-modulus-pa, --poisson-ratio and --density-kg-m3 (the deliverable's Gen 4: 112e9, 0.25, 3600)").into());
                     };
-                    let (file, s) = partlife::discrepancy::run::quick_study(d, partlife::contact::Elastic { youngs_modulus_pa: e, poisson_ratio: nu }, rho)?;
+                    let (file, s) = partlife::discrepancy::run::quick_study(d, partlife::contact::Elastic { youngs_modulus_pa: e, poisson_ratio: nu }, rho, temperature_c, operating_temperature_c)?;
                     partlife::study::LoadedStudy { file, study: partlife::study::Study::Discrepancy(Box::new(s)) }
                 }
                 (Some(s), None) => partlife::study::load(s)?,
@@ -425,7 +436,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 out!("{}", p.display());
             }
         }
-        Command::Datasets { command: DatasetsCommand::Check { files, study, sheet, header_row, material } } => {
+        Command::Datasets { command: DatasetsCommand::Check { files, study, sheet, header_row, material, temperature_c } } => {
             let sources: Vec<(partlife::intake::Source, Option<&'static str>, partlife::intake::MapOrigin)> = match study {
                 Some(path) => partlife::study::load(&path)?.data_sources(),
                 None => files
@@ -435,6 +446,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                             sheet: sheet.as_ref().map(|s| s.parse::<usize>().map(partlife::intake::SheetRef::Index).unwrap_or_else(|_| partlife::intake::SheetRef::Name(s.clone()))),
                             header_row,
                             material: material.clone(),
+                            temperature_c,
                             ..partlife::intake::Source::file(f)
                         };
                         (src, None, partlife::intake::MapOrigin::default())

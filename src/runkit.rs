@@ -149,6 +149,9 @@ pub struct RunRecord {
     pub evaluations: BTreeMap<String, u64>,
     /// What failed without stopping the run (figures, evaluations).
     pub failures: Vec<String>,
+    /// What the run found in its inputs that a reader must know (materials tested at
+    /// different temperatures); each also printed on stderr.
+    pub warnings: Vec<String>,
 }
 
 /// Writes `manifest.json` (listing every file of the report), then — unless the run turned them
@@ -178,6 +181,7 @@ pub fn commit_with_manifest(mut dir: ReportDir, loaded: &StudyFile, study_resolv
         wall_time_s: run.clock.seconds(),
         evaluations: run.evaluations,
         failures: run.failures,
+        warnings: run.warnings,
         outputs,
     };
     let json = |m: &Manifest| serde_json::to_vec_pretty(m).map_err(|e| Error::numerical("manifest", e.to_string()));

@@ -458,7 +458,11 @@ fn bad_command_line_arguments() {
 fn bad_strength_files_and_factor_declarations() {
     let s = Scratch::new();
     std::fs::create_dir_all(s.path("datasets/real")).unwrap();
-    s.write("datasets/real/bars.csv", "id;batch;lab;V [mm³];strength [MPa]\nB1;x;1;2,0;310\nB2;y;2;8,0;290\nB3;x;1;2,0;305\nB4;y;2;8,0;295\nB5;x;1;2,0;300\nB6;y;2;8,0;285\nB7;x;1;2,0;312\nB8;y;2;8,0;280\nB9;x;1;2,0;308\nB10;y;2;8,0;288\nB11;x;1;2,0;301\nB12;y;2;8,0;292\n");
+    let bars = "id;batch;lab;V [mm³];strength [MPa]\nB1;x;1;2,0;310\nB2;y;2;8,0;290\nB3;x;1;2,0;305\nB4;y;2;8,0;295\nB5;x;1;2,0;300\nB6;y;2;8,0;285\nB7;x;1;2,0;312\nB8;y;2;8,0;280\nB9;x;1;2,0;308\nB10;y;2;8,0;288\nB11;x;1;2,0;301\nB12;y;2;8,0;292\n";
+    // With a test-temperature column (`T [°C]`), and without one (the study must then say it).
+    let with_t: String = bars.lines().enumerate().map(|(i, l)| format!("{l};{}\n", if i == 0 { "T [°C]" } else { "20" })).collect();
+    s.write("datasets/real/bars.csv", &with_t);
+    s.write("datasets/real/bars_no_t.csv", bars);
     let study = "studies/bars.toml";
     let base = "kind = \"discrepancy\"\nseed = 1\n[discrepancy]\nbootstrap = 99\npermutations = 99\n[power]\nreplicates = 0\n[[strength]]\nkey = \"bars\"\nlabel = \"Bars\"\ndata = \"../datasets/real/bars.csv\"\nsize = { column = \"V\", measure = \"effective_volume\" }\nfactors = [\"batch\"]\n";
     s.write(study, base);
@@ -472,4 +476,9 @@ fn bad_strength_files_and_factor_declarations() {
     s.expect_bad_study(study, "data = \"../datasets/real/bars.csv\"", "data = { file = \"../datasets/real/bars.csv\", columns = { strength = \"strength [MPa]\" }, units = { strength = \"Pa\" } }", &["units.strength", "contradicts"]);
     s.write(study, base);
     s.expect_bad_study(study, "factors = [\"batch\"]", "factors = [\"residual\"]", &["strength[0].factors", "`residual` is a name the report's tables use"]);
+    // A strength file that states no test temperature, in a study that gives none.
+    s.write(study, base);
+    s.expect_bad_study(study, "data = \"../datasets/real/bars.csv\"", "data = \"../datasets/real/bars_no_t.csv\"", &["bars_no_t.csv", "states no test temperature", "strength[0].data.temperature_c = 20"]);
+    s.write(study, base);
+    s.expect_bad_study(study, "data = \"../datasets/real/bars.csv\"", "data = { file = \"../datasets/real/bars_no_t.csv\", temperature_c = 5000 }", &["strength[0].data.temperature_c", "[-273.15, 2100] °C"]);
 }

@@ -43,7 +43,7 @@ fn lab_workbook(s: &Scratch, seed: u64) -> f64 {
     // The limit between the 50th and 51st force, at the rig's 0.1 N steps: ten above it.
     let limit = (5.0 * (forces[49] + forces[50])).round() / 10.0;
     assert!(forces[49] < limit && limit < forces[50], "forces {} and {} share the limit {limit}", forces[49], forces[50]);
-    let mut rows = vec![["Probe", "D [mm]", "Fmax [N]", "gebrochen", "Prüfer"].iter().map(|h| Value::Text(h.to_string())).collect::<Vec<_>>()];
+    let mut rows = vec![["Probe", "D [mm]", "Fmax [N]", "gebrochen", "Prüfer", "T [°C]"].iter().map(|h| Value::Text(h.to_string())).collect::<Vec<_>>()];
     for (k, p) in particles.iter().enumerate() {
         let r = &p.record;
         let broke = r.crush_force_n <= limit;
@@ -53,6 +53,7 @@ fn lab_workbook(s: &Scratch, seed: u64) -> f64 {
             Value::Number(if broke { r.crush_force_n } else { limit }),
             Value::Text(if broke { "ja" } else { "nein" }.into()),
             Value::Text(["Schulz", "Meier"][k % 2].into()),
+            Value::Number(20.0),
         ]);
     }
     let bytes = xlsx(&[Sheet { name: "Bruchversuche".into(), rows, merged: vec![] }]).unwrap();
@@ -277,6 +278,7 @@ fn a_grouped_table_is_its_expanded_specimens_and_narrow_classes_are_the_exact_fi
         let mut src = partlife::intake::Source::file(&p);
         src.interval = Some(partlife::intake::observed::Interval { lower: "von".into(), upper: "bis".into(), unit: None });
         src.count = Some("Anzahl".into());
+        src.temperature_c = Some(20.0);
         let read = partlife::strength::specimens::read_specimens(&src, None, &Default::default(), &Default::default()).unwrap();
         let o = read.sample.strength.view();
         assert_eq!((o.len(), o.tally().interval), (389, 389));
@@ -431,7 +433,7 @@ replicates = 0
 [[strength]]
 key = "klassen"
 label = "Grouped bend strengths"
-data = { file = "../datasets/klassen.csv", interval = { lower = "von", upper = "bis" }, count = "Anzahl", ignore = ["Klasse"] }
+data = { file = "../datasets/klassen.csv", interval = { lower = "von", upper = "bis" }, count = "Anzahl", ignore = ["Klasse"], temperature_c = 20 }
 "#,
     );
     let out = s.run(&["datasets", "check", "--study", "studies/klassen.toml"]);

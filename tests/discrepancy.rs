@@ -13,10 +13,17 @@ use partlife::synth::{SynthSettings, generate};
 
 /// Generates with the CLI, runs `partlife discrepancy --data`, returns the verdict.
 fn verdict_of(s: &Scratch, generator: &str) -> serde_json::Value {
+    verdict_with(s, generator, &[])
+}
+
+/// [`verdict_of`] with more arguments of `partlife discrepancy`.
+fn verdict_with(s: &Scratch, generator: &str, more: &[&str]) -> serde_json::Value {
     s.write("datasets/hidden.toml", generator);
     let out = s.run(&["datasets", "synth", "--settings", "datasets/hidden.toml"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
-    let out = s.run(&["discrepancy", "--data", "datasets/hidden.csv", "--youngs-modulus-pa", "112e9", "--poisson-ratio", "0.25", "--density-kg-m3", "3600", "--quiet"]);
+    let mut args = vec!["discrepancy", "--data", "datasets/hidden.csv", "--youngs-modulus-pa", "112e9", "--poisson-ratio", "0.25", "--density-kg-m3", "3600", "--quiet"];
+    args.extend(more);
+    let out = s.run(&args);
     assert_eq!(out.code, 0, "{}", out.stderr);
     serde_json::from_str(&s.read("reports/discrepancy-hidden/verdict.json")).unwrap()
 }
@@ -82,8 +89,17 @@ fn two_hidden_effects_are_named_in_order_of_strength() {
 fn temperatures_mixed_in_one_file_are_named() {
     let s = Scratch::new();
     let soft = "softening = { reference_c = 20.0, strength_per_100c = 0.04, stiffness_per_100c = 0.03 }";
-    let v = verdict_of(&s, &settings(0.0, 0.0, 60, 74, "[20.0, 800.0]", soft));
+    // Without the temperature the lifetime is for: refused before the loop runs.
+    s.write("datasets/hidden.toml", &settings(0.0, 0.0, 60, 74, "[20.0, 800.0]", soft));
+    assert_eq!(s.run(&["datasets", "synth", "--settings", "datasets/hidden.toml"]).code, 0);
+    let out = s.run(&["discrepancy", "--data", "datasets/hidden.csv", "--youngs-modulus-pa", "112e9", "--poisson-ratio", "0.25", "--density-kg-m3", "3600", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("--operating-temperature-c") && out.stderr.contains("20 °C (30) and 800 °C (30)"), "{}", out.stderr);
+    let v = verdict_with(&s, &settings(0.0, 0.0, 60, 74, "[20.0, 800.0]", soft), &["--operating-temperature-c", "800"]);
     assert_eq!(named(&v), ["temperature"], "{}", v["evidence"]);
+    // The report says where the particles were tested and what the lifetime after it is for.
+    let summary = s.read("reports/discrepancy-hidden/summary.md");
+    assert!(summary.contains("Tested at 20 °C (30) and 800 °C (30). Its lifetime after the named effects is at the study's predict.temperature_c = 800"), "{summary}");
     let e = v["evidence"]["hidden"].as_array().unwrap().iter().find(|e| e["named"] == true).unwrap();
     assert!(e["parameter"]["value"].as_f64().unwrap() < 1.0, "strength falls with temperature: {}", e["parameter"]);
 }

@@ -9,7 +9,13 @@ use std::path::Path;
 use common::{Scratch, edited, root};
 
 /// A lifetime study of one material reading `data` (a TOML value) from `studies/lab.toml`.
+/// A lifetime study of one lab file; `data` is the study's `data` as written (a path or a
+/// table), which states the test temperature the lab files here do not: 20 °C.
 fn lab_study(data: &str) -> String {
+    let data = match data.strip_prefix('{') {
+        Some(table) => format!("{{ temperature_c = 20,{table}"),
+        None => format!("{{ file = {data}, temperature_c = 20 }}"),
+    };
     format!(
         "# Purpose: a test.\n# Good result: it runs.\nkind = \"lifetime\"\nseed = 1\n\n[[material]]\nkey = \"lab\"\nlabel = \"Lab\"\ndata = {data}\nelastic = {{ youngs_modulus_pa = 112e9, poisson_ratio = 0.25 }}\ndensity_kg_m3 = 3600\n"
     )

@@ -290,7 +290,7 @@ fn a_lab_crush_file_with_batches_is_predicted_for_a_named_batch_from_its_study_f
             ("effects = []", "effects = [\"levels(Charge)\"]"),
             (
                 "data = \"../datasets/crush_gen4.csv\"",
-                "data = { file = \"../datasets/bruch_chargen.csv\", columns = { id = \"Probe\", diameter = \"Durchmesser [mm]\", crush_force = \"Bruchkraft [N]\" } }\nfactors = { Charge = \"categorical\", \"Sintertemp [°C]\" = \"numeric\" }\npredict = { Charge = \"K2\" }",
+                "data = { file = \"../datasets/bruch_chargen.csv\", columns = { id = \"Probe\", diameter = \"Durchmesser [mm]\", crush_force = \"Bruchkraft [N]\" }, temperature_c = 20 }\nfactors = { Charge = \"categorical\", \"Sintertemp [°C]\" = \"numeric\" }\npredict = { Charge = \"K2\" }",
             ),
         ],
     );

@@ -284,6 +284,8 @@ fn real(file: &str, strength: &str, filter: Option<&str>) -> Vec<f64> {
     let mut src = Source::file(common::root().join("datasets/real").join(file));
     src.columns.insert("strength".into(), strength.into());
     src.units.insert("strength".into(), "GPa".into());
+    // The test temperature the shipped studies declare (the sources state none).
+    src.temperature_c = Some(20.0);
     // The carbon file's gauge length is read as a numeric factor; the glass file has none.
     let factors = if file.starts_with("bader_priest") { Factors::Typed([("gauge_length_mm".to_string(), partlife::strength::factors::FactorType::Numeric)].into()) } else { Factors::default() };
     let s = read_specimens(&src, None, &factors, &MapOrigin { file: "test".into(), key: "data".into() }).unwrap();
@@ -330,7 +332,7 @@ fn the_shipped_real_data_studies_say_what_the_readme_reports_and_a_lab_export_ag
     }
     s.write("datasets/real/carbon_lab.csv", &lab);
     let study = s.read("studies/strength_carbon_fibres.toml")
-        .replace("data = \"../datasets/real/bader_priest_carbon_fibres.csv\"", "data = { file = \"../datasets/real/carbon_lab.csv\", columns = { strength = \"Festigkeit [MPa]\", id = \"Probe\" } }")
+        .replace("data = { file = \"../datasets/real/bader_priest_carbon_fibres.csv\", temperature_c = 20 }", "data = { file = \"../datasets/real/carbon_lab.csv\", columns = { strength = \"Festigkeit [MPa]\", id = \"Probe\" }, temperature_c = 20 }")
         .replace("column = \"gauge_length_mm\"", "column = \"Messlänge\"");
     s.write("studies/carbon_lab.toml", &study);
     // A lab's export of the glass fibres: semicolon, decimal comma, its own headers.
@@ -342,8 +344,8 @@ fn the_shipped_real_data_studies_say_what_the_readme_reports_and_a_lab_export_ag
     }
     s.write("datasets/real/glass_lab.csv", &lab);
     let glass_lab = glass.replace(
-        "data = { file = \"../datasets/real/smith_naylor_glass_fibres.csv\", columns = { strength = \"strength_original_units\" }, units = { strength = \"GPa\" } }",
-        "data = { file = \"../datasets/real/glass_lab.csv\", columns = { id = \"Nr.\", strength = \"Bruchspannung [GPa]\" } }",
+        "data = { file = \"../datasets/real/smith_naylor_glass_fibres.csv\", columns = { strength = \"strength_original_units\" }, units = { strength = \"GPa\" }, temperature_c = 20 }",
+        "data = { file = \"../datasets/real/glass_lab.csv\", columns = { id = \"Nr.\", strength = \"Bruchspannung [GPa]\" }, temperature_c = 20 }",
     );
     assert_ne!(glass_lab, glass);
     s.write("studies/glass_lab.toml", &glass_lab);
@@ -755,7 +757,7 @@ fn a_lab_file_with_uneven_lots_and_a_scattering_lab_runs_from_its_study_file_alo
     s.write("data/biegung.tsv", &text);
     s.write(
         "studies/bars.toml",
-        "kind = \"discrepancy\"\nseed = 5\n[discrepancy]\nbootstrap = 199\npermutations = 199\n[power]\nreplicates = 0\n[[strength]]\nkey = \"bars\"\nlabel = \"Bend bars\"\ndata = { file = \"../data/biegung.tsv\", columns = { strength = \"Festigkeit [MPa]\", id = \"Probe\" } }\nfactors = [\"Charge\", \"Labor\"]\n",
+        "kind = \"discrepancy\"\nseed = 5\n[discrepancy]\nbootstrap = 199\npermutations = 199\n[power]\nreplicates = 0\n[[strength]]\nkey = \"bars\"\nlabel = \"Bend bars\"\ndata = { file = \"../data/biegung.tsv\", columns = { strength = \"Festigkeit [MPa]\", id = \"Probe\" }, temperature_c = 20 }\nfactors = [\"Charge\", \"Labor\"]\n",
     );
     let out = s.run(&["run", "studies/bars.toml", "--reports-dir", "reports", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
@@ -779,6 +781,7 @@ fn jahanmir(batch: Option<&str>) -> Vec<f64> {
     let mut src = Source::file(common::root().join("datasets/real/jahanmir_silicon_nitride_bend_bars.csv"));
     src.columns.insert("strength".into(), "strength_original_units".into());
     src.units.insert("strength".into(), "MPa".into());
+    src.temperature_c = Some(20.0);
     let s = read_specimens(&src, None, &Factors::Typed([("batch".to_string(), FactorType::Categorical)].into()), &MapOrigin { file: "test".into(), key: "data".into() }).unwrap();
     let levels = &s.sample.levels[0].1;
     (0..levels.len()).filter(|&i| batch.is_none_or(|b| levels[i] == b)).map(|i| s.sample.strength.x[i]).collect()
@@ -857,7 +860,7 @@ fn the_jahanmir_study_names_the_batch_and_a_lab_export_agrees() {
     let lab_study = common::edited(
         &fast,
         &[
-            ("data = { file = \"../datasets/real/jahanmir_silicon_nitride_bend_bars.csv\", columns = { strength = \"strength_original_units\" }, units = { strength = \"MPa\" } }", "data = { file = \"../datasets/real/jahanmir_lab.csv\", columns = { strength = \"Biegefestigkeit [GPa]\", id = \"Probe\" } }"),
+            ("data = { file = \"../datasets/real/jahanmir_silicon_nitride_bend_bars.csv\", columns = { strength = \"strength_original_units\" }, units = { strength = \"MPa\" }, temperature_c = 20 }", "data = { file = \"../datasets/real/jahanmir_lab.csv\", columns = { strength = \"Biegefestigkeit [GPa]\", id = \"Probe\" }, temperature_c = 20 }"),
             ("factors = { lab = \"categorical\", batch = \"categorical\", table_speed = \"categorical\", down_feed_rate = \"categorical\", wheel_grit = \"categorical\" }", "factors = { Labor = \"categorical\", Charge = \"categorical\", Tischvorschub = \"categorical\", Zustellung = \"categorical\", \"Körnung\" = \"categorical\" }"),
         ],
     );

@@ -323,7 +323,12 @@ fn the_main_study_runs_at_operating_temperatures() {
     let out = s.run(&["run", "studies/gen4_vs_bl.toml", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     let summary = s.read("reports/gen4_vs_bl/summary.md");
-    assert!(summary.contains("**At operating temperatures**: Gen 4 at 750–850 °C, BL 16/30 at 800 °C (crush data at 20 and 20 °C)"), "{summary}");
+    // The lead (first page and summary.md) says the comparison is at a temperature other than the tests'.
+    assert!(summary.contains("**At a temperature other than the tests'**: the lifetimes are for the operating temperature (Gen 4 at 750–850 °C; BL 16/30 at 800 °C), while both materials were tested at 20 °C; the temperature laws of `temperature.toml`"), "{summary}");
+    let lead = summary.split("## Headline").next().unwrap_or_default();
+    assert!(lead.contains("At a temperature other than the tests'"), "not in the lead paragraphs: {lead}");
+    let html = s.read("reports/gen4_vs_bl/report.html");
+    assert!(html.contains("At a temperature other than the tests"), "the first page does not say it");
     let inputs = table_text(&s.path("reports/gen4_vs_bl/inputs.csv"), "input");
     for n in ["temperature_law", "operating_temperature_gen4", "operating_temperature_bl1630"] {
         assert!(inputs.iter().any(|i| i == n), "{n} not among the inputs {inputs:?}");

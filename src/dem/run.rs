@@ -396,7 +396,7 @@ pub fn run_dem(loaded: &StudyFile, s: &DemStudy, opts: &RunOptions) -> Result<Ru
     let mut evaluations = std::collections::BTreeMap::new();
     evaluations.insert("dem_particle_steps".to_string(), dem.counters.particle_steps);
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let run = RunRecord { inputs, seed: s.seed, clock, evaluations, failures };
+    let run = RunRecord { inputs, seed: s.seed, clock, evaluations, failures, warnings: Vec::new() };
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, run)?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })

@@ -387,6 +387,16 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         let (b, a) = (r.outcome.before(), r.outcome.after());
         let what = if r.crush.is_some() { "particles" } else { "specimens" };
         md.push_str(&format!("\n## {} ({} {what}, `{}`)\n\n", r.label, r.sample.strength.len(), r.path.display()));
+        let tested = crate::intake::observed::describe_temperatures(&r.temperatures_c);
+        let held = match &r.crush {
+            Some(spec) if !r.lifetime.is_empty() => match spec.predict.get("temperature_c").filter(|_| r.outcome.after().model.effects.contains(&crate::strength::Effect::Temperature)) {
+                Some(t) => format!(" Its lifetime after the named effects is at the study's predict.temperature_c = {t} (°C), not at the tests' temperature."),
+                None if r.temperatures_c.iter().any(|t| *t != r.temperatures_c[0]) => " Its lifetimes below are for the tested particles at their own test temperatures, pooled, not at an operating temperature.".to_string(),
+                None => " Its lifetimes below hold at the tests' temperature, not at an operating temperature other than it.".to_string(),
+            },
+            _ => String::new(),
+        };
+        md.push_str(&format!("Tested at {tested}.{held}\n\n"));
         let tally = r.sample.strength.view().tally();
         if !tally.complete() {
             md.push_str(&format!(

@@ -48,7 +48,7 @@ pub use super::study::{DiscrepancyStudy, LifetimeBand, LifetimeOptions, Material
 pub use super::report::wilson90;
 use super::report::{headline, summary, verdict_json, write_tables};
 use super::workflow::{Outcome, analyse, names, validate};
-use crate::data::{CrushData, read_crush};
+use crate::data::CrushData;
 use crate::error::{Error, Result};
 use crate::io::InputFile;
 use crate::lifetime::impacts_in;
@@ -63,21 +63,42 @@ use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSpec, 
 /// `density_kg_m3`: the command's options, which it requires — they set the lifetime: with a
 /// bauxite's constants instead of Gen 4's the 1-year breakage differs by an order of
 /// magnitude; they shift σ̄ by a common factor and do not change the naming verdict).
-pub fn quick_study(data: &Path, elastic: crate::contact::Elastic, density_kg_m3: f64) -> Result<(StudyFile, DiscrepancyStudy)> {
-    let crush = read_crush(data)?;
+pub fn quick_study(data: &Path, elastic: crate::contact::Elastic, density_kg_m3: f64, temperature_c: Option<f64>, operating_c: Option<f64>) -> Result<(StudyFile, DiscrepancyStudy)> {
+    let source = crate::intake::Source { temperature_c, ..crate::intake::Source::file(data) };
+    if let Some(t) = temperature_c
+        && !crate::data::TEMPERATURE.contains(t)
+    {
+        return Err(Error::config("--data", "--temperature-c", format!("a test temperature must lie in {} (got {t})", crate::data::TEMPERATURE.shown)));
+    }
+    let crush = crate::data::read_crush_source(&source, &crate::intake::MapOrigin { file: "--data".into(), key: String::new() })?;
+    // Tests at several temperatures: the lifetime after a named temperature term is at the
+    // temperature the command line names.
+    let tested: Vec<f64> = crush.records.iter().filter_map(|r| r.temperature_c).collect();
+    if let Some(t) = operating_c
+        && !crate::data::TEMPERATURE.contains(t)
+    {
+        return Err(Error::config("--data", "--operating-temperature-c", format!("an operating temperature must lie in {} (got {t})", crate::data::TEMPERATURE.shown)));
+    }
+    if operating_c.is_none() && tested.iter().any(|t| *t != tested[0]) {
+        return Err(Error::config(
+            "--data",
+            "--operating-temperature-c",
+            format!("{} was tested at {}: the loop may name temperature softening, and the lifetime after it must be at a temperature you name: give --operating-temperature-c (°C), e.g. 800", data.display(), crate::intake::observed::describe_temperatures(&tested)),
+        ));
+    }
     let stem = data.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "data".into());
     let key: String = stem.chars().map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' }).collect();
     let file_name = data.file_name().map(PathBuf::from).unwrap_or_else(|| data.to_path_buf());
     let material = MaterialSpec {
         key,
         label: if crush.material().is_empty() { stem.clone() } else { crush.material().to_string() },
-        data: crate::intake::DataRef(crate::intake::Source::file(file_name)),
+        data: crate::intake::DataRef(crate::intake::Source { temperature_c, ..crate::intake::Source::file(file_name) }),
         elastic,
         density_kg_m3,
         impact_diameter_m: None,
         population: None,
         factors: Default::default(),
-        predict: Default::default(),
+        predict: operating_c.map(|t| [("temperature_c".to_string(), toml::Value::Float(t))].into_iter().collect()).unwrap_or_default(),
     };
     let study = DiscrepancyStudy {
         kind: "discrepancy".into(),
@@ -184,6 +205,16 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         let sample = sample_of(&data, &m.elastic, &s.contact)?;
         validate(&sample)?;
         let population = crate::strength::Population::of_material(m, prepared.len(), &data, &loaded.path, s.seed)?;
+        // Tests at several temperatures can name temperature softening, whose lifetime is at a
+        // temperature the study must name (the tests' mixture is no plant's).
+        let tested: Vec<f64> = data.records.iter().filter_map(|r| r.temperature_c).collect();
+        if tested.iter().any(|t| *t != tested[0]) && s.settings().candidates.contains(&crate::strength::Effect::Temperature) && !population.temperature_named() {
+            return Err(Error::config(
+                loaded.path.display().to_string(),
+                format!("material[{k}].predict.temperature_c"),
+                format!("`{}` was tested at {}: the loop may name temperature softening, and the lifetime after it must be at a temperature the study names (the operating temperature, °C): predict = {{ temperature_c = 800 }}", m.key, crate::intake::observed::describe_temperatures(&tested)),
+            ));
+        }
         prepared.push(Prepared { spec: m.clone(), data, sample, population });
     }
     let mut specimens = Vec::new();
@@ -217,7 +248,8 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
             Vec::new()
         };
         let ids = m.data.records.iter().map(|r| r.id.clone()).collect();
-        results.push(MaterialResult { key: m.spec.key.clone(), label: m.spec.label.clone(), path: m.data.path.clone(), ids, crush: Some(m.spec), sample: m.sample, outcome, lifetime, power });
+        let temperatures_c = m.data.records.iter().filter_map(|r| r.temperature_c).collect();
+        results.push(MaterialResult { key: m.spec.key.clone(), label: m.spec.label.clone(), path: m.data.path.clone(), ids, crush: Some(m.spec), sample: m.sample, outcome, lifetime, power, temperatures_c });
     }
     for (j, (set, read)) in specimens.into_iter().enumerate() {
         let k = s.material.len() + j;
@@ -231,7 +263,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         } else {
             Vec::new()
         };
-        results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power });
+        results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power, temperatures_c: read.temperatures_c });
     }
 
     let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
@@ -240,6 +272,20 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
     let json = serde_json::to_string_pretty(&verdict).map_err(|e| Error::numerical("verdict.json", e.to_string()))?;
     dir.write_bytes("verdict.json", json.as_bytes())?;
     let headlines: Vec<String> = results.iter().map(headline).collect();
+    // A material's tests pooled across several temperatures without a temperature term, and
+    // recorded factors that coincide with the test temperature.
+    let mut warnings: Vec<String> = results
+        .iter()
+        .flat_map(|r| crate::lifetime::tested::warnings(&[crate::lifetime::tested::Tested { label: &r.label, temperatures_c: &r.temperatures_c, temperature_term: r.outcome.after().model.effects.contains(&crate::strength::Effect::Temperature) }]))
+        .collect();
+    for r in &results {
+        for (name, levels) in &r.sample.levels {
+            warnings.extend(crate::lifetime::tested::confounded(&r.label, name, levels, &r.temperatures_c));
+        }
+    }
+    for w in &warnings {
+        crate::intake::warn(w);
+    }
     dir.write_bytes("summary.md", summary(s, &results).as_bytes())?;
     pb.set_message("figures");
     let mut failures = Vec::new();
@@ -249,7 +295,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
     evaluations.insert("naming_bootstrap_replicates".to_string(), results.iter().map(|r| (r.outcome.stages.len() * s.discrepancy.bootstrap) as u64).sum());
     evaluations.insert("power_datasets".to_string(), results.iter().map(|r| r.power.iter().map(|p| p.replicates as u64).sum::<u64>()).sum());
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
+    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures, warnings })?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })
 }

@@ -206,5 +206,7 @@ pub struct MaterialResult {
     pub lifetime: Vec<(String, Vec<LifetimeBand>)>,
     /// Detection power (empty when off).
     pub power: Vec<PowerRow>,
+    /// Each specimen's test temperature (°C).
+    pub temperatures_c: Vec<f64>,
 }
 

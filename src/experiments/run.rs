@@ -213,7 +213,7 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     evaluations.insert("prior_samples".to_string(), state.samples.len() as u64);
     evaluations.insert("simulated_datasets".to_string(), (singles.len() + allocated.plans().len()) as u64 * a.outer as u64);
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
+    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures, warnings: Vec::new() })?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: summary.headlines })
 }

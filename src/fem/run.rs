@@ -172,7 +172,7 @@ pub fn run_crush(loaded: &StudyFile, s: &CrushStudy, opts: &RunOptions) -> Resul
     evaluations.insert("crush_runs".to_string(), runs.len() as u64);
     evaluations.insert("element_steps".to_string(), steps_total);
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let run = RunRecord { inputs, seed: s.seed, clock, evaluations, failures };
+    let run = RunRecord { inputs, seed: s.seed, clock, evaluations, failures, warnings: Vec::new() };
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, run)?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })

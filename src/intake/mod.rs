@@ -102,6 +102,10 @@ pub struct Source {
     /// Columns that say nothing of the strength, looked at and left out on purpose.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub ignore: Vec<String>,
+    /// The test temperature (°C) of the rows whose file gives none (no temperature column, or
+    /// an empty cell): every crush and strength row must have one ([`observed::test_temperatures`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temperature_c: Option<f64>,
 }
 
 impl Source {

@@ -23,6 +23,11 @@
 //! * `at_highest`: what the rows holding the file's highest value are, when no column says it:
 //!   `"not_broken"` (a rig's limit: right-censored there) or `"broken"` (they broke at it).
 //! * `ignore`: columns the study has looked at and that say nothing of the strength.
+//! * `temperature_c`: the test temperature (°C) of rows whose file gives none — no temperature
+//!   column (`temperature_c`, `T [°C]`, `temp` …) or an empty cell. Every row of a crush or
+//!   strength file has a test temperature: a file that gives none, and whose study gives none,
+//!   is refused with the key to declare ([`test_temperatures`]). A strength measured at 20 °C is
+//!   not a strength at 800 °C, and a comparison must be able to say which it is.
 //!
 //! Refused unless declared ([`check_unused`], [`pile_up`]): an unused column of yes/no values
 //! (`ja`/`nein`, `yes`/`no`, `true`/`false`, `broken`/`intact` …; a 0/1 column whose header
@@ -152,7 +157,14 @@ impl Source {
 
     /// Refuses what a reader of another kind of table cannot use (`what`: "a shape file").
     pub fn refuse_rows(&self, file: &str, key: &str, what: &str) -> Result<()> {
-        let declared = [("broken", self.broken.is_some()), ("count", self.count.is_some()), ("interval", self.interval.is_some()), ("at_highest", self.at_highest.is_some()), ("ignore", !self.ignore.is_empty())];
+        let declared = [
+            ("broken", self.broken.is_some()),
+            ("count", self.count.is_some()),
+            ("interval", self.interval.is_some()),
+            ("at_highest", self.at_highest.is_some()),
+            ("ignore", !self.ignore.is_empty()),
+            ("temperature_c", self.temperature_c.is_some()),
+        ];
         match declared.iter().find(|(_, d)| *d) {
             Some((k, _)) => Err(Error::config(file, format!("{key}.{k}"), format!("{what} has no strength or force at break: `{k}` belongs to a crush or strength file's `data`"))),
             None => Ok(()),
@@ -174,6 +186,11 @@ impl Source {
             if self.interval.is_some() {
                 return Err(Error::config(file, format!("{key}.broken"), "declare `broken` or `interval`, not both: a class with an empty upper end already says the specimen did not break by its lower end"));
             }
+        }
+        if let Some(t) = self.temperature_c
+            && !TEMPERATURE.contains(t)
+        {
+            return Err(Error::config(file, format!("{key}.temperature_c"), format!("a test temperature must lie in {} ({}; got {t})", TEMPERATURE.shown, TEMPERATURE.why)));
         }
         if self.at_highest.is_some() && (self.broken.is_some() || self.interval.is_some()) {
             return Err(Error::config(file, format!("{key}.at_highest"), "the rows already say whether they broke (`broken` or `interval`): `at_highest` is for files that do not"));
@@ -397,6 +414,71 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
         }
     }
     Ok(())
+}
+
+/// Plausible test temperatures (°C), of a temperature column and of a study's `temperature_c`.
+pub const TEMPERATURE: super::Plausible = super::Plausible { what: "temperature", lo: -273.15, hi: 2100.0, shown: "[-273.15, 2100] °C", why: "from absolute zero to the melting point of alumina (2072 °C), above which no ceramic particle is solid" };
+
+/// The test temperature of each row (°C): its own (`cells`: the file's temperature column,
+/// None for no column or an empty cell), else the study's `temperature_c`. A row with neither
+/// is refused: `place(k)` names row k in the message, `column` is the file's temperature
+/// column if it has one, as said in words (`` `T [°C]` ``). Records in `provenance` where the temperatures came from and what
+/// they are (`test temperature: 20 °C (column `T [°C]`)`).
+pub fn test_temperatures(cells: &[Option<f64>], place: &dyn Fn(usize) -> String, column: Option<&str>, src: &Source, origin: &MapOrigin, provenance: &mut Provenance) -> Result<Vec<f64>> {
+    let key = prefix(origin);
+    let mut out = Vec::with_capacity(cells.len());
+    let mut from_study = 0;
+    for (k, cell) in cells.iter().enumerate() {
+        match (cell, src.temperature_c) {
+            (Some(t), _) => out.push(*t),
+            (None, Some(t)) => {
+                from_study += 1;
+                out.push(t);
+            }
+            (None, None) => {
+                let rule = match column {
+                    Some(c) if origin.key.is_empty() => format!("has no test temperature (column {c} is empty there): fill the cell, or give the test temperature of the rows without one (`--temperature-c 20` on the command line, `temperature_c = 20` in a study's data table; °C)"),
+                    Some(c) => format!("has no test temperature (column {c} is empty there): fill the cell, or give the test temperature of the rows without one in {}: {key}temperature_c = … (°C)", origin.file),
+                    None if origin.key.is_empty() => "states no test temperature: it has no temperature column (temperature_c, temp, test_temperature …). A strength measured at 20 °C is not one at 800 °C: add the column, or give the file's test temperature (`--temperature-c 20` on the command line, `temperature_c = 20` in a study's data table; °C)".to_string(),
+                    None => format!(
+                        "states no test temperature: it has no temperature column (temperature_c, temp, test_temperature …) and the study gives none. A strength measured at 20 °C is not one at 800 °C: add the column, or declare the file's test temperature in {}: {key}temperature_c = 20 (°C; a `data` given as a path becomes a table: data = {{ file = \"…\", temperature_c = 20 }})",
+                        origin.file
+                    ),
+                };
+                return Err(Error::data_file(&src.file, if column.is_some() { place(k) } else { "file".into() }, rule));
+            }
+        }
+    }
+    let source = match (column, from_study) {
+        (Some(c), 0) => format!("column {c}"),
+        (Some(c), n) if origin.key.is_empty() => format!("column {c}; {n} empty cells from --temperature-c"),
+        (Some(c), n) => format!("column {c}; {n} empty cells from the study's {key}temperature_c"),
+        (None, _) if origin.key.is_empty() => "given: --temperature-c".to_string(),
+        (None, _) => format!("the study's {key}temperature_c"),
+    };
+    provenance.observed.push(format!("test temperature: {} ({source})", describe_temperatures(&out)));
+    Ok(out)
+}
+
+/// Test temperatures in words: `20 °C`, or `20 °C (45) and 800 °C (30)` (rows at each).
+pub fn describe_temperatures(t: &[f64]) -> String {
+    let mut seen: Vec<(f64, usize)> = Vec::new();
+    for &x in t {
+        match seen.iter_mut().find(|(v, _)| *v == x) {
+            Some(s) => s.1 += 1,
+            None => seen.push((x, 1)),
+        }
+    }
+    seen.sort_by(|a, b| a.0.total_cmp(&b.0));
+    match seen.len() {
+        0 => "none".into(),
+        1 => format!("{} °C", super::columns::shown(seen[0].0)),
+        _ => {
+            let parts: Vec<String> = seen.iter().map(|(v, n)| format!("{} °C ({n})", super::columns::shown(*v))).collect();
+            let (last, head) = parts.split_last().unwrap_or((&parts[0], &[]));
+            format!("{} and {last}", head.join(", "))
+        }
+    }
 }
 
 /// The specimens a file's rows stand for: a row counting k becomes k specimens, and what each

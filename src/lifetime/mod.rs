@@ -15,6 +15,7 @@
 
 pub mod attrition;
 pub mod damage;
+pub mod tested;
 
 use crate::contact::{AveragingDomain, ContactState, ContactStress, Elastic, Impact, Sphere};
 use crate::error::Result;

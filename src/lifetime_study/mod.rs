@@ -367,7 +367,26 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
     }
     write_force_time(&mut dir, &runs, s)?;
     let tables::Summary { headlines, attrition } = write_summary(&mut dir, &runs, s)?;
-    let md = crate::runkit::headline_summary("Breaking probability after repeated impacts (the deliverable's chain)", &headlines) + &attrition;
+    // At which temperature each material was tested, and what the lifetimes hold at.
+    let temperatures: Vec<Vec<f64>> = runs.iter().map(|r| r.data.records.iter().filter_map(|x| x.temperature_c).collect()).collect();
+    let tested: Vec<crate::lifetime::tested::Tested> = runs
+        .iter()
+        .zip(&temperatures)
+        .map(|(r, t)| crate::lifetime::tested::Tested { label: &r.label, temperatures_c: t, temperature_term: r.chain.model().fit.effects().contains(&crate::strength::Effect::Temperature) })
+        .collect();
+    let predicted: Vec<Option<String>> = runs.iter().map(|r| r.chain.model().population.predicted_temperature()).collect();
+    let mut warnings = crate::lifetime::tested::warnings(&tested);
+    warnings.extend(tested.iter().zip(&predicted).filter_map(|(t, p)| crate::lifetime::tested::unused_prediction(t, p.as_deref())));
+    for ((t, sample), temps) in tested.iter().zip(&samples).zip(&temperatures) {
+        for (name, levels) in &sample.levels {
+            warnings.extend(crate::lifetime::tested::confounded(t.label, name, levels, temps));
+        }
+    }
+    for w in &warnings {
+        crate::intake::warn(w);
+    }
+    let lead = crate::lifetime::tested::paragraph(&tested, &crate::lifetime::tested::named_or_tests(&tested, &predicted));
+    let md = crate::runkit::headline_summary("Breaking probability after repeated impacts (the deliverable's chain)", &headlines).replacen("\n## Headline", &format!("\n{lead}\n\n## Headline"), 1) + &attrition;
     dir.write_bytes("summary.md", md.as_bytes())?;
     pb.inc(1);
 
@@ -378,7 +397,7 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
     pb.inc(1);
 
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let run = RunRecord { inputs, seed: s.seed, clock, evaluations, failures };
+    let run = RunRecord { inputs, seed: s.seed, clock, evaluations, failures, warnings };
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, run)?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })

@@ -129,7 +129,7 @@ pub fn run_microstructure(loaded: &StudyFile, s: &MicroStudy, opts: &RunOptions)
     evaluations.insert("cracked_pixels".to_string(), cracked.iter().map(|c| c.run.events.len() as u64).sum());
     evaluations.insert("pixels".to_string(), solved.iter().map(|r| r.micro.labels.len() as u64).sum());
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
+    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures, warnings: Vec::new() })?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })
 }

@@ -151,9 +151,12 @@ fn inputs(m: &Value) -> Vec<Block> {
     blocks
 }
 
-/// Every warning the run recorded: its failures and the intake's warnings on its inputs.
+/// Every warning the run recorded: the study's warnings on its inputs (materials tested at
+/// different temperatures), its failures and the intake's warnings on each file.
 pub fn warnings(m: &Value) -> Vec<String> {
-    let mut out: Vec<String> = m.get("failures").and_then(Value::as_array).map(|f| f.iter().filter_map(|x| x.as_str().map(String::from)).collect()).unwrap_or_default();
+    let list = |k: &str| -> Vec<String> { m.get(k).and_then(Value::as_array).map(|f| f.iter().filter_map(|x| x.as_str().map(String::from)).collect()).unwrap_or_default() };
+    let mut out = list("warnings");
+    out.extend(list("failures"));
     fn intake(r: &Value, out: &mut Vec<String>) {
         let file = s(r, "file");
         for w in r.get("warnings").and_then(Value::as_array).into_iter().flatten() {

@@ -153,6 +153,14 @@ impl LifetimeModel {
         if population.is_empty() {
             return Err(Error::numerical("lifetime model", format!("material `{key}`: the population has no particle")));
         }
+        // Temperature softening predicts at a temperature the study must name: the tests' own
+        // (a mixture of 20 and 800 °C, say) is no plant's.
+        if fit.effects().contains(&Effect::Temperature) && !population.temperature_named() {
+            return Err(Error::Param {
+                name: "predict".into(),
+                rule: format!("material `{key}`: the strength model carries temperature softening; say which temperature the lifetime is for (the operating temperature): predict = {{ temperature_c = 800 }} or a distribution, in °C"),
+            });
+        }
         let (kz, rows, groups) = if beta_columns.is_empty() && scale_columns.is_empty() {
             (vec![], 1, vec![])
         } else {

@@ -38,6 +38,12 @@
 //! crush campaign had; a declared population has no recorded values and needs `predict` for
 //! every factor its strength model carries. A level must be one of the data's (a new batch's
 //! scale is not known), and a value outside the data's range is flagged as extrapolated.
+//!
+//! **Temperature**: `predict = { temperature_c = 800 }` (or a distribution) sets the temperature
+//! every particle is predicted at — the operating temperature the lifetime is for. A strength
+//! model that carries temperature softening predicts nothing without it (or a declared
+//! population's `temperature_c`): the tests' temperatures are not the plant's
+//! ([`Population::temperature_named`]).
 
 
 use crate::data::CrushData;
@@ -148,6 +154,18 @@ impl Prediction {
     }
 }
 
+/// One value per row from `m`'s n strata: the strata of the CDF shifted by one common seeded
+/// offset, dealt to the rows in a seeded random order.
+fn stratified(m: &Marginal, n: usize, seed: u64) -> Vec<f64> {
+    use rand::SeedableRng;
+    use rand::seq::SliceRandom;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut order: Vec<usize> = (0..n).collect();
+    order.shuffle(&mut rng);
+    let u: f64 = rand::Rng::random(&mut rng);
+    order.iter().map(|&k| m.quantile((k as f64 + u) / n as f64)).collect()
+}
+
 impl Population {
     /// The crushed particles of a dataset, fresh.
     pub fn of_data(data: &CrushData) -> Population {
@@ -205,6 +223,13 @@ impl Population {
         };
         for (k, (factor, value)) in m.predict.iter().enumerate() {
             let key = format!("material[{index}].predict.{factor}");
+            if factor == "temperature_c" && !data.factors.iter().any(|(n, _)| n == factor) {
+                // The operating temperature: a value or a distribution over the tests' range.
+                let tested: Vec<f64> = data.records.iter().filter_map(|r| r.temperature_c).collect();
+                let prediction = Prediction::parse(value, &FactorValues::Numeric(tested.clone()), &name, &key, &resolve)?;
+                pop.predict_temperature(&tested, &prediction, seed ^ (0x7E3 + 97 * index as u64));
+                continue;
+            }
             let Some((_, values)) = data.factors.iter().find(|(n, _)| n == factor) else {
                 let known = data.factors.iter().map(|(n, _)| format!("`{n}`")).collect::<Vec<_>>().join(", ");
                 return Err(Error::config(&name, key, format!("`{factor}` is not a recorded factor of this material (declared in its `factors`: {})", if known.is_empty() { "none".into() } else { known })));
@@ -215,11 +240,45 @@ impl Population {
         Ok(pop)
     }
 
+    /// Whether the study named the temperature the population is predicted at: `predict`'s
+    /// `temperature_c`, or a declared population with a `temperature_c` for every particle.
+    pub fn temperature_named(&self) -> bool {
+        self.predicted.iter().any(|p| p.starts_with("temperature_c ")) || (self.source == "declared" && self.particles.iter().all(|p| p.temperature_c.is_some()))
+    }
+
+    /// The temperature the study predicts at, in words (`800 °C`, `700–800 °C (declared
+    /// distribution)`), or None where it named none.
+    pub fn predicted_temperature(&self) -> Option<String> {
+        let p = self.predicted.iter().find(|p| p.starts_with("temperature_c "))?;
+        Some(p.trim_start_matches("temperature_c ").trim_start_matches("= ").trim_start_matches("over ").to_string())
+    }
+
+    /// Sets every particle's temperature as `prediction` (a value or a distribution) says;
+    /// `tested`: the tests' temperatures, for the range.
+    pub fn predict_temperature(&mut self, tested: &[f64], prediction: &Prediction, seed: u64) {
+        let (lo, hi) = tested.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(*x), b.max(*x)));
+        let outside = |a: f64, b: f64| if a < lo || b > hi { format!(" (outside the tests' {lo}–{hi} °C: extrapolated)") } else { String::new() };
+        let values = match prediction {
+            Prediction::Value(x) => {
+                self.predicted.push(format!("temperature_c = {x} °C{}", outside(*x, *x)));
+                vec![*x; self.particles.len()]
+            }
+            Prediction::Distribution(m) => {
+                let (a, b) = (m.quantile(0.0), m.quantile(1.0));
+                self.predicted.push(format!("temperature_c over {a}–{b} °C (declared distribution){}", outside(a, b)));
+                stratified(m, self.particles.len(), seed)
+            }
+            // A numeric factor's prediction is a value or a distribution (Prediction::parse).
+            Prediction::Level(_) | Prediction::Levels(_) => return,
+        };
+        for (p, t) in self.particles.iter_mut().zip(values) {
+            p.temperature_c = Some(t);
+        }
+    }
+
     /// Sets factor `name` of every row as `prediction` says (`data`: its values in the fitted
     /// data, for the range; `seed`: the order of a distribution's strata).
     pub fn predict(&mut self, name: &str, data: &FactorValues, prediction: &Prediction, seed: u64) {
-        use rand::SeedableRng;
-        use rand::seq::SliceRandom;
         let n = self.particles.len();
         if self.parent.is_empty() {
             self.parent = (0..n).collect();
@@ -260,11 +319,7 @@ impl Population {
                 self.predicted.push(format!("{name}: {shares}"));
             }
             Prediction::Distribution(m) => {
-                let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-                let mut order: Vec<usize> = (0..n).collect();
-                order.shuffle(&mut rng);
-                let u: f64 = rand::Rng::random(&mut rng);
-                let values: Vec<f64> = order.iter().map(|&k| m.quantile((k as f64 + u) / n as f64)).collect();
+                let values = stratified(m, n, seed);
                 let (lo, hi) = (m.quantile(0.0), m.quantile(1.0));
                 set(self, FactorValues::Numeric(values));
                 self.predicted.push(format!("{name} over {lo}–{hi} (declared distribution){}", outside(lo, hi)));

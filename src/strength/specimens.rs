@@ -55,7 +55,7 @@ pub const SPECIMEN_STRENGTH: Plausible = Plausible {
 };
 
 /// Fields of a strength file.
-pub const STRENGTH_FIELDS: [Field; 3] = [
+pub const STRENGTH_FIELDS: [Field; 4] = [
     Field { key: "id", column: "id", kind: Kind::Text, synonyms: &["specimen", "specimen_id", "sample", "sample_id"], required: false, plausible: None },
     Field { key: "material", column: "material", kind: Kind::Text, synonyms: &["grade"], required: false, plausible: None },
     Field {
@@ -66,6 +66,8 @@ pub const STRENGTH_FIELDS: [Field; 3] = [
         required: true,
         plausible: Some(SPECIMEN_STRENGTH),
     },
+    // Not `t`: a bend bar's thickness goes by it.
+    Field { key: "temperature", column: "temperature_c", kind: Kind::Number(Quantity::Temperature), synonyms: &["temp", "test_temperature", "temperature"], required: false, plausible: Some(crate::intake::observed::TEMPERATURE) },
 ];
 
 /// The strength's class ends, read in place of `strength` when the study declares `interval`.
@@ -97,6 +99,8 @@ pub struct Specimens {
     pub ids: Vec<String>,
     /// Strengths, covariates, levels and the generic candidates.
     pub sample: Sample,
+    /// Each specimen's test temperature (°C): its row's, else the study's `temperature_c`.
+    pub temperatures_c: Vec<f64>,
 }
 
 /// Reads a strength file as `src` describes it, with the size measure and factor columns
@@ -104,6 +108,18 @@ pub struct Specimens {
 pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, origin: &MapOrigin) -> Result<Specimens> {
     let path = src.file.as_path();
     let table = read_raw(src)?;
+    // `T [°C]`: a `t` that states a temperature unit is the test temperature, not a thickness.
+    let mapped;
+    let src = match table.headers.iter().find(|h| {
+        let p = crate::intake::units::parse_header(h);
+        crate::intake::units::fold(&p.name) == "t" && p.unit.is_some_and(|u| crate::intake::units::unit_of(Quantity::Temperature, &u).is_some())
+    }) {
+        Some(h) if !src.columns.contains_key("temperature") => {
+            mapped = Source { columns: src.columns.iter().map(|(k, v)| (k.clone(), v.clone())).chain([("temperature".to_string(), h.clone())]).collect(), ..src.clone() };
+            &mapped
+        }
+        _ => src,
+    };
     let ((fields, columns, units), ends) = crate::intake::observed::fields_for(&table, &STRENGTH_FIELDS, "strength", STRENGTH_ENDS, src, origin)?;
     let r = resolve(&table, &fields, &columns, &units, origin)?;
     if table.rows.is_empty() {
@@ -142,6 +158,9 @@ pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, 
         provenance.unused.retain(|u| *u != table.headers[c]);
     }
     let mut columns = read_factors(&table, &rows, factors, &mut provenance, origin, path)?;
+    let tc = r.column("temperature");
+    let cells: Vec<Option<f64>> = rows.iter().map(|&row| r.number("temperature", row)).collect::<Result<_>>()?;
+    let mut temperatures_c = crate::intake::observed::test_temperatures(&cells, &|k| table.place(rows[k], tc), tc.map(|c| format!("`{}`", table.headers[c])).as_deref(), src, origin, &mut provenance)?;
     crate::intake::observed::check_unused(&table, &rows, &mut provenance, src, origin)?;
     crate::intake::observed::pile_up(&r, &rows, &values, "strength", src, origin, "strength")?;
     // Rows counting several specimens become that many (ids `A#1` … `A#k`); then what the rows say.
@@ -153,10 +172,11 @@ pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, 
         for (_, v) in columns.iter_mut() {
             v.keep(&sp.rows);
         }
+        temperatures_c = sp.rows.iter().map(|&k| temperatures_c[k]).collect();
     }
     sample.strength = sp.observations;
     sample.add_factors(&columns);
-    Ok(Specimens { path: path.to_path_buf(), provenance, ids, sample })
+    Ok(Specimens { path: path.to_path_buf(), provenance, ids, sample, temperatures_c })
 }
 
 #[cfg(test)]
@@ -169,6 +189,7 @@ mod tests {
         std::fs::write(&p, body).unwrap();
         let mut src = Source::file(&p);
         src.units = units.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect();
+        src.temperature_c = Some(20.0);
         read_specimens(&src, size.as_ref(), &factors, &MapOrigin { file: "study.toml".into(), key: "strength[0].data".into() })
     }
 
@@ -183,6 +204,30 @@ mod tests {
         let names: Vec<String> = s.sample.factors.iter().map(|f| f.name()).collect();
         assert_eq!(names, ["size(L)", "levels(batch)", "moduli(batch)", "linear(rate)", "power(rate)"]);
         assert!(!s.sample.particles);
+    }
+
+    #[test]
+    fn a_strength_file_states_its_test_temperature_and_t_in_celsius_is_one() {
+        let dir = crate::io::TempDir::new("specimens_t").unwrap();
+        let origin = MapOrigin { file: "study.toml".into(), key: "strength[0].data".into() };
+        let at = |body: &str, t: Option<f64>| {
+            let p = dir.path().join("s.csv");
+            std::fs::write(&p, body).unwrap();
+            read_specimens(&Source { temperature_c: t, ..Source::file(&p) }, None, &Factors::default(), &origin)
+        };
+        let e = at("sigma_f [MPa]\n300\n310\n", None).unwrap_err().to_string();
+        assert!(e.contains("states no test temperature") && e.contains("strength[0].data.temperature_c = 20"), "{e}");
+        assert_eq!(at("sigma_f [MPa]\n300\n310\n", Some(1000.0)).unwrap().temperatures_c, [1000.0, 1000.0]);
+        // `T [°C]` is the test temperature; `t [mm]` (a bar's thickness) is not.
+        assert_eq!(at("sigma_f [MPa];T [°C]\n300;20\n310;1200\n", None).unwrap().temperatures_c, [20.0, 1200.0]);
+        let e = at("sigma_f [MPa];t [mm]\n300;3\n310;3\n", None).unwrap_err().to_string();
+        assert!(e.contains("states no test temperature"), "{e}");
+        // A count expands the temperatures with the specimens.
+        let e = at("sigma_f [MPa];n;temperature_c\n300;2;20\n310;1;800\n", None).unwrap_err().to_string();
+        assert!(e.contains("count = \"n\""), "{e}");
+        let p = dir.path().join("s.csv");
+        let s = read_specimens(&Source { count: Some("n".into()), ..Source::file(&p) }, None, &Factors::default(), &origin).unwrap();
+        assert_eq!(s.temperatures_c, [20.0, 20.0, 800.0]);
     }
 
     #[test]

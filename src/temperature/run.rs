@@ -413,7 +413,7 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
     record_figures(&mut dir, rendered, &mut failures);
     pb.inc(1);
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
+    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures, warnings: Vec::new() })?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines })
 }

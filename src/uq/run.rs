@@ -113,6 +113,14 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     }
     let varying = primary.setup.varying(Mode::Split);
     let mut md = summary(s, &forms, &final_indices, &varying, &outputs, &headline, &averaging);
+    // Materials tested at different temperatures, or one material's tests pooled across several.
+    let temps: Vec<Vec<f64>> = primary.setup.materials.iter().map(|m| m.temperatures_c()).collect();
+    let tested: Vec<_> = primary.setup.materials.iter().zip(&temps).map(|(m, t)| m.tested(t)).collect();
+    let mut warnings = crate::lifetime::tested::warnings(&tested);
+    warnings.extend(tested.iter().zip(&primary.setup.materials).filter_map(|(t, m)| crate::lifetime::tested::unused_prediction(t, m.model.population.predicted_temperature().as_deref())));
+    for w in &warnings {
+        crate::intake::warn(w);
+    }
     md.push_str(&super::attrition::markdown(&attrition, &impacts_per_year_text(&primary.setup), &primary.setup.materials[0].model.label));
     dir.write_bytes("summary.md", md.as_bytes())?;
     pb.set_message("figures");
@@ -125,7 +133,7 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     evaluations.insert("sobol_model_runs".to_string(), sens_sizes.iter().map(|n| (n * (varying.len() + 2)) as u64).sum());
     evaluations.insert("strength_draws".to_string(), forms.iter().map(|f| 2 * f.setup.materials[0].draws.len() as u64).sum());
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
-    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
+    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures, warnings })?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: headline.lines })
 }

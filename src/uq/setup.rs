@@ -13,8 +13,8 @@
 //!
 //! # Operating temperature
 //!
-//! The crush data fix the strength law at their temperature T₀ (every row's `temperature_c`, or
-//! 20 °C when the column is empty). At an operating temperature T the sample's draw j of the laws
+//! The crush data fix the strength law at their temperature T₀ (every row's test temperature,
+//! from its `temperature_c` cell or the study's `data.temperature_c`). At an operating temperature T the sample's draw j of the laws
 //! multiplies the Weibull scale by s_j(T)/s_j(T₀) and the particle's Young's modulus by
 //! E_j(T)/E_j(T₀) ([`crate::thermal::Factors`]); the impact stress follows the modulus
 //! ([`LifetimeModel::ln_impact_stress_with_modulus`]).
@@ -85,15 +85,26 @@ pub struct Material {
     effect_columns: Vec<(crate::strength::Effect, usize)>,
 }
 
-/// The temperature of the crush data assumed when the `temperature_c` column is empty (°C).
+/// The crush data's temperature of a sample without a `temperature_c` covariate (°C): only a
+/// sample built by hand, since the intake gives every crush row a test temperature.
 pub const ROOM_TEMPERATURE_C: f64 = 20.0;
 
 /// γ points of a Tavares–King table of critical ratios (linear in γ between them).
 const TK_GAMMA_POINTS: usize = 41;
 
 impl Material {
-    /// The temperature of its crush data T₀ (°C): every row's `temperature_c`, or
-    /// [`ROOM_TEMPERATURE_C`] when none is given; data at several temperatures are refused (the
+    /// Each crushed particle's test temperature (°C; the intake gives every row one).
+    pub fn temperatures_c(&self) -> Vec<f64> {
+        self.sample.covariates.iter().find(|(n, _)| n == "temperature_c").map_or(Vec::new(), |(_, v)| v.iter().flatten().copied().collect())
+    }
+
+    /// This material's tests for [`crate::lifetime::tested`] (`temperatures`: [`Self::temperatures_c`]).
+    pub fn tested<'a>(&'a self, temperatures: &'a [f64]) -> crate::lifetime::tested::Tested<'a> {
+        crate::lifetime::tested::Tested { label: &self.model.label, temperatures_c: temperatures, temperature_term: self.model.fit.effects().contains(&crate::strength::Effect::Temperature) }
+    }
+
+    /// The temperature of its crush data T₀ (°C): every row's `temperature_c` (the intake gives
+    /// each row one; [`ROOM_TEMPERATURE_C`] for a hand-built sample without); data at several temperatures are refused (the
     /// temperature laws scale a strength measured at one temperature).
     pub fn data_temperature_c(&self) -> Result<f64> {
         let t: &[Option<f64>] = self.sample.covariates.iter().find(|(n, _)| n == "temperature_c").map_or(&[], |(_, v)| v);

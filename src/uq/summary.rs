@@ -68,21 +68,27 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
             md.push_str(&format!("**{}**: {}. Fitted as what the rows say, with {bands}.\n\n", m.model.label, t.describe("particles")));
         }
     }
-    if let (Some(th), Some(op)) = (&st.thermal, &s.operating) {
-        let range = |i: usize| {
-            let m = &st.inputs[i].marginal;
-            let (lo, hi) = (m.quantile(0.0), m.quantile(1.0));
-            if lo == hi { format!("{lo} °C") } else { format!("{lo}–{hi} °C") }
+    // At which temperature each material was tested, and what the comparison holds at.
+    {
+        use crate::lifetime::tested::{LifetimeAt, paragraph};
+        let temps: Vec<Vec<f64>> = st.materials.iter().map(|m| m.temperatures_c()).collect();
+        let tested: Vec<_> = st.materials.iter().zip(&temps).map(|(m, t)| m.tested(t)).collect();
+        let at = if let (Some(th), Some(op)) = (&st.thermal, &s.operating) {
+            let range = |i: usize| {
+                let m = &st.inputs[i].marginal;
+                let (lo, hi) = (m.quantile(0.0), m.quantile(1.0));
+                if lo == hi { format!("{lo} °C") } else { format!("{lo}–{hi} °C") }
+            };
+            LifetimeAt::Operating {
+                per_material: vec![range(th.temperature_inputs[0]), range(th.temperature_inputs[1])],
+                by: format!("the temperature laws of `{}` ({} joint draws, input `temperature_law`; they move the Weibull scale and the particle's Young's modulus)", op.law.display(), th.laws.len()),
+            }
+        } else {
+            let named: Vec<Option<String>> = st.materials.iter().map(|m| m.model.population.predicted_temperature()).collect();
+            crate::lifetime::tested::named_or_tests(&tested, &named)
         };
-        md.push_str(&format!(
-            "**At operating temperatures**: {a} at {}, {b} at {} (crush data at {} and {} °C). The Weibull scale and the particle's Young's modulus move by the temperature laws of `{}` ({} joint draws; input `temperature_law`).\n\n",
-            range(th.temperature_inputs[0]),
-            range(th.temperature_inputs[1]),
-            th.data_c[0],
-            th.data_c[1],
-            op.law.display(),
-            th.laws.len()
-        ));
+        md.push_str(&paragraph(&tested, &at));
+        md.push_str("\n\n");
     }
     md.push_str("## Headline\n\n");
     for l in &headline.lines {

@@ -336,7 +336,7 @@ pub fn run_curves(loaded: &StudyFile, s: &CurveStudy, opts: &RunOptions) -> Resu
     evaluations.insert("fe_runs".to_string(), table.as_ref().map_or(0, |t| t.roundness.len() as u64));
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
     let headline = curve_headline(&outcome);
-    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures })?;
+    let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures, warnings: Vec::new() })?;
     pb.finish_and_clear();
     Ok(RunSummary { report_dir, wall_time_s: clock.seconds(), headlines: vec![headline] })
 }

@@ -118,63 +118,55 @@ pub(super) fn loglik_grad(kind: Populations, rows: &Rows, z: &[Vec<f64>], t: &[f
     let k0 = kind.parameters();
     let eta = |i: usize| shift_at(z, &t[k0..], i);
     let lnx = rows.lnx;
-    match kind {
-        Populations::Mixture => {
-            let p = 1.0 / (1.0 + (-t[0]).exp());
-            let lw = [-(1.0 + (-t[0]).exp()).ln(), -(1.0 + t[0].exp()).ln()];
-            let (u, v) = ([t[1], t[3]], [t[2], t[4]]);
-            let m = [v[0].exp(), v[1].exp()];
-            for (i, &lx0) in lnx.iter().enumerate() {
-                let h = eta(i);
-                if !rows.exact(i) {
-                    l += censored_row(kind, rows, i, h, z, t, g);
-                    continue;
-                }
-                let (y, e) = standardised(lx0 - h, u, m);
+    // The populations' ln σ_j (u), ln m_j (v) and where their gradient goes: the mixture's
+    // weight logit comes first.
+    let at = match kind {
+        Populations::Mixture => 1,
+        Populations::Competing => 0,
+    };
+    let (u, v) = ([t[at], t[at + 2]], [t[at + 1], t[at + 3]]);
+    let m = [v[0].exp(), v[1].exp()];
+    for (i, &lx0) in lnx.iter().enumerate() {
+        let h = eta(i);
+        if !rows.exact(i) {
+            l += censored_row(kind, rows, i, h, z, t, g);
+            continue;
+        }
+        let (y, e) = standardised(lx0 - h, u, m);
+        let mut gu = 0.0;
+        match kind {
+            Populations::Mixture => {
+                let p = 1.0 / (1.0 + (-t[0]).exp());
+                let lw = [-(1.0 + (-t[0]).exp()).ln(), -(1.0 + t[0].exp()).ln()];
                 let a = [0, 1].map(|j| lw[j] + v[j] - u[j] + (m[j] - 1.0) * y[j] - e[j]);
                 // ln(e^a₀ + e^a₁) and the responsibilities from one exponential.
                 let (li, r) = log_sum_and_shares(a);
                 l += li - h;
                 g[0] += r[0] - p;
-                let mut gu = 0.0;
                 for j in 0..2 {
                     if r[j] > 0.0 {
                         let du = r[j] * m[j] * (e[j] - 1.0);
-                        g[1 + 2 * j] += du;
+                        g[at + 2 * j] += du;
                         gu += du;
-                        g[2 + 2 * j] += r[j] * (1.0 + m[j] * y[j] * (1.0 - e[j]));
+                        g[at + 1 + 2 * j] += r[j] * (1.0 + m[j] * y[j] * (1.0 - e[j]));
                     }
                 }
-                for (k, c) in z.iter().enumerate() {
-                    g[k0 + k] += gu * c[i];
-                }
             }
-        }
-        Populations::Competing => {
-            let (u, v) = ([t[0], t[2]], [t[1], t[3]]);
-            let m = [v[0].exp(), v[1].exp()];
-            for (i, &lx0) in lnx.iter().enumerate() {
-                let h = eta(i);
-                if !rows.exact(i) {
-                    l += censored_row(kind, rows, i, h, z, t, g);
-                    continue;
-                }
-                let (y, e) = standardised(lx0 - h, u, m);
+            Populations::Competing => {
                 let lh = [0, 1].map(|j| v[j] - u[j] + (m[j] - 1.0) * y[j]);
                 let (lht, share) = log_sum_and_shares(lh);
                 l += lht - e[0] - e[1] - h;
-                let mut gu = 0.0;
                 for j in 0..2 {
                     let w = share[j];
                     let du = m[j] * (e[j] - w);
-                    g[2 * j] += du;
+                    g[at + 2 * j] += du;
                     gu += du;
-                    g[2 * j + 1] += w * (1.0 + m[j] * y[j]) - m[j] * y[j] * e[j];
-                }
-                for (k, c) in z.iter().enumerate() {
-                    g[k0 + k] += gu * c[i];
+                    g[at + 1 + 2 * j] += w * (1.0 + m[j] * y[j]) - m[j] * y[j] * e[j];
                 }
             }
+        }
+        for (k, c) in z.iter().enumerate() {
+            g[k0 + k] += gu * c[i];
         }
     }
     if l.is_finite() && g.iter().all(|v| v.is_finite()) { l } else { f64::NEG_INFINITY }

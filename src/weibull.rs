@@ -526,6 +526,12 @@ pub fn two_population_cdf(mixture: bool, p: f64, first: (f64, f64), second: (f64
     if mixture { p * -(-h(first)).exp_m1() + (1.0 - p) * -(-h(second)).exp_m1() } else { -(-h(first) - h(second)).exp_m1() }
 }
 
+/// CDF at x of the three-parameter (threshold) Weibull law 1 − exp[−((x − γ)/σ)^m] for x > γ,
+/// 0 below; fitted in `strength::flaws`.
+pub fn threshold_cdf(threshold: f64, (s, m): (f64, f64), x: f64) -> f64 {
+    -(-((x - threshold).max(0.0) / s).powf(m)).exp_m1()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

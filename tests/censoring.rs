@@ -445,3 +445,48 @@ data = { file = "../datasets/klassen.csv", interval = { lower = "von", upper = "
     let summary = s.read("reports/klassen/summary.md");
     assert!(summary.contains("82 specimens: 1 did not break by its limit") && summary.contains("one counted in a class the probability of breaking within it"), "{summary}");
 }
+
+/// The peers on Weibull's (1951) Bofors steel table (tests/bench/reliability/bofors.py;
+/// reliability 0.9.0, surpyval 0.25): log-likelihoods of the class values as exact strengths
+/// (density per kgf/mm²) and of the classes (probabilities), two and three parameters, and the
+/// two-parameter moduli.
+const BOFORS_EXACT: (f64, f64) = (-957.9381131594, -918.2640882815);
+const BOFORS_CLASSES: (f64, f64) = (-861.9456745993, -824.0429720289);
+const BOFORS_M: (f64, f64) = (17.5713194425, 17.9364971908);
+
+#[test]
+fn the_bofors_steel_table_equals_the_peers_and_its_threshold_is_named_not_a_second_population() {
+    // The shipped study, with fewer bootstrap replicates (99, the least a 5 % guard accepts).
+    let s = Scratch::new();
+    let study = common::edited(&std::fs::read_to_string(common::root().join("studies/strength_bofors_steel.toml")).unwrap(), &[("bootstrap = 499", "bootstrap = 99"), ("permutations = 999", "permutations = 99")]);
+    std::fs::create_dir_all(s.path("datasets/real")).unwrap();
+    s.write("datasets/real/weibull_bofors_steel_yield.csv", &std::fs::read_to_string(common::root().join("datasets/real/weibull_bofors_steel_yield.csv")).unwrap());
+    s.write("studies/bofors.toml", &study);
+    let out = s.run(&["run", "studies/bofors.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let dir = s.path("reports/bofors");
+    let material_of = table_text(&dir.join("stages.csv"), "material");
+    let rounds = table_f64(&dir.join("stages.csv"), "round");
+    let loglik = table_f64(&dir.join("stages.csv"), "log_likelihood");
+    let modulus = table_f64(&dir.join("stages.csv"), "weibull_modulus");
+    // A density per Pa is a density per kgf/mm² over 9.80665e6, for each of 389 exact values.
+    let per_kgf = 389.0 * 9.80665e6f64.ln();
+    for (key, (two, three), m, shift) in [("exact", BOFORS_EXACT, BOFORS_M.0, per_kgf), ("classes", BOFORS_CLASSES, BOFORS_M.1, 0.0)] {
+        let at = |r: f64| (0..material_of.len()).find(|&i| material_of[i] == key && rounds[i] == r).unwrap_or_else(|| panic!("{key} round {r}"));
+        let (base, thr) = (at(0.0), at(1.0));
+        assert!((loglik[base] + shift - two).abs() < 1e-6 && (modulus[base] / m - 1.0).abs() < 1e-5, "{key}: ℓ {} m {} against the peers' {two} {m}", loglik[base] + shift, modulus[base]);
+        assert!((loglik[thr] + shift - three).abs() < 1e-6, "{key}: three-parameter ℓ {} against surpyval's {three}", loglik[thr] + shift);
+    }
+    let summary = s.read("reports/bofors/summary.md");
+    // 389 specimens, not 10 rows; a threshold named in both readings, the mixture passing but
+    // weaker; the class values read as exact values misfit any continuous law, and it says so.
+    assert_eq!(summary.matches("**Effects named, in order: threshold.**").count(), 2, "{summary}");
+    assert_eq!(summary.matches("(389 specimens, `datasets/real/weibull_bofors_steel_yield.csv`)").count(), 2, "{summary}");
+    assert!(summary.contains("| 0 | mixture | 47.88 |") && summary.contains("they describe one departure, so the one with the lower BIC is named: `threshold`"), "{summary}");
+    assert!(summary.contains("The 389 strengths take only 10 distinct values"), "{summary}");
+    assert!(summary.contains("| 0 | threshold | 79.35 |") && summary.contains("| 0 | threshold | 75.81 |"), "{summary}");
+    // Read as classes, the three-parameter law fits (bootstrap AD p above α).
+    let p_ad = table_f64(&dir.join("stages.csv"), "p_anderson_darling");
+    let last = (0..material_of.len()).rfind(|&i| material_of[i] == "classes").unwrap();
+    assert!(p_ad[last] > 0.05, "classes: AD p {} after the threshold", p_ad[last]);
+}

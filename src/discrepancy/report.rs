@@ -43,7 +43,9 @@ pub(super) fn headline(r: &MaterialResult) -> String {
 /// with a modulus per level, or the two populations' moduli.
 pub(super) fn modulus_text(m: &crate::strength::ModelFit) -> String {
     let (lo, hi) = m.modulus_range();
-    if m.law.is_some() {
+    if let Some(l) = m.law.as_ref().filter(|l| l.kind == crate::strength::flaws::Populations::Threshold) {
+        format!("{lo:.1} (above a threshold of {:.1} MPa)", l.threshold / 1e6)
+    } else if m.law.is_some() {
         format!("{lo:.1} and {hi:.1} (two populations)")
     } else if m.scale_columns.is_empty() {
         format!("{lo:.1}")
@@ -321,6 +323,7 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         fcol("law_modulus1", law_column(results, |l| l.first.1)),
         fcol("law_scale2_pa", law_column(results, |l| l.second.0)),
         fcol("law_modulus2", law_column(results, |l| l.second.1)),
+        fcol("law_threshold_pa", law_column(results, |l| l.threshold)),
     ])?;
     dir.write_table("fits", &mut t)?;
 
@@ -359,8 +362,20 @@ fn evidence_row(e: &super::workflow::Evidence) -> String {
     if let Some(reason) = &e.skipped {
         return format!("| {} | {} | | | | | | | skipped: {} |\n", e.round, e.candidate.name(), reason);
     }
-    let band = e.band.map(|(a, b)| format!(" (90 % {} {a:.3}–{b:.3})", if e.band_pivotal { "pivotal" } else { "profile" })).unwrap_or_default();
-    let par = e.parameter.as_ref().map(|(k, v, se)| if se.is_finite() { format!("{k} = {v:.3} ± {se:.3}{band}") } else { format!("{k} = {v:.3}{band}") }).unwrap_or_default();
+    // A stress in Pa (`…_pa`) is printed in MPa.
+    let (unit, scale) = match e.parameter.as_ref() {
+        Some((k, _, _)) if k.ends_with("_pa") => (" MPa", 1e-6),
+        _ => ("", 1.0),
+    };
+    let band = e.band.map(|(a, b)| format!(" (90 % {} {:.3}–{:.3}{unit})", if e.band_pivotal { "pivotal" } else { "profile" }, a * scale, b * scale)).unwrap_or_default();
+    let par = e
+        .parameter
+        .as_ref()
+        .map(|(k, v, se)| {
+            let k = if unit.is_empty() { k.as_str() } else { k.trim_end_matches("_pa") };
+            if se.is_finite() { format!("{k} = {:.3} ± {:.3}{unit}{band}", v * scale, se * scale) } else { format!("{k} = {:.3}{unit}{band}", v * scale) }
+        })
+        .unwrap_or_default();
     let verdict = if e.named { "**named**" } else if e.passed { "passed, weaker" } else { "not supported" };
     format!("| {} | {} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {} | {} |\n", e.round, e.candidate.name(), e.lr, e.lr_critical, e.p_family, e.delta_bic, e.delta_cv, par, verdict)
 }
@@ -444,15 +459,16 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             for e in r.outcome.evidence.iter().filter(|e| e.named && e.weakest_link.is_none() && !e.meaning.is_empty()) {
                 md.push_str(&format!("\n`{}` (named in round {}): {}.\n", e.candidate.name(), e.round, e.meaning));
             }
-            // Both two-population laws passing: why the named one.
+            // Several laws in place of the Weibull law passing: why the named one.
             let is_law = |e: &&crate::discrepancy::workflow::Evidence| matches!(e.candidate, crate::strength::Effect::Populations(_));
             let named_round = r.outcome.evidence.iter().filter(is_law).find(|e| e.named).map(|e| e.round);
             let laws: Vec<&crate::discrepancy::workflow::Evidence> = r.outcome.evidence.iter().filter(is_law).filter(|e| e.passed && Some(e.round) == named_round).collect();
-            if let ([a, b], Some(named)) = (laws.as_slice(), laws.iter().find(|e| e.named)) {
-                let other = if a.named { b } else { a };
+            if let (true, Some(named)) = (laws.len() > 1, laws.iter().find(|e| e.named)) {
+                let others: Vec<String> = laws.iter().filter(|e| !e.named).map(|o| format!("`{}` (ΔBIC {:.1}, {})", o.candidate.name(), o.delta_bic, o.parameters)).collect();
                 md.push_str(&format!(
-                    "\nBoth two-population laws pass the guard; they describe one departure, so the one with the lower BIC is named: `{}` (ΔBIC {:.1}, {} extra parameters) against `{}` (ΔBIC {:.1}, {}).\n",
-                    named.candidate.name(), named.delta_bic, named.parameters, other.candidate.name(), other.delta_bic, other.parameters
+                    "\n{} laws in place of the Weibull law pass the guard; they describe one departure, so the one with the lower BIC is named: `{}` (ΔBIC {:.1}, {} extra parameter{}) against {}.\n",
+                    if laws.len() == 2 { "Both".to_string() } else { format!("All {}", laws.len()) },
+                    named.candidate.name(), named.delta_bic, named.parameters, if named.parameters == 1 { "" } else { "s" }, others.join(" and ")
                 ));
             }
         }
@@ -502,10 +518,16 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                 _ => format!("Kolmogorov–Smirnov p = {:.3}", a.p_ks),
             };
             let tests = if tally.complete() { tests } else { format!("{tests} of the randomised quantile residuals") };
-            let tried: Vec<String> = r.outcome.evidence.iter().filter(|e| e.round == 0 && e.skipped.is_none() && matches!(e.candidate, crate::strength::Effect::Populations(_))).map(|e| e.candidate.name().replace('_', " ")).collect();
+            let kinds = |round: Option<usize>| -> Vec<crate::strength::flaws::Populations> {
+                let mut k: Vec<_> = r.outcome.evidence.iter().filter(|e| round.is_none_or(|k| e.round == k) && e.skipped.is_none()).filter_map(|e| if let crate::strength::Effect::Populations(k) = e.candidate { Some(k) } else { None }).collect();
+                k.sort();
+                k.dedup();
+                k
+            };
+            let tried = kinds(Some(0));
             let explained = match (r.outcome.named.is_empty(), tried.is_empty()) {
                 (true, true) => "and nothing recorded in the data explains the misfit".to_string(),
-                (true, false) => format!("and nothing recorded in the data explains the misfit; two flaw populations ({}), tried in its place, do not pass the guard", tried.join(", ")),
+                (true, false) => format!("and nothing recorded in the data explains the misfit; {}, tried in its place, {} not pass the guard", crate::strength::flaws::Populations::words(&tried), if tried.len() == 1 { "does" } else { "do" }),
                 (false, true) => "even with the named effects".to_string(),
                 (false, false) => {
                     // Were the laws offered in the last round (beside the named effects)?
@@ -515,15 +537,27 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                     let law_named = r.outcome.named.iter().any(|e| matches!(e, crate::strength::Effect::Populations(_)));
                     match (law_named, offered) {
                         (true, _) => "even with the named effects".to_string(),
-                        (false, true) => "even with the named effects; two flaw populations beside them do not pass the guard".to_string(),
+                        (false, true) => format!("even with the named effects; {} beside them {} not pass the guard", crate::strength::flaws::Populations::words(&kinds(Some(last))), if kinds(Some(last)).len() == 1 { "does" } else { "do" }),
                         (false, false) => format!(
-                            "even with the named effects; two flaw populations were not tried beside {} (a two-population law is fitted beside scale effects of recorded columns only, not beside a partially pooled factor, a modulus per level or damage)",
+                            "even with the named effects; {} {} not tried beside {} (a law in place of the Weibull law is fitted beside scale effects of recorded columns only, not beside a partially pooled factor, a modulus per level or damage)",
+                            crate::strength::flaws::Populations::words(&kinds(None)),
+                            if kinds(None).len() == 1 { "was" } else { "were" },
                             r.outcome.named.iter().map(|e| format!("`{}`", e.name())).collect::<Vec<_>>().join(" and ")
                         ),
                     }
                 }
             };
-            md.push_str(&format!("\n**The Weibull law fits these data poorly** ({tests}, parametric bootstrap), {explained}: the departure lies in the shape of the distribution, not in a factor the data carry.\n"));
+            // Values rounded to a few classes misfit any continuous law, whatever else is wrong.
+            let mut values: Vec<f64> = r.sample.strength.x.clone();
+            values.sort_by(f64::total_cmp);
+            values.dedup();
+            let n = r.sample.strength.x.len();
+            let ties = if tally.complete() && 4 * values.len() <= n {
+                format!(" The {n} strengths take only {} distinct values: values rounded to classes misfit every continuous law; if the rows are classes, declare them (`data.interval = {{ lower = …, upper = … }}`) and each specimen is fitted as breaking somewhere in its class.", values.len())
+            } else {
+                String::new()
+            };
+            md.push_str(&format!("\n**The Weibull law fits these data poorly** ({tests}, parametric bootstrap), {explained}: the departure lies in the shape of the distribution, not in a factor the data carry.{ties}\n"));
         }
         if let Some(spec) = &r.crush {
         let how = match (r.outcome.before().model.pivotal(), r.outcome.after().model.pivotal(), r.outcome.after().model.location_scale()) {

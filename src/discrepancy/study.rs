@@ -92,16 +92,16 @@ pub struct SpecimenSet {
     /// The recorded factors: `["lab", "rate"]` or `{ lab = "categorical", rate = "numeric" }`.
     #[serde(default)]
     pub factors: Factors,
-    /// Two-flaw-population laws offered as candidates against the one Weibull law:
-    /// `["mixture", "competing_risks"]` (the default) or a part of it; `[]` for none. Each
-    /// bootstrap replicate refits them from seven starts (the Jahanmir study's 480 bars with 499
+    /// Laws offered as candidates in place of the one Weibull law: two flaw populations and a
+    /// threshold strength, `["mixture", "competing_risks", "threshold"]` (the default) or a part
+    /// of it; `[]` for none. Each bootstrap replicate refits them from six or seven starts (the Jahanmir study's 480 bars with 499
     /// replicates: 7 s on two cores).
     #[serde(default = "both_populations")]
     pub populations: Vec<crate::strength::flaws::Populations>,
 }
 
 fn both_populations() -> Vec<crate::strength::flaws::Populations> {
-    vec![crate::strength::flaws::Populations::Mixture, crate::strength::flaws::Populations::Competing]
+    vec![crate::strength::flaws::Populations::Mixture, crate::strength::flaws::Populations::Competing, crate::strength::flaws::Populations::Threshold]
 }
 
 /// Column names of `residuals.csv` a factor may not take.

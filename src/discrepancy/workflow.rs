@@ -578,6 +578,7 @@ fn describe(c: &Effect, t: &Term, m: &ModelFit, x: Obs) -> ((String, f64, f64), 
         let (sym, v) = match law.kind {
             crate::strength::flaws::Populations::Mixture => ("weaker_fraction", law.p),
             crate::strength::flaws::Populations::Competing => ("m_weaker", law.first.1),
+            crate::strength::flaws::Populations::Threshold => ("threshold_pa", law.threshold),
         };
         return ((sym.into(), v, f64::NAN), what, None);
     }

@@ -226,18 +226,19 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
         let last = (0..sm.len()).filter(|&i| sm[i] == key).last()?;
         Some((lo[last], hi[last]))
     });
-    // A stage whose law is two flaw populations (fits.csv `law`; older reports lack it).
-    // (kind, mixture?, p, first, second).
-    type Law = (String, bool, f64, (f64, f64), (f64, f64));
+    // A stage whose law is two flaw populations or a threshold (fits.csv `law`; older reports
+    // lack it): (kind, mixture?, p, first, second, threshold γ or NaN).
+    type Law = (String, bool, f64, (f64, f64), (f64, f64), f64);
     let law = |j: usize| -> Option<Law> {
         let kind = fits.s("law").ok()?.get(j)?.clone();
+        let g = |c: &str| fits.f(c).ok().and_then(|v| v.get(j).copied());
         let mixture = match kind.as_str() {
             "mixture" => true,
             "competing_risks" => false,
+            "threshold" => return Some((kind, false, 1.0, (g("law_scale1_pa")?, g("law_modulus1")?), (g("law_scale1_pa")?, g("law_modulus1")?), g("law_threshold_pa")?)),
             _ => return None,
         };
-        let g = |c: &str| fits.f(c).ok().and_then(|v| v.get(j).copied());
-        Some((kind.replace('_', " "), mixture, g("law_weight")?, (g("law_scale1_pa")?, g("law_modulus1")?), (g("law_scale2_pa")?, g("law_modulus2")?)))
+        Some((kind.replace('_', " "), mixture, g("law_weight")?, (g("law_scale1_pa")?, g("law_modulus1")?), (g("law_scale2_pa")?, g("law_modulus2")?), f64::NAN))
     };
     let mut series = Vec::new();
     let mut xs = Vec::new();
@@ -274,7 +275,7 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
         // carried onto it): say so, with the range by level (stages.csv; older reports lack it).
         // A two-population law is drawn as its curve ln(−ln(1 − F(x))), not a line.
         if let Some(l) = law(j) {
-            let label = format!("final: {}, m = {:.1} and {:.1}", l.0, l.3.1.min(l.4.1), l.3.1.max(l.4.1));
+            let label = if l.5.is_nan() { format!("final: {}, m = {:.1} and {:.1}", l.0, l.3.1.min(l.4.1), l.3.1.max(l.4.1)) } else { format!("final: threshold {:.1} MPa, m = {:.1}", l.5 / 1e6, l.3.1) };
             series.push(Series { label: Some(label), points: pts, colour: colour_st, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 1.6) });
             curves.push((l, colour_st));
             continue;
@@ -294,7 +295,8 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
     for (l, colour_st) in curves {
         let pts: Vec<(f64, f64)> = (0..=200)
             .map(|k| xr.0 + (xr.1 - xr.0) * k as f64 / 200.0)
-            .map(|lx| (lx, (-(-crate::weibull::two_population_cdf(l.1, l.2, l.3, l.4, lx.exp() * 1e6)).ln_1p()).ln()))
+            .map(|lx| (lx, if l.5.is_nan() { crate::weibull::two_population_cdf(l.1, l.2, l.3, l.4, lx.exp() * 1e6) } else { crate::weibull::threshold_cdf(l.5, l.3, lx.exp() * 1e6) }))
+            .map(|(lx, f)| (lx, (-(-f).ln_1p()).ln()))
             .filter(|p| p.1.is_finite())
             .collect();
         series.push(Series::line(None, pts, colour_st, 1.0));

@@ -22,6 +22,21 @@
 //!
 //! (r_j = 1 for competing risks.)
 //!
+//! **The threshold law** (three-parameter Weibull), in coordinates ln γ, ln σ, ln m, with
+//! x' = x e^(−η) the row's strength with its shift taken out, w = x' − γ, y = ln(w/σ) and
+//! e = (w/σ)^m:
+//!
+//! ```text
+//! ℓ_i = ln m − ln σ + (m − 1) y − e − η                    (exact row, w > 0; −∞ for w ≤ 0)
+//! ∂ℓ_i/∂ ln σ = m (e − 1)      ∂ℓ_i/∂ ln m = 1 + m y (1 − e)
+//! ∂ℓ_i/∂ ln γ = γ (m e − m + 1)/w      ∂ℓ_i/∂η = x' (m e − m + 1)/w − 1
+//! ln S = −e (0 for w ≤ 0):  ∂/∂ ln σ = m e,  ∂/∂ ln m = −m y e,  ∂/∂ ln γ = γ m e/w,  ∂/∂η = x' m e/w
+//! ```
+//!
+//! A row that says the specimen broke at or below a value the threshold has passed (exact,
+//! left-censored, or an interval whose upper end is at or below γ) has probability 0: ℓ = −∞,
+//! which the search's line search steps back from.
+//!
 //! Verified by the unit test below (the gradient against central differences, exact rows and
 //! rows of every kind, with a scale-effect column).
 
@@ -74,6 +89,20 @@ fn ln_sf_grad(kind: Populations, lx: f64, t: &[f64], gs: &mut [f64; 6]) -> f64 {
             }
             -e[0] - e[1]
         }
+        Populations::Threshold => {
+            let (g, m, x) = (t[0].exp(), t[2].exp(), lx.exp());
+            let w = x - g;
+            if w <= 0.0 {
+                return 0.0;
+            }
+            let y = w.ln() - t[1];
+            let e = (m * y).exp();
+            gs[0] = g * m * e / w;
+            gs[1] = m * e;
+            gs[2] = -m * y * e;
+            gs[k0] = x * m * e / w;
+            -e
+        }
     }
 }
 
@@ -118,11 +147,14 @@ pub(super) fn loglik_grad(kind: Populations, rows: &Rows, z: &[Vec<f64>], t: &[f
     let k0 = kind.parameters();
     let eta = |i: usize| shift_at(z, &t[k0..], i);
     let lnx = rows.lnx;
+    if kind == Populations::Threshold {
+        return threshold_loglik_grad(rows, z, t, g);
+    }
     // The populations' ln σ_j (u), ln m_j (v) and where their gradient goes: the mixture's
     // weight logit comes first.
     let at = match kind {
         Populations::Mixture => 1,
-        Populations::Competing => 0,
+        Populations::Competing | Populations::Threshold => 0,
     };
     let (u, v) = ([t[at], t[at + 2]], [t[at + 1], t[at + 3]]);
     let m = [v[0].exp(), v[1].exp()];
@@ -164,9 +196,42 @@ pub(super) fn loglik_grad(kind: Populations, rows: &Rows, z: &[Vec<f64>], t: &[f
                     g[at + 1 + 2 * j] += w * (1.0 + m[j] * y[j]) - m[j] * y[j] * e[j];
                 }
             }
+            Populations::Threshold => unreachable!("the threshold law's own loop"),
         }
         for (k, c) in z.iter().enumerate() {
             g[k0 + k] += gu * c[i];
+        }
+    }
+    if l.is_finite() && g.iter().all(|v| v.is_finite()) { l } else { f64::NEG_INFINITY }
+}
+
+/// [`loglik_grad`] of the threshold law (module docs): θ = (ln γ, ln σ, ln m, β…).
+fn threshold_loglik_grad(rows: &Rows, z: &[Vec<f64>], t: &[f64], g: &mut [f64]) -> f64 {
+    let kind = Populations::Threshold;
+    let k0 = kind.parameters();
+    let (gam, u, m) = (t[0].exp(), t[1], t[2].exp());
+    let mut l = 0.0;
+    for (i, &lx) in rows.lnx.iter().enumerate() {
+        let h = shift_at(z, &t[k0..], i);
+        if !rows.exact(i) {
+            l += censored_row(kind, rows, i, h, z, t, g);
+            continue;
+        }
+        let x = (lx - h).exp();
+        let w = x - gam;
+        if w <= 0.0 {
+            return f64::NEG_INFINITY;
+        }
+        let y = w.ln() - u;
+        let e = (m * y).exp();
+        l += m.ln() - u + (m - 1.0) * y - e - h;
+        let a = (m * e - m + 1.0) / w;
+        g[0] += gam * a;
+        g[1] += m * (e - 1.0);
+        g[2] += 1.0 + m * y * (1.0 - e);
+        let geta = x * a - 1.0;
+        for (k, c) in z.iter().enumerate() {
+            g[k0 + k] += geta * c[i];
         }
     }
     if l.is_finite() && g.iter().all(|v| v.is_finite()) { l } else { f64::NEG_INFINITY }
@@ -216,7 +281,7 @@ mod tests {
         let kinds = [Censor::Exact, Censor::Right, Censor::Exact, Censor::Left, Censor::Interval, Censor::Exact, Censor::Right, Censor::Interval];
         let upper = [f64::NAN, f64::NAN, f64::NAN, f64::NAN, 1.2f64.ln(), f64::NAN, f64::NAN, 0.7f64.ln()];
         for rows in [Rows { lnx: &x, kind: &[], lnu: &[] }, Rows { lnx: &x, kind: &kinds, lnu: &upper }] {
-            for (kind, t) in [(Populations::Mixture, vec![0.3, -0.2, 1.5, 0.1, 2.2, 0.15]), (Populations::Competing, vec![-0.1, 1.2, 0.2, 2.5, -0.2])] {
+            for (kind, t) in [(Populations::Mixture, vec![0.3, -0.2, 1.5, 0.1, 2.2, 0.15]), (Populations::Competing, vec![-0.1, 1.2, 0.2, 2.5, -0.2]), (Populations::Threshold, vec![0.15f64.ln(), 0.1, 1.1, 0.05])] {
                 let mut g = vec![0.0; t.len()];
                 let mut scratch = g.clone();
                 let l = loglik_grad(kind, &rows, &z, &t, &mut g);

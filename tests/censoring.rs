@@ -490,3 +490,37 @@ fn the_bofors_steel_table_equals_the_peers_and_its_threshold_is_named_not_a_seco
     let last = (0..material_of.len()).rfind(|&i| material_of[i] == "classes").unwrap();
     assert!(p_ad[last] > 0.05, "classes: AD p {} after the threshold", p_ad[last]);
 }
+
+/// reliability's right-censored fits of Nelson's connection strengths per failure mode, the
+/// other mode's breaks censored (tests/bench/reliability/origins.py): (mode, m, scale, ℓ per
+/// the file's unit), and the shared-law likelihood ratio.
+const NELSON_ORIGINS: [(&str, f64, f64, f64); 2] = [("Bond", 3.9826198453, 1676.6785714302, -79.9475567937), ("Wire", 4.2419494130, 1670.2952178697, -79.1146624556)];
+const NELSON_SHARED_LR: f64 = 0.0347152125;
+
+#[test]
+fn failure_origins_give_each_origin_s_law_with_the_others_censored_and_the_shared_law_test() {
+    let s = Scratch::new();
+    std::fs::create_dir_all(s.path("datasets/real")).unwrap();
+    let data = std::fs::read_to_string(common::root().join("datasets/real/nelson_connection_strength.csv")).unwrap();
+    s.write("datasets/real/nelson_connection_strength.csv", &data);
+    let study = common::edited(&std::fs::read_to_string(common::root().join("studies/strength_connection_origins.toml")).unwrap(), &[("bootstrap = 499", "bootstrap = 99"), ("permutations = 999", "permutations = 99")]);
+    s.write("studies/origins.toml", &study);
+    let out = s.run(&["run", "studies/origins.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let path = s.path("reports/origins/origins.csv");
+    let (origin, m, scale, l, lr) = (table_text(&path, "origin"), table_f64(&path, "weibull_modulus"), table_f64(&path, "scale_pa"), table_f64(&path, "log_likelihood"), table_f64(&path, "shared_law_lr"));
+    assert_eq!(origin, ["Bond", "Wire"]);
+    for (i, (name, pm, ps, pl)) in NELSON_ORIGINS.iter().enumerate() {
+        // Ten breaks per mode: a density per Pa is one per MPa over 1e6.
+        let ours = l[i] + 10.0 * 1e6f64.ln();
+        assert!((m[i] / pm - 1.0).abs() < 1e-5 && (scale[i] / 1e6 / ps - 1.0).abs() < 1e-6 && (ours - pl).abs() < 1e-6, "{name}: m {} σ {} ℓ {ours} against reliability's {pm} {ps} {pl}", m[i], scale[i]);
+        assert!((lr[i] - NELSON_SHARED_LR).abs() < 1e-6, "LR {}", lr[i]);
+    }
+    let summary = s.read("reports/origins/summary.md");
+    assert!(summary.contains("**Failure origins** (column `failure_mode`") && summary.contains("| Bond | 10 | 3.98 | 1676.7 |") && summary.contains("The origins are consistent with one shared Weibull law: likelihood ratio 0.03 on 2 degrees of freedom, χ² p = 0.983"), "{summary}");
+    // A specimen without its origin is refused, naming the row and column.
+    s.write("datasets/real/nelson_connection_strength.csv", &data.replace("NC-05,1150,Wire,3", "NC-05,1150,,3"));
+    let out = s.run(&["run", "studies/origins.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("nelson_connection_strength.csv") && out.stderr.contains("failure_mode") && out.stderr.contains("an empty failure origin"), "{}", out.stderr);
+}

@@ -220,7 +220,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
     let mut specimens = Vec::new();
     for (k, m) in s.strength.iter().enumerate() {
         let origin = crate::intake::MapOrigin { file: loaded.path.display().to_string(), key: format!("strength[{k}].data") };
-        let mut read = crate::strength::specimens::read_specimens(&m.data.resolved(&loaded.path), m.size.as_ref(), &m.factors, &origin)?;
+        let mut read = crate::strength::specimens::read_specimens_with_origins(&m.data.resolved(&loaded.path), m.size.as_ref(), &m.factors, m.origin.as_deref(), &origin)?;
         read.sample.populations = m.populations.clone();
         inputs.extend(InputFile::read(&read.path, &read.provenance)?);
         validate(&read.sample)?;
@@ -249,7 +249,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         };
         let ids = m.data.records.iter().map(|r| r.id.clone()).collect();
         let temperatures_c = m.data.records.iter().filter_map(|r| r.temperature_c).collect();
-        results.push(MaterialResult { key: m.spec.key.clone(), label: m.spec.label.clone(), path: m.data.path.clone(), ids, crush: Some(m.spec), sample: m.sample, outcome, lifetime, power, temperatures_c });
+        results.push(MaterialResult { key: m.spec.key.clone(), label: m.spec.label.clone(), path: m.data.path.clone(), ids, crush: Some(m.spec), sample: m.sample, outcome, lifetime, power, temperatures_c, origins: None });
     }
     for (j, (set, read)) in specimens.into_iter().enumerate() {
         let k = s.material.len() + j;
@@ -263,7 +263,11 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         } else {
             Vec::new()
         };
-        results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power, temperatures_c: read.temperatures_c });
+        let origins = match &set.origin {
+            Some(column) => Some(crate::strength::origins::analyse(read.sample.strength.view(), &read.origins, column)?),
+            None => None,
+        };
+        results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power, temperatures_c: read.temperatures_c, origins });
     }
 
     let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;

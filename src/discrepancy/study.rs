@@ -98,6 +98,11 @@ pub struct SpecimenSet {
     /// replicates: 7 s on two cores).
     #[serde(default = "both_populations")]
     pub populations: Vec<crate::strength::flaws::Populations>,
+    /// The column naming each specimen's failure origin (fractography: volume, surface, edge,
+    /// pore …): each origin's law with the other origins' breaks censored (ASTM C1239) and the
+    /// test of one shared law ([`crate::strength::origins`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub origin: Option<String>,
 }
 
 fn both_populations() -> Vec<crate::strength::flaws::Populations> {
@@ -208,5 +213,7 @@ pub struct MaterialResult {
     pub power: Vec<PowerRow>,
     /// Each specimen's test temperature (°C).
     pub temperatures_c: Vec<f64>,
+    /// Each failure origin's law and the shared-law test (a strength file with `origin`).
+    pub origins: Option<crate::strength::origins::Origins>,
 }
 

@@ -16,6 +16,8 @@
 //!   competing-risks Weibull — fitted from several starts (BFGS, analytic gradient) with
 //!   non-identifiability reported and profile bands; naming candidates in place of the one
 //!   Weibull law (`Effect::Populations`), beside the scale effects of recorded columns.
+//! * [`origins`]: known failure origins (fractography) — each origin's law with the other
+//!   origins' breaks censored (ASTM C1239), and the test of one law shared by all.
 //! * [`specimens`]: strength data as input — a file of specimen strengths with a size measure
 //!   and recorded factors, read through the intake into a [`Sample`] the naming loop takes
 //!   like a crush sample.
@@ -50,6 +52,7 @@ pub mod loglik;
 pub mod mle;
 pub mod model;
 pub mod options;
+pub mod origins;
 pub mod pooling;
 pub mod population;
 pub mod regress;

@@ -101,11 +101,20 @@ pub struct Specimens {
     pub sample: Sample,
     /// Each specimen's test temperature (°C): its row's, else the study's `temperature_c`.
     pub temperatures_c: Vec<f64>,
+    /// Each specimen's failure origin, where the study names the column (`origin = "…"`;
+    /// empty otherwise).
+    pub origins: Vec<String>,
 }
 
 /// Reads a strength file as `src` describes it, with the size measure and factor columns
 /// a study declares. `origin` names the study table (`strength[0].data`) for messages.
 pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, origin: &MapOrigin) -> Result<Specimens> {
+    read_specimens_with_origins(src, size, factors, None, origin)
+}
+
+/// [`read_specimens`] with each specimen's failure origin read from the column `origins`
+/// (fractography: volume, surface, edge, pore …; an empty cell is refused).
+pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factors: &Factors, origins: Option<&str>, origin: &MapOrigin) -> Result<Specimens> {
     let path = src.file.as_path();
     let table = read_raw(src)?;
     // `T [°C]`: a `t` that states a temperature unit is the test temperature, not a thickness.
@@ -158,6 +167,19 @@ pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, 
         provenance.unused.retain(|u| *u != table.headers[c]);
     }
     let mut columns = read_factors(&table, &rows, factors, &mut provenance, origin, path)?;
+    let mut failure_origins: Vec<String> = Vec::new();
+    if let Some(col) = origins {
+        let key = format!("{}.origin", table_key(origin));
+        let c = declared_columns(&table, &provenance, &[(key, col.to_string())], origin, path)?[0].1;
+        for &row in &rows {
+            match table.text(row, c).map(|t| t.trim().to_string()).filter(|t| !t.is_empty()) {
+                Some(t) => failure_origins.push(t),
+                None => return Err(table.error(row, Some(c), "an empty failure origin: every specimen needs one (write the origin, or `none` for a specimen that did not break)".to_string())),
+            }
+        }
+        provenance.columns.push(ColumnRecord { source: table.headers[c].clone(), field: "origin".into(), unit: String::new(), conversion: "failure origin (fractography)".into(), found_by: "study".into() });
+        provenance.unused.retain(|u| *u != table.headers[c]);
+    }
     let tc = r.column("temperature");
     let cells: Vec<Option<f64>> = rows.iter().map(|&row| r.number("temperature", row)).collect::<Result<_>>()?;
     let mut temperatures_c = crate::intake::observed::test_temperatures(&cells, &|k| table.place(rows[k], tc), tc.map(|c| format!("`{}`", table.headers[c])).as_deref(), src, origin, &mut provenance)?;
@@ -173,10 +195,13 @@ pub fn read_specimens(src: &Source, size: Option<&SizeSpec>, factors: &Factors, 
             v.keep(&sp.rows);
         }
         temperatures_c = sp.rows.iter().map(|&k| temperatures_c[k]).collect();
+        if !failure_origins.is_empty() {
+            failure_origins = sp.rows.iter().map(|&k| failure_origins[k].clone()).collect();
+        }
     }
     sample.strength = sp.observations;
     sample.add_factors(&columns);
-    Ok(Specimens { path: path.to_path_buf(), provenance, ids, sample, temperatures_c })
+    Ok(Specimens { path: path.to_path_buf(), provenance, ids, sample, temperatures_c, origins: failure_origins })
 }
 
 #[cfg(test)]

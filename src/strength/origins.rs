@@ -1,0 +1,180 @@
+//! Known failure origins (fractography): each origin's Weibull law, and whether the origins
+//! share one.
+//!
+//! Where a strength file names each specimen's failure origin (volume, surface, edge, pore …),
+//! the origins are competing risks with known cause. ASTM C1239 (§9, concurrent flaw
+//! populations) estimates each origin's law from its own breaks with **the other origins' breaks
+//! right-censored at their strength**: that specimen survived this origin's flaws at least to
+//! the stress that broke it elsewhere. The full likelihood of (strength, origin) pairs
+//! factorises into these censored likelihoods, one per origin (Lawless 2003, §9.1):
+//!
+//! ```text
+//! L = Π_i h_{c_i}(x_i) Π_k S_k(x_i) = Π_k [ Π_{i: c_i = k} h_k(x_i) · Π_i S_k(x_i) ] = Π_k L_k
+//! ```
+//!
+//! A specimen that did not break is right-censored for every origin; one that broke within a
+//! class of another origin survived this origin at least to the class's lower end
+//! (right-censored there); one that broke at or below a value from another origin says nothing
+//! of this origin and is left out of its fit.
+//!
+//! **Do the origins share one law?** Under H₀ every origin has the same Weibull law (σ, m), so
+//! Σ_k ℓ_k(σ, m) = ℓ_c − r ln K, with ℓ_c the two-parameter fit of all specimens together (the
+//! weakest of K equal risks is Weibull with the same m) and r the breaks. The likelihood ratio
+//! LR = 2[Σ_k ℓ̂_k − (ℓ̂_c − r ln K)] is referred to χ² with 2(K − 1) degrees of freedom. The
+//! test needs every origin with at least two breaks and rows that are breaks or not broken
+//! (a class or a left-censored row does not factorise this way); otherwise it is not made, and
+//! the reason is given.
+//!
+//! Files without origins keep the latent competing-risks law of [`super::flaws`] (two flaw
+//! populations in every specimen, causes unknown).
+//!
+//! Verified against the `reliability` package's right-censored fits (tests/bench/reliability/
+//! origins.py) on Nelson's connection-strength data in `tests/censoring.rs`.
+
+use serde::Serialize;
+
+use crate::error::Result;
+use crate::obs::{Censor, Censoring, Obs};
+use crate::strength::regress::{Design, fit};
+
+/// One origin's Weibull law, from its own breaks with the others censored.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OriginFit {
+    /// The origin, as the file writes it.
+    pub origin: String,
+    /// Specimens that broke from this origin.
+    pub breaks: usize,
+    /// Weibull modulus (NaN with fewer than two breaks).
+    pub shape: f64,
+    /// Weibull scale (the data's units, Pa for a strength file; NaN with fewer than two breaks).
+    pub scale: f64,
+    /// The censored fit's log-likelihood.
+    pub loglik: f64,
+}
+
+/// The likelihood-ratio test of one law shared by every origin.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SharedLaw {
+    /// Σ_k ℓ̂_k, each origin its own law.
+    pub loglik_separate: f64,
+    /// ℓ̂ with one law for every origin.
+    pub loglik_shared: f64,
+    /// 2 (separate − shared).
+    pub lr: f64,
+    /// 2 (K − 1).
+    pub df: usize,
+    /// χ² p-value.
+    pub p: f64,
+}
+
+/// What the origins say.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Origins {
+    /// The column that names them.
+    pub column: String,
+    /// One law per origin, in the origins' sorted order.
+    pub fits: Vec<OriginFit>,
+    /// The shared-law test, or why it is not made.
+    pub shared: std::result::Result<SharedLaw, String>,
+}
+
+/// Each origin's law from the observations `x` whose specimen i failed from `origin[i]` (ignored
+/// for a specimen that did not break), and the shared-law test (module docs).
+pub fn analyse(x: Obs, origin: &[String], column: &str) -> Result<Origins> {
+    let n = x.len();
+    let mut levels: Vec<String> = (0..n).filter(|&i| x.kind(i) != Censor::Right).map(|i| origin[i].clone()).collect();
+    levels.sort();
+    levels.dedup();
+    let mut fits = Vec::new();
+    let mut why: Option<String> = None;
+    for lv in &levels {
+        let (mut xs, mut kinds, mut upper) = (Vec::new(), Vec::new(), Vec::new());
+        let mut breaks = 0;
+        for i in 0..n {
+            let k = x.kind(i);
+            if origin[i] == *lv || k == Censor::Right {
+                breaks += usize::from(k != Censor::Right);
+                xs.push(x.x[i]);
+                kinds.push(k);
+                upper.push(x.upper(i));
+            } else if k != Censor::Left {
+                // A break from another origin (exact or within a class): survived this one.
+                xs.push(x.x[i]);
+                kinds.push(Censor::Right);
+                upper.push(f64::NAN);
+            }
+        }
+        if breaks < 2 {
+            why.get_or_insert(format!("origin \"{lv}\" has {breaks} break: a Weibull law needs at least two"));
+            fits.push(OriginFit { origin: lv.clone(), breaks, shape: f64::NAN, scale: f64::NAN, loglik: f64::NAN });
+            continue;
+        }
+        let c = Censoring::of_rows(kinds, &xs, upper);
+        let f = fit(Obs { x: &xs, censoring: c.as_ref() }, &Design::default())?;
+        fits.push(OriginFit { origin: lv.clone(), breaks, shape: f.shape(), scale: f.mu.exp(), loglik: f.loglik });
+    }
+    let k = levels.len();
+    let shared = if k < 2 {
+        Err(format!("every break has one origin (\"{}\")", levels.first().map_or("", |s| s.as_str())))
+    } else if let Some(w) = why {
+        Err(w)
+    } else if (0..n).any(|i| matches!(x.kind(i), Censor::Left | Censor::Interval)) {
+        Err("rows that broke within a class or at or below a value do not factorise by origin; the test takes breaks and specimens not broken only".to_string())
+    } else {
+        let all = fit(x, &Design::default())?;
+        let r = (0..n).filter(|&i| x.kind(i) == Censor::Exact).count();
+        let separate: f64 = fits.iter().map(|f| f.loglik).sum();
+        let shared = all.loglik - r as f64 * (k as f64).ln();
+        let lr = (2.0 * (separate - shared)).max(0.0);
+        let df = 2 * (k - 1);
+        let p = statrs::distribution::ChiSquared::new(df as f64).map_or(f64::NAN, |c| 1.0 - statrs::distribution::ContinuousCDF::cdf(&c, lr));
+        Ok(SharedLaw { loglik_separate: separate, loglik_shared: shared, lr, df, p })
+    };
+    Ok(Origins { column: column.to_string(), fits, shared })
+}
+
+impl Origins {
+    /// The shared-law test in words, for the report.
+    pub fn sentence(&self, alpha: f64) -> String {
+        match &self.shared {
+            Ok(s) if s.p < alpha => format!(
+                "**The origins do not share one Weibull law**: likelihood ratio {:.2} on {} degrees of freedom, χ² p = {:.3} (each origin its own law: ℓ = {:.3}; one law: {:.3}); the lifetime should carry each origin's law, the weakest acting first.",
+                s.lr, s.df, s.p, s.loglik_separate, s.loglik_shared
+            ),
+            Ok(s) => format!(
+                "The origins are consistent with one shared Weibull law: likelihood ratio {:.2} on {} degrees of freedom, χ² p = {:.3} (each origin its own law: ℓ = {:.3}; one law: {:.3}).",
+                s.lr, s.df, s.p, s.loglik_separate, s.loglik_shared
+            ),
+            Err(why) => format!("Whether the origins share one law is not tested: {why}."),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn the_origins_fits_recover_their_laws_and_the_shared_law_test_tells_one_law_from_two() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let draw = |rng: &mut ChaCha8Rng, s: f64, m: f64| s * (-(-rng.random::<f64>()).ln_1p()).powf(1.0 / m);
+        for (second, differ) in [((1.5, 4.0), true), ((1.0, 10.0), false)] {
+            let (mut x, mut o) = (Vec::new(), Vec::new());
+            for _ in 0..400 {
+                let (a, b) = (draw(&mut rng, 1.0, 10.0), draw(&mut rng, second.0, second.1));
+                x.push(a.min(b));
+                o.push(if a <= b { "volume".to_string() } else { "surface".to_string() });
+            }
+            let r = analyse(Obs::exact(&x), &o, "origin").unwrap();
+            let v = r.fits.iter().find(|f| f.origin == "volume").unwrap();
+            assert!((v.shape / 10.0 - 1.0).abs() < 0.15 && (v.scale - 1.0).abs() < 0.03, "{r:?}");
+            let s = r.shared.clone().unwrap();
+            assert_eq!(s.df, 2);
+            assert_eq!(s.p < 0.01, differ, "{r:?}");
+            // The separate fits' ℓ is the full likelihood: at least the shared law's.
+            assert!(s.loglik_separate >= s.loglik_shared - 1e-9);
+        }
+    }
+}

@@ -146,7 +146,7 @@ pub const CRUSH_FIELDS: [Field; 8] = [
     Field { key: "crush_force", column: "crush_force_n", kind: Kind::Number(Quantity::Force), synonyms: &["f", "fmax", "force", "load", "breaking_force", "peak_force", "crushing_force"], required: true, plausible: Some(CRUSH_FORCE) },
     Field { key: "roundness", column: "roundness", kind: Kind::Number(Quantity::Ratio), synonyms: &["wadell_roundness"], required: false, plausible: Some(ROUNDNESS) },
     Field { key: "sphericity", column: "sphericity", kind: Kind::Number(Quantity::Ratio), synonyms: &["b/l"], required: false, plausible: Some(SPHERICITY) },
-    Field { key: "temperature", column: "temperature_c", kind: Kind::Number(Quantity::Temperature), synonyms: &["t", "temp", "test_temperature"], required: false, plausible: Some(TEMPERATURE) },
+    Field { key: "temperature", column: "temperature_c", kind: Kind::Number(Quantity::Temperature), synonyms: &["t", "temp", "test_temperature", "temperatur", "prüftemperatur", "prueftemperatur"], required: false, plausible: Some(TEMPERATURE) },
     Field { key: "impacts", column: "impacts", kind: Kind::Number(Quantity::Count), synonyms: &["prior_impacts", "n_impacts"], required: false, plausible: Some(IMPACTS) },
 ];
 

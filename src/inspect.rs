@@ -51,17 +51,13 @@ fn span((lo, hi): (f64, f64), scale: f64, places: usize) -> String {
 }
 
 /// The folded names a strength column goes by (the strength file's field).
-fn strength_names() -> Vec<String> {
-    let f = &crate::strength::specimens::STRENGTH_FIELDS[2];
-    [f.key, f.column].into_iter().chain(f.synonyms.iter().copied()).map(crate::intake::units::fold).collect()
-}
 
 /// The kind of table a header shows (module docs).
 fn kind_of(t: &RawTable) -> &'static str {
     let has = |n: &str| t.column(n).is_some();
     let folded: Vec<String> = t.headers.iter().map(|h| crate::intake::units::fold(&crate::intake::units::parse_header(h).name)).collect();
     let any = |names: &[&str]| folded.iter().any(|f| names.contains(&f.as_str()));
-    let strength = strength_names();
+    let strength = crate::strength::specimens::strength_names();
     if has("size_um_min") {
         "table1"
     } else if has("phase") {
@@ -138,13 +134,6 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin) -> 
             one(format!("impact spectrum ({}), {} rows: {}", t.format, t.rows.len(), lines.join("; ")), None)
         }
         "strength" => {
-            // Two stress columns and no strength: classes, which the study must declare.
-            let stress: Vec<&String> = t.headers.iter().filter(|h| crate::intake::units::parse_header(h).unit.is_some_and(|u| crate::intake::units::unit_of(crate::intake::Quantity::Stress, &u).is_some())).collect();
-            let names = strength_names();
-            let named = t.headers.iter().any(|h| names.contains(&crate::intake::units::fold(&crate::intake::units::parse_header(h).name)));
-            if src.interval.is_none() && !named && stress.len() >= 2 {
-                return Err(t.header_error(None, format!("holds stress columns {} and no strength column: if they are classes, say which ends they are in the study's data table: interval = {{ lower = \"{}\", upper = \"{}\" }} (and count = \"…\" for a column of specimens per class)", stress.iter().map(|h| format!("`{h}`")).collect::<Vec<_>>().join(", "), stress[0], stress[1])));
-            }
             let s = crate::strength::specimens::read_specimens(src, None, &crate::intake::factors::Factors::default(), origin)?;
             let o = s.sample.strength.view();
             let (lo, hi) = range(o.x);

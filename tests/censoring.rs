@@ -489,6 +489,11 @@ fn the_bofors_steel_table_equals_the_peers_and_its_threshold_is_named_not_a_seco
     let p_ad = table_f64(&dir.join("stages.csv"), "p_anderson_darling");
     let last = (0..material_of.len()).rfind(|&i| material_of[i] == "classes").unwrap();
     assert!(p_ad[last] > 0.05, "classes: AD p {} after the threshold", p_ad[last]);
+    // fits.csv: the threshold law's own columns; it has no weight and no second population.
+    let fits = dir.join("fits.csv");
+    let (law, weight, scale2, gamma) = (table_text(&fits, "law"), table_f64(&fits, "law_weight"), table_f64(&fits, "law_scale2_pa"), table_f64(&fits, "law_threshold_pa"));
+    let after = law.iter().position(|l| l == "threshold").unwrap();
+    assert!(weight[after].is_nan() && scale2[after].is_nan() && (gamma[after] / 9.80665e6 - 39.7656).abs() < 1e-3, "{} {} {}", weight[after], scale2[after], gamma[after]);
 }
 
 /// reliability's right-censored fits of Nelson's connection strengths per failure mode, the
@@ -518,6 +523,11 @@ fn failure_origins_give_each_origin_s_law_with_the_others_censored_and_the_share
     }
     let summary = s.read("reports/origins/summary.md");
     assert!(summary.contains("**Failure origins** (column `failure_mode`") && summary.contains("| Bond | 10 | 3.98 | 1676.7 |") && summary.contains("The origins are consistent with one shared Weibull law: likelihood ratio 0.03 on 2 degrees of freedom, χ² p = 0.983"), "{summary}");
+    // A column read twice — the origin also declared a factor — is refused with both keys' rule.
+    s.write("studies/twice.toml", &study.replace("origin = \"failure_mode\"", "origin = \"failure_mode\"\nfactors = [\"failure_mode\"]"));
+    let out = s.run(&["run", "studies/twice.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("strength[0].origin: `failure_mode` is already read as a factor; each column is read once"), "{}", out.stderr);
     // A specimen without its origin is refused, naming the row and column.
     s.write("datasets/real/nelson_connection_strength.csv", &data.replace("NC-05,1150,Wire,3", "NC-05,1150,,3"));
     let out = s.run(&["run", "studies/origins.toml", "--quiet"]);

@@ -309,6 +309,7 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
     dir.write_table("residuals", &mut t)?;
 
     // fits.csv: the Weibull law of the adjusted strengths of each stage (probability plot).
+    let two = |l: &crate::strength::flaws::FlawFit| l.kind != crate::strength::flaws::Populations::Threshold;
     let mut t = table(vec![
         scol("material", results.iter().flat_map(|r| [r.key.clone(), r.key.clone()]).collect()),
         scol("stage", results.iter().flat_map(|_| ["before".to_string(), "after".to_string()]).collect()),
@@ -318,11 +319,12 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         fcol("scale_pa", results.iter().flat_map(|r| [&r.outcome.before().model, &r.outcome.after().model]).map(|m| if m.law.is_some() { f64::NAN } else { reference_ln_scale(m).exp() }).collect()),
         // A two-population law in place of the Weibull law: its parameters (empty / NaN else).
         scol("law", results.iter().flat_map(|r| [&r.outcome.before().model, &r.outcome.after().model]).map(|m| m.law.as_ref().map_or(String::new(), |l| l.kind.name().to_string())).collect()),
-        fcol("law_weight", law_column(results, |l| l.p)),
+        // The threshold law has one population: its weight and second population are NaN.
+        fcol("law_weight", law_column(results, |l| if two(l) { l.p } else { f64::NAN })),
         fcol("law_scale1_pa", law_column(results, |l| l.first.0)),
         fcol("law_modulus1", law_column(results, |l| l.first.1)),
-        fcol("law_scale2_pa", law_column(results, |l| l.second.0)),
-        fcol("law_modulus2", law_column(results, |l| l.second.1)),
+        fcol("law_scale2_pa", law_column(results, |l| if two(l) { l.second.0 } else { f64::NAN })),
+        fcol("law_modulus2", law_column(results, |l| if two(l) { l.second.1 } else { f64::NAN })),
         fcol("law_threshold_pa", law_column(results, |l| l.threshold)),
     ])?;
     dir.write_table("fits", &mut t)?;
@@ -381,18 +383,18 @@ fn evidence_row(e: &super::workflow::Evidence) -> String {
     if let Some(reason) = &e.skipped {
         return format!("| {} | {} | | | | | | | skipped: {} |\n", e.round, e.candidate.name(), reason);
     }
-    // A stress in Pa (`…_pa`) is printed in MPa.
-    let (unit, scale) = match e.parameter.as_ref() {
-        Some((k, _, _)) if k.ends_with("_pa") => (" MPa", 1e-6),
-        _ => ("", 1.0),
+    // A stress in Pa (`…_pa`) is printed in MPa to 0.1 MPa; other parameters to three decimals.
+    let (unit, scale, d) = match e.parameter.as_ref() {
+        Some((k, _, _)) if k.ends_with("_pa") => (" MPa", 1e-6, 1),
+        _ => ("", 1.0, 3),
     };
-    let band = e.band.map(|(a, b)| format!(" (90 % {} {:.3}–{:.3}{unit})", if e.band_pivotal { "pivotal" } else { "profile" }, a * scale, b * scale)).unwrap_or_default();
+    let band = e.band.map(|(a, b)| format!(" (90 % {} {:.d$}–{:.d$}{unit})", if e.band_pivotal { "pivotal" } else { "profile" }, a * scale, b * scale)).unwrap_or_default();
     let par = e
         .parameter
         .as_ref()
         .map(|(k, v, se)| {
             let k = if unit.is_empty() { k.as_str() } else { k.trim_end_matches("_pa") };
-            if se.is_finite() { format!("{k} = {:.3} ± {:.3}{unit}{band}", v * scale, se * scale) } else { format!("{k} = {:.3}{unit}{band}", v * scale) }
+            if se.is_finite() { format!("{k} = {:.d$} ± {:.d$}{unit}{band}", v * scale, se * scale) } else { format!("{k} = {:.d$}{unit}{band}", v * scale) }
         })
         .unwrap_or_default();
     let verdict = if e.named { "**named**" } else if e.passed { "passed, weaker" } else { "not supported" };
@@ -580,11 +582,15 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         }
         if let Some(o) = &r.origins {
             md.push_str(&format!(
-                "\n**Failure origins** (column `{}`; ASTM C1239: each origin's Weibull law from its own breaks, the other origins' breaks right-censored at their strength):\n\n| origin | breaks | Weibull m | scale (MPa) | ℓ |\n|---|---|---|---|---|\n",
+                "\n**Failure origins** (column `{}`; ASTM C1239: each origin's Weibull law from its own breaks, the other origins' breaks right-censored at their strength, a specimen that did not break censored for every origin):\n\n| origin | breaks | Weibull m | scale σθ (MPa) | ℓ (per Pa) |\n|---|---|---|---|---|\n",
                 o.column
             ));
             for f in &o.fits {
-                md.push_str(&format!("| {} | {} | {:.2} | {:.1} | {:.3} |\n", f.origin, f.breaks, f.shape, f.scale / 1e6, f.loglik));
+                if f.shape.is_finite() {
+                    md.push_str(&format!("| {} | {} | {:.2} | {:.1} | {:.3} |\n", f.origin, f.breaks, f.shape, f.scale / 1e6, f.loglik));
+                } else {
+                    md.push_str(&format!("| {} | {} | — | — | — |\n", f.origin, f.breaks));
+                }
             }
             md.push_str(&format!("\n{}\n", o.sentence(s.discrepancy.alpha)));
         }

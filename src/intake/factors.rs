@@ -131,7 +131,8 @@ pub fn declared_columns(table: &RawTable, provenance: &Provenance, wanted: &[(St
         };
         if used.contains(&c) {
             let field = provenance.columns.iter().find(|x| x.source == table.headers[c]).map_or("a field", |x| x.field.as_str());
-            return Err(Error::config(&origin.file, key.clone(), format!("`{name}` is the column read as the {field}; a factor must be another column")));
+            let as_what = if field == table.headers[c] || field == name.as_str() { "as a factor".to_string() } else { format!("as the {}", field.replace('_', " ")) };
+            return Err(Error::config(&origin.file, key.clone(), format!("`{name}` is already read {as_what}; each column is read once: name another column here, or take it off the other key")));
         }
         if let Some((other, _)) = columns.iter().find(|(_, k)| *k == c) {
             return Err(Error::config(&origin.file, key.clone(), format!("`{name}` is the same column as `{other}`: declare each column once")));

@@ -133,19 +133,22 @@ pub fn analyse(x: Obs, origin: &[String], column: &str) -> Result<Origins> {
     Ok(Origins { column: column.to_string(), fits, shared })
 }
 
+/// What the origins' analysis is not: said after it in the report.
+const NOT_IN_LOOP: &str = "Each origin's law here is a two-parameter Weibull law fitted on its own; the naming loop above does not use the origins (its competing-risks candidate is two populations of unknown cause), and no lifetime is computed from them.";
+
 impl Origins {
     /// The shared-law test in words, for the report.
     pub fn sentence(&self, alpha: f64) -> String {
         match &self.shared {
             Ok(s) if s.p < alpha => format!(
-                "**The origins do not share one Weibull law**: likelihood ratio {:.2} on {} degrees of freedom, χ² p = {:.3} (each origin its own law: ℓ = {:.3}; one law: {:.3}); the lifetime should carry each origin's law, the weakest acting first.",
-                s.lr, s.df, s.p, s.loglik_separate, s.loglik_shared
+                "**The origins do not share one Weibull law**: likelihood ratio {:.2} on {} degrees of freedom, χ² p = {:.3} (ℓ per Pa: each origin its own law {:.3}; one law acting through all {} origins {:.3}, the one-law fit of all specimens less ln {} per break). {}",
+                s.lr, s.df, s.p, s.loglik_separate, self.fits.len(), s.loglik_shared, self.fits.len(), NOT_IN_LOOP
             ),
             Ok(s) => format!(
-                "The origins are consistent with one shared Weibull law: likelihood ratio {:.2} on {} degrees of freedom, χ² p = {:.3} (each origin its own law: ℓ = {:.3}; one law: {:.3}).",
-                s.lr, s.df, s.p, s.loglik_separate, s.loglik_shared
+                "The origins are consistent with one shared Weibull law: likelihood ratio {:.2} on {} degrees of freedom, χ² p = {:.3} (ℓ per Pa: each origin its own law {:.3}; one law acting through all {} origins {:.3}, the one-law fit of all specimens less ln {} per break). {}",
+                s.lr, s.df, s.p, s.loglik_separate, self.fits.len(), s.loglik_shared, self.fits.len(), NOT_IN_LOOP
             ),
-            Err(why) => format!("Whether the origins share one law is not tested: {why}."),
+            Err(why) => format!("Whether the origins share one law is not tested: {why}. {NOT_IN_LOOP}"),
         }
     }
 }

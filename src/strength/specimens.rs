@@ -62,12 +62,31 @@ pub const STRENGTH_FIELDS: [Field; 4] = [
         key: "strength",
         column: "strength_pa",
         kind: Kind::Number(Quantity::Stress),
-        synonyms: &["strength", "fracture_strength", "fracture_stress", "breaking_strength", "tensile_strength", "flexural_strength", "sigma_f", "sigma", "σ", "σf", "stress_at_break"],
+        synonyms: &[
+            "strength",
+            "fracture_strength",
+            "fracture_stress",
+            "breaking_strength",
+            "tensile_strength",
+            "flexural_strength",
+            "sigma_f",
+            "sigma",
+            "σ",
+            "σf",
+            "stress_at_break",
+            // As German laboratories head them.
+            "festigkeit",
+            "bruchfestigkeit",
+            "biegefestigkeit",
+            "zugfestigkeit",
+            "druckfestigkeit",
+            "bruchspannung",
+        ],
         required: true,
         plausible: Some(SPECIMEN_STRENGTH),
     },
     // Not `t`: a bend bar's thickness goes by it.
-    Field { key: "temperature", column: "temperature_c", kind: Kind::Number(Quantity::Temperature), synonyms: &["temp", "test_temperature", "temperature"], required: false, plausible: Some(crate::intake::observed::TEMPERATURE) },
+    Field { key: "temperature", column: "temperature_c", kind: Kind::Number(Quantity::Temperature), synonyms: &["temp", "test_temperature", "temperature", "temperatur", "prüftemperatur", "prueftemperatur"], required: false, plausible: Some(crate::intake::observed::TEMPERATURE) },
 ];
 
 /// The strength's class ends, read in place of `strength` when the study declares `interval`.
@@ -129,6 +148,7 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
         }
         _ => src,
     };
+    classes_undeclared(&table, src)?;
     let ((fields, columns, units), ends) = crate::intake::observed::fields_for(&table, &STRENGTH_FIELDS, "strength", STRENGTH_ENDS, src, origin)?;
     let r = resolve(&table, &fields, &columns, &units, origin)?;
     if table.rows.is_empty() {
@@ -168,6 +188,7 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
     }
     let mut columns = read_factors(&table, &rows, factors, &mut provenance, origin, path)?;
     let mut failure_origins: Vec<String> = Vec::new();
+    let mut origin_column = None;
     if let Some(col) = origins {
         let key = format!("{}.origin", table_key(origin));
         let c = declared_columns(&table, &provenance, &[(key, col.to_string())], origin, path)?[0].1;
@@ -177,7 +198,8 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
                 None => return Err(table.error(row, Some(c), "an empty failure origin: every specimen needs one (write the origin, or `none` for a specimen that did not break)".to_string())),
             }
         }
-        provenance.columns.push(ColumnRecord { source: table.headers[c].clone(), field: "origin".into(), unit: String::new(), conversion: "failure origin (fractography)".into(), found_by: "study".into() });
+        origin_column = Some(c);
+        provenance.columns.push(ColumnRecord { source: table.headers[c].clone(), field: "failure origin".into(), unit: String::new(), conversion: "failure origin (fractography)".into(), found_by: "study".into() });
         provenance.unused.retain(|u| *u != table.headers[c]);
     }
     let tc = r.column("temperature");
@@ -199,9 +221,34 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
             failure_origins = sp.rows.iter().map(|&k| failure_origins[k].clone()).collect();
         }
     }
+    // `none` is for a specimen that did not break: a break needs its origin.
+    if let Some(c) = origin_column {
+        let o = sp.observations.view();
+        if let Some(i) = (0..o.len()).find(|&i| o.kind(i) != crate::obs::Censor::Right && failure_origins[i].eq_ignore_ascii_case("none")) {
+            return Err(table.error(rows[sp.rows[i]], Some(c), "failure origin `none` on a specimen that broke: write where it broke (`none` is for a specimen that did not break)"));
+        }
+    }
     sample.strength = sp.observations;
     sample.add_factors(&columns);
     Ok(Specimens { path: path.to_path_buf(), provenance, ids, sample, temperatures_c, origins: failure_origins })
+}
+
+/// The folded names a strength column goes by.
+pub fn strength_names() -> Vec<String> {
+    let f = &STRENGTH_FIELDS[2];
+    [f.key, f.column].into_iter().chain(f.synonyms.iter().copied()).map(crate::intake::units::fold).collect()
+}
+
+/// Two stress columns and no strength column, and no `interval` declared: classes the study must
+/// declare — refused with the key to write.
+pub fn classes_undeclared(t: &crate::intake::RawTable, src: &Source) -> Result<()> {
+    let stress: Vec<&String> = t.headers.iter().filter(|h| crate::intake::units::parse_header(h).unit.is_some_and(|u| crate::intake::units::unit_of(Quantity::Stress, &u).is_some())).collect();
+    let names = strength_names();
+    let named = t.headers.iter().any(|h| names.contains(&crate::intake::units::fold(&crate::intake::units::parse_header(h).name)));
+    if src.interval.is_none() && !src.columns.contains_key("strength") && !named && stress.len() >= 2 {
+        return Err(t.header_error(None, format!("holds stress columns {} and no strength column: if they are classes, say which ends they are in the study's data table: interval = {{ lower = \"{}\", upper = \"{}\" }} (and count = \"…\" for a column of specimens per class)", stress.iter().map(|h| format!("`{h}`")).collect::<Vec<_>>().join(", "), stress[0], stress[1])));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -216,6 +263,23 @@ mod tests {
         src.units = units.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect();
         src.temperature_c = Some(20.0);
         read_specimens(&src, size.as_ref(), &factors, &MapOrigin { file: "study.toml".into(), key: "strength[0].data".into() })
+    }
+
+    #[test]
+    fn german_strength_and_temperature_headers_are_found_and_origins_are_read_and_checked() {
+        let dir = crate::io::TempDir::new("specimens").unwrap();
+        let p = dir.path().join("s.csv");
+        std::fs::write(&p, "Probe;Festigkeit [MPa];Prüftemperatur [°C];Bruchursprung\nA;312,5;20;Volumen\nB;298;20;Kante\nC;305;800;Volumen\n").unwrap();
+        let src = Source::file(&p);
+        let at = MapOrigin { file: "study.toml".into(), key: "strength[0].data".into() };
+        let s = read_specimens_with_origins(&src, None, &Factors::default(), Some("Bruchursprung"), &at).unwrap();
+        assert_eq!(s.sample.strength.x, [312.5e6, 298e6, 305e6]);
+        assert_eq!(s.temperatures_c, [20.0, 20.0, 800.0]);
+        assert_eq!(s.origins, ["Volumen", "Kante", "Volumen"]);
+        // `none` is for a specimen that did not break.
+        std::fs::write(&p, "Probe;Festigkeit [MPa];Prüftemperatur [°C];Bruchursprung\nA;312,5;20;Volumen\nB;298;20;none\n").unwrap();
+        let e = read_specimens_with_origins(&src, None, &Factors::default(), Some("Bruchursprung"), &at).unwrap_err().to_string();
+        assert!(e.contains("row 2") && e.contains("Bruchursprung") && e.contains("failure origin `none` on a specimen that broke"), "{e}");
     }
 
     #[test]

@@ -72,7 +72,7 @@ pub(super) fn figure(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
         let (stage, eff, m, scale, law) = (t.s("stage")?, t.s("effects")?, t.f("weibull_modulus")?, t.f("scale_pa")?, t.s("law")?);
         let parts: Vec<String> = (0..stage.len())
             .map(|i| {
-                let what = if law[i].is_empty() { format!("m = {:.2}, σθ = {:.0} MPa", m[i], scale[i] / 1e6) } else { format!("a two-population law ({})", law[i]) };
+                let what = if law[i].is_empty() { format!("m = {:.2}, σθ = {:.0} MPa", m[i], scale[i] / 1e6) } else { if law[i] == "threshold" { "a threshold strength (three-parameter Weibull)".to_string() } else { format!("a two-population law ({})", law[i].replace('_', " ")) } };
                 format!("{} (effects: {}): {what}", stage[i], eff[i])
             })
             .collect();

@@ -556,7 +556,7 @@ impl FlawFit {
         match self.kind {
             Populations::Mixture => format!("{:.1} % of specimens with {} (weaker), {:.1} % with {}{at}", 100.0 * self.p, pop(self.first), 100.0 * (1.0 - self.p), pop(self.second)),
             Populations::Competing => format!("every specimen holds both flaw populations: {} and {}{at}", pop(self.first), pop(self.second)),
-            Populations::Threshold => format!("no specimen breaks below γ = {:.1} MPa; above it {} of the strength less γ{at}", self.threshold / 1e6, pop(self.first)),
+            Populations::Threshold => format!("no specimen breaks below γ = {:.1} MPa; the strength less γ is Weibull with {}{at}", self.threshold / 1e6, pop(self.first)),
         }
     }
 

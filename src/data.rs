@@ -82,6 +82,8 @@ pub struct CrushData {
     pub places: Vec<(usize, usize)>,
     /// The sheet, for a spreadsheet.
     pub sheet: Option<String>,
+    /// Several sheets read as one table: each table row's sheet (empty otherwise).
+    pub row_sheets: Vec<String>,
     /// The factor columns the study declares (`factors` of its `[[material]]`), per record.
     pub factors: crate::intake::factors::FactorColumns,
     /// What the rows say of their forces, in newtons (None: every particle broke at its
@@ -95,7 +97,7 @@ impl CrushData {
     /// form, header on line 1.
     pub fn new(path: impl Into<PathBuf>, records: Vec<CrushRecord>) -> CrushData {
         let places = (0..records.len()).map(|k| (k, k + 2)).collect();
-        CrushData { path: path.into(), records, provenance: Provenance::default(), places, sheet: None, factors: Vec::new(), censoring: None }
+        CrushData { path: path.into(), records, provenance: Provenance::default(), places, sheet: None, row_sheets: Vec::new(), factors: Vec::new(), censoring: None }
     }
 
     /// The forces (N) as observations: each particle's `crush_force_n` with what its row says of
@@ -106,7 +108,8 @@ impl CrushData {
 
     /// An error about record `k` and a column.
     pub fn error(&self, k: usize, column: &str, rule: impl Into<String>) -> Error {
-        let place = match (self.places.get(k), &self.sheet) {
+        let sheet = self.places.get(k).and_then(|(row, _)| self.row_sheets.get(*row)).or(self.sheet.as_ref());
+        let place = match (self.places.get(k), sheet) {
             (Some((row, line)), None) => format!("row {} (line {line})", row + 1),
             (Some((row, line)), Some(sheet)) => format!("sheet \"{sheet}\", row {} (sheet row {line})", row + 1),
             (None, _) => format!("particle {}", k + 1),
@@ -370,7 +373,7 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
     for w in provenance.warnings.iter().chain(provenance.joined.iter().flat_map(|j| &j.warnings)) {
         crate::intake::warn(w);
     }
-    Ok(CrushData { path: path.to_path_buf(), records, provenance, places, sheet: table.origin.sheet.clone(), factors, censoring })
+    Ok(CrushData { path: path.to_path_buf(), records, provenance, places, sheet: table.origin.sheet.clone(), row_sheets: table.row_sheets.clone(), factors, censoring })
 }
 
 /// Numeric properties of Table 1, each stored as `<name>_min`, `<name>_max`, `<name>_qualifier`.

@@ -438,3 +438,42 @@ fn a_german_curve_export_is_read_through_the_calibrations_column_map() {
         assert!(out.stderr.contains(&format!("{file}: {key}: unknown field")), "{file}: {}", out.stderr);
     }
 }
+
+#[test]
+fn several_sheets_of_a_workbook_are_one_table_with_the_sheet_name_as_a_column() {
+    use partlife::intake::write::{Sheet, Value, xlsx};
+    // A lab's bend-bar workbook: one sheet per test temperature, the hot sheet's columns in
+    // another order, a notes sheet between them.
+    let t = |s: &str| Value::Text(s.into());
+    let n = Value::Number;
+    let mut rt = vec![vec![t("Probe"), t("Festigkeit [MPa]"), t("T [°C]")]];
+    let mut hot = vec![vec![t("T [°C]"), t("Probe"), t("Festigkeit [MPa]")]];
+    for k in 0..20 {
+        rt.push(vec![t(&format!("R{k}")), n(500.0 + 7.0 * ((k * 37 % 20) as f64)), n(20.0)]);
+        hot.push(vec![n(800.0), t(&format!("H{k}")), n(420.0 + 6.0 * ((k * 53 % 20) as f64))]);
+    }
+    let sheet = |name: &str, rows: Vec<Vec<Value>>| Sheet { name: name.into(), rows, merged: vec![] };
+    let book = xlsx(&[sheet("RT", rt), sheet("Notizen", vec![vec![t("Prüfer: Müller")]]), sheet("800 °C", hot.clone())]).unwrap();
+    let s = Scratch::new();
+    std::fs::write(s.path("datasets/biegung.xlsx"), &book).unwrap();
+    s.write(
+        "studies/sheets.toml",
+        "kind = \"discrepancy\"\nseed = 3\n[discrepancy]\nbootstrap = 99\npermutations = 99\n[power]\nreplicates = 0\n[[strength]]\nkey = \"bars\"\nlabel = \"Bend bars, two sheets\"\ndata = { file = \"../datasets/biegung.xlsx\", sheet = [\"RT\", \"800 °C\"] }\nfactors = [\"sheet\"]\npopulations = []\n",
+    );
+    let out = s.run(&["run", "studies/sheets.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let summary = s.read("reports/sheets/summary.md");
+    assert!(summary.contains("(40 specimens, `datasets/biegung.xlsx`)") && summary.contains("Tested at 20 °C (20) and 800 °C (20)."), "{summary}");
+    // The hot sheet is 17 % weaker: the sheet's scale is named.
+    assert!(summary.contains("**Effects named, in order: levels(sheet)"), "{summary}");
+    // … and the sheet stands for the temperature: said.
+    let manifest = s.read("reports/sheets/manifest.json");
+    assert!(manifest.contains("`sheet` coincides with the test temperature (RT at 20 °C, 800 °C at 800 °C)"), "{manifest}");
+    // A bad cell in the second sheet is named by its own sheet and sheet row.
+    hot[5][2] = t("n.b.");
+    let book = xlsx(&[sheet("RT", vec![vec![t("Probe"), t("Festigkeit [MPa]"), t("T [°C]")], vec![t("R0"), n(500.0), n(20.0)]]), sheet("800 °C", hot)]).unwrap();
+    std::fs::write(s.path("datasets/biegung.xlsx"), &book).unwrap();
+    let out = s.run(&["run", "studies/sheets.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("sheet \"800 °C\", row 6 (sheet row 6), column \"Festigkeit [MPa]\""), "{}", out.stderr);
+}

@@ -143,7 +143,7 @@ impl Source {
         if self.header_row == Some(0) {
             return Err(Error::config(file, format!("{key}.header_row"), "rows are numbered from 1"));
         }
-        if self.sheet == Some(SheetRef::Index(0)) {
+        if self.sheet == Some(SheetRef::Index(0)) || matches!(&self.sheet, Some(SheetRef::Several(l)) if l.contains(&SheetRef::Index(0))) {
             return Err(Error::config(file, format!("{key}.sheet"), "sheets are numbered from 1"));
         }
         for (k, u) in &self.units {

@@ -18,7 +18,9 @@ use super::table::{Cell, Origin, RawTable, column_letters, from_sheet};
 use super::Source;
 use crate::error::{Error, Result};
 
-/// A sheet by name or by 1-based position.
+/// A sheet by name or by 1-based position — or several sheets read as one table
+/// (`sheet = ["RT", "800 °C"]`: the same columns on each; their rows one after the other, with
+/// the sheet's name in an added column `sheet`).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum SheetRef {
@@ -26,7 +28,12 @@ pub enum SheetRef {
     Name(String),
     /// Its position, 1 for the first.
     Index(usize),
+    /// Several sheets as one table.
+    Several(Vec<SheetRef>),
 }
+
+/// The column that holds each row's sheet when several sheets are read as one table.
+pub const SHEET_COLUMN: &str = "sheet";
 
 /// The spreadsheet formats by file extension (lower case).
 pub const EXTENSIONS: [&str; 5] = ["xlsx", "xlsm", "xls", "xlsb", "ods"];
@@ -51,6 +58,9 @@ fn open(path: &Path, bytes: Vec<u8>) -> Result<Sheets<Cursor<Vec<u8>>>> {
 
 /// Reads one sheet of a spreadsheet as a raw table.
 pub fn read_sheet(path: &Path, bytes: Vec<u8>, opts: &Source) -> Result<RawTable> {
+    if let Some(SheetRef::Several(list)) = &opts.sheet {
+        return read_sheets(path, bytes, opts, list);
+    }
     let mut book = open(path, bytes)?;
     let names = book.sheet_names();
     let listed = || names.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(", ");
@@ -67,6 +77,7 @@ pub fn read_sheet(path: &Path, bytes: Vec<u8>, opts: &Source) -> Result<RawTable
             Some(n) => (n.clone(), k - 1),
             None => return Err(Error::data_file(path, format!("sheet {k}"), format!("no such sheet: the workbook has {} ({}), numbered from 1", names.len(), listed()))),
         },
+        Some(SheetRef::Several(_)) => unreachable!("several sheets are read by read_sheets"),
     };
     let at = |what: String| format!("sheet \"{name}\"{what}");
     let range = book.worksheet_range(&name).map_err(|e| Error::data_file(path, at(String::new()), format!("cannot be read: {}", e.to_string().split_whitespace().collect::<Vec<_>>().join(" "))))?;
@@ -153,6 +164,67 @@ pub fn read_sheet(path: &Path, bytes: Vec<u8>, opts: &Source) -> Result<RawTable
     from_sheet(origin, format, headers, rows, lines, header_row as usize + 1)
 }
 
+/// Several sheets as one table: each read as [`read_sheet`] reads one, with the same columns
+/// (in any order; a column missing from a sheet, or one only a sheet has, is refused), their rows
+/// in the order the sheets are listed, and a column [`SHEET_COLUMN`] holding each row's sheet.
+/// Each row keeps its own sheet and sheet row for messages ([`RawTable::row_sheets`]).
+fn read_sheets(path: &Path, bytes: Vec<u8>, opts: &Source, list: &[SheetRef]) -> Result<RawTable> {
+    if list.is_empty() {
+        return Err(Error::data_file(path, "file", "`sheet = []` names no sheet: give one or several"));
+    }
+    let mut tables = Vec::with_capacity(list.len());
+    for s in list {
+        if matches!(s, SheetRef::Several(_)) {
+            return Err(Error::data_file(path, "file", "`sheet` lists a list: give the sheets' names or positions"));
+        }
+        tables.push(read_sheet(path, bytes.clone(), &Source { sheet: Some(s.clone()), ..opts.clone() })?);
+    }
+    let first = tables.remove(0);
+    let name_of = |t: &RawTable| t.origin.sheet.clone().unwrap_or_default();
+    if let Some(c) = first.headers.iter().position(|h| crate::intake::units::fold(h) == SHEET_COLUMN) {
+        return Err(first.header_error(Some(c), format!("already has a column `{}`: reading several sheets as one table adds a column `{SHEET_COLUMN}` with each row's sheet; rename this one", first.headers[c])));
+    }
+    let mut seen = vec![name_of(&first)];
+    let mut headers = first.headers.clone();
+    headers.push(SHEET_COLUMN.to_string());
+    let mut rows: Vec<Vec<Cell>> = Vec::new();
+    let mut lines = Vec::new();
+    let mut row_sheets = Vec::new();
+    let mut formats = vec![first.format.clone()];
+    for t in std::iter::once(&first).chain(&tables) {
+        let name = name_of(t);
+        if !std::ptr::eq(t, &first) && seen.contains(&name) {
+            return Err(Error::data_file(path, format!("sheet \"{name}\""), "is listed twice in `sheet`"));
+        }
+        if !std::ptr::eq(t, &first) {
+            seen.push(name.clone());
+            formats.push(t.format.clone());
+        }
+        // Each of the first sheet's columns in this sheet.
+        let mut at = Vec::with_capacity(first.headers.len());
+        for h in &first.headers {
+            match t.headers.iter().position(|x| x == h) {
+                Some(c) => at.push(c),
+                None => return Err(t.header_error(None, format!("has no column `{h}`, which sheet \"{}\" has: sheets read as one table need the same columns", name_of(&first)))),
+            }
+        }
+        if let Some(extra) = t.headers.iter().find(|x| !first.headers.contains(x)) {
+            return Err(t.header_error(None, format!("has a column `{extra}` that sheet \"{}\" has not: sheets read as one table need the same columns", name_of(&first))));
+        }
+        for (r, line) in t.rows.iter().zip(&t.lines) {
+            let mut cells: Vec<Cell> = at.iter().map(|&c| r[c].clone()).collect();
+            cells.push(Cell::Text(name.clone()));
+            rows.push(cells);
+            lines.push(*line);
+            row_sheets.push(name.clone());
+        }
+    }
+    let format = format!("{} sheets as one table, their name in column `{SHEET_COLUMN}`: {}", seen.len(), formats.join("; "));
+    let mut table = RawTable { origin: first.origin.clone(), format, headers, rows, lines, header_line: first.header_line, decimal: first.decimal, row_sheets: Vec::new() };
+    table.row_sheets = row_sheets;
+    Ok(table)
+}
+
 /// The sheet names of a workbook, in order.
 pub fn sheet_names(path: &Path, bytes: Vec<u8>) -> Result<Vec<String>> {
     Ok(open(path, bytes)?.sheet_names())
@@ -186,6 +258,32 @@ mod tests {
             assert_eq!(tab.place(1, Some(1)), "sheet \"BL 16-30\", row 2 (sheet row 4), column B \"D [mm]\"");
             assert!(tab.format.starts_with(&format!("{ext} sheet \"BL 16-30\" (2 of 2)")), "{}", tab.format);
         }
+    }
+
+    #[test]
+    fn several_sheets_read_as_one_table_with_the_sheet_as_a_column() {
+        let rt = sheet("RT", vec![vec![t("Nr"), t("D [mm]"), t("F [N]")], vec![t("A1"), Value::Number(0.9), Value::Number(131.2)], vec![t("A2"), Value::Number(0.85), Value::Number(120.7)]]);
+        // The hot sheet orders its columns differently and starts lower.
+        let hot = sheet("800 °C", vec![vec![], vec![t("F [N]"), t("Nr"), t("D [mm]")], vec![Value::Number(90.5), t("H1"), Value::Number(0.88)]]);
+        let book = xlsx(&[rt.clone(), sheet("notes", vec![vec![t("x")]]), hot]).unwrap();
+        let both = Some(SheetRef::Several(vec![SheetRef::Name("RT".into()), SheetRef::Name("800 °C".into())]));
+        let tab = read(book.clone(), "xlsx", Source { sheet: both.clone(), ..Source::default() }).unwrap();
+        assert_eq!(tab.headers, ["Nr", "D [mm]", "F [N]", SHEET_COLUMN]);
+        assert_eq!(tab.rows.len(), 3);
+        assert_eq!(tab.rows[2], vec![t_cell("H1"), Cell::Number(0.88), Cell::Number(90.5), t_cell("800 °C")]);
+        assert_eq!(tab.rows[0][3], t_cell("RT"));
+        // Each row's messages name its own sheet and sheet row.
+        assert_eq!(tab.place(2, Some(2)), "sheet \"800 °C\", row 3 (sheet row 3), column \"F [N]\"");
+        assert_eq!(tab.place(0, None), "sheet \"RT\", row 1 (sheet row 2)");
+        // By position too; a sheet without a column the first has is refused, naming both.
+        let tab = read(book.clone(), "xlsx", Source { sheet: Some(SheetRef::Several(vec![SheetRef::Index(1), SheetRef::Index(3)])), ..Source::default() }).unwrap();
+        assert_eq!(tab.rows.len(), 3);
+        let e = read(book, "xlsx", Source { sheet: Some(SheetRef::Several(vec![SheetRef::Name("RT".into()), SheetRef::Name("notes".into())])), ..Source::default() }).unwrap_err().to_string();
+        assert!(e.contains("sheet \"notes\"") && e.contains("has no column `Nr`, which sheet \"RT\" has"), "{e}");
+    }
+
+    fn t_cell(s: &str) -> Cell {
+        Cell::Text(s.into())
     }
 
     #[test]

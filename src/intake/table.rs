@@ -48,6 +48,9 @@ pub struct RawTable {
     pub header_line: usize,
     /// The decimal mark of text cells.
     pub decimal: DecimalMark,
+    /// Several sheets read as one table: each row's sheet (its columns named by header, not
+    /// letter: the sheets may order them differently); empty otherwise (every row is `origin`'s).
+    pub row_sheets: Vec<String>,
 }
 
 /// Column letters of a 0-based index: 0 → A, 26 → AA.
@@ -69,6 +72,10 @@ impl RawTable {
     /// `row 3 (line 4), column D [mm]` or `sheet BL, row 3 (sheet row 5), column C "D [mm]"`.
     pub fn place(&self, row: usize, col: Option<usize>) -> String {
         let line = self.lines.get(row).copied().unwrap_or(0);
+        if let Some(sheet) = self.row_sheets.get(row) {
+            let c = col.map(|c| format!(", column \"{}\"", self.headers[c])).unwrap_or_default();
+            return format!("sheet \"{sheet}\", row {} (sheet row {line}){c}", row + 1);
+        }
         match &self.origin.sheet {
             None => {
                 let c = col.map(|c| format!(", column {}", self.headers[c])).unwrap_or_default();
@@ -231,13 +238,14 @@ pub fn read_delimited(path: &Path, bytes: &[u8], opts: &Source) -> Result<RawTab
         lines: at,
         header_line,
         decimal: sniffed.decimal,
+        row_sheets: Vec::new(),
     }
     .check_header()
 }
 
 /// A spreadsheet's table (see [`super::sheet`]) checked like a text table's.
 pub(super) fn from_sheet(origin: Origin, format: String, headers: Vec<String>, rows: Vec<Vec<Cell>>, lines: Vec<usize>, header_line: usize) -> Result<RawTable> {
-    RawTable { origin, format, headers, rows, lines, header_line, decimal: DecimalMark::Point }.check_header()
+    RawTable { origin, format, headers, rows, lines, header_line, decimal: DecimalMark::Point, row_sheets: Vec::new() }.check_header()
 }
 
 /// The text of a number cell, ready for parsing with a decimal point; Err(rule) when the cell

@@ -80,18 +80,19 @@ fn kind_of(t: &RawTable) -> &'static str {
 /// Checks one file as `src` describes it (every sheet of a workbook when no sheet is named), as
 /// the kind `kind` (`"curves"`, `"observations"`, …; None: the kind its header shows); a
 /// mistake in the study's column or unit map is reported at `origin` (the study file and key).
-pub fn check(src: &Source, kind: Option<&'static str>, origin: &MapOrigin) -> Result<Vec<Checked>> {
+/// A strength file is read with its study table's size, factor and origin columns (`set`).
+pub fn check(src: &Source, kind: Option<&'static str>, origin: &MapOrigin, set: Option<&crate::strength::specimens::SetColumns>) -> Result<Vec<Checked>> {
     let path = src.file.as_path();
     if crate::intake::sheet::is_spreadsheet(path) && src.sheet.is_none() {
         let names = sheet_names(path)?;
         let mut out = Vec::new();
         for (k, _) in names.iter().enumerate() {
             let s = Source { sheet: Some(SheetRef::Index(k + 1)), ..src.clone() };
-            out.extend(check_table(&s, kind, origin)?);
+            out.extend(check_table(&s, kind, origin, set)?);
         }
         return Ok(out);
     }
-    check_table(src, kind, origin)
+    check_table(src, kind, origin, set)
 }
 
 fn sheet_names(path: &Path) -> Result<Vec<String>> {
@@ -99,10 +100,13 @@ fn sheet_names(path: &Path) -> Result<Vec<String>> {
     crate::intake::sheet::sheet_names(path, bytes)
 }
 
-fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin) -> Result<Vec<Checked>> {
+fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin, set: Option<&crate::strength::specimens::SetColumns>) -> Result<Vec<Checked>> {
     let path = src.file.as_path();
     let t = read_raw(src)?;
+    let mut sheets: Vec<&String> = t.row_sheets.iter().collect();
+    sheets.dedup();
     let what = match &t.origin.sheet {
+        _ if sheets.len() > 1 => format!("{} sheets {}", path.display(), sheets.iter().map(|s| format!("\"{s}\"")).collect::<Vec<_>>().join(", ")),
         Some(s) => format!("{} sheet \"{s}\"", path.display()),
         None => path.display().to_string(),
     };
@@ -134,11 +138,24 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin) -> 
             one(format!("impact spectrum ({}), {} rows: {}", t.format, t.rows.len(), lines.join("; ")), None)
         }
         "strength" => {
-            let s = crate::strength::specimens::read_specimens(src, None, &crate::intake::factors::Factors::default(), origin)?;
+            let keys = set.cloned().unwrap_or_default();
+            let s = crate::strength::specimens::read_specimens_with_origins(src, keys.size.as_ref(), &keys.factors, keys.origin.as_deref(), origin)?;
             let o = s.sample.strength.view();
-            let (lo, hi) = range(o.x);
+            // A class's upper end counts for the range.
+            let (lo, hi) = range(&(0..o.len()).flat_map(|i| [o.x[i], o.upper(i)]).filter(|v| v.is_finite()).collect::<Vec<_>>());
             let n = if o.complete() { format!("{} specimen{}", o.len(), if o.len() == 1 { "" } else { "s" }) } else { o.tally().describe("specimens") };
-            one(format!("strength data, {n}, strength = {} MPa", span((lo, hi), 1e-6, 1)), Some(s.provenance))
+            // The failure origins of the specimens that broke, with their counts.
+            let origins = match &keys.origin {
+                Some(col) => {
+                    let mut counts: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
+                    for i in (0..o.len()).filter(|&i| o.kind(i) != crate::obs::Censor::Right) {
+                        *counts.entry(s.origins[i].as_str()).or_default() += 1;
+                    }
+                    format!("; failure origins (`{col}`) of the breaks: {}", counts.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", "))
+                }
+                None => String::new(),
+            };
+            one(format!("strength data, {n}, strength = {} MPa{origins}", span((lo, hi), 1e-6, 1)), Some(s.provenance))
         }
         "curves" => {
             let (curves, read) = crate::calibrate::data::curves_of(&t, path, &src.columns, &src.units, origin)?;

@@ -437,7 +437,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Datasets { command: DatasetsCommand::Check { files, study, sheet, header_row, material, temperature_c } } => {
-            let sources: Vec<(partlife::intake::Source, Option<&'static str>, partlife::intake::MapOrigin)> = match study {
+            let sources: Vec<(partlife::intake::Source, Option<&'static str>, partlife::intake::MapOrigin, Option<partlife::strength::specimens::SetColumns>)> = match study {
                 Some(path) => partlife::study::load(&path)?.data_sources(),
                 None => files
                     .into_iter()
@@ -449,12 +449,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                             temperature_c,
                             ..partlife::intake::Source::file(f)
                         };
-                        (src, None, partlife::intake::MapOrigin::default())
+                        (src, None, partlife::intake::MapOrigin::default(), None)
                     })
                     .collect(),
             };
-            for (src, kind, origin) in sources {
-                for checked in partlife::inspect::check(&src, kind, &origin)? {
+            for (src, kind, origin, set) in sources {
+                for checked in partlife::inspect::check(&src, kind, &origin, set.as_ref())? {
                     for line in checked.lines() {
                         out!("{line}");
                     }

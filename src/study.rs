@@ -97,12 +97,13 @@ impl LoadedStudy {
     /// reads. The crush data of its materials; a calibration's curve or observation file and a
     /// curve-level discrepancy study's curve files, with their column and unit maps and where
     /// the study holds each map (its key, for messages about the map). Other kinds read none.
-    pub fn data_sources(&self) -> Vec<(crate::intake::Source, Option<&'static str>, crate::intake::MapOrigin)> {
+    /// A strength file comes with its table's other column keys (size, factors, origin).
+    pub fn data_sources(&self) -> Vec<(crate::intake::Source, Option<&'static str>, crate::intake::MapOrigin, Option<crate::strength::specimens::SetColumns>)> {
         use crate::intake::{MapOrigin, Source};
         let study = &self.file.path;
         let origin = |key: String| MapOrigin { file: study.display().to_string(), key };
         let curves = |file: &str, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, key: String| {
-            (Source { columns: columns.clone(), units: units.clone(), ..Source::file(resolve_relative(study, Path::new(file))) }, Some("curves"), origin(key))
+            (Source { columns: columns.clone(), units: units.clone(), ..Source::file(resolve_relative(study, Path::new(file))) }, Some("curves"), origin(key), None)
         };
         let materials: &[MaterialSpec] = match &self.study {
             Study::Lifetime(s) => &s.material,
@@ -111,15 +112,18 @@ impl LoadedStudy {
             Study::Calibrate(s) => {
                 return vec![match &s.data {
                     crate::calibrate::study::DataSpec::CrushCurves { file, columns, units, .. } => curves(file, columns, units, "data".into()),
-                    crate::calibrate::study::DataSpec::Observations { file } => (Source::file(resolve_relative(study, Path::new(file))), Some("observations"), origin("data".into())),
+                    crate::calibrate::study::DataSpec::Observations { file } => (Source::file(resolve_relative(study, Path::new(file))), Some("observations"), origin("data".into()), None),
                 }];
             }
             Study::DiscrepancyCurves(s) => return s.data.iter().enumerate().map(|(i, d)| curves(&d.file, &d.columns, &d.units, format!("data[{i}]"))).collect(),
             _ => &[],
         };
-        let mut out: Vec<_> = materials.iter().enumerate().map(|(k, m)| (m.data.resolved(study), None, origin(format!("material[{k}].data")))).collect();
+        let mut out: Vec<_> = materials.iter().enumerate().map(|(k, m)| (m.data.resolved(study), None, origin(format!("material[{k}].data")), None)).collect();
         if let Study::Discrepancy(s) = &self.study {
-            out.extend(s.strength.iter().enumerate().map(|(k, set)| (set.data.resolved(study), Some("strength"), origin(format!("strength[{k}].data")))));
+            out.extend(s.strength.iter().enumerate().map(|(k, set)| {
+                let keys = crate::strength::specimens::SetColumns { size: set.size.clone(), factors: set.factors.clone(), origin: set.origin.clone() };
+                (set.data.resolved(study), Some("strength"), origin(format!("strength[{k}].data")), Some(keys))
+            }));
         }
         out
     }

@@ -534,3 +534,15 @@ fn failure_origins_give_each_origin_s_law_with_the_others_censored_and_the_share
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("nelson_connection_strength.csv") && out.stderr.contains("failure_mode") && out.stderr.contains("an empty failure origin"), "{}", out.stderr);
 }
+
+#[test]
+fn datasets_check_of_a_study_reads_a_strength_file_with_its_origin_column_as_the_run_does() {
+    let s = Scratch::new();
+    std::fs::create_dir_all(s.path("datasets/real")).unwrap();
+    s.write("datasets/real/nelson_connection_strength.csv", &std::fs::read_to_string(common::root().join("datasets/real/nelson_connection_strength.csv")).unwrap());
+    s.write("studies/origins.toml", &std::fs::read_to_string(common::root().join("studies/strength_connection_origins.toml")).unwrap());
+    let out = s.run(&["datasets", "check", "--study", "studies/origins.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains("strength data, 20 specimens, strength = 550.0–2050.0 MPa; failure origins (`failure_mode`) of the breaks: Bond 10, Wire 10: ok"), "{}", out.stdout);
+    assert!(out.stdout.contains("`failure_mode` → failure origin (fractography) [mapped by the study]") && !out.stdout.contains("not used"), "{}", out.stdout);
+}

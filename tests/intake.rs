@@ -460,6 +460,9 @@ fn several_sheets_of_a_workbook_are_one_table_with_the_sheet_name_as_a_column() 
         "studies/sheets.toml",
         "kind = \"discrepancy\"\nseed = 3\n[discrepancy]\nbootstrap = 99\npermutations = 99\n[power]\nreplicates = 0\n[[strength]]\nkey = \"bars\"\nlabel = \"Bend bars, two sheets\"\ndata = { file = \"../datasets/biegung.xlsx\", sheet = [\"RT\", \"800 °C\"] }\nfactors = [\"sheet\"]\npopulations = []\n",
     );
+    let out = s.run(&["datasets", "check", "--study", "studies/sheets.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains("datasets/biegung.xlsx sheets \"RT\", \"800 °C\": strength data, 40 specimens") && out.stdout.contains("2 sheets as one table, their name in column `sheet`"), "{}", out.stdout);
     let out = s.run(&["run", "studies/sheets.toml", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     let summary = s.read("reports/sheets/summary.md");

@@ -106,6 +106,19 @@ pub struct SizeSpec {
     pub measure: SizeMeasure,
 }
 
+/// What a study's `[[strength]]` table says of its file's columns beside `data`: the size
+/// measure, the recorded factors and the failure-origin column (`datasets check --study` reads
+/// the file with them, as the run does).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SetColumns {
+    /// The size measure.
+    pub size: Option<SizeSpec>,
+    /// The recorded factors.
+    pub factors: Factors,
+    /// The failure-origin column.
+    pub origin: Option<String>,
+}
+
 /// A strength file read: ids, the sample (strengths in Pa, numeric and categorical columns,
 /// candidates) and the intake's record.
 #[derive(Debug, Clone)]
@@ -199,7 +212,7 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
             }
         }
         origin_column = Some(c);
-        provenance.columns.push(ColumnRecord { source: table.headers[c].clone(), field: "failure origin".into(), unit: String::new(), conversion: "failure origin (fractography)".into(), found_by: "study".into() });
+        provenance.columns.push(ColumnRecord { source: table.headers[c].clone(), field: "failure origin".into(), unit: String::new(), conversion: "fractography".into(), found_by: "study".into() });
         provenance.unused.retain(|u| *u != table.headers[c]);
     }
     let tc = r.column("temperature");

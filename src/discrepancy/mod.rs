@@ -21,6 +21,7 @@ pub mod curves;
 pub mod gof;
 pub mod koh;
 mod report;
+mod tables;
 pub mod run;
 pub mod study;
 pub mod workflow;

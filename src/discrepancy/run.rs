@@ -46,7 +46,8 @@ use rayon::prelude::*;
 
 pub use super::study::{DiscrepancyStudy, LifetimeBand, LifetimeOptions, MaterialResult, PowerOptions, PowerRow};
 pub use super::report::wilson90;
-use super::report::{headline, summary, verdict_json, write_tables};
+use super::report::{headline, summary, verdict_json};
+use super::tables::write_tables;
 use super::workflow::{Outcome, analyse, names, validate};
 use crate::data::CrushData;
 use crate::error::{Error, Result};

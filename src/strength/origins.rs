@@ -127,7 +127,7 @@ pub fn analyse(x: Obs, origin: &[String], column: &str) -> Result<Origins> {
         let shared = all.loglik - r as f64 * (k as f64).ln();
         let lr = (2.0 * (separate - shared)).max(0.0);
         let df = 2 * (k - 1);
-        let p = statrs::distribution::ChiSquared::new(df as f64).map_or(f64::NAN, |c| 1.0 - statrs::distribution::ContinuousCDF::cdf(&c, lr));
+        let p = crate::stats::chi2_upper_tail(lr, df as f64);
         Ok(SharedLaw { loglik_separate: separate, loglik_shared: shared, lr, df, p })
     };
     Ok(Origins { column: column.to_string(), fits, shared })

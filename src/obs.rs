@@ -266,22 +266,32 @@ impl Observations {
         self.view().rows(rows)
     }
 
-    /// Appends rows that broke at the values `x`, with no limit (new tests without a force
-    /// limit).
-    pub fn append_exact(&mut self, x: impl IntoIterator<Item = f64>) {
+    /// Appends the rows of new tests, each (value, right limit, broke): a row that broke at its
+    /// value under a rig's limit (∞: none), or one that did not break by the limit (its value is
+    /// the limit; right-censored). A redraw of an appended row is censored at its limit, type I,
+    /// as the test would have censored it. The rows already held keep what they say.
+    pub fn append_tested(&mut self, rows: impl IntoIterator<Item = (f64, f64, bool)>) {
+        let rows: Vec<(f64, f64, bool)> = rows.into_iter().collect();
         let start = self.x.len();
-        self.x.extend(x);
-        let added = self.x.len() - start;
-        if let Some(c) = &mut self.censoring {
-            c.kind.extend(std::iter::repeat_n(Censor::Exact, added));
-            c.upper.extend(std::iter::repeat_n(f64::NAN, added));
-            let mut s = (*c.scheme).clone();
-            s.right.extend(std::iter::repeat_n(f64::INFINITY, added));
-            s.left.extend(std::iter::repeat_n(0.0, added));
-            s.edges.extend(std::iter::repeat_n(Vec::new(), added));
-            s.right_draws.extend(std::iter::repeat_n(Vec::new(), added));
-            c.scheme = Arc::new(s);
+        self.x.extend(rows.iter().map(|r| r.0));
+        if self.censoring.is_none() && rows.iter().all(|&(_, limit, broke)| broke && limit == f64::INFINITY) {
+            return;
         }
+        let c = self.censoring.get_or_insert_with(|| Censoring {
+            kind: vec![Censor::Exact; start],
+            upper: vec![f64::NAN; start],
+            scheme: Arc::new(Scheme { right: vec![f64::INFINITY; start], left: vec![0.0; start], edges: vec![Vec::new(); start], right_draws: vec![Vec::new(); start] }),
+        });
+        let mut s = (*c.scheme).clone();
+        for &(_, limit, broke) in &rows {
+            c.kind.push(if broke { Censor::Exact } else { Censor::Right });
+            c.upper.push(f64::NAN);
+            s.right.push(limit);
+            s.left.push(0.0);
+            s.edges.push(Vec::new());
+            s.right_draws.push(Vec::new());
+        }
+        c.scheme = Arc::new(s);
     }
 
     /// Every row's values mapped by `f` (a monotone increasing change of units: the limits and
@@ -494,6 +504,30 @@ pub fn ln_one_minus_exp(a: f64) -> f64 {
 mod tests {
     use super::*;
     use rand::SeedableRng;
+
+    #[test]
+    fn appended_tests_keep_their_limits_and_the_held_rows_theirs() {
+        // New tests without a limit on complete data: still complete.
+        let mut o = Observations::exact(vec![1.0, 2.0]);
+        o.append_tested([(3.0, f64::INFINITY, true)]);
+        assert_eq!(o, Observations::exact(vec![1.0, 2.0, 3.0]));
+        // At a rig's limit of 4: one broke at 3.5, one did not break by 4.
+        o.append_tested([(3.5, 4.0, true), (4.0, 4.0, false)]);
+        let c = o.censoring.as_ref().unwrap();
+        assert_eq!(c.kind, [Censor::Exact, Censor::Exact, Censor::Exact, Censor::Exact, Censor::Right]);
+        assert_eq!(c.scheme.right, [f64::INFINITY, f64::INFINITY, f64::INFINITY, 4.0, 4.0]);
+        assert_eq!(o.view().tally(), Tally { exact: 4, right: 1, left: 0, interval: 0 });
+        // A redraw censors the new rows at 4 and the held rows nowhere.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let r = o.view().censor(vec![9.0; 5], &mut rng);
+        assert_eq!(r.x, [9.0, 9.0, 9.0, 4.0, 4.0]);
+        assert_eq!(r.censoring.unwrap().kind, [Censor::Exact, Censor::Exact, Censor::Exact, Censor::Right, Censor::Right]);
+        // Held censoring is kept.
+        let mut h = Observations { x: vec![1.0, 5.0], censoring: Censoring::of_rows(vec![Censor::Exact, Censor::Right], &[1.0, 5.0], vec![f64::NAN; 2]) };
+        h.append_tested([(2.0, 3.0, true)]);
+        let c = h.censoring.unwrap();
+        assert_eq!((c.kind, c.scheme.right.clone()), (vec![Censor::Exact, Censor::Right, Censor::Exact], vec![5.0, 5.0, 3.0]));
+    }
 
     fn scheme() -> Censoring {
         Censoring {

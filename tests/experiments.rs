@@ -139,7 +139,7 @@ fn summary_has(s: &Scratch, text: &str) -> bool {
 #[test]
 fn bad_experiments_inputs_exit_2_naming_the_key() {
     let study = "studies/experiments.toml";
-    let cases: [(&str, &str, &[&str]); 14] = [
+    let cases: [(&str, &str, &[&str]); 16] = [
         ("sizes = [25, 50, 100]\ncost_per_unit = 40           # one crush", "sizes = [0, 50, 100]\ncost_per_unit = 40           # one crush", &["candidate[0].sizes", "≥ 1"]),
         ("cost_per_unit = 40           # one crush", "cost_per_unit = -40           # one crush", &["candidate[0].cost_per_unit", "> 0"]),
         ("velocity_m_s = 15            # fast enough", "velocity_m_s = 0            # fast enough", &["candidate[2].velocity_m_s"]),
@@ -152,6 +152,8 @@ fn bad_experiments_inputs_exit_2_naming_the_key() {
         ("material = \"gen4\"\nsizes = [25, 50, 100]", "material = \"gen4\"\ntemperature_c = -300\nsizes = [25, 50, 100]", &["candidate[0].temperature_c", "absolute zero"]),
         ("total = 15000", "total = 15000\nallocation = \"exhaustive\"", &["budget.allocation", "max_plans = 200"]),
         ("counts = [1]\n", "counts = [1]\nnaming_draws = 20\n", &["candidate[2].naming_draws", "only crush tests"]),
+        ("counts = [1]\n", "counts = [1]\nforce_limit_n = 150\n", &["candidate[2].force_limit_n", "only crush tests"]),
+        ("material = \"gen4\"\nsizes = [25, 50, 100]", "material = \"gen4\"\nforce_limit_n = 0\nsizes = [25, 50, 100]", &["candidate[0].force_limit_n", "> 0"]),
         ("naming_draws = 20\n\n[[candidate]]\nname = \"crush BL", "naming_draws = 61\n\n[[candidate]]\nname = \"crush BL", &["candidate[0].naming_draws", "analysis.outer = 60"]),
         ("naming_draws = 20\n\n[[candidate]]\nname = \"crush BL", "naming_draws = 20\nshape_measured = false\n\n[[candidate]]\nname = \"crush BL", &["candidate[0].naming_draws", "shape_measured = true"]),
     ];
@@ -185,8 +187,9 @@ fn a_crush_test_outside_the_data_temperatures_is_bad_input() {
 
 /// Exhaustive allocation over a small grid: every affordable plan (at most one size per
 /// candidate) is evaluated, ranked by objective, and the recommended plan is the cheapest within
-/// two standard errors of the best; crush tests without the shape measurement and at the data's
-/// temperature run.
+/// two standard errors of the best; crush tests without the shape measurement, at the data's
+/// temperature and at a rig's force limit run, and the summary says what share of the
+/// particles the limit is expected to leave unbroken.
 #[test]
 fn exhaustive_allocation_evaluates_every_affordable_plan() {
     let s = scratch();
@@ -194,7 +197,7 @@ fn exhaustive_allocation_evaluates_every_affordable_plan() {
     let head = &text[..text.find("[budget]").unwrap()];
     let study = format!(
         "{head}[budget]\ntotal = 6000\nallocation = \"exhaustive\"\n\n\
-         [[candidate]]\nname = \"crush Gen 4, shape not measured\"\ntest = \"crush\"\nmaterial = \"gen4\"\nshape_measured = false\ntemperature_c = 20\nsizes = [25, 100]\ncost_per_unit = 20\nfixed_cost = 500\n\n\
+         [[candidate]]\nname = \"crush Gen 4, shape not measured\"\ntest = \"crush\"\nmaterial = \"gen4\"\nshape_measured = false\ntemperature_c = 20\nforce_limit_n = 120\nsizes = [25, 100]\ncost_per_unit = 20\nfixed_cost = 500\n\n\
          [[candidate]]\nname = \"repeated impacts Gen 4\"\ntest = \"impact\"\nmaterial = \"gen4\"\nvelocity_m_s = 15\ncounts = [1, 10, 100, 1000]\nsizes = [25, 50]\ncost_per_unit = 60\nfixed_cost = 1000\n\n\
          [[candidate]]\nname = \"η from rebound tests\"\ntest = \"eta_measurement\"\nsd_log = 0.3\nsizes = [5, 20]\ncost_per_unit = 50\nfixed_cost = 2000\n"
     );
@@ -229,4 +232,8 @@ fn exhaustive_allocation_evaluates_every_affordable_plan() {
     let summary = s.read("reports/experiments/summary.md");
     assert!(summary.contains(&format!("allocated exhaustively over its {affordable} affordable plans")), "{summary}");
     assert!(summary.contains(&format!("Recommended: {}", plan[c].split(" + ").next().unwrap().split(" × ").next().unwrap())), "{summary}");
+    let said = "\"crush Gen 4, shape not measured\" stops at the rig's force limit of 120 N: under today's state of knowledge an expected ";
+    let share: f64 = summary.split(said).nth(1).and_then(|t| t.split(" %").next()).and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("no force-limit sentence in\n{summary}"));
+    // About half of Gen 4's 45 crushed particles broke below 120 N.
+    assert!((20.0..80.0).contains(&share), "{share} % unbroken at 120 N");
 }

@@ -35,6 +35,20 @@
 //! them is refused: extrapolating in temperature needs a temperature model of the parameters
 //! (phases, softening), not a crush-test likelihood.
 //!
+//! # At a force limit
+//!
+//! A rig may stop at a force limit F_lim (`force_limit_n`): a particle that has not broken by
+//! then is recorded as not broken by F_lim, and its strength as above σ̄_lim,r — the σ̄ of a
+//! particle of row r's diameter at F_lim ([`crate::strength::crush_contact`], the same reduction
+//! as the crush data's). Each simulated particle is drawn as above; one whose σ̄ exceeds its row's
+//! σ̄_lim,r is recorded at σ̄_lim,r, not broken (type I censoring at the rig's limit). Its term
+//! of the likelihood is the survival function, ln S = −exp(m_k (ln σ̄_lim,r − ln σ_θ,r(k)));
+//! without the shape measurement, the mixture's over the rows' scales at the particle's own
+//! σ̄_lim, ln[(1/R) Σ_r' S(σ̄_lim; σ_θ,r'(k))] — known as a broken particle's σ̄ is. A limit well above every break changes nothing; a
+//! limit near the median force leaves about half the particles as lower bounds, and the test
+//! carries less. The naming loop's verdict pools them as right-censored rows, censored at the
+//! limit in its bootstrap redraws as the test censors them.
+//!
 //! # The naming loop's verdict
 //!
 //! Optionally (`naming_draws`), each of the first outer draws also runs the discrepancy
@@ -58,6 +72,7 @@ use rayon::prelude::*;
 use super::preposterior::{Experiment, Score};
 use super::smc::Movable;
 use super::state::{State, StateSample};
+use crate::contact::{ContactOptions, Elastic};
 use crate::error::{Error, Result};
 use crate::strength::regress::{draw_particles, ln_density_of_log};
 use crate::strength::{Effect, NamingSettings, Sample, Term};
@@ -76,6 +91,9 @@ pub struct CrushTest {
     rows: Vec<usize>,
     /// Test temperature (°C), or the temperatures of the crush data.
     temperature_c: Option<f64>,
+    /// The rig's force limit (N) and, per eligible row, ln σ̄ at it (module docs); None: every
+    /// particle is crushed to break.
+    limit: Option<(f64, Vec<f64>)>,
     /// Per sample: m.
     shape: Vec<f64>,
     /// Per sample and eligible row: ln σ_θ (K × rows).
@@ -113,12 +131,37 @@ pub struct CrushOptions {
     /// Run the discrepancy naming loop on the pooled data with these settings (the main
     /// study's), for the naming loop's verdict; None: not.
     pub naming: Option<NamingSettings>,
+    /// The rig's force limit, if any (module docs).
+    pub force_limit: Option<ForceLimit>,
 }
 
 impl Default for CrushOptions {
     fn default() -> Self {
-        CrushOptions { diameter: None, shape_measured: true, temperature_c: None, naming: None }
+        CrushOptions { diameter: None, shape_measured: true, temperature_c: None, naming: None, force_limit: None }
     }
+}
+
+/// A rig's force limit and what turns it into each particle's σ̄: the material's elastic
+/// constants and the contact options (platen, averaging domain) of the main study.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForceLimit {
+    /// The force (N) at which the rig stops.
+    pub force_n: f64,
+    /// The particle's elastic constants.
+    pub elastic: Elastic,
+    /// The platen and the averaging domain of σ̄.
+    pub contact: ContactOptions,
+}
+
+/// One particle of a simulated crush test.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Crushed {
+    /// Its eligible row (an index into the test's rows).
+    pub row: usize,
+    /// ln σ̄ (ln Pa): at break, or at the rig's limit when it did not break.
+    pub ln_sigma: f64,
+    /// Whether it broke (false: not broken by the rig's limit, right-censored).
+    pub broke: bool,
 }
 
 /// Points of a mixture's log-density table.
@@ -235,13 +278,65 @@ impl CrushTest {
             forms: state.samples.iter().map(|s| s.form).collect(),
         });
         let mixture = (!options.shape_measured).then(|| (0..shape.len()).into_par_iter().map(|k| MixtureTable::new(shape[k], &ln_scale[k * r..(k + 1) * r])).collect());
-        Ok(CrushTest { material, particles, diameter, rows, temperature_c: options.temperature_c, shape, ln_scale, mixture, naming })
+        let limit = match &options.force_limit {
+            None => None,
+            Some(f) => {
+                if !(f.force_n.is_finite() && f.force_n > 0.0) {
+                    return bad(format!("force limit {} N: needs a finite force > 0", f.force_n));
+                }
+                let ln_limit = rows
+                    .iter()
+                    .map(|&i| {
+                        let s = crate::strength::crush_contact(&f.elastic, &f.contact, diameters[i]).at_force(f.force_n)?.mean_tensile;
+                        if s.is_finite() && s > 0.0 { Ok(s.ln()) } else { Err(Error::numerical("crush test", format!("σ̄ at the force limit {} N is {s} Pa for a particle of diameter {} m", f.force_n, diameters[i]))) }
+                    })
+                    .collect::<Result<Vec<f64>>>()?;
+                Some((f.force_n, ln_limit))
+            }
+        };
+        Ok(CrushTest { material, particles, diameter, rows, temperature_c: options.temperature_c, limit, shape, ln_scale, mixture, naming })
     }
 
     /// Number of rows new particles are drawn from.
     pub fn eligible(&self) -> usize {
         self.rows.len()
     }
+
+    /// The rig's force limit (N), if any.
+    pub fn force_limit_n(&self) -> Option<f64> {
+        self.limit.as_ref().map(|l| l.0)
+    }
+
+    /// The expected share of particles not broken by the rig's limit under the samples weighted
+    /// by `weights` (one per sample): Σ_k w_k (1/R) Σ_r S_k,r(σ̄_lim,r) / Σ_k w_k. None without a
+    /// limit.
+    pub fn expected_unbroken(&self, weights: &[f64]) -> Option<f64> {
+        let (_, ln_limit) = self.limit.as_ref()?;
+        let r = self.rows.len();
+        let (mut sum, mut total) = (0.0, 0.0);
+        for (k, &w) in weights.iter().enumerate().take(self.shape.len()) {
+            let row = &self.ln_scale[k * r..(k + 1) * r];
+            sum += w * ln_limit.iter().zip(row).map(|(&l, &s)| ln_survival(l, self.shape[k], s).exp()).sum::<f64>() / r as f64;
+            total += w;
+        }
+        Some(sum / total)
+    }
+}
+
+/// ln S(y; m, ℓ) = −e^(m (y − ℓ)) of y = ln s for Weibull strength s with modulus m and scale e^ℓ.
+fn ln_survival(y: f64, m: f64, l: f64) -> f64 {
+    -(m * (y - l)).exp()
+}
+
+/// ln[(1/R) Σ_r S(y; m, ℓ_r)]: the survival at y of a particle drawn from the rows
+/// (log-sum-exp).
+fn ln_mixture_survival(y: f64, m: f64, ls: &[f64]) -> f64 {
+    let terms: Vec<f64> = ls.iter().map(|&l| ln_survival(y, m, l)).collect();
+    let top = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if !top.is_finite() {
+        return top;
+    }
+    top + (terms.iter().map(|t| (t - top).exp()).sum::<f64>() / ls.len() as f64).ln()
 }
 
 /// Sample `s`'s Weibull modulus and ln σ_θ at each of `rows` of `material`'s crush sample (the
@@ -271,16 +366,25 @@ fn scales_at(state: &State, material: usize, rows: &[usize], temperature_c: Opti
     Ok((p.shape, scales))
 }
 
-/// ln p(s | m, ℓ) of the strengths `data` with modulus `m` and eligible rows' scales `row`
-/// (module docs); `mixture`: the shape is not measured, with the mixture's table when tabulated.
-fn loglik_of(data: &[(usize, f64)], m: f64, row: &[f64], mixture: Option<Option<&MixtureTable>>) -> f64 {
-    match mixture {
-        None => data.iter().map(|&(i, ln_s)| ln_gumbel_min(ln_s, m, row[i])).sum(),
-        // Shape not measured, every row at the same scale: one density.
-        Some(None) if one_scale(row) => data.iter().map(|&(_, ln_s)| ln_gumbel_min(ln_s, m, row[0])).sum(),
-        Some(None) => data.iter().map(|&(_, ln_s)| ln_mixture(ln_s, m, row).0).sum(),
-        Some(Some(table)) => data.iter().map(|&(_, ln_s)| table.ln_density(ln_s, m, row)).sum(),
-    }
+/// ln p(data | m, ℓ) of the crushed particles `data` with modulus `m` and eligible rows' scales
+/// `row` (module docs): a broken particle's density, a particle not broken by the rig's limit
+/// its survival at the limit; `mixture`: the shape is not measured, with the mixture's table
+/// when tabulated.
+fn loglik_of(data: &[Crushed], m: f64, row: &[f64], mixture: Option<Option<&MixtureTable>>) -> f64 {
+    let broke = data.iter().filter(|c| c.broke);
+    let unbroken = data.iter().filter(|c| !c.broke);
+    let censored: f64 = match mixture {
+        None => unbroken.map(|c| ln_survival(c.ln_sigma, m, row[c.row])).sum(),
+        Some(_) => unbroken.map(|c| ln_mixture_survival(c.ln_sigma, m, row)).sum(),
+    };
+    censored
+        + match mixture {
+            None => broke.map(|c| ln_gumbel_min(c.ln_sigma, m, row[c.row])).sum::<f64>(),
+            // Shape not measured, every row at the same scale: one density.
+            Some(None) if one_scale(row) => broke.map(|c| ln_gumbel_min(c.ln_sigma, m, row[0])).sum(),
+            Some(None) => broke.map(|c| ln_mixture(c.ln_sigma, m, row).0).sum(),
+            Some(Some(table)) => broke.map(|c| table.ln_density(c.ln_sigma, m, row)).sum(),
+        }
 }
 
 impl Movable<State> for CrushTest {
@@ -293,12 +397,21 @@ impl Movable<State> for CrushTest {
 }
 
 impl Experiment for CrushTest {
-    /// (eligible-row index, ln σ̄ at break) per particle.
-    type Data = Vec<(usize, f64)>;
+    /// The crushed particles: each one's row, ln σ̄ and whether it broke.
+    type Data = Vec<Crushed>;
 
+    /// The particles drawn as without a limit (the same random numbers), then censored at the
+    /// rig's limit.
     fn simulate(&self, truth: usize, rng: &mut ChaCha8Rng) -> Self::Data {
         let r = self.rows.len();
-        draw_particles(&self.ln_scale[truth * r..(truth + 1) * r], self.shape[truth], self.particles, rng)
+        let drawn = draw_particles(&self.ln_scale[truth * r..(truth + 1) * r], self.shape[truth], self.particles, rng);
+        drawn
+            .into_iter()
+            .map(|(row, y)| match &self.limit {
+                Some((_, l)) if y > l[row] => Crushed { row, ln_sigma: l[row], broke: false },
+                _ => Crushed { row, ln_sigma: y, broke: true },
+            })
+            .collect()
     }
 
     fn loglik(&self, data: &Self::Data, k: usize) -> f64 {
@@ -311,10 +424,12 @@ impl Experiment for CrushTest {
         let n = self.naming.as_ref()?;
         let mut pooled = n.sample.clone();
         pooled.source = format!("{} + {} simulated particles", n.sample.source, data.len());
-        pooled.strength.append_exact(data.iter().map(|&(_, ln_s)| ln_s.exp()));
+        // Each new particle with the σ̄ at the rig's limit its redraws are censored at (∞: none).
+        let limit = |c: &Crushed| self.limit.as_ref().map_or(f64::INFINITY, |l| l.1[c.row].exp());
+        pooled.strength.append_tested(data.iter().map(|c| (c.ln_sigma.exp(), limit(c), c.broke)));
         for ((name, column), (_, base)) in pooled.covariates.iter_mut().zip(&n.sample.covariates) {
             let at_test = (*name == Effect::Temperature.covariate()).then_some(n.temperature_c).flatten();
-            column.extend(data.iter().map(|&(i, _)| at_test.or(base[self.rows[i]])));
+            column.extend(data.iter().map(|c| at_test.or(base[self.rows[c.row]])));
         }
         let settings = NamingSettings { seed: n.settings.seed.wrapping_add(draw as u64 + 1), ..n.settings.clone() };
         // A loop that fails on the data scores 0 and is counted as a failure: it names no
@@ -336,7 +451,7 @@ mod tests {
     fn naming_test(sample: Sample) -> CrushTest {
         let settings = NamingSettings { bootstrap: 49, permutations: 99, ..NamingSettings::default() };
         let naming = NamingCheck { settings, sample, temperature_c: None, effects: vec![vec![]], forms: vec![0] };
-        CrushTest { material: 0, particles: 2, diameter: None, rows: vec![0, 1], temperature_c: None, shape: vec![8.0], ln_scale: vec![18.4; 2], mixture: None, naming: Some(naming) }
+        CrushTest { material: 0, particles: 2, diameter: None, rows: vec![0, 1], temperature_c: None, limit: None, shape: vec![8.0], ln_scale: vec![18.4; 2], mixture: None, naming: Some(naming) }
     }
 
     #[test]
@@ -344,11 +459,12 @@ mod tests {
         // Five particles are too few for the loop. The truth's model has no effects, which a
         // failure read as "named nothing" would match (it scored 1 before).
         let few = Sample { source: "few".into(), strength: crate::obs::Observations::exact(vec![1.0e8, 1.2e8, 0.9e8, 1.1e8, 0.95e8]), particles: true, ..Sample::default() };
-        assert_eq!(naming_test(few).score(&vec![(0, 18.4), (1, 18.5)], 0, 0), Some(Score { value: 0.0, failed: true }));
+        let two = vec![Crushed { row: 0, ln_sigma: 18.4, broke: true }, Crushed { row: 1, ln_sigma: 18.5, broke: true }];
+        assert_eq!(naming_test(few).score(&two, 0, 0), Some(Score { value: 0.0, failed: true }));
         // Forty Weibull-like strengths without covariates: the loop runs, names nothing, and
         // that is the truth's model.
         let many = Sample { source: "many".into(), strength: (0..40).map(|i| 1e8 * (-(1.0 - (i as f64 + 0.5) / 40.0).ln()).powf(1.0 / 8.0)).collect(), particles: true, ..Sample::default() };
-        assert_eq!(naming_test(many).score(&vec![(0, 18.4), (1, 18.5)], 0, 0), Some(Score { value: 1.0, failed: false }));
+        assert_eq!(naming_test(many).score(&two, 0, 0), Some(Score { value: 1.0, failed: false }));
     }
 
     #[test]

@@ -60,7 +60,7 @@ pub mod state;
 pub mod study;
 mod summary;
 
-pub use crush::{CrushOptions, CrushTest};
+pub use crush::{CrushOptions, CrushTest, Crushed, ForceLimit};
 pub use impact::ImpactTest;
 pub use measure::{Measured, Measurement};
 pub use preposterior::{Draw, Estimate, Experiment, Knowledge, Metrics, Posterior, Route, Score, Scored, Settings, preposterior};

@@ -27,8 +27,8 @@ pub enum Candidate {
 /// Data of one candidate.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Data {
-    /// Crush strengths.
-    Crush(Vec<(usize, f64)>),
+    /// Crushed particles.
+    Crush(Vec<super::crush::Crushed>),
     /// Impact counts.
     Impact(Vec<u64>),
     /// Mean log-measurement.

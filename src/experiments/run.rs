@@ -34,7 +34,7 @@
 //! test is worth more than two cheap ones together (a knapsack); exhaustive cannot, on its grid.
 
 
-use super::crush::{CrushOptions, CrushTest};
+use super::crush::{CrushOptions, CrushTest, ForceLimit};
 use super::impact::ImpactTest;
 use super::measure::{Measured, Measurement};
 pub use super::plan::{Allocated, Evaluated, first_step};
@@ -117,7 +117,9 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
                 // The main study's naming settings for this material (its seed as in the main study).
                 let index = u.order()[material];
                 let naming = c.naming_draws.map(|_| crate::strength::NamingSettings { seed: u.seed.wrapping_add(7919 * index as u64), ..u.strength.naming.clone() });
-                CrushTest::new(&state, material, n0 as usize, &CrushOptions { diameter: c.diameter_m.map(|[lo, hi]| (lo, hi)), shape_measured: c.shape_measured.unwrap_or(true), temperature_c: c.temperature_c, naming }).map(Candidate::Crush)
+                // The rig's limit in σ̄ through the main study's elastic constants and contact.
+                let force_limit = c.force_limit_n.map(|force_n| ForceLimit { force_n, elastic: u.material[index].elastic, contact: u.contact.clone() });
+                CrushTest::new(&state, material, n0 as usize, &CrushOptions { diameter: c.diameter_m.map(|[lo, hi]| (lo, hi)), shape_measured: c.shape_measured.unwrap_or(true), temperature_c: c.temperature_c, naming, force_limit }).map(Candidate::Crush)
             }
             TestKind::Impact => ImpactTest::new(&state, material, n0, c.velocity_m_s.unwrap_or(0.0), c.counts.clone().unwrap_or_default().iter().map(|&k| k as u64).collect()).map(Candidate::Impact),
             TestKind::EtaMeasurement => Measurement::new(&state, Measured::EnergyFraction, n0, c.sd_log.unwrap_or(0.0)).map(Candidate::Measure),
@@ -198,7 +200,17 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
 
     let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
     write_tables(&mut dir, s, &state, &keys, &singles, &allocated)?;
-    let summary = super::summary::summary(s, &state, &singles, &allocated);
+    // Per crush candidate with a force limit: the limit and the prior's expected share of
+    // particles not broken by it.
+    let limits: Vec<(usize, f64, f64)> = built
+        .iter()
+        .enumerate()
+        .filter_map(|(i, b)| match b.first() {
+            Some(Candidate::Crush(t)) => Some((i, t.force_limit_n()?, t.expected_unbroken(&state.knowledge.weights)?)),
+            _ => None,
+        })
+        .collect();
+    let summary = super::summary::summary(s, &state, &singles, &allocated, &limits);
     let mut text = summary.text.clone();
     if !notes.is_empty() {
         text.push_str("\n## What the run mended\n\n");

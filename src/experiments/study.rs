@@ -35,6 +35,8 @@
 //! diameter_m = [0.0008, 0.001]       # crush tests: a sieve fraction (optional)
 //! shape_measured = true              # crush tests: roundness and sphericity measured per particle (default)
 //! temperature_c = 20                 # crush tests: test temperature, within the crush data's (optional)
+//! force_limit_n = 150                # crush tests: the rig stops at this force; a particle not broken
+//!                                    # by it is recorded as not broken (right-censored; optional)
 //! naming_draws = 60                  # crush tests: run the discrepancy naming loop on the pooled data of
 //!                                    # this many outer draws (its verdict on the truth's effects; optional)
 //! sd_log = 0.2                       # measurements: sd of ln of one measurement
@@ -215,6 +217,9 @@ pub struct CandidateSpec {
     /// Crush tests: outer draws on which the naming loop is run on the pooled data.
     #[serde(default)]
     pub naming_draws: Option<usize>,
+    /// Crush tests: the rig's force limit (N); a particle not broken by it is recorded so.
+    #[serde(default)]
+    pub force_limit_n: Option<f64>,
 }
 
 impl CandidateSpec {
@@ -329,9 +334,15 @@ impl ExperimentsStudy {
                     only(c.shape_measured.is_some(), "shape_measured", "crush tests")?;
                     only(c.temperature_c.is_some(), "temperature_c", "crush tests")?;
                     only(c.naming_draws.is_some(), "naming_draws", "crush tests")?;
+                    only(c.force_limit_n.is_some(), "force_limit_n", "crush tests")?;
                     only(c.sd_log.is_some(), "sd_log", "measurements")?;
                 }
                 TestKind::Crush => {
+                    if let Some(f) = c.force_limit_n
+                        && !positive(f)
+                    {
+                        return bad(key("force_limit_n"), format!("must be a finite force > 0 (N), got {f}"));
+                    }
                     if let Some(n) = c.naming_draws {
                         if !(20..=a.outer).contains(&n) {
                             return bad(key("naming_draws"), format!("must lie between 20 and analysis.outer = {}, got {n}", a.outer));
@@ -364,6 +375,7 @@ impl ExperimentsStudy {
                     only(c.shape_measured.is_some(), "shape_measured", "crush tests")?;
                     only(c.temperature_c.is_some(), "temperature_c", "crush tests")?;
                     only(c.naming_draws.is_some(), "naming_draws", "crush tests")?;
+                    only(c.force_limit_n.is_some(), "force_limit_n", "crush tests")?;
                 }
             }
             cheapest = cheapest.min(c.cost(c.sizes[0] as u64));

@@ -74,7 +74,9 @@ fn floor_section(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize)
 }
 
 /// The summary of the study.
-pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), Evaluated)], allocated: &Allocated) -> Summary {
+/// `limits`: per crush candidate with a force limit, (candidate, limit in N, the prior's expected
+/// share of particles not broken by it).
+pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), Evaluated)], allocated: &Allocated, limits: &[(usize, f64, f64)]) -> Summary {
     let cur = &s.decision.currency;
     let labels: Vec<String> = state.forms[0].setup.materials.iter().map(|m| m.model.label.clone()).collect();
     let h = state.years.len() - 1;
@@ -149,6 +151,13 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
             prob(m.width90[qs[0]].mean),
             prob(m.width90[qs[1]].mean),
             pm(m.true_label_weight[0].mean, m.true_label_weight[0].se)
+        ));
+    }
+    for &(i, force, share) in limits {
+        md.push_str(&format!(
+            "\n\"{}\" stops at the rig's force limit of {force} N: under today's state of knowledge an expected {:.1} % of its particles do not break by it. Each enters the test's likelihood as not broken by the σ̄ its diameter gives at {force} N (right-censored), not as a break at the limit.\n",
+            s.candidate[i].name,
+            100.0 * share
         ));
     }
     md.push_str(&floor_section(s, state, singles, &order));

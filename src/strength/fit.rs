@@ -97,20 +97,26 @@ impl Sample {
 /// A σ̄ outside [`crate::data::SIGMA_BAR`] is refused naming the particle's row, with the hint
 /// to check the force and diameter units.
 pub fn contact_at_break(data: &CrushData, elastic: &Elastic, contact: &ContactOptions) -> Result<Vec<ContactState>> {
-    let zone = TensileZone::new(elastic.poisson_ratio);
     data.records
         .iter()
         .enumerate()
         .map(|(k, r)| {
-            let radius = 0.5 * r.diameter_m;
-            let hertz = Hertz::sphere_on_flat(elastic, &contact.platen, radius);
-            let state = ContactStress { hertz, zone, domain: contact.averaging, particle_radius: radius }.at_force(r.crush_force_n)?;
+            let state = crush_contact(elastic, contact, r.diameter_m).at_force(r.crush_force_n)?;
             if let Some(rule) = crate::data::SIGMA_BAR.broken(state.mean_tensile) {
                 return Err(data.error(k, "crush_force_n", format!("{rule}, from F = {} N, d = {} m and E = {} Pa: check the force and diameter units", r.crush_force_n, r.diameter_m, elastic.youngs_modulus_pa)));
             }
             Ok(state)
         })
         .collect()
+}
+
+/// The contact of a crushed particle of diameter `diameter_m`: a sphere of radius d/2 on the
+/// platen, σ̄ over the contact options' averaging domain. Its `at_force(F)` gives the particle's
+/// σ̄ at a crush force F (at break, at a rig's limit, at a class edge).
+pub fn crush_contact(elastic: &Elastic, contact: &ContactOptions, diameter_m: f64) -> ContactStress {
+    let radius = 0.5 * diameter_m;
+    let hertz = Hertz::sphere_on_flat(elastic, &contact.platen, radius);
+    ContactStress { hertz, zone: TensileZone::new(elastic.poisson_ratio), domain: contact.averaging, particle_radius: radius }
 }
 
 /// Strengths (σ̄ at break) and covariates of a crush dataset, with the factor columns its study
@@ -121,14 +127,11 @@ pub fn contact_at_break(data: &CrushData, elastic: &Elastic, contact: &ContactOp
 pub fn sample_of(data: &CrushData, elastic: &Elastic, contact: &ContactOptions) -> Result<Sample> {
     let at = contact_at_break(data, elastic, contact)?;
     let r = &data.records;
-    let zone = TensileZone::new(elastic.poisson_ratio);
     let sigma_at = |k: usize, force: f64| -> f64 {
         if force == r[k].crush_force_n {
             return at[k].mean_tensile;
         }
-        let radius = 0.5 * r[k].diameter_m;
-        let hertz = Hertz::sphere_on_flat(elastic, &contact.platen, radius);
-        ContactStress { hertz, zone, domain: contact.averaging, particle_radius: radius }.at_force(force).map_or(f64::NAN, |s| s.mean_tensile)
+        crush_contact(elastic, contact, r[k].diameter_m).at_force(force).map_or(f64::NAN, |s| s.mean_tensile)
     };
     let strength = data.observed().map(sigma_at);
     if let Some(c) = &strength.censoring

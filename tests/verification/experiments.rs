@@ -306,7 +306,7 @@ fn the_shape_measurement_is_worth_what_the_shape_effects_explain() {
     for k in [0, 1, 7, 1234, 7999] {
         let s = &state.samples[k];
         let (p, _) = state.forms[s.form].setup.params(0, &s.x, partlife::uq::setup::Mode::Joint);
-        let direct: f64 = data.iter().map(|&(_, y)| p.shape.ln() + p.shape * (y - p.mu) - (p.shape * (y - p.mu)).exp()).sum();
+        let direct: f64 = data.iter().map(|c| p.shape.ln() + p.shape * (c.ln_sigma - p.mu) - (p.shape * (c.ln_sigma - p.mu)).exp()).sum();
         for (what, t) in [("measured", &measured), ("not measured", &unmeasured)] {
             let ll = t.loglik(&data, k);
             assert!((ll - direct).abs() < 1e-9 * direct.abs().max(1.0), "sample {k}, {what}: {ll} against the direct sum {direct}");
@@ -483,4 +483,86 @@ fn resample_move_agrees_with_nested_refits_and_the_conjugate_model_on_a_whole_pl
     assert!(m.collapsed < 8 && m.median_ess >= 100.0, "collapsed {}, median ESS {}", m.collapsed, m.median_ess);
     assert!((m.width90[q].mean - nested.mean).abs() < 0.03 * nested.mean + 4.0 * m.width90[q].se.hypot(nested.se), "{:?} vs {nested:?}", m.width90[q]);
     assert!((m.var[qe].mean - conjugate).abs() < 4.0 * m.var[qe].se + 0.05 * conjugate, "{:?} vs {conjugate}", m.var[qe]);
+}
+
+/// A rig's force limit (issue 52: "a proposed test may have a force limit"). A particle whose σ̄
+/// at break would exceed the σ̄ its diameter gives at the limit is recorded as not broken there
+/// (type I censoring). With the deliverable's strength model (one Weibull law per material):
+/// 1. the test's likelihood equals an independent sum — each broken particle's Weibull log
+///    density of ln σ̄, each unbroken one's ln S = −(σ̄_lim/σ_θ)^m at its own diameter's σ̄_lim
+///    (computed here from the main study's elastic constants and contact) — with and without the
+///    shape measured, and the recorded particles are censored where they should be;
+/// 2. a limit far above every break changes nothing: the metrics equal the test without one;
+/// 3. at the material's median crush force, the share of unbroken particles in the simulated
+///    tests matches the prior's expectation, and the test carries less than the uncensored one
+///    (a wider expected band of m, paired over the same truths and random numbers) but still
+///    narrows the prior's band.
+#[test]
+fn a_force_limit_censors_the_proposed_crush_test_and_costs_information() {
+    use partlife::experiments::{CrushOptions, CrushTest, ForceLimit};
+    use partlife::schema::StudyFile;
+    use partlife::uq::study::UqStudy;
+    let state = state_of(8000, true);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/gen4_vs_bl.toml");
+    let u: UqStudy = StudyFile::read(&path).unwrap().parse().unwrap();
+    let (j, n) = (0, 60);
+    let index = u.order()[j];
+    let spec = &u.material[index];
+    let mut forces = spec.read_data(&path, index).unwrap().forces();
+    forces.sort_by(f64::total_cmp);
+    let median = forces[forces.len() / 2];
+    let limit = |force_n: f64| ForceLimit { force_n, elastic: spec.elastic, contact: u.contact.clone() };
+    let test = |force_n: Option<f64>, shape_measured: bool| CrushTest::new(&state, j, n, &CrushOptions { shape_measured, force_limit: force_n.map(limit), ..Default::default() }).unwrap();
+    let diameters: Vec<f64> = state.forms[0].setup.materials[j].sample.covariates.iter().find(|(c, _)| c == "diameter_m").unwrap().1.iter().map(|d| d.unwrap()).collect();
+    let ln_limit = |row: usize| partlife::strength::crush_contact(&spec.elastic, &u.contact, diameters[row]).at_force(median).unwrap().mean_tensile.ln();
+
+    // 1. The likelihood against the independent sum.
+    let (measured, unmeasured) = (test(Some(median), true), test(Some(median), false));
+    let mut rng = <ChaCha8Rng as rand::SeedableRng>::seed_from_u64(11);
+    let data = measured.simulate(5, &mut rng);
+    let unbroken = data.iter().filter(|c| !c.broke).count();
+    assert!(unbroken > 5 && unbroken < n - 5, "{unbroken} of {n} unbroken at the median force");
+    for c in &data {
+        let l = ln_limit(c.row);
+        assert!(if c.broke { c.ln_sigma <= l } else { (c.ln_sigma - l).abs() < 1e-12 }, "{c:?} against ln σ̄_lim {l}");
+    }
+    for k in [0, 5, 1234, 7999] {
+        let s = &state.samples[k];
+        let (p, _) = state.forms[s.form].setup.params(j, &s.x, partlife::uq::setup::Mode::Joint);
+        let z = |y: f64| p.shape * (y - p.mu);
+        let direct: f64 = data.iter().map(|c| if c.broke { p.shape.ln() + z(c.ln_sigma) - z(c.ln_sigma).exp() } else { -z(c.ln_sigma).exp() }).sum();
+        for (what, t) in [("measured", &measured), ("not measured", &unmeasured)] {
+            let ll = t.loglik(&data, k);
+            assert!((ll - direct).abs() < 1e-9 * direct.abs().max(1.0), "sample {k}, {what}: {ll} against the direct sum {direct}");
+        }
+    }
+
+    // 2. A limit far above every break: the same numbers as no limit.
+    let settings = Settings { outer: 300, min_ess: 50.0, seed: 41, truth: None, active: Some(4000), scored: 0 };
+    let run = |t: &CrushTest| preposterior(&state.knowledge, t, settings).unwrap();
+    let free = run(&test(None, true));
+    assert_eq!(run(&test(Some(1e3 * forces[forces.len() - 1]), true)), free);
+
+    // 3. At the median force.
+    let censored = run(&measured);
+    let q = state.weibull_m_quantity(j);
+    let expected = measured.expected_unbroken(&state.knowledge.weights).unwrap();
+    let mut rng = <ChaCha8Rng as rand::SeedableRng>::seed_from_u64(12);
+    let shares: Vec<f64> = censored.draws.iter().map(|d| measured.simulate(d.truth, &mut rng).iter().filter(|c| !c.broke).count() as f64 / n as f64).collect();
+    let share = partlife::experiments::Estimate::of(&shares);
+    let diff: Vec<f64> = censored.draws.iter().zip(&free.draws).map(|(a, b)| a.posterior.width90[q] - b.posterior.width90[q]).collect();
+    let wider = partlife::experiments::Estimate::of(&diff);
+    eprintln!(
+        "limit {median:.1} N: unbroken share expected {expected:.3}, simulated {share:?}; E[width90 m]: prior {:.3}, no limit {:?}, at the limit {:?}, paired difference {wider:?}",
+        free.prior.width90[q], free.width90[q], censored.width90[q]
+    );
+    // The simulated tests' truths are the outer draws' (drawn from the prior): 4 standard errors.
+    assert!((share.mean - expected).abs() < 4.0 * share.se, "simulated {share:?} vs expected {expected}");
+    assert!(wider.mean > 4.0 * wider.se, "the censored test is not less informative: {wider:?}");
+    assert!(censored.width90[q].mean < free.prior.width90[q] - 4.0 * censored.width90[q].se, "the censored test does not narrow the prior band: {:?} vs {}", censored.width90[q], free.prior.width90[q]);
+    // The README's figures: 122 N, 51 % unbroken, band 2.68 → 2.04 (1.75 without a limit).
+    assert!((median - 122.0).abs() < 0.5 && (100.0 * expected).round() == 51.0, "README: {median} N, {expected}");
+    for (got, readme) in [(free.prior.width90[q], 2.68), (censored.width90[q].mean, 2.04), (free.width90[q].mean, 1.75)] {
+        assert!((got - readme).abs() < 0.005, "README figure {readme} vs {got}");
+    }
 }

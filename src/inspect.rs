@@ -158,7 +158,7 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin, set
             one(format!("strength data, {n}, strength = {} MPa{origins}", span((lo, hi), 1e-6, 1)), Some(s.provenance))
         }
         "curves" => {
-            let (curves, read) = crate::calibrate::data::curves_of(&t, path, &src.columns, &src.units, origin)?;
+            let (curves, read) = crate::calibrate::data::curves_of(&t, path, &src.columns, &src.units, origin, src.temperature_c)?;
             let d = span(range(&curves.iter().map(|c| c.diameter).collect::<Vec<_>>()), 1e6, 0);
             one(format!("crush curves, {} particles, d = {d} µm, {} samples", curves.len(), t.rows.len()), Some(read))
         }

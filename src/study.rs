@@ -102,8 +102,8 @@ impl LoadedStudy {
         use crate::intake::{MapOrigin, Source};
         let study = &self.file.path;
         let origin = |key: String| MapOrigin { file: study.display().to_string(), key };
-        let curves = |file: &str, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, key: String| {
-            (Source { columns: columns.clone(), units: units.clone(), ..Source::file(resolve_relative(study, Path::new(file))) }, Some("curves"), origin(key), None)
+        let curves = |file: &str, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, temperature_c: Option<f64>, key: String| {
+            (Source { columns: columns.clone(), units: units.clone(), temperature_c, ..Source::file(resolve_relative(study, Path::new(file))) }, Some("curves"), origin(key), None)
         };
         let materials: &[MaterialSpec] = match &self.study {
             Study::Lifetime(s) => &s.material,
@@ -111,11 +111,11 @@ impl LoadedStudy {
             Study::Discrepancy(s) => &s.material,
             Study::Calibrate(s) => {
                 return vec![match &s.data {
-                    crate::calibrate::study::DataSpec::CrushCurves { file, columns, units, .. } => curves(file, columns, units, "data".into()),
+                    crate::calibrate::study::DataSpec::CrushCurves { file, columns, units, temperature_c, .. } => curves(file, columns, units, *temperature_c, "data".into()),
                     crate::calibrate::study::DataSpec::Observations { file } => (Source::file(resolve_relative(study, Path::new(file))), Some("observations"), origin("data".into()), None),
                 }];
             }
-            Study::DiscrepancyCurves(s) => return s.data.iter().enumerate().map(|(i, d)| curves(&d.file, &d.columns, &d.units, format!("data[{i}]"))).collect(),
+            Study::DiscrepancyCurves(s) => return s.data.iter().enumerate().map(|(i, d)| curves(&d.file, &d.columns, &d.units, Some(d.temperature_c), format!("data[{i}]"))).collect(),
             _ => &[],
         };
         let mut out: Vec<_> = materials.iter().enumerate().map(|(k, m)| (m.data.resolved(study), None, origin(format!("material[{k}].data")), None)).collect();

@@ -253,7 +253,7 @@ fn simulator_failures_are_recorded_not_fatal() {
 
 #[test]
 fn curve_reduction_scales_to_the_reference_diameter() {
-    let curves = load_curves(&root().join("datasets/crush_curves_gen3_rt.csv")).unwrap();
+    let curves = load_curves(&root().join("datasets/crush_curves_gen3_rt.csv"), Some(20.0)).unwrap();
     assert_eq!(curves.len(), 8);
     let d0 = 0.9e-3;
     let red = reduce_curves(std::path::Path::new("x.csv"), &curves, d0, 8, 0.7, 0.02, Default::default()).unwrap();
@@ -271,18 +271,53 @@ fn curve_reduction_scales_to_the_reference_diameter() {
     assert!(red.observations.sigma.iter().all(|s| *s > 0.0));
 }
 
+/// Every curve states its test temperature: a temperature column (one value per particle) or the
+/// study's `temperature_c` for curves without one; a calibration fits one temperature, so curves
+/// at several are refused, and the reduction keeps the temperature its report states.
+#[test]
+fn curves_state_their_test_temperature_and_a_calibration_fits_one() {
+    use partlife::fracture::FractureParams;
+    let s = Scratch::new();
+    let rt = std::fs::read_to_string(root().join("datasets/crush_curves_gen3_rt.csv")).unwrap();
+    // A column: particles 1–4 at 20 °C, the others at 800 °C.
+    let with = |t: &dyn Fn(&str) -> &'static str| -> String {
+        rt.lines().enumerate().map(|(i, l)| if i == 0 { format!("{l},temperature_c\n") } else { format!("{l},{}\n", t(l.split(',').next().unwrap())) }).collect()
+    };
+    s.write("datasets/two.csv", &with(&|p| if p.parse::<u32>().unwrap() <= 4 { "20" } else { "800" }));
+    let curves = load_curves(&s.path("datasets/two.csv"), None).unwrap();
+    assert_eq!(curves.iter().map(|c| c.temperature_c).collect::<Vec<_>>(), [20.0, 20.0, 20.0, 20.0, 800.0, 800.0, 800.0, 800.0]);
+    let e = reduce_curves(&s.path("datasets/two.csv"), &curves, 1e-3, 8, 0.8, 0.02, FractureParams::default()).unwrap_err().to_string();
+    assert!(e.contains("two.csv") && e.contains("20 °C (4) and 800 °C (4)") && e.contains("one temperature"), "{e}");
+    // One temperature: kept by the reduction; the column wins over the study's value.
+    s.write("datasets/hot.csv", &with(&|_| "800"));
+    let hot = load_curves(&s.path("datasets/hot.csv"), Some(20.0)).unwrap();
+    assert_eq!(reduce_curves(&s.path("datasets/hot.csv"), &hot, 1e-3, 8, 0.8, 0.02, FractureParams::default()).unwrap().temperature_c, 800.0);
+    // One particle's curve at two temperatures names the row.
+    let mixed: String = with(&|_| "800").lines().enumerate().map(|(i, l)| if i == 3 { format!("{},20\n", l.rsplit_once(',').unwrap().0) } else { format!("{l}\n") }).collect();
+    s.write("datasets/mixed.csv", &mixed);
+    let e = load_curves(&s.path("datasets/mixed.csv"), None).unwrap_err().to_string();
+    assert!(e.contains("row 3 (line 4)") && e.contains("20 °C differs from 800 °C"), "{e}");
+    // Neither a column nor a value: refused.
+    let e = load_curves(&root().join("datasets/crush_curves_gen3_rt.csv"), None).unwrap_err().to_string();
+    assert!(e.contains("states no test temperature"), "{e}");
+}
+
 #[test]
 fn bad_calibration_studies_fail_at_load_naming_file_and_key() {
     let s = Scratch::new();
     let study = "studies/calibrate_gen3_rt.toml";
     let original = s.read(study);
-    let cases: [(&str, &str, &[&str]); 6] = [
+    let cases: [(&str, &str, &[&str]); 8] = [
         ("name = \"t\"", "name = \"tt\"", &["param[3].name", "tt"]),
         ("lower = 0.6\nupper = 1.2", "lower = 1.2\nupper = 0.6", &["param[2]", "lower < upper"]),
         ("name = \"a\"\nlower = 0.6\nupper = 1.2", "name = \"a\"\nlower = 0.6\nupper = 1.2\nprior = { kind = \"normal\", mean = 0.9, sd = 0.0 }", &["param[2]", "sd > 0"]),
         ("name = \"g\"", "name = \"k1\"", &["param[1].name", "twice"]),
         ("design = 32", "design = 4", &["calibration.design"]),
         ("file = \"../datasets/crush_curves_gen3_rt.csv\"", "file = \"../datasets/missing.csv\"", &["missing.csv"]),
+        // The curves' test temperature: neither a column nor the key is refused, as is an
+        // implausible one.
+        ("temperature_c = 20   #", "# temperature_c = 20", &["crush_curves_gen3_rt.csv", "states no test temperature", "data.temperature_c = 20"]),
+        ("temperature_c = 20   #", "temperature_c = 3000   #", &["data.temperature_c", "[-273.15, 2100] °C"]),
     ];
     for (from, to, expect) in cases {
         s.write(study, &original);

@@ -79,6 +79,15 @@ fn curve_loop_names_temperature_and_compliance_and_nothing_on_clean_curves() {
 
 /// Temperature mixed in: the RT calibration against RT and 800 °C curves.
 fn mixed_temperatures_are_named(s: &Scratch) {
+    // The temperature term is referred to the first file's temperature, which must be the
+    // calibration's: listed the other way round, the study is refused before any work.
+    s.write("studies/swapped.toml", &curve_study(&[("crush_curves_gen3_800c.csv", 800.0), ("crush_curves_gen3_rt.csv", 20.0)]));
+    let out = s.run(&["run", "studies/swapped.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    for e in ["data[0].temperature_c", "first curve file's 800 °C", "measured at 20 °C"] {
+        assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
+    }
+    assert!(!s.path("reports/swapped").exists());
     let v = run_verdict(s, "mixed", &curve_study(&[("crush_curves_gen3_rt.csv", 20.0), ("crush_curves_gen3_800c.csv", 800.0)]));
     assert_eq!(named(&v), ["temperature"], "{v}");
     let (r, lo, hi) = parameter(&v, "temperature");
@@ -152,6 +161,17 @@ fn curve_study_without_its_calibration_report_is_refused() {
     assert!(s.report_files().is_empty(), "{:?}", s.report_files());
     // A bad key is refused at load, naming it.
     s.expect_bad_study("studies/curves.toml", "temperature_c = 20", "temperature_c = -400", &["data[0].temperature_c"]);
+    // A file whose temperature column says otherwise than its data[i].temperature_c is refused,
+    // naming the particle and both (checked before the calibration is read or run).
+    let rt = s.read("datasets/crush_curves_gen3_rt.csv");
+    let hot: Vec<String> = rt.lines().enumerate().map(|(i, l)| if i == 0 { format!("{l},T [°C]") } else { format!("{l},800") }).collect();
+    s.write("datasets/hot.csv", &(hot.join("\n") + "\n"));
+    s.write("studies/curves.toml", &curve_study(&[("hot.csv", 20.0)]));
+    let out = s.run(&["run", "studies/curves.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    for e in ["hot.csv", "particle 1", "says 800 °C", "data[0].temperature_c 20 °C"] {
+        assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
+    }
     // A missing curve file names its key (checked before the calibration is read or run).
     s.write("studies/curves.toml", &curve_study(&[("crush_curves_gen3_rt.csv", 20.0), ("no_such.csv", 800.0)]));
     let out = s.run(&["run", "studies/curves.toml", "--quiet"]);

@@ -377,9 +377,9 @@ fn a_german_curve_export_is_read_through_the_calibrations_column_map() {
         export.push_str(&format!("{id};{};{};{}\r\n", f[0] * 1e3, f[1] * 1e6, f[2]).replace('.', ","));
     }
     s.write("datasets/kurven.csv", &export);
-    let want = partlife::calibrate::data::load_curves(&si).unwrap();
+    let want = partlife::calibrate::data::load_curves(&si, Some(20.0)).unwrap();
     let columns: std::collections::BTreeMap<String, String> = [("displacement", "Weg [µm]"), ("force", "Kraft [N]")].into_iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
-    let got = partlife::calibrate::data::load_curves_mapped(&s.path("datasets/kurven.csv"), &columns, &Default::default(), &Default::default()).unwrap();
+    let got = partlife::calibrate::data::load_curves_mapped(&s.path("datasets/kurven.csv"), &columns, &Default::default(), &Default::default(), Some(20.0)).unwrap();
     assert_eq!(got.len(), want.len());
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1e-9);
     for (g, w) in got.iter().zip(&want) {

@@ -53,9 +53,10 @@ fn scratch_in(reports: &str) -> Scratch {
     let f = partlife::phases::ILLUSTRATIVE_FILE;
     std::fs::copy(root().join("datasets").join(f), s.path("datasets").join(f)).unwrap();
     let params = "name,unit\ng,Pa\nk1,Pa\na,-\nt,Pa\n".to_string();
-    report(&s, reports, "calibrate_gen3_rt.toml", &["datasets/crush_curves_gen3_rt.csv"], &[("chains.csv", chains([42e9, 72e9, 0.90, 0.42e9])), ("parameters.csv", params.clone())]);
+    let grid = |t: f64| format!("grid_displacement_m,reference_diameter_m,test_temperature_c\n1e-6,1e-3,{t}\n2e-6,1e-3,{t}\n");
+    report(&s, reports, "calibrate_gen3_rt.toml", &["datasets/crush_curves_gen3_rt.csv"], &[("chains.csv", chains([42e9, 72e9, 0.90, 0.42e9])), ("parameters.csv", params.clone()), ("grid.csv", grid(20.0))]);
     let rt_parameters = format!("{reports}/calibrate_gen3_rt/parameters.csv");
-    report(&s, reports, "calibrate_gen3_800c.toml", &["datasets/crush_curves_gen3_800c.csv", &rt_parameters], &[("chains.csv", chains([29e9, 48e9, 0.82, 0.31e9])), ("parameters.csv", params)]);
+    report(&s, reports, "calibrate_gen3_800c.toml", &["datasets/crush_curves_gen3_800c.csv", &rt_parameters], &[("chains.csv", chains([29e9, 48e9, 0.82, 0.31e9])), ("parameters.csv", params), ("grid.csv", grid(800.0))]);
     report(&s, reports, "discrepancy_curves.toml", &["datasets/crush_curves_gen3_rt.csv", "datasets/crush_curves_gen3_800c.csv"], &[("curve_evidence.csv", "round,candidate,median,q05,q95,named\n1,temperature,0.9489,0.9450,0.9510,yes\n".into())]);
     s
 }
@@ -74,6 +75,21 @@ fn current_reports_are_used_as_they_are() {
     assert!(!out.stderr.contains("running"), "nothing runs first: {}", out.stderr);
     let manifest = s.read("reports/temperature/manifest.json");
     assert!(manifest.contains("reports/calibrate_gen3_800c/chains.csv") && manifest.contains("reports/discrepancy_curves/curve_evidence.csv"), "the reports read are inputs: {manifest}");
+}
+
+/// A calibrated state is at its data's temperature: declared at another than the one its
+/// calibration's report states (`grid.csv`), the temperature study is refused, naming the key,
+/// both temperatures and the report.
+#[test]
+fn a_calibration_declared_at_another_temperature_than_its_curves_is_refused() {
+    let s = scratch();
+    s.write("reports/calibrate_gen3_800c/grid.csv", "grid_displacement_m,reference_diameter_m,test_temperature_c\n1e-6,1e-3,750\n");
+    let out = run(&s, &["--no-deps"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    for e in ["law.calibrations[1].temperature_c", "800 °C", "measured at 750 °C", "calibrate_gen3_800c/grid.csv"] {
+        assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
+    }
+    assert!(!s.path("reports/temperature").exists());
 }
 
 #[test]

@@ -60,7 +60,7 @@ fn crush(p: &Path) -> partlife::Result<Vec<f64>> {
 }
 
 fn curves(p: &Path) -> partlife::Result<Vec<f64>> {
-    let c = partlife::calibrate::data::load_curves(p)?;
+    let c = partlife::calibrate::data::load_curves(p, Some(20.0))?;
     Ok(c.iter().flat_map(|c| std::iter::once(c.diameter).chain(c.displacement.iter().copied()).chain(c.force.iter().copied())).collect())
 }
 

@@ -19,6 +19,14 @@
 //! noise. The calibrated θ is then that of the typical particle, and the posterior predictive of
 //! a new particle adds σ.
 //!
+//! **Test temperature.** Every curve states the temperature it was measured at: a temperature
+//! column (`temperature_c`, `temp`, `test_temperature` …; one value per particle), else the
+//! study's `temperature_c` (a calibration's `[data]`, a curve study's `[[data]]`); a curve with
+//! neither is refused, as a crush or strength file is. A calibration fits the curves of one
+//! temperature: curves at several are refused ([`reduce_curves`]), and the reduction keeps the
+//! temperature, which the calibration's report states (`grid.csv`, `summary.md`) and the studies
+//! that read it check against their own.
+//!
 //! ## Observations (`output, unit, value, sd`)
 //! One row per measured model output, by the output's name (for example the DEM's
 //! `vz_at_100mm`, `mass_flow`): the unit must equal the model output's unit; sd > 0.
@@ -41,6 +49,8 @@ pub struct Curve {
     pub displacement: Vec<f64>,
     /// Force (N).
     pub force: Vec<f64>,
+    /// Test temperature (°C).
+    pub temperature_c: f64,
 }
 
 impl Curve {
@@ -52,6 +62,7 @@ impl Curve {
             diameter: d0,
             displacement: self.displacement.iter().map(|x| x * s).collect(),
             force: self.force.iter().map(|f| f * s * s).collect(),
+            temperature_c: self.temperature_c,
         }
     }
 
@@ -81,39 +92,50 @@ impl Curve {
 
 /// The fields of a curve file (read through [`crate::intake`]: any delimiter, decimal mark,
 /// encoding or sheet; units from the headers, `displacement [mm]`, `F [kN]`).
-pub const CURVE_FIELDS: [Field; 4] = [
+pub const CURVE_FIELDS: [Field; 5] = [
     Field { key: "particle", column: "particle", kind: Kind::Text, synonyms: &["id", "particle_id", "probe", "sample", "specimen"], required: true, plausible: None },
     Field { key: "diameter", column: "diameter_m", kind: Kind::Number(Quantity::Length), synonyms: &["d", "dp"], required: true, plausible: Some(crate::data::DIAMETER) },
     Field { key: "displacement", column: "displacement_m", kind: Kind::Number(Quantity::Length), synonyms: &["s", "delta", "travel", "deformation"], required: true, plausible: None },
     Field { key: "force", column: "force_n", kind: Kind::Number(Quantity::Force), synonyms: &["f", "load"], required: true, plausible: Some(crate::data::CURVE_FORCE) },
+    // Not `t`: a curve's time goes by it.
+    Field { key: "temperature", column: "temperature_c", kind: Kind::Number(Quantity::Temperature), synonyms: &["temp", "test_temperature", "temperature", "temperatur", "prüftemperatur", "prueftemperatur"], required: false, plausible: Some(crate::intake::observed::TEMPERATURE) },
 ];
 
-/// Reads a curve file; every rule broken names the file, row and column.
-pub fn load_curves(path: &Path) -> Result<Vec<Curve>> {
-    load_curves_mapped(path, &Default::default(), &Default::default(), &MapOrigin::default())
+/// Reads a curve file (`temperature_c`: the test temperature of curves whose file states none,
+/// module docs); every rule broken names the file, row and column.
+pub fn load_curves(path: &Path, temperature_c: Option<f64>) -> Result<Vec<Curve>> {
+    load_curves_mapped(path, &Default::default(), &Default::default(), &MapOrigin::default(), temperature_c)
 }
 
 /// [`load_curves`] with the study's map of the file: `columns` (field → the file's header, for
 /// headers that do not name their field, e.g. `displacement = "Weg [µm]"`) and `units` (field →
 /// unit, for headers that state none), as every crush data table takes them; `origin` names the
-/// study table that holds the map.
-pub fn load_curves_mapped(path: &Path, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, origin: &MapOrigin) -> Result<Vec<Curve>> {
-    Ok(curves_of(&read_raw(&Source::file(path))?, path, columns, units, origin)?.0)
+/// study table that holds the map; `temperature_c` the study's test temperature (module docs).
+pub fn load_curves_mapped(path: &Path, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, origin: &MapOrigin, temperature_c: Option<f64>) -> Result<Vec<Curve>> {
+    Ok(curves_of(&read_raw(&Source::file(path))?, path, columns, units, origin, temperature_c)?.0)
 }
 
 /// The curves of a table already read from `path` (what [`load_curves_mapped`] does after
 /// reading it), with how its columns were read.
-pub fn curves_of(t: &RawTable, path: &Path, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, origin: &MapOrigin) -> Result<(Vec<Curve>, Provenance)> {
-    let r = resolve(t, &CURVE_FIELDS, columns, units, origin)?;
+pub fn curves_of(t: &RawTable, path: &Path, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, origin: &MapOrigin, temperature_c: Option<f64>) -> Result<(Vec<Curve>, Provenance)> {
+    // `T [°C]` is the test temperature (a bare `t` would be a time).
+    let mut columns = columns.clone();
+    if let Some(h) = crate::intake::observed::temperature_named_t(&t.headers, &columns) {
+        columns.insert("temperature".into(), h);
+    }
+    let r = resolve(t, &CURVE_FIELDS, &columns, units, origin)?;
     for w in &r.provenance.warnings {
         crate::intake::warn(w);
     }
     let mut curves: Vec<Curve> = Vec::new();
+    // Per curve: its first row and its temperature cell (None: no column, or empty).
+    let mut cells: Vec<(usize, Option<f64>)> = Vec::new();
     for i in 0..t.rows.len() {
         let particle = r.need_text("particle", i)?;
         let diam = r.need_number("diameter", i)?;
         let disp = r.need_number("displacement", i)?;
         let force = r.need_number("force", i)?;
+        let temperature = r.number("temperature", i)?;
         if !(disp >= 0.0 && disp <= diam) {
             return Err(r.error(i, "displacement", format!("displacement must lie in [0, d = {diam} m] (a platen cannot travel more than the particle's diameter); got {disp} m")));
         }
@@ -121,6 +143,12 @@ pub fn curves_of(t: &RawTable, path: &Path, columns: &std::collections::BTreeMap
             Some(c) if c.particle == particle => {
                 if diam != c.diameter {
                     return Err(r.error(i, "diameter", format!("{diam} m differs from {} m earlier in particle {}'s curve", c.diameter, c.particle)));
+                }
+                let cell = &mut cells.last_mut().expect("a cell per curve").1;
+                match (*cell, temperature) {
+                    (Some(a), Some(b)) if a != b => return Err(r.error(i, "temperature", format!("{b} °C differs from {a} °C earlier in particle {}'s curve: one curve is measured at one temperature", c.particle))),
+                    (None, Some(b)) => *cell = Some(b),
+                    _ => {}
                 }
                 if disp < *c.displacement.last().unwrap_or(&0.0) {
                     return Err(r.error(i, "displacement", format!("falls back (from {:e} to {:e} m): a curve's displacement must not decrease", c.displacement.last().unwrap_or(&0.0), disp)));
@@ -132,7 +160,8 @@ pub fn curves_of(t: &RawTable, path: &Path, columns: &std::collections::BTreeMap
                 if curves.iter().any(|c| c.particle == particle) {
                     return Err(r.error(i, "particle", format!("particle {particle} appears again after another particle's rows")));
                 }
-                curves.push(Curve { particle, diameter: diam, displacement: vec![disp], force: vec![force] });
+                curves.push(Curve { particle, diameter: diam, displacement: vec![disp], force: vec![force], temperature_c: f64::NAN });
+                cells.push((i, temperature));
             }
         }
     }
@@ -142,7 +171,15 @@ pub fn curves_of(t: &RawTable, path: &Path, columns: &std::collections::BTreeMap
     if let Some(c) = curves.iter().find(|c| c.displacement.len() < 10) {
         return Err(Error::data_file(path, format!("particle {}", c.particle), format!("{} samples: a curve needs at least 10", c.displacement.len())));
     }
-    Ok((curves, r.provenance))
+    // Every curve's test temperature: its column's, else the study's.
+    let mut provenance = r.provenance.clone();
+    let column = r.column("temperature");
+    let src = Source { temperature_c, ..Source::file(path) };
+    let temperatures = crate::intake::observed::test_temperatures(&cells.iter().map(|c| c.1).collect::<Vec<_>>(), &|k| t.place(cells[k].0, column), column.map(|c| format!("`{}`", t.headers[c])).as_deref(), &src, origin, &mut provenance)?;
+    for (c, temperature) in curves.iter_mut().zip(temperatures) {
+        c.temperature_c = temperature;
+    }
+    Ok((curves, provenance))
 }
 
 /// Observations d_i with σ_i, each of model output `output[i]`.
@@ -184,10 +221,18 @@ pub struct CrushReduction {
     /// The observations; outputs 0..K are the grid forces, K the peak force, K+1 the fracture
     /// displacement.
     pub observations: Observations,
+    /// The curves' test temperature (°C).
+    pub temperature_c: f64,
 }
 
-/// Reduces curves (see the module documentation).
+/// Reduces curves (see the module documentation); curves at several test temperatures are
+/// refused.
 pub fn reduce_curves(path: &Path, curves: &[Curve], d0: f64, points: usize, fraction: f64, sigma_floor: f64, fracture: FractureParams) -> Result<CrushReduction> {
+    let temperature_c = curves.first().map_or(f64::NAN, |c| c.temperature_c);
+    if curves.iter().any(|c| c.temperature_c != temperature_c) {
+        let all: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
+        return Err(Error::data_file(path, "file", format!("the curves were measured at {}: a calibration fits the constants of one temperature; give each temperature its own file and calibration (a temperature study carries the constants between them)", crate::intake::observed::describe_temperatures(&all))));
+    }
     let curves: Vec<Curve> = curves.iter().map(|c| c.normalised(d0)).collect();
     let fractures: Vec<Option<(f64, f64)>> = curves.iter().map(|c| c.fracture(fracture)).collect();
     let fracture_min = fractures.iter().flatten().map(|f| f.1).fold(f64::INFINITY, f64::min);
@@ -225,7 +270,7 @@ pub fn reduce_curves(path: &Path, curves: &[Curve], d0: f64, points: usize, frac
             obs.group.push(p);
         }
     }
-    Ok(CrushReduction { reference_diameter: d0, grid, curves, fractures, observations: obs })
+    Ok(CrushReduction { reference_diameter: d0, grid, curves, fractures, observations: obs, temperature_c })
 }
 
 /// One row of an observation file.

@@ -5,7 +5,8 @@
 //! kind = "calibrate"
 //! seed = 5
 //! label = "Gen 3, RT"
-//! [data]            # kind = "crush_curves": file, reference_diameter?, points, fraction, sigma_floor
+//! [data]            # kind = "crush_curves": file, temperature_c (unless a column gives it),
+//!                   # reference_diameter?, points, fraction, sigma_floor
 //!                   # kind = "observations": file (output, unit, value, sd)
 //! [model]           # kind = "crush": [model.crush] = a CrushSetup (the calibration mesh)
 //!                   # kind = "dem": study = "<dem study file>", duration, heights, window
@@ -28,7 +29,8 @@
 //! ([`super::executor`]); the report then also has `executor.csv` (one row per array job).
 //!
 //! Report files (`reports/<study>/`): `parameters.csv`, `correlation.csv`, `chains.csv`,
-//! `observations.csv`, `runs.csv`, `rounds.csv`, `failures.csv`, (crush) `curves.csv`,
+//! `observations.csv`, `runs.csv`, `rounds.csv`, `failures.csv`, (crush) `curves.csv` and
+//! `grid.csv` (the grid displacements, the reference diameter and the curves' test temperature),
 //! (with `[compare]`) `comparison.csv`, `summary.md`, figures (see
 //! [`crate::report::calibrate`]), `manifest.json`.
 
@@ -421,7 +423,7 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
         }
         let mut df = table(vec![scol("kind", kind), scol("id", id), fcol("displacement_m", x), fcol("force_n", f)])?;
         dir.write_table("curves", &mut df)?;
-        let mut df = table(vec![fcol("grid_displacement_m", red.grid.clone()), fcol("reference_diameter_m", vec![red.reference_diameter; red.grid.len()])])?;
+        let mut df = table(vec![fcol("grid_displacement_m", red.grid.clone()), fcol("reference_diameter_m", vec![red.reference_diameter; red.grid.len()]), fcol("test_temperature_c", vec![red.temperature_c; red.grid.len()])])?;
         dir.write_table("grid", &mut df)?;
     }
 
@@ -464,6 +466,9 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
 
     // Summary.
     let mut md = format!("# Calibration: {}\n\n", s.label);
+    if let Built::Crush(_, red) = &prep.built {
+        md.push_str(&format!("Data: {} force–displacement curves measured at {} °C (`grid.csv`).\n\n", red.curves.len(), crate::intake::columns::shown(red.temperature_c)));
+    }
     md.push_str(&format!(
         "Simulator runs: {} requested ({} in the emulator), {} failed; emulator posterior evaluations: {}.\n\n",
         cal.evaluations,

@@ -39,6 +39,10 @@ pub enum DataSpec {
         /// A field's unit where its header states none, e.g. `{ displacement = "mm" }`.
         #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
         units: std::collections::BTreeMap<String, String>,
+        /// The curves' test temperature (°C) where the file has no temperature column (or an
+        /// empty cell); a curve with neither is refused.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        temperature_c: Option<f64>,
     },
     /// Named observations (`output, unit, value, sd`).
     Observations {
@@ -230,7 +234,7 @@ impl CalibrateStudy {
             other => other,
         };
         let (built, observations, inputs, config) = match (&self.model, &self.data) {
-            (ModelSpec::Crush { crush }, DataSpec::CrushCurves { file: data, reference_diameter, points, fraction, sigma_floor, columns, units }) => {
+            (ModelSpec::Crush { crush }, DataSpec::CrushCurves { file: data, reference_diameter, points, fraction, sigma_floor, columns, units, temperature_c }) => {
                 if !(*points >= 2 && *points <= 40) {
                     return Err(Error::config(&file, "data.points", format!("must lie in [2, 40], got {points}")));
                 }
@@ -246,7 +250,12 @@ impl CalibrateStudy {
                     return Err(Error::config(&file, "model.crush.diameter", format!("must lie in {}, got {}", crate::data::DIAMETER.shown, crush.diameter)));
                 }
                 let path = existing(&file, "data.file", resolve(data))?;
-                let curves = load_curves_mapped(&path, columns, units, &crate::intake::MapOrigin { file: file.clone(), key: "data".into() })?;
+                if let Some(t) = temperature_c
+                    && let Some(rule) = crate::intake::observed::TEMPERATURE.broken(*t)
+                {
+                    return Err(Error::config(&file, "data.temperature_c", rule));
+                }
+                let curves = load_curves_mapped(&path, columns, units, &crate::intake::MapOrigin { file: file.clone(), key: "data".into() }, *temperature_c)?;
                 let d0 = match reference_diameter {
                     Some(d) if *d > 0.0 && d.is_finite() => *d,
                     Some(d) => return Err(Error::config(&file, "data.reference_diameter", format!("must be > 0, got {d}"))),

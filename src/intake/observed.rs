@@ -416,6 +416,22 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
     Ok(())
 }
 
+/// The header `T [°C]` — a `t` that states a temperature unit — where the study maps no
+/// temperature column: in a strength file a bare `t` is a bend bar's thickness, in a curve file a
+/// time, but with a temperature unit it is the test temperature.
+pub fn temperature_named_t(headers: &[String], columns: &std::collections::BTreeMap<String, String>) -> Option<String> {
+    if columns.contains_key("temperature") {
+        return None;
+    }
+    headers
+        .iter()
+        .find(|h| {
+            let p = super::units::parse_header(h);
+            super::units::fold(&p.name) == "t" && p.unit.is_some_and(|u| super::units::unit_of(super::Quantity::Temperature, &u).is_some())
+        })
+        .cloned()
+}
+
 /// Plausible test temperatures (°C), of a temperature column and of a study's `temperature_c`.
 pub const TEMPERATURE: super::Plausible = super::Plausible { what: "temperature", lo: -273.15, hi: 2100.0, shown: "[-273.15, 2100] °C", why: "from absolute zero to the melting point of alumina (2072 °C), above which no ceramic particle is solid" };
 
@@ -439,10 +455,12 @@ pub fn test_temperatures(cells: &[Option<f64>], place: &dyn Fn(usize) -> String,
                 let rule = match column {
                     Some(c) if origin.key.is_empty() => format!("has no test temperature (column {c} is empty there): fill the cell, or give the test temperature of the rows without one (`--temperature-c 20` on the command line, `temperature_c = 20` in a study's data table; °C)"),
                     Some(c) => format!("has no test temperature (column {c} is empty there): fill the cell, or give the test temperature of the rows without one in {}: {key}temperature_c = … (°C)", origin.file),
-                    None if origin.key.is_empty() => "states no test temperature: it has no temperature column (temperature_c, temp, test_temperature …). A strength measured at 20 °C is not one at 800 °C: add the column, or give the file's test temperature (`--temperature-c 20` on the command line, `temperature_c = 20` in a study's data table; °C)".to_string(),
+                    None if origin.key.is_empty() => "states no test temperature: it has no temperature column (temperature_c, temp, test_temperature …). A test at 20 °C is not one at 800 °C: add the column, or give the file's test temperature (`--temperature-c 20` on the command line, `temperature_c = 20` in a study's data table; °C)".to_string(),
                     None => format!(
-                        "states no test temperature: it has no temperature column (temperature_c, temp, test_temperature …) and the study gives none. A strength measured at 20 °C is not one at 800 °C: add the column, or declare the file's test temperature in {}: {key}temperature_c = 20 (°C; a `data` given as a path becomes a table: data = {{ file = \"…\", temperature_c = 20 }})",
-                        origin.file
+                        "states no test temperature: it has no temperature column (temperature_c, temp, test_temperature …) and the study gives none. A test at 20 °C is not one at 800 °C: add the column, or declare the file's test temperature in {}: {key}temperature_c = 20 (°C{})",
+                        origin.file,
+                        // A material's or strength set's `data` may be a bare path.
+                        if origin.key.ends_with(".data") { "; a `data` given as a path becomes a table: data = { file = \"…\", temperature_c = 20 }" } else { "" }
                     ),
                 };
                 return Err(Error::data_file(&src.file, if column.is_some() { place(k) } else { "file".into() }, rule));

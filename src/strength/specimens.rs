@@ -151,15 +151,12 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
     let table = read_raw(src)?;
     // `T [°C]`: a `t` that states a temperature unit is the test temperature, not a thickness.
     let mapped;
-    let src = match table.headers.iter().find(|h| {
-        let p = crate::intake::units::parse_header(h);
-        crate::intake::units::fold(&p.name) == "t" && p.unit.is_some_and(|u| crate::intake::units::unit_of(Quantity::Temperature, &u).is_some())
-    }) {
-        Some(h) if !src.columns.contains_key("temperature") => {
-            mapped = Source { columns: src.columns.iter().map(|(k, v)| (k.clone(), v.clone())).chain([("temperature".to_string(), h.clone())]).collect(), ..src.clone() };
+    let src = match crate::intake::observed::temperature_named_t(&table.headers, &src.columns) {
+        Some(h) => {
+            mapped = Source { columns: src.columns.iter().map(|(k, v)| (k.clone(), v.clone())).chain([("temperature".to_string(), h)]).collect(), ..src.clone() };
             &mapped
         }
-        _ => src,
+        None => src,
     };
     classes_undeclared(&table, src)?;
     let ((fields, columns, units), ends) = crate::intake::observed::fields_for(&table, &STRENGTH_FIELDS, "strength", STRENGTH_ENDS, src, origin)?;

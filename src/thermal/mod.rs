@@ -152,7 +152,7 @@ pub fn law_prerequisites(o: &LawOptions, resolve: &dyn Fn(&Path) -> PathBuf) -> 
     o.calibrations
         .iter()
         .enumerate()
-        .filter_map(|(i, c)| c.study.as_ref().map(|s| crate::schema::Prerequisite { key: format!("law.calibrations[{i}].study"), study: resolve(s), files: vec!["chains.csv", "parameters.csv"] }))
+        .filter_map(|(i, c)| c.study.as_ref().map(|s| crate::schema::Prerequisite { key: format!("law.calibrations[{i}].study"), study: resolve(s), files: vec!["chains.csv", "parameters.csv", "grid.csv"] }))
         .collect()
 }
 
@@ -302,6 +302,18 @@ impl ParameterLaws {
             if !path.is_file() {
                 let sub = if c.study.is_some() { "study" } else { "chains" };
                 return Err(Error::config(file, format!("{key}.{sub}"), format!("{} does not exist: it is the chains.csv a calibration study's run writes", path.display())));
+            }
+            // A calibration study's report states its curves' test temperature: it must be the
+            // one this state is declared at.
+            if let Some(s) = &c.study {
+                let grid = crate::schema::report_file(reports_root, &resolve(s), "grid.csv");
+                if !grid.is_file() {
+                    return Err(Error::config(file, format!("{key}.study"), format!("{} does not exist: the law is fitted to crush calibrations, whose report's grid.csv states the curves' test temperature", grid.display())));
+                }
+                let tested = crate::report::Table::load_file(&grid)?.f("test_temperature_c")?;
+                if let Some(&t) = tested.iter().find(|&&t| t != c.temperature_c) {
+                    return Err(Error::config(file, format!("{key}.temperature_c"), format!("{} °C, but the calibration {} fitted curves measured at {t} °C ({}): a calibrated state is at its data's temperature", c.temperature_c, s.display(), grid.display())));
+                }
             }
             let t = crate::report::Table::load_file(&path)?;
             let cols: Vec<Vec<f64>> = names.iter().map(|n| t.f(n)).collect::<Result<_>>()?;

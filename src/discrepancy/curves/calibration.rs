@@ -33,6 +33,8 @@ pub struct Calibrated {
     pub posterior: (Vec<f64>, nalgebra::DMatrix<f64>),
     /// Files read (study, data, runs, parameters).
     pub inputs: Vec<PathBuf>,
+    /// The test temperature of the calibration's curves (°C).
+    pub temperature_c: f64,
 }
 
 /// Loads a crush calibration and its report; a missing or stale report is an error naming it.
@@ -90,7 +92,7 @@ pub fn load_calibration(study_file: &str, key: &str, path: &Path, reports_root: 
     let mut inputs = vec![loaded.path.clone()];
     inputs.extend(prep.inputs);
     inputs.extend([runs_path, params_path, chains_path]);
-    Ok(Calibrated { model, reference_diameter: red.reference_diameter, grid: red.grid, fracture, emulator, theta, posterior, inputs })
+    Ok(Calibrated { model, reference_diameter: red.reference_diameter, grid: red.grid, fracture, emulator, theta, posterior, inputs, temperature_c: red.temperature_c })
 }
 
 /// Mean and inverse covariance of the calibration's posterior draws (`chains.csv`).

@@ -233,7 +233,13 @@ impl CurveStudy {
             if !path.is_file() {
                 return Err(Error::config(&file, format!("data[{i}].file"), format!("{} does not exist", path.display())));
             }
-            raw.push(load_curves_mapped(&path, &d.columns, &d.units, &crate::intake::MapOrigin { file: file.clone(), key: format!("data[{i}]") })?);
+            let curves = load_curves_mapped(&path, &d.columns, &d.units, &crate::intake::MapOrigin { file: file.clone(), key: format!("data[{i}]") }, Some(d.temperature_c))?;
+            // A temperature column that says otherwise than the study: each file is one
+            // temperature of the model.
+            if let Some(c) = curves.iter().find(|c| c.temperature_c != d.temperature_c) {
+                return Err(Error::data_file(&path, format!("particle {}", c.particle), format!("its temperature column says {} °C, the study's data[{i}].temperature_c {} °C: each curve file is one test temperature; correct the one that is wrong, or split the file", c.temperature_c, d.temperature_c)));
+            }
+            raw.push(curves);
             paths.push(path);
         }
         Ok((paths, raw))
@@ -268,6 +274,14 @@ pub fn run_curves(loaded: &StudyFile, s: &CurveStudy, opts: &RunOptions) -> Resu
     // The curve files first (cheap), then the calibration and its emulator.
     let (paths, raw) = s.read_data(loaded)?;
     let cal = load_calibration(&file, "calibration", &loaded.resolve(Path::new(&s.calibration)), &opts.reports_root)?;
+    // The calibrated model is the first file's temperature's: the temperature term's reference.
+    if cal.temperature_c != s.data[0].temperature_c {
+        return Err(Error::config(
+            &file,
+            "data[0].temperature_c",
+            format!("the temperature term is referred to the first curve file's {} °C, but the calibration {} fitted curves measured at {} °C: list first the curve file at the calibration's temperature", s.data[0].temperature_c, s.calibration, cal.temperature_c),
+        ));
+    }
     let groups: Vec<Group> = s
         .data
         .iter()

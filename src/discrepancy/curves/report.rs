@@ -289,7 +289,7 @@ mod tests {
     #[test]
     fn summary_verdicts_follow_delta_bic_and_numbers_are_the_given_ones() {
         use CurveCandidate::*;
-        let curve = Curve { particle: "p".into(), diameter: 1e-3, displacement: vec![0.0, 1e-6], force: vec![0.0, 1.0] };
+        let curve = Curve { particle: "p".into(), diameter: 1e-3, displacement: vec![0.0, 1e-6], force: vec![0.0, 1.0], temperature_c: 20.0 };
         let groups = [Group { label: "RT".into(), temperature: 20.0, curves: vec![curve.clone(); 3] }, Group { label: "800 °C".into(), temperature: 800.0, curves: vec![curve; 2] }];
         let md = curve_summary("cal.toml", &groups, &outcome(), &[Some((2e-6, 8e-6, 0.125)), None], &[(0.5, 0.01), (-0.25, 0.5)]);
         for line in [

@@ -64,6 +64,13 @@ fn crush_calibration_recovers_the_truth_and_a_rerun_reuses_every_run() {
     let manifest: serde_json::Value = serde_json::from_str(&s.read(&format!("{dir}/manifest.json"))).unwrap();
     let inputs = manifest["inputs"].to_string();
     assert!(inputs.contains("crush_curves_gen3_rt.csv") && !inputs.contains("synth_curves"), "{inputs}");
+    // The curves' test temperature, where it came from, and how the file was read: in the
+    // manifest's record of the curve file, grid.csv and the summary.
+    let read = manifest["inputs"].as_array().unwrap().iter().find(|i| i["path"].as_str().unwrap().ends_with("crush_curves_gen3_rt.csv")).unwrap()["read"].to_string();
+    assert!(read.contains("test temperature: 20 °C (the study's data.temperature_c)"), "{read}");
+    assert!(column(&s.read(&format!("{dir}/grid.csv")), "test_temperature_c").iter().all(|t| t.parse::<f64>().unwrap() == 20.0));
+    let summary = s.read(&format!("{dir}/summary.md"));
+    assert!(summary.contains("Data: 8 force–displacement curves (`crush_curves_gen3_rt.csv`) measured at 20 °C") && summary.contains("test temperature: 20 °C (the study's data.temperature_c)"), "{summary}");
     let ev = &manifest["evaluations"];
     let requested = ev["simulator_requested"].as_u64().unwrap();
     assert!(requested >= 20 && ev["simulator_runs"].as_u64().unwrap() + ev["simulator_cache_hits"].as_u64().unwrap() == requested, "{ev}");

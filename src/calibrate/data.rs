@@ -112,7 +112,13 @@ pub fn load_curves(path: &Path, temperature_c: Option<f64>) -> Result<Vec<Curve>
 /// unit, for headers that state none), as every crush data table takes them; `origin` names the
 /// study table that holds the map; `temperature_c` the study's test temperature (module docs).
 pub fn load_curves_mapped(path: &Path, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, origin: &MapOrigin, temperature_c: Option<f64>) -> Result<Vec<Curve>> {
-    Ok(curves_of(&read_raw(&Source::file(path))?, path, columns, units, origin, temperature_c)?.0)
+    Ok(read_curves(path, columns, units, origin, temperature_c)?.0)
+}
+
+/// [`load_curves_mapped`] with the record of how the file was read (columns, units, the test
+/// temperature and where it came from), for a report's manifest and summary.
+pub fn read_curves(path: &Path, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, origin: &MapOrigin, temperature_c: Option<f64>) -> Result<(Vec<Curve>, Provenance)> {
+    curves_of(&read_raw(&Source::file(path))?, path, columns, units, origin, temperature_c)
 }
 
 /// The curves of a table already read from `path` (what [`load_curves_mapped`] does after

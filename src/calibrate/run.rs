@@ -62,8 +62,12 @@ pub fn run_calibrate(loaded: &StudyFile, s: &CalibrateStudy, opts: &RunOptions) 
     let resolve = |p: &str| loaded.resolve(std::path::Path::new(p));
     let prep = s.prepare(&loaded.path, &resolve)?;
     let mut inputs = vec![InputFile::hash(&loaded.path)?];
-    for p in &prep.inputs {
-        inputs.push(InputFile::hash(p)?);
+    for (k, p) in prep.inputs.iter().enumerate() {
+        // The curve file (the first input) with the record of how it was read.
+        match (&prep.read, k) {
+            (Some(read), 0) => inputs.extend(InputFile::read(p, read)?),
+            _ => inputs.push(InputFile::hash(p)?),
+        }
     }
     // The calibration compared with: its parameters.csv, hashed when it is there.
     let compare_file = match &s.compare {
@@ -466,8 +470,9 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
 
     // Summary.
     let mut md = format!("# Calibration: {}\n\n", s.label);
-    if let Built::Crush(_, red) = &prep.built {
-        md.push_str(&format!("Data: {} force–displacement curves measured at {} °C (`grid.csv`).\n\n", red.curves.len(), crate::intake::columns::shown(red.temperature_c)));
+    if let (Built::Crush(_, red), Some(read)) = (&prep.built, &prep.read) {
+        let file = std::path::Path::new(&read.file).file_name().map_or(read.file.clone(), |f| f.to_string_lossy().into_owned());
+        md.push_str(&format!("Data: {} force–displacement curves (`{file}`) measured at {} °C (`grid.csv`). Read as: {}.\n\n", red.curves.len(), crate::intake::columns::shown(red.temperature_c), read.describe()));
     }
     md.push_str(&format!(
         "Simulator runs: {} requested ({} in the emulator), {} failed; emulator posterior evaluations: {}.\n\n",

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
-use super::data::{CrushReduction, Observations, load_curves_mapped, load_observations, reduce_curves};
+use super::data::{CrushReduction, Observations, load_observations, read_curves, reduce_curves};
 use super::pipeline::PipelineOptions;
 use crate::error::{Error, Result};
 use crate::fem::model::CrushModel;
@@ -193,6 +193,8 @@ pub struct Prepared {
     pub inputs: Vec<PathBuf>,
     /// Configuration text of the model (the cache key's prefix).
     pub config: String,
+    /// How the curve file was read (crush curves; its columns, units and test temperature).
+    pub read: Option<crate::intake::Provenance>,
 }
 
 impl CalibrateStudy {
@@ -233,7 +235,7 @@ impl CalibrateStudy {
             Error::Config { key, rule, .. } => Error::config(&file, format!("model: {key}"), rule),
             other => other,
         };
-        let (built, observations, inputs, config) = match (&self.model, &self.data) {
+        let (built, observations, inputs, config, read) = match (&self.model, &self.data) {
             (ModelSpec::Crush { crush }, DataSpec::CrushCurves { file: data, reference_diameter, points, fraction, sigma_floor, columns, units, temperature_c }) => {
                 if !(*points >= 2 && *points <= 40) {
                     return Err(Error::config(&file, "data.points", format!("must lie in [2, 40], got {points}")));
@@ -255,7 +257,7 @@ impl CalibrateStudy {
                 {
                     return Err(Error::config(&file, "data.temperature_c", rule));
                 }
-                let curves = load_curves_mapped(&path, columns, units, &crate::intake::MapOrigin { file: file.clone(), key: "data".into() }, *temperature_c)?;
+                let (curves, read) = read_curves(&path, columns, units, &crate::intake::MapOrigin { file: file.clone(), key: "data".into() }, *temperature_c)?;
                 let d0 = match reference_diameter {
                     Some(d) if *d > 0.0 && d.is_finite() => *d,
                     Some(d) => return Err(Error::config(&file, "data.reference_diameter", format!("must be > 0, got {d}"))),
@@ -268,7 +270,7 @@ impl CalibrateStudy {
                 let model = CrushModel::new(base.clone(), params, red.grid.clone()).map_err(relabel)?;
                 let config = serde_json::to_string(&(&base, &self.param, &red.grid)).map_err(|e| Error::numerical("cache key", e.to_string()))?;
                 let obs = red.observations.clone();
-                (Built::Crush(model, red), obs, vec![path], config)
+                (Built::Crush(model, red), obs, vec![path], config, Some(read))
             }
             (ModelSpec::Dem { study, duration, heights, window }, DataSpec::Observations { file: data }) => {
                 let spath = existing(&file, "model.study", resolve(study))?;
@@ -286,7 +288,7 @@ impl CalibrateStudy {
                 let path = existing(&file, "data.file", resolve(data))?;
                 let obs = load_observations(&path, model.outputs())?;
                 let config = format!("{}\n{}", loaded.text, serde_json::to_string(&(&self.model, &self.param)).map_err(|e| Error::numerical("cache key", e.to_string()))?);
-                (Built::Dem(Box::new(model)), obs, vec![path, spath], config)
+                (Built::Dem(Box::new(model)), obs, vec![path, spath], config, None)
             }
             _ => return Err(Error::config(&file, "data.kind", "a crush model takes data kind \"crush_curves\", a dem model \"observations\"")),
         };
@@ -298,7 +300,7 @@ impl CalibrateStudy {
         crate::schema::FigureOptions { width_cm: self.figures.width_cm }.validate(&file)?;
         // [compare]'s reference report may not exist yet at load: it is read when the tables are
         // written, and a missing one is reported in summary.md.
-        Ok(Prepared { built, observations, inputs, config })
+        Ok(Prepared { built, observations, inputs, config, read })
     }
 }
 

@@ -494,6 +494,18 @@ fn the_bofors_steel_table_equals_the_peers_and_its_threshold_is_named_not_a_seco
     let (law, weight, scale2, gamma) = (table_text(&fits, "law"), table_f64(&fits, "law_weight"), table_f64(&fits, "law_scale2_pa"), table_f64(&fits, "law_threshold_pa"));
     let after = law.iter().position(|l| l == "threshold").unwrap();
     assert!(weight[after].is_nan() && scale2[after].is_nan() && (gamma[after] / 9.80665e6 - 39.7656).abs() < 1e-3, "{} {} {}", weight[after], scale2[after], gamma[after]);
+    // No recorded factor: G is 0 by construction, and the text says so instead of "G ≈ 0"; its
+    // expectation is written 0, not −0.
+    assert_eq!(summary.matches("The file records no factor to diagnose the residuals against: G is 0 by construction").count(), 2, "{summary}");
+    assert!(!summary.contains("G ≈ 0") && table_f64(&dir.join("stages.csv"), "gap_expected").iter().all(|g| *g == 0.0 && g.is_sign_positive()), "{summary}");
+    // The probability plots: the threshold moves no point, so each set's points are drawn once
+    // and said to be both stages', the laws' entries on their curves; no legend entry for a
+    // marker that is not drawn (the classes have no exact break).
+    let svg = |k: &str| s.read(&format!("reports/bofors/discrepancy_probability_{k}.svg"));
+    let (exact, classes) = (svg("exact"), svg("classes"));
+    assert!(exact.contains("strengths: base and final alike") && exact.contains("base model: m = 17.6") && exact.contains("final: threshold 390.0 MPa, m = 2.6"), "exact plot legend");
+    assert!(classes.contains("base and final alike: class ends") && !classes.contains("base: class ends") && !classes.contains("strengths: base"), "classes plot legend");
+    assert!(classes.contains("base model: m = 17.9") && classes.contains("final: threshold 390.5 MPa, m = 2.6"), "classes plot legend");
 }
 
 /// reliability's right-censored fits of Nelson's connection strengths per failure mode, the

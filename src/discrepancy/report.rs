@@ -26,7 +26,10 @@ pub(super) fn names(c: &[Effect]) -> String {
 
 pub(super) fn headline(r: &MaterialResult) -> String {
     let (b, a) = (r.outcome.before(), r.outcome.after());
-    format!("{}: effects named: {}; gap G {:.1} → {:.1}; Weibull modulus {} → {}", r.label, names(&r.outcome.named), b.gap, a.gap, modulus_text(&b.model), modulus_text(&a.model))
+    // Without a recorded factor the residuals have nothing to be diagnosed against: G is 0 by
+    // construction and says nothing.
+    let gap = if b.findings.is_empty() { "no recorded factor to diagnose the residuals against".to_string() } else { format!("gap G {:.1} → {:.1}", b.gap, a.gap) };
+    format!("{}: effects named: {}; {gap}; Weibull modulus {} → {}", r.label, names(&r.outcome.named), modulus_text(&b.model), modulus_text(&a.model))
 }
 
 /// The model's Weibull modulus in words: one value, or the range over the levels of a factor
@@ -215,7 +218,11 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             ));
         }
         let df: usize = b.findings.iter().map(|f| f.df).sum();
-        md.push_str(&format!("\nWith nothing missing G ≈ {df} (one per numeric covariate diagnosed; per categorical factor of L levels, L − 1 for the location and again for the scatter of its levels of 3 or more specimens).\n\n"));
+        if b.findings.is_empty() {
+            md.push_str("\nThe file records no factor to diagnose the residuals against: G is 0 by construction and says nothing here.\n\n");
+        } else {
+            md.push_str(&format!("\nWith nothing missing G ≈ {df} (one per numeric covariate diagnosed; per categorical factor of L levels, L − 1 for the location and again for the scatter of its levels of 3 or more specimens).\n\n"));
+        }
         if r.outcome.evidence.is_empty() {
             md.push_str("The data record no factor and no size measure and no two-population law was asked for: there is no candidate effect to name, and the workflow can only diagnose the Weibull law itself (below).\n");
         } else {

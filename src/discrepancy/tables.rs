@@ -77,7 +77,8 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         fcol("gap", st.iter().map(|(_, _, s)| s.gap).collect()),
         ucol("covariates_diagnosed", st.iter().map(|(_, _, s)| s.findings.len() as u64).collect()),
         // E(G) with nothing missing: one per numeric covariate, 2(L − 1) per categorical factor.
-        fcol("gap_expected", st.iter().map(|(_, _, s)| s.findings.iter().map(|f| f.df as f64).sum()).collect()),
+        // 0.0 + …: an empty sum of f64 is −0.0.
+        fcol("gap_expected", st.iter().map(|(_, _, s)| 0.0 + s.findings.iter().map(|f| f.df as f64).sum::<f64>()).collect()),
     ])?;
     dir.write_table("stages", &mut t)?;
 

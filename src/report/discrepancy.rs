@@ -246,6 +246,8 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
     let mut curves = Vec::new();
     // Censored points of each stage, drawn after both stages' breaks (the legend lists those first).
     let mut rings = Vec::new();
+    // Each stage's breaks' marker series: (its index in `series`, its points).
+    let mut markers: Vec<(usize, Vec<(f64, f64)>)> = Vec::new();
     for (si, st) in ["before", "after"].iter().enumerate() {
         // Plotting positions: C1239's (i − 0.5)/N, or Kaplan–Meier/Turnbull where rows are
         // censored (drawn as open circles).
@@ -274,32 +276,52 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
         // With a modulus per level the line is the reference level's (the adjusted points are
         // carried onto it): say so, with the range by level (stages.csv; older reports lack it).
         // A two-population law is drawn as its curve ln(−ln(1 − F(x))), not a line.
+        // The stage's legend entry goes on its breaks' markers, or, where it has none (every row
+        // censored or a class), on its line: no entry for a marker that is not drawn.
+        let on_line = pts.is_empty();
+        markers.push((series.len(), pts.clone()));
+        let marker = |label: String, pts: Vec<(f64, f64)>| Series { label: (!on_line).then_some(label), points: pts, colour: colour_st, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 1.6) };
         if let Some(l) = law(j) {
             let label = if l.5.is_nan() { format!("final: {}, m = {:.1} and {:.1}", l.0, l.3.1.min(l.4.1), l.3.1.max(l.4.1)) } else { format!("final: threshold {:.1} MPa, m = {:.1}", l.5 / 1e6, l.3.1) };
-            series.push(Series { label: Some(label), points: pts, colour: colour_st, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 1.6) });
-            curves.push((l, colour_st));
+            series.push(marker(label.clone(), pts));
+            curves.push((l, colour_st, label, on_line));
             continue;
         }
         let label = match moduli.filter(|(lo, hi)| si == 1 && hi > lo) {
             Some((lo, hi)) => format!("final model: m = {lo:.1}–{hi:.1}, line at {m:.1}"),
             None => format!("{name}: m = {m:.1}"),
         };
-        series.push(Series { label: Some(label), points: pts, colour: colour_st, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 1.6) });
-        lines.push((m, s, colour_st));
+        series.push(marker(label.clone(), pts));
+        lines.push((m, s, colour_st, label, on_line));
+    }
+    // Where no effect moves the breaks (the same positions before and after), one set of
+    // markers, said to be both — the base's would hide under the final's — and each stage's
+    // legend entry on its line.
+    let merged = markers.len() == 2 && !markers[0].1.is_empty() && markers[0].1 == markers[1].1;
+    if merged {
+        series[markers[1].0].label = Some("strengths: base and final alike".into());
+        series.remove(markers[0].0);
+    }
+    // Where no effect moves the censored points (the same positions before and after), one set
+    // of rings, said to be both: the base's would hide under the final's.
+    if rings.len() == 2 && rings[0].points == rings[1].points {
+        let base = rings.remove(0);
+        let words = base.label.as_deref().and_then(|l| l.strip_prefix("base: ")).unwrap_or("censored").to_string();
+        rings[0].label = Some(format!("base and final alike: {words}"));
     }
     series.extend(rings);
     let xr = padded(xs.iter().copied(), 0.05, 0.05);
-    for (m, s, colour_st) in lines {
-        series.push(Series::line(None, vec![(xr.0, m * (xr.0 - s)), (xr.1, m * (xr.1 - s))], colour_st, 1.0));
+    for (m, s, colour_st, label, on_line) in lines {
+        series.push(Series::line((on_line || merged).then_some(label), vec![(xr.0, m * (xr.0 - s)), (xr.1, m * (xr.1 - s))], colour_st, 1.0));
     }
-    for (l, colour_st) in curves {
+    for (l, colour_st, label, on_line) in curves {
         let pts: Vec<(f64, f64)> = (0..=200)
             .map(|k| xr.0 + (xr.1 - xr.0) * k as f64 / 200.0)
             .map(|lx| (lx, if l.5.is_nan() { crate::weibull::two_population_cdf(l.1, l.2, l.3, l.4, lx.exp() * 1e6) } else { crate::weibull::threshold_cdf(l.5, l.3, lx.exp() * 1e6) }))
             .map(|(lx, f)| (lx, (-(-f).ln_1p()).ln()))
             .filter(|p| p.1.is_finite())
             .collect();
-        series.push(Series::line(None, pts, colour_st, 1.0));
+        series.push(Series::line((on_line || merged).then_some(label), pts, colour_st, 1.0));
     }
     Ok(Panel {
         x_categories: vec![],

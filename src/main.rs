@@ -263,7 +263,7 @@ enum DatasetsCommand {
         /// Only the rows of this material (a campaign file holding several).
         #[arg(long)]
         material: Option<String>,
-        /// The test temperature (°C) of rows whose file gives none (crush and strength files).
+        /// The test temperature (°C) of rows whose file gives none (crush, strength and crush-curve files).
         #[arg(long, conflicts_with = "study", value_name = "CELSIUS")]
         temperature_c: Option<f64>,
     },

@@ -294,16 +294,27 @@ fn curves_state_their_test_temperature_and_a_calibration_fits_one() {
     let curves = load_curves(&s.path("datasets/two.csv"), None).unwrap();
     assert_eq!(curves.iter().map(|c| c.temperature_c).collect::<Vec<_>>(), [20.0, 20.0, 20.0, 20.0, 800.0, 800.0, 800.0, 800.0]);
     let e = reduce_curves(&s.path("datasets/two.csv"), &curves, 1e-3, 8, 0.8, 0.02, FractureParams::default()).unwrap_err().to_string();
-    assert!(e.contains("two.csv") && e.contains("20 °C (4) and 800 °C (4)") && e.contains("one temperature"), "{e}");
-    // One temperature: kept by the reduction; the column wins over the study's value.
+    assert!(e.contains("two.csv") && e.contains("20 °C (4) and 800 °C (4) (20 °C: particles 1, 2, 3, 4; 800 °C: particles 5, 6, 7, 8)") && e.contains("one temperature"), "{e}");
+    // One temperature: kept by the reduction.
     s.write("datasets/hot.csv", &with(&|_| "800"));
-    let hot = load_curves(&s.path("datasets/hot.csv"), Some(20.0)).unwrap();
+    let hot = load_curves(&s.path("datasets/hot.csv"), Some(800.0)).unwrap();
     assert_eq!(reduce_curves(&s.path("datasets/hot.csv"), &hot, 1e-3, 8, 0.8, 0.02, FractureParams::default()).unwrap().temperature_c, 800.0);
     // One particle's curve at two temperatures names the row.
     let mixed: String = with(&|_| "800").lines().enumerate().map(|(i, l)| if i == 3 { format!("{},20\n", l.rsplit_once(',').unwrap().0) } else { format!("{l}\n") }).collect();
     s.write("datasets/mixed.csv", &mixed);
     let e = load_curves(&s.path("datasets/mixed.csv"), None).unwrap_err().to_string();
-    assert!(e.contains("row 3 (line 4)") && e.contains("20 °C differs from 800 °C"), "{e}");
+    assert!(e.contains("row 3 (line 4)") && e.contains("particle 1's curve spans 20–800 °C"), "{e}");
+    // A furnace's log that wanders by a kelvin or two along a curve is one temperature, its
+    // mean; so are curves a few kelvin apart.
+    let wander: String = rt.lines().enumerate().map(|(i, l)| if i == 0 { format!("{l},T [°C]\n") } else { format!("{l},{}\n", 799.0 + (i % 3) as f64) }).collect();
+    s.write("datasets/wander.csv", &wander);
+    let curves = load_curves(&s.path("datasets/wander.csv"), None).unwrap();
+    assert!(curves.iter().all(|c| (c.temperature_c - 800.0).abs() < 1.0), "{:?}", curves.iter().map(|c| c.temperature_c).collect::<Vec<_>>());
+    let t = reduce_curves(&s.path("datasets/wander.csv"), &curves, 1e-3, 8, 0.8, 0.02, FractureParams::default()).unwrap().temperature_c;
+    assert!((t - 800.0).abs() < 1.0, "{t}");
+    // A study's value that contradicts a column that gives every particle's is refused.
+    let e = load_curves(&s.path("datasets/hot.csv"), Some(20.0)).unwrap_err().to_string();
+    assert!(e.contains("column `temperature_c`") && e.contains("800 °C") && e.contains("says 20 °C: which is right?"), "{e}");
     // Neither a column nor a value: refused.
     let e = load_curves(&root().join("datasets/crush_curves_gen3_rt.csv"), None).unwrap_err().to_string();
     assert!(e.contains("states no test temperature"), "{e}");

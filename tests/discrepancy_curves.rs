@@ -169,7 +169,7 @@ fn curve_study_without_its_calibration_report_is_refused() {
     s.write("studies/curves.toml", &curve_study(&[("hot.csv", 20.0)]));
     let out = s.run(&["run", "studies/curves.toml", "--quiet"]);
     assert_eq!(out.code, 2, "{}", out.stderr);
-    for e in ["hot.csv", "particle 1", "says 800 °C", "data[0].temperature_c 20 °C"] {
+    for e in ["hot.csv", "column `T [°C]`", "800 °C", "data[0].temperature_c says 20 °C"] {
         assert!(out.stderr.contains(e), "message lacks \"{e}\": {}", out.stderr);
     }
     // A missing curve file names its key (checked before the calibration is read or run).

@@ -20,12 +20,14 @@
 //! a new particle adds σ.
 //!
 //! **Test temperature.** Every curve states the temperature it was measured at: a temperature
-//! column (`temperature_c`, `temp`, `test_temperature` …; one value per particle), else the
-//! study's `temperature_c` (a calibration's `[data]`, a curve study's `[[data]]`); a curve with
-//! neither is refused, as a crush or strength file is. A calibration fits the curves of one
-//! temperature: curves at several are refused ([`reduce_curves`]), and the reduction keeps the
-//! temperature, which the calibration's report states (`grid.csv`, `summary.md`) and the studies
-//! that read it check against their own.
+//! column (`temperature_c`, `temp`, `T [°C]` …; a furnace's log along the curve is one
+//! temperature, its mean, where its readings lie within
+//! [`crate::intake::observed::TEMPERATURE_TOLERANCE_C`]), else the study's `temperature_c` (a
+//! calibration's `[data]`, a curve study's `[[data]]`); a curve with neither is refused, as a
+//! crush or strength file is. A calibration fits the curves of one temperature (their mean, the
+//! curves within the tolerance): curves at several are refused ([`reduce_curves`]), and the
+//! reduction keeps the temperature, which the calibration's report states (`grid.csv`,
+//! `summary.md`) and the studies that read it check against their own, to the tolerance.
 //!
 //! ## Observations (`output, unit, value, sd`)
 //! One row per measured model output, by the output's name (for example the DEM's
@@ -126,16 +128,17 @@ pub fn read_curves(path: &Path, columns: &std::collections::BTreeMap<String, Str
 pub fn curves_of(t: &RawTable, path: &Path, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, origin: &MapOrigin, temperature_c: Option<f64>) -> Result<(Vec<Curve>, Provenance)> {
     // `T [°C]` is the test temperature (a bare `t` would be a time).
     let mut columns = columns.clone();
-    if let Some(h) = crate::intake::observed::temperature_named_t(&t.headers, &columns) {
-        columns.insert("temperature".into(), h);
+    let named_t = crate::intake::observed::temperature_named_t(&t.headers, &columns);
+    if let Some(h) = &named_t {
+        columns.insert("temperature".into(), h.clone());
     }
     let r = resolve(t, &CURVE_FIELDS, &columns, units, origin)?;
     for w in &r.provenance.warnings {
         crate::intake::warn(w);
     }
     let mut curves: Vec<Curve> = Vec::new();
-    // Per curve: its first row and its temperature cell (None: no column, or empty).
-    let mut cells: Vec<(usize, Option<f64>)> = Vec::new();
+    // Per curve: its first row and its temperature readings (none: no column, or empty cells).
+    let mut cells: Vec<(usize, Vec<f64>)> = Vec::new();
     for i in 0..t.rows.len() {
         let particle = r.need_text("particle", i)?;
         let diam = r.need_number("diameter", i)?;
@@ -150,11 +153,13 @@ pub fn curves_of(t: &RawTable, path: &Path, columns: &std::collections::BTreeMap
                 if diam != c.diameter {
                     return Err(r.error(i, "diameter", format!("{diam} m differs from {} m earlier in particle {}'s curve", c.diameter, c.particle)));
                 }
-                let cell = &mut cells.last_mut().expect("a cell per curve").1;
-                match (*cell, temperature) {
-                    (Some(a), Some(b)) if a != b => return Err(r.error(i, "temperature", format!("{b} °C differs from {a} °C earlier in particle {}'s curve: one curve is measured at one temperature", c.particle))),
-                    (None, Some(b)) => *cell = Some(b),
-                    _ => {}
+                let readings = &mut cells.last_mut().expect("readings per curve").1;
+                if let Some(b) = temperature {
+                    readings.push(b);
+                    let (lo, hi) = readings.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+                    if hi - lo > crate::intake::observed::TEMPERATURE_TOLERANCE_C {
+                        return Err(r.error(i, "temperature", format!("{b} °C: particle {}'s curve spans {lo}–{hi} °C, more than the {} °C a furnace's readings of one test temperature scatter by: one curve is measured at one temperature", c.particle, crate::intake::observed::TEMPERATURE_TOLERANCE_C)));
+                    }
                 }
                 if disp < *c.displacement.last().unwrap_or(&0.0) {
                     return Err(r.error(i, "displacement", format!("falls back (from {:e} to {:e} m): a curve's displacement must not decrease", c.displacement.last().unwrap_or(&0.0), disp)));
@@ -167,7 +172,7 @@ pub fn curves_of(t: &RawTable, path: &Path, columns: &std::collections::BTreeMap
                     return Err(r.error(i, "particle", format!("particle {particle} appears again after another particle's rows")));
                 }
                 curves.push(Curve { particle, diameter: diam, displacement: vec![disp], force: vec![force], temperature_c: f64::NAN });
-                cells.push((i, temperature));
+                cells.push((i, temperature.into_iter().collect()));
             }
         }
     }
@@ -179,9 +184,14 @@ pub fn curves_of(t: &RawTable, path: &Path, columns: &std::collections::BTreeMap
     }
     // Every curve's test temperature: its column's, else the study's.
     let mut provenance = r.provenance.clone();
+    if named_t.is_some() {
+        crate::intake::observed::found_by_name(&mut provenance);
+    }
     let column = r.column("temperature");
     let src = Source { temperature_c, ..Source::file(path) };
-    let temperatures = crate::intake::observed::test_temperatures(&cells.iter().map(|c| c.1).collect::<Vec<_>>(), &|k| t.place(cells[k].0, column), column.map(|c| format!("`{}`", t.headers[c])).as_deref(), &src, origin, &mut provenance)?;
+    // A curve's temperature: the mean of its readings.
+    let means: Vec<Option<f64>> = cells.iter().map(|c| (!c.1.is_empty()).then(|| c.1.iter().sum::<f64>() / c.1.len() as f64)).collect();
+    let temperatures = crate::intake::observed::test_temperatures(&means, &|k| t.place(cells[k].0, column), column.map(|c| format!("`{}`", t.headers[c])).as_deref(), &src, origin, &mut provenance)?;
     for (c, temperature) in curves.iter_mut().zip(temperatures) {
         c.temperature_c = temperature;
     }
@@ -234,11 +244,23 @@ pub struct CrushReduction {
 /// Reduces curves (see the module documentation); curves at several test temperatures are
 /// refused.
 pub fn reduce_curves(path: &Path, curves: &[Curve], d0: f64, points: usize, fraction: f64, sigma_floor: f64, fracture: FractureParams) -> Result<CrushReduction> {
-    let temperature_c = curves.first().map_or(f64::NAN, |c| c.temperature_c);
-    if curves.iter().any(|c| c.temperature_c != temperature_c) {
-        let all: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
-        return Err(Error::data_file(path, "file", format!("the curves were measured at {}: a calibration fits the constants of one temperature; give each temperature its own file and calibration (a temperature study carries the constants between them)", crate::intake::observed::describe_temperatures(&all))));
+    let all: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
+    let (lo, hi) = all.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+    if hi - lo > crate::intake::observed::TEMPERATURE_TOLERANCE_C {
+        // Which particles are at which temperature.
+        let mut at: Vec<(f64, Vec<&str>)> = Vec::new();
+        for c in curves {
+            match at.iter_mut().find(|(t, _)| *t == c.temperature_c) {
+                Some(a) => a.1.push(&c.particle),
+                None => at.push((c.temperature_c, vec![&c.particle])),
+            }
+        }
+        at.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let which: Vec<String> = at.iter().map(|(t, p)| format!("{} °C: particle{} {}", crate::intake::columns::shown(*t), if p.len() == 1 { "" } else { "s" }, p.join(", "))).collect();
+        return Err(Error::data_file(path, "file", format!("the curves were measured at {} ({}): a calibration fits the constants of one temperature; give each temperature its own file and calibration (a temperature study carries the constants between them)", crate::intake::observed::describe_temperatures(&all), which.join("; "))));
     }
+    // One temperature: the mean of the curves'.
+    let temperature_c = all.iter().sum::<f64>() / all.len().max(1) as f64;
     let curves: Vec<Curve> = curves.iter().map(|c| c.normalised(d0)).collect();
     let fractures: Vec<Option<(f64, f64)>> = curves.iter().map(|c| c.fracture(fracture)).collect();
     let fracture_min = fractures.iter().flatten().map(|f| f.1).fold(f64::INFINITY, f64::min);

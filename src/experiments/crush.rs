@@ -44,9 +44,9 @@
 //! σ̄_lim,r is recorded at σ̄_lim,r, not broken (type I censoring at the rig's limit). Its term
 //! of the likelihood is the survival function, ln S = −exp(m_k (ln σ̄_lim,r − ln σ_θ,r(k)));
 //! without the shape measurement, the mixture's over the rows' scales at the particle's own
-//! σ̄_lim, ln[(1/R) Σ_r' S(σ̄_lim; σ_θ,r'(k))] — known as a broken particle's σ̄ is. A limit well above every break changes nothing; a
-//! limit near the median force leaves about half the particles as lower bounds, and the test
-//! carries less. The naming loop's verdict pools them as right-censored rows, censored at the
+//! σ̄_lim (known as a broken particle's σ̄ is), ln[(1/R) Σ_r' S(σ̄_lim; σ_θ,r'(k))]. A limit well
+//! above every break changes nothing; a limit near the median force leaves about half the
+//! particles as lower bounds, and the test carries less. The naming loop's verdict pools them as right-censored rows, censored at the
 //! limit in its bootstrap redraws as the test censors them.
 //!
 //! # The naming loop's verdict

@@ -26,6 +26,14 @@ pub struct Summary {
     pub headlines: Vec<String>,
 }
 
+/// A candidate's name as the tables show it: with its rig's force limit, if any.
+fn shown(s: &ExperimentsStudy, name: &str) -> String {
+    match s.candidate.iter().find(|c| c.name == name).and_then(|c| c.force_limit_n) {
+        Some(f) => format!("{name} (stops at {f} N)"),
+        None => name.to_string(),
+    }
+}
+
 /// "Gen 4 × 100 particles" for a single candidate or a plan.
 fn plan_phrase(s: &ExperimentsStudy, e: &Evaluated) -> String {
     e.names
@@ -33,7 +41,7 @@ fn plan_phrase(s: &ExperimentsStudy, e: &Evaluated) -> String {
         .zip(&e.sizes)
         .map(|(n, k)| {
             let unit = s.candidate.iter().find(|c| &c.name == n).map_or("units", |c| c.test.unit());
-            format!("{n} ({k} {unit})")
+            format!("{} ({k} {unit})", shown(s, n))
         })
         .collect::<Vec<_>>()
         .join(" + ")
@@ -142,7 +150,7 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         md.push_str(&format!(
             "| {} | {} | {} | {:.0} | {} | {} | {} | {} | {} | {} |\n",
             r + 1,
-            e.names[0],
+            shown(s, &e.names[0]),
             e.sizes[0],
             e.cost,
             pm(e.objective.0, e.objective.1),
@@ -154,11 +162,15 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         ));
     }
     for &(i, force, share) in limits {
-        md.push_str(&format!(
-            "\n\"{}\" stops at the rig's force limit of {force} N: under today's state of knowledge an expected {:.1} % of its particles do not break by it. Each enters the test's likelihood as not broken by the σ̄ its diameter gives at {force} N (right-censored), not as a break at the limit.\n",
-            s.candidate[i].name,
-            100.0 * share
-        ));
+        let name = &s.candidate[i].name;
+        let pct = 100.0 * share;
+        md.push_str(&if pct < 0.05 {
+            format!("\n\"{name}\" stops at the rig's force limit of {force} N, above every break today's state of knowledge expects ({pct:.1} % unbroken): the limit changes nothing.\n")
+        } else if pct > 99.95 {
+            format!("\n\"{name}\" stops at the rig's force limit of {force} N, below nearly every break: an expected {pct:.1} % of its particles do not break by it, so the test records lower bounds only and carries almost no information.\n")
+        } else {
+            format!("\n\"{name}\" stops at the rig's force limit of {force} N: under today's state of knowledge an expected {pct:.1} % of its particles do not break by it. Each enters the test's likelihood as not broken by the σ̄ its diameter gives at {force} N (right-censored), not as a break at the limit.\n")
+        });
     }
     md.push_str(&floor_section(s, state, singles, &order));
 

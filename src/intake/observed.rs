@@ -432,14 +432,29 @@ pub fn temperature_named_t(headers: &[String], columns: &std::collections::BTree
         .cloned()
 }
 
+/// Marks the temperature column as found by its header's name: what [`temperature_named_t`]
+/// put in the map is the reading of a header (`T [°C]`), not the study's mapping.
+pub fn found_by_name(provenance: &mut Provenance) {
+    for c in provenance.columns.iter_mut().filter(|c| c.field == "temperature_c") {
+        c.found_by = "name".into();
+    }
+}
+
 /// Plausible test temperatures (°C), of a temperature column and of a study's `temperature_c`.
 pub const TEMPERATURE: super::Plausible = super::Plausible { what: "temperature", lo: -273.15, hi: 2100.0, shown: "[-273.15, 2100] °C", why: "from absolute zero to the melting point of alumina (2072 °C), above which no ceramic particle is solid" };
+
+/// Readings of one test temperature — a furnace's thermocouple log along one test, the tests of
+/// one campaign — scatter by a few kelvin: values within this many °C of each other are one
+/// temperature (°C).
+pub const TEMPERATURE_TOLERANCE_C: f64 = 10.0;
 
 /// The test temperature of each row (°C): its own (`cells`: the file's temperature column,
 /// None for no column or an empty cell), else the study's `temperature_c`. A row with neither
 /// is refused: `place(k)` names row k in the message, `column` is the file's temperature
-/// column if it has one, as said in words (`` `T [°C]` ``). Records in `provenance` where the temperatures came from and what
-/// they are (`test temperature: 20 °C (column `T [°C]`)`).
+/// column if it has one, as said in words (`` `T [°C]` ``). A study's value that no row uses
+/// (the column gives every row's) and that lies more than [`TEMPERATURE_TOLERANCE_C`] from every
+/// one of them contradicts the file and is refused, naming both. Records in `provenance` where
+/// the temperatures came from and what they are (`test temperature: 20 °C (column `T [°C]`)`).
 pub fn test_temperatures(cells: &[Option<f64>], place: &dyn Fn(usize) -> String, column: Option<&str>, src: &Source, origin: &MapOrigin, provenance: &mut Provenance) -> Result<Vec<f64>> {
     let key = prefix(origin);
     let mut out = Vec::with_capacity(cells.len());
@@ -466,6 +481,16 @@ pub fn test_temperatures(cells: &[Option<f64>], place: &dyn Fn(usize) -> String,
                 return Err(Error::data_file(&src.file, if column.is_some() { place(k) } else { "file".into() }, rule));
             }
         }
+    }
+    if let (Some(t), Some(c), 0) = (src.temperature_c, column, from_study)
+        && out.iter().all(|v| (v - t).abs() > TEMPERATURE_TOLERANCE_C)
+    {
+        let (given, fix) = if origin.key.is_empty() { ("--temperature-c".to_string(), "drop the option".to_string()) } else { (format!("the study's {key}temperature_c"), format!("remove the key from {} or correct it", origin.file)) };
+        return Err(Error::data_file(
+            &src.file,
+            format!("column {c}"),
+            format!("gives every row's test temperature, {}, but {given} says {} °C: which is right? If the column is, {fix}; if the key is, correct the column", describe_temperatures(&out), super::columns::shown(t)),
+        ));
     }
     let source = match (column, from_study) {
         (Some(c), 0) => format!("column {c}"),

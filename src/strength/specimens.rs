@@ -151,7 +151,8 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
     let table = read_raw(src)?;
     // `T [°C]`: a `t` that states a temperature unit is the test temperature, not a thickness.
     let mapped;
-    let src = match crate::intake::observed::temperature_named_t(&table.headers, &src.columns) {
+    let named_t = crate::intake::observed::temperature_named_t(&table.headers, &src.columns);
+    let src = match named_t.clone() {
         Some(h) => {
             mapped = Source { columns: src.columns.iter().map(|(k, v)| (k.clone(), v.clone())).chain([("temperature".to_string(), h)]).collect(), ..src.clone() };
             &mapped
@@ -166,6 +167,9 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
     }
     let (rows, filter) = select(&r, "material", src.material.as_deref(), origin, "material")?;
     let mut provenance = r.provenance.clone();
+    if named_t.is_some() {
+        crate::intake::observed::found_by_name(&mut provenance);
+    }
     provenance.rows = rows.len();
     provenance.filter = filter;
 

@@ -102,7 +102,7 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
         let Built::Crush(model, red) = &prep.built else {
             return Err(Error::config(file, format!("{key}.study"), format!("{} is not a crush calibration (model kind = \"crush\" on crush curves): the laws are of crush constants", path.display())));
         };
-        if red.temperature_c != t {
+        if (red.temperature_c - t).abs() > crate::intake::observed::TEMPERATURE_TOLERANCE_C {
             return Err(Error::config(file, format!("{key}.temperature_c"), format!("{t} °C, but the curves of {} were measured at {} °C: the laws are checked at the curves' own temperature", path.display(), red.temperature_c)));
         }
         inputs.push(path.clone());

@@ -311,7 +311,7 @@ impl ParameterLaws {
                     return Err(Error::config(file, format!("{key}.study"), format!("{} does not exist: the law is fitted to crush calibrations, whose report's grid.csv states the curves' test temperature", grid.display())));
                 }
                 let tested = crate::report::Table::load_file(&grid)?.f("test_temperature_c")?;
-                if let Some(&t) = tested.iter().find(|&&t| t != c.temperature_c) {
+                if let Some(&t) = tested.iter().find(|&&t| (t - c.temperature_c).abs() > crate::intake::observed::TEMPERATURE_TOLERANCE_C) {
                     return Err(Error::config(file, format!("{key}.temperature_c"), format!("{} °C, but the calibration {} fitted curves measured at {t} °C ({}): a calibrated state is at its data's temperature", c.temperature_c, s.display(), grid.display())));
                 }
             }

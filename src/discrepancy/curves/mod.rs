@@ -236,7 +236,7 @@ impl CurveStudy {
             let curves = load_curves_mapped(&path, &d.columns, &d.units, &crate::intake::MapOrigin { file: file.clone(), key: format!("data[{i}]") }, Some(d.temperature_c))?;
             // A temperature column that says otherwise than the study: each file is one
             // temperature of the model.
-            if let Some(c) = curves.iter().find(|c| c.temperature_c != d.temperature_c) {
+            if let Some(c) = curves.iter().find(|c| (c.temperature_c - d.temperature_c).abs() > crate::intake::observed::TEMPERATURE_TOLERANCE_C) {
                 return Err(Error::data_file(&path, format!("particle {}", c.particle), format!("its temperature column says {} °C, the study's data[{i}].temperature_c {} °C: each curve file is one test temperature; correct the one that is wrong, or split the file", c.temperature_c, d.temperature_c)));
             }
             raw.push(curves);
@@ -275,7 +275,7 @@ pub fn run_curves(loaded: &StudyFile, s: &CurveStudy, opts: &RunOptions) -> Resu
     let (paths, raw) = s.read_data(loaded)?;
     let cal = load_calibration(&file, "calibration", &loaded.resolve(Path::new(&s.calibration)), &opts.reports_root)?;
     // The calibrated model is the first file's temperature's: the temperature term's reference.
-    if cal.temperature_c != s.data[0].temperature_c {
+    if (cal.temperature_c - s.data[0].temperature_c).abs() > crate::intake::observed::TEMPERATURE_TOLERANCE_C {
         return Err(Error::config(
             &file,
             "data[0].temperature_c",

@@ -189,8 +189,8 @@ pub fn curves_of(t: &RawTable, path: &Path, columns: &std::collections::BTreeMap
     }
     let column = r.column("temperature");
     let src = Source { temperature_c, ..Source::file(path) };
-    // A curve's temperature: the mean of its readings.
-    let means: Vec<Option<f64>> = cells.iter().map(|c| (!c.1.is_empty()).then(|| c.1.iter().sum::<f64>() / c.1.len() as f64)).collect();
+    // A curve's temperature: the mean of its readings, to 0.1 °C (a thermocouple's resolution).
+    let means: Vec<Option<f64>> = cells.iter().map(|c| (!c.1.is_empty()).then(|| (10.0 * c.1.iter().sum::<f64>() / c.1.len() as f64).round() / 10.0)).collect();
     let temperatures = crate::intake::observed::test_temperatures(&means, &|k| t.place(cells[k].0, column), column.map(|c| format!("`{}`", t.headers[c])).as_deref(), &src, origin, &mut provenance)?;
     for (c, temperature) in curves.iter_mut().zip(temperatures) {
         c.temperature_c = temperature;

@@ -472,7 +472,7 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
     let mut md = format!("# Calibration: {}\n\n", s.label);
     if let (Built::Crush(_, red), Some(read)) = (&prep.built, &prep.read) {
         let file = std::path::Path::new(&read.file).file_name().map_or(read.file.clone(), |f| f.to_string_lossy().into_owned());
-        md.push_str(&format!("Data: {} force–displacement curves (`{file}`) measured at {} °C (`grid.csv`). Read as: {}.\n\n", red.curves.len(), crate::intake::columns::shown(red.temperature_c), read.describe()));
+        md.push_str(&format!("Data: {} force–displacement curves (`{file}`) measured at {} °C (`grid.csv`). Read as: {}.\n\n", red.curves.len(), crate::intake::columns::shown((10.0 * red.temperature_c).round() / 10.0), read.describe()));
     }
     md.push_str(&format!(
         "Simulator runs: {} requested ({} in the emulator), {} failed; emulator posterior evaluations: {}.\n\n",

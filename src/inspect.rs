@@ -40,10 +40,6 @@ impl Checked {
     }
 }
 
-fn range(v: &[f64]) -> (f64, f64) {
-    v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)))
-}
-
 /// `lo–hi` as printed (scaled, `places` decimals), or the one value when both print alike.
 fn span((lo, hi): (f64, f64), scale: f64, places: usize) -> String {
     let (a, b) = (format!("{:.*}", places, lo * scale), format!("{:.*}", places, hi * scale));
@@ -119,7 +115,7 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin, set
         "phases" => {
             let (p, read) = crate::phases::read_phases_source(src)?;
             let fa = p.amorphous_fractions();
-            let (lo, hi) = range(&fa);
+            let (lo, hi) = crate::stats::min_max(&fa);
             one(format!("phase fractions ({}), {} phases at {} temperatures ({}–{} °C), amorphous fraction {lo:.3}–{hi:.3}", p.basis.column(), p.phases.len(), p.temperatures_c.len(), p.range().0, p.range().1), Some(read))
         }
         "observations" => {
@@ -142,7 +138,7 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin, set
             let s = crate::strength::specimens::read_specimens_with_origins(src, keys.size.as_ref(), &keys.factors, keys.origin.as_deref(), origin)?;
             let o = s.sample.strength.view();
             // A class's upper end counts for the range.
-            let (lo, hi) = range(&(0..o.len()).flat_map(|i| [o.x[i], o.upper(i)]).filter(|v| v.is_finite()).collect::<Vec<_>>());
+            let (lo, hi) = crate::stats::min_max(&(0..o.len()).flat_map(|i| [o.x[i], o.upper(i)]).filter(|v| v.is_finite()).collect::<Vec<_>>());
             let n = if o.complete() { format!("{} specimen{}", o.len(), if o.len() == 1 { "" } else { "s" }) } else { o.tally().describe("specimens") };
             // The failure origins of the specimens that broke, with their counts.
             let origins = match &keys.origin {
@@ -159,7 +155,7 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin, set
         }
         "curves" => {
             let (curves, read) = crate::calibrate::data::curves_of(&t, path, &src.columns, &src.units, origin, src.temperature_c)?;
-            let d = span(range(&curves.iter().map(|c| c.diameter).collect::<Vec<_>>()), 1e6, 0);
+            let d = span(crate::stats::min_max(&curves.iter().map(|c| c.diameter).collect::<Vec<_>>()), 1e6, 0);
             one(format!("crush curves, {} particles, d = {d} µm, {} samples", curves.len(), t.rows.len()), Some(read))
         }
         "shape" => {
@@ -193,7 +189,7 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin, set
             for m in materials {
                 let s = Source { material: (!m.is_empty()).then_some(m.clone()), ..src.clone() };
                 let d = crate::data::read_crush_source(&s, origin)?;
-                let (dia, force) = (span(range(&d.diameters()), 1e6, 0), span(range(&d.forces()), 1.0, 1));
+                let (dia, force) = (span(crate::stats::min_max(&d.diameters()), 1e6, 0), span(crate::stats::min_max(&d.forces()), 1.0, 1));
                 let label = if d.material().is_empty() { "no material column".to_string() } else { format!("material \"{}\"", d.material()) };
                 out.push(Checked {
                     what: if s.material.is_some() && src.material.is_none() { format!("{what} [{m}]") } else { what.clone() },

@@ -253,6 +253,12 @@ pub fn region_end(mut inside: impl FnMut(f64) -> Option<bool>, start: f64, dir: 
     Some(0.5 * (keep + out))
 }
 
+
+/// The smallest and largest of `v` ((∞, −∞) for none).
+pub fn min_max(v: &[f64]) -> (f64, f64) {
+    v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -156,7 +156,7 @@ pub fn curves_of(t: &RawTable, path: &Path, columns: &std::collections::BTreeMap
                 let readings = &mut cells.last_mut().expect("readings per curve").1;
                 if let Some(b) = temperature {
                     readings.push(b);
-                    let (lo, hi) = readings.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+                    let (lo, hi) = crate::stats::min_max(readings);
                     if hi - lo > crate::intake::observed::TEMPERATURE_TOLERANCE_C {
                         return Err(r.error(i, "temperature", format!("{b} °C: particle {}'s curve spans {lo}–{hi} °C, more than the {} °C a furnace's readings of one test temperature scatter by: one curve is measured at one temperature", c.particle, crate::intake::observed::TEMPERATURE_TOLERANCE_C)));
                     }
@@ -245,7 +245,7 @@ pub struct CrushReduction {
 /// refused.
 pub fn reduce_curves(path: &Path, curves: &[Curve], d0: f64, points: usize, fraction: f64, sigma_floor: f64, fracture: FractureParams) -> Result<CrushReduction> {
     let all: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
-    let (lo, hi) = all.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+    let (lo, hi) = crate::stats::min_max(&all);
     if hi - lo > crate::intake::observed::TEMPERATURE_TOLERANCE_C {
         // Which particles are at which temperature.
         let mut at: Vec<(f64, Vec<&str>)> = Vec::new();

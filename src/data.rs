@@ -90,6 +90,9 @@ pub struct CrushData {
     /// `crush_force_n`): a particle that did not break by the rig's limit, a force class
     /// ([`crate::obs`]; the study declares the columns: `broken`, `count`, `interval`).
     pub censoring: Option<crate::obs::Censoring>,
+    /// Each particle's failure origin (fractography), where the study names the column
+    /// (`origin = "…"` of a `[[material]]`); empty otherwise.
+    pub origins: Vec<String>,
 }
 
 impl CrushData {
@@ -97,7 +100,7 @@ impl CrushData {
     /// form, header on line 1.
     pub fn new(path: impl Into<PathBuf>, records: Vec<CrushRecord>) -> CrushData {
         let places = (0..records.len()).map(|k| (k, k + 2)).collect();
-        CrushData { path: path.into(), records, provenance: Provenance::default(), places, sheet: None, row_sheets: Vec::new(), factors: Vec::new(), censoring: None }
+        CrushData { path: path.into(), records, provenance: Provenance::default(), places, sheet: None, row_sheets: Vec::new(), factors: Vec::new(), censoring: None, origins: Vec::new() }
     }
 
     /// The forces (N) as observations: each particle's `crush_force_n` with what its row says of
@@ -209,13 +212,15 @@ pub fn read_crush(path: &Path) -> Result<CrushData> {
 /// units, material filter and shape file ([`Source`]); `origin` names the study table for
 /// errors in the map. Every data error names file, sheet, row and column.
 pub fn read_crush_source(src: &Source, origin: &MapOrigin) -> Result<CrushData> {
-    read_crush_with_factors(src, &crate::intake::factors::Factors::default(), origin)
+    read_crush_with_factors(src, &crate::intake::factors::Factors::default(), None, origin)
 }
 
 /// [`read_crush_source`] with the factor columns a study declares for the file (`factors` of a
 /// `[[material]]`; [`crate::intake::factors`]), read over the same rows (after the material
-/// filter; a join by id keeps the factor values of the particles it keeps).
-pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factors::Factors, origin: &MapOrigin) -> Result<CrushData> {
+/// filter; a join by id keeps the factor values of the particles it keeps), and each particle's
+/// failure origin from the column `failure_origin` names (`origin` of a `[[material]]`;
+/// fractography: where the break started).
+pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factors::Factors, failure_origin: Option<&str>, origin: &MapOrigin) -> Result<CrushData> {
     let path = src.file.as_path();
     let table = read_raw(src)?;
     let ((fields, columns, units), ends) = crate::intake::observed::fields_for(&table, &CRUSH_FIELDS, "crush_force", CRUSH_FORCE_ENDS, src, origin)?;
@@ -270,6 +275,13 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
         }
     }
     let mut factors = crate::intake::factors::read_factors(&table, &rows, factor_spec, &mut provenance, origin, path)?;
+    let (mut origins, origin_column) = match failure_origin {
+        Some(col) => {
+            let (o, c) = crate::intake::observed::failure_origins(&table, &rows, col, format!("{}.origin", crate::intake::factors::table_key(origin)), origin, &mut provenance)?;
+            (o, Some(c))
+        }
+        None => (Vec::new(), None),
+    };
     crate::intake::observed::check_unused(&table, &rows, &mut provenance, src, origin)?;
     crate::intake::observed::pile_up(&r, &rows, &values, "crush_force", src, origin, "force")?;
     // The temperature column, of this file or (below) of the joined shape file.
@@ -300,6 +312,9 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
         let kept: Vec<usize> = pairs.iter().map(|(k, _)| *k).collect();
         for (_, values) in factors.iter_mut() {
             values.keep(&kept);
+        }
+        if !origins.is_empty() {
+            origins = kept.iter().map(|&k| origins[k].clone()).collect();
         }
         values = kept.iter().map(|&k| values[k]).collect();
         for (k, srow) in pairs {
@@ -365,6 +380,15 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
         for (_, v) in factors.iter_mut() {
             v.keep(&sp.rows);
         }
+        if !origins.is_empty() {
+            origins = sp.rows.iter().map(|&k| origins[k].clone()).collect();
+        }
+    }
+    // `none` is for a particle that did not break: a break needs its origin.
+    if let Some(c) = origin_column
+        && let Some(i) = crate::intake::observed::break_without_origin(sp.observations.view(), &origins)
+    {
+        return Err(table.error(places[i].0, Some(c), crate::intake::observed::NONE_ON_A_BREAK));
     }
     let censoring = sp.observations.censoring;
     if records.is_empty() {
@@ -373,7 +397,7 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
     for w in provenance.warnings.iter().chain(provenance.joined.iter().flat_map(|j| &j.warnings)) {
         crate::intake::warn(w);
     }
-    Ok(CrushData { path: path.to_path_buf(), records, provenance, places, sheet: table.origin.sheet.clone(), row_sheets: table.row_sheets.clone(), factors, censoring })
+    Ok(CrushData { path: path.to_path_buf(), records, provenance, places, sheet: table.origin.sheet.clone(), row_sheets: table.row_sheets.clone(), factors, censoring, origins })
 }
 
 /// Numeric properties of Table 1, each stored as `<name>_min`, `<name>_max`, `<name>_qualifier`.

@@ -91,6 +91,17 @@ pub fn check(src: &Source, kind: Option<&'static str>, origin: &MapOrigin, set: 
     check_table(src, kind, origin, set)
 }
 
+/// The failure origins of the specimens that broke, with their counts, where the study names
+/// the column (`; failure origins (`Bruchursprung`) of the breaks: Kante 3, Volumen 40`).
+fn origins_of_breaks(o: crate::obs::Obs, origins: &[String], column: Option<&str>) -> String {
+    let Some(col) = column else { return String::new() };
+    let mut counts: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
+    for i in (0..o.len()).filter(|&i| o.kind(i) != crate::obs::Censor::Right) {
+        *counts.entry(origins[i].as_str()).or_default() += 1;
+    }
+    format!("; failure origins (`{col}`) of the breaks: {}", counts.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", "))
+}
+
 fn sheet_names(path: &Path) -> Result<Vec<String>> {
     let bytes = crate::intake::read_bytes(path)?;
     crate::intake::sheet::sheet_names(path, bytes)
@@ -140,17 +151,7 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin, set
             // A class's upper end counts for the range.
             let (lo, hi) = crate::stats::min_max(&(0..o.len()).flat_map(|i| [o.x[i], o.upper(i)]).filter(|v| v.is_finite()).collect::<Vec<_>>());
             let n = if o.complete() { format!("{} specimen{}", o.len(), if o.len() == 1 { "" } else { "s" }) } else { o.tally().describe("specimens") };
-            // The failure origins of the specimens that broke, with their counts.
-            let origins = match &keys.origin {
-                Some(col) => {
-                    let mut counts: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
-                    for i in (0..o.len()).filter(|&i| o.kind(i) != crate::obs::Censor::Right) {
-                        *counts.entry(s.origins[i].as_str()).or_default() += 1;
-                    }
-                    format!("; failure origins (`{col}`) of the breaks: {}", counts.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", "))
-                }
-                None => String::new(),
-            };
+            let origins = origins_of_breaks(o, &s.origins, keys.origin.as_deref());
             one(format!("strength data, {n}, strength = {} MPa{origins}", span((lo, hi), 1e-6, 1)), Some(s.provenance))
         }
         "curves" => {
@@ -188,14 +189,17 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin, set
             let mut out = Vec::new();
             for m in materials {
                 let s = Source { material: (!m.is_empty()).then_some(m.clone()), ..src.clone() };
-                let d = crate::data::read_crush_source(&s, origin)?;
+                let keys = set.cloned().unwrap_or_default();
+                let d = crate::data::read_crush_with_factors(&s, &keys.factors, keys.origin.as_deref(), origin)?;
+                let forces = d.observed();
+                let origins = origins_of_breaks(forces.view(), &d.origins, keys.origin.as_deref());
                 let (dia, force) = (span(crate::stats::min_max(&d.diameters()), 1e6, 0), span(crate::stats::min_max(&d.forces()), 1.0, 1));
                 let label = if d.material().is_empty() { "no material column".to_string() } else { format!("material \"{}\"", d.material()) };
                 out.push(Checked {
                     what: if s.material.is_some() && src.material.is_none() { format!("{what} [{m}]") } else { what.clone() },
                     summary: match &d.censoring {
-                        None => format!("crush data, {label}, {} particle{}, d = {dia} µm, F = {force} N", d.records.len(), if d.records.len() == 1 { "" } else { "s" }),
-                        Some(c) => format!("crush data, {label}, {}, d = {dia} µm, F = {force} N", crate::obs::Obs { x: &d.forces(), censoring: Some(c) }.tally().describe("particles")),
+                        None => format!("crush data, {label}, {} particle{}, d = {dia} µm, F = {force} N{origins}", d.records.len(), if d.records.len() == 1 { "" } else { "s" }),
+                        Some(c) => format!("crush data, {label}, {}, d = {dia} µm, F = {force} N{origins}", crate::obs::Obs { x: &d.forces(), censoring: Some(c) }.tally().describe("particles")),
                     },
                     read: Some(d.provenance),
                 });

@@ -347,6 +347,32 @@ impl<'a> Obs<'a> {
         self.censoring.map_or(f64::NAN, |c| c.upper[i])
     }
 
+    /// The rows as failure origin `level` sees them, where row i failed from `origin[i]`
+    /// (ASTM C1239's estimate per origin, the other origins censored): its own breaks and the
+    /// rows that did not break as they are, another origin's break right-censored at its value
+    /// (or its class's lower end: it survived this origin's flaws at least that far), a break
+    /// at or below a value from another origin left out (it says nothing of this origin); and
+    /// how many of the rows are breaks from `level`.
+    pub fn of_origin(&self, origin: &[String], level: &str) -> (Observations, usize) {
+        let (mut xs, mut kinds, mut upper) = (Vec::new(), Vec::new(), Vec::new());
+        let mut breaks = 0;
+        for i in 0..self.len() {
+            let k = self.kind(i);
+            if origin[i] == level || k == Censor::Right {
+                breaks += usize::from(k != Censor::Right);
+                xs.push(self.x[i]);
+                kinds.push(k);
+                upper.push(self.upper(i));
+            } else if k != Censor::Left {
+                xs.push(self.x[i]);
+                kinds.push(Censor::Right);
+                upper.push(f64::NAN);
+            }
+        }
+        let censoring = Censoring::of_rows(kinds, &xs, upper);
+        (Observations { x: xs, censoring }, breaks)
+    }
+
     /// Whether every row is exact.
     pub fn complete(&self) -> bool {
         self.censoring.is_none_or(|c| c.kind.iter().all(|k| *k == Censor::Exact))

@@ -190,6 +190,14 @@ pub struct MaterialSpec {
     /// particles with their own recorded values (a declared population needs every factor here).
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub predict: std::collections::BTreeMap<String, toml::Value>,
+    /// The column naming each particle's failure origin (fractography: volume, surface, pore
+    /// …; `none` for a particle that did not break). Read by the discrepancy study: each
+    /// origin's law with the other origins' breaks censored (ASTM C1239), the test of one shared
+    /// law, and the lifetime with every origin's law acting ([`crate::strength::origins`]). The
+    /// main and lifetime studies fit one law per material and refuse it
+    /// ([`MaterialSpec::one_law`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub origin: Option<String>,
 }
 
 impl MaterialSpec {
@@ -199,7 +207,21 @@ impl MaterialSpec {
         let file = study.display().to_string();
         let key = format!("material[{index}].data");
         self.data.validate(&file, &key)?;
-        crate::data::read_crush_with_factors(&self.data.resolved(study), &self.factors, &crate::intake::MapOrigin { file, key })
+        crate::data::read_crush_with_factors(&self.data.resolved(study), &self.factors, self.origin.as_deref(), &crate::intake::MapOrigin { file, key })
+    }
+
+    /// Refuses a declared failure-origin column in a study that fits one Weibull law per
+    /// material (`kind`: the main or the lifetime study), naming the key and where the origins
+    /// are used: never read and passed over.
+    pub fn one_law(&self, file: &str, index: usize, kind: &str) -> Result<()> {
+        match &self.origin {
+            Some(col) => Err(Error::config(
+                file,
+                format!("material[{index}].origin"),
+                format!("the {kind} fits one Weibull law per material and does not read failure origins (`{col}`): each origin's law, the test of one shared law and the lifetime with every origin acting are the discrepancy study's (`kind = \"discrepancy\"` with this `[[material]]` and its `origin`); remove `origin` here (the column is then listed among the unused columns)"),
+            )),
+            None => Ok(()),
+        }
     }
 
     /// The reference particle of the impact outputs: `impact_diameter_m` or the median

@@ -118,7 +118,15 @@ impl LoadedStudy {
             Study::DiscrepancyCurves(s) => return s.data.iter().enumerate().map(|(i, d)| curves(&d.file, &d.columns, &d.units, Some(d.temperature_c), format!("data[{i}]"))).collect(),
             _ => &[],
         };
-        let mut out: Vec<_> = materials.iter().enumerate().map(|(k, m)| (m.data.resolved(study), None, origin(format!("material[{k}].data")), None)).collect();
+        // A crush file is read with its material's factor and origin columns, as the run reads it.
+        let mut out: Vec<_> = materials
+            .iter()
+            .enumerate()
+            .map(|(k, m)| {
+                let keys = crate::strength::specimens::SetColumns { size: None, factors: m.factors.clone(), origin: m.origin.clone() };
+                (m.data.resolved(study), None, origin(format!("material[{k}].data")), Some(keys))
+            })
+            .collect();
         if let Study::Discrepancy(s) = &self.study {
             out.extend(s.strength.iter().enumerate().map(|(k, set)| {
                 let keys = crate::strength::specimens::SetColumns { size: set.size.clone(), factors: set.factors.clone(), origin: set.origin.clone() };

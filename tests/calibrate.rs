@@ -295,6 +295,14 @@ fn curves_state_their_test_temperature_and_a_calibration_fits_one() {
     assert_eq!(curves.iter().map(|c| c.temperature_c).collect::<Vec<_>>(), [20.0, 20.0, 20.0, 20.0, 800.0, 800.0, 800.0, 800.0]);
     let e = reduce_curves(&s.path("datasets/two.csv"), &curves, 1e-3, 8, 0.8, 0.02, FractureParams::default()).unwrap_err().to_string();
     assert!(e.contains("two.csv") && e.contains("20 °C (4) and 800 °C (4) (20 °C: particles 1, 2, 3, 4; 800 °C: particles 5, 6, 7, 8)") && e.contains("one temperature"), "{e}");
+    // A curve file without its displacement column: the example names a displacement header,
+    // not a diameter's.
+    let header = rt.lines().next().unwrap();
+    let drop = header.split(',').position(|h| h == "displacement_m").unwrap();
+    let cut: String = rt.lines().map(|l| l.split(',').enumerate().filter(|(i, _)| *i != drop).map(|(_, c)| c).collect::<Vec<_>>().join(",") + "\n").collect();
+    s.write("datasets/no_s.csv", &cut);
+    let e = load_curves(&s.path("datasets/no_s.csv"), Some(20.0)).unwrap_err().to_string();
+    assert!(e.contains("missing column displacement (a length, e.g. `displacement_m`, `s [mm]`)"), "{e}");
     // One temperature: kept by the reduction.
     s.write("datasets/hot.csv", &with(&|_| "800"));
     let hot = load_curves(&s.path("datasets/hot.csv"), Some(800.0)).unwrap();

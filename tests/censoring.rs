@@ -558,3 +558,128 @@ fn datasets_check_of_a_study_reads_a_strength_file_with_its_origin_column_as_the
     assert!(out.stdout.contains("strength data, 20 specimens, strength = 550.0–2050.0 MPa; failure origins (`failure_mode`) of the breaks: Bond 10, Wire 10: ok"), "{}", out.stdout);
     assert!(out.stdout.contains("`failure_mode` → failure origin (fractography) [mapped by the study]") && !out.stdout.contains("not used"), "{}", out.stdout);
 }
+
+/// A crush campaign with fractography, as a lab exports it: semicolon CSV with decimal commas,
+/// German headers, each particle's failure origin (`Volumen` or `Oberfläche`), the rig stopping
+/// at its limit (`nein` in `gebrochen`, origin `none`). σ̄ of each particle is the weaker of two
+/// independent Weibull flaw populations (volume m = 15, surface m = 8, its scale 1.1× the
+/// volume's), so the origins do not share one law; the forces are σ̄'s through the same Hertz
+/// reduction the study uses (σ̄ ∝ F^(1/3) at a fixed diameter). Returns the file's text.
+fn fractography_campaign(n: usize, seed: u64) -> String {
+    let (contact, elastic) = fractography_contact();
+    use rand::Rng;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut text = String::from("Probe;D [mm];Fmax [N];gebrochen;Bruchursprung;T [°C]\n");
+    let limit = 115.0;
+    for k in 0..n {
+        let d_mm = 1.0 + 0.1 * (rng.random::<f64>() - 0.5);
+        let unit = partlife::strength::crush_contact(&elastic, &contact, d_mm * 1e-3).at_force(1.0).unwrap().mean_tensile;
+        // Volume flaws: σ̄ scale at 100 N, m = 15; surface flaws 1.1× stronger in scale, m = 8.
+        let scale = unit * 100f64.powf(1.0 / 3.0);
+        let draw = |rng: &mut ChaCha8Rng, s: f64, m: f64| s * (-(-rng.random::<f64>()).ln_1p()).powf(1.0 / m);
+        let (v, o) = (draw(&mut rng, scale, 15.0), draw(&mut rng, 1.1 * scale, 8.0));
+        let force = (v.min(o) / unit).powi(3);
+        let (f, broke, origin) = if force > limit { (limit, "nein", "none") } else { (force, "ja", if v <= o { "Volumen" } else { "Oberfläche" }) };
+        text.push_str(&format!("P{:03};{};{};{broke};{origin};20\n", k + 1, format!("{d_mm:.3}").replace('.', ","), format!("{f:.2}").replace('.', ",")));
+    }
+    text
+}
+
+/// The campaign's contact: the study's defaults (steel platen, line domain) and the material's
+/// elastic constants.
+fn fractography_contact() -> (partlife::contact::ContactOptions, partlife::contact::Elastic) {
+    (partlife::contact::ContactOptions::default(), partlife::contact::Elastic { youngs_modulus_pa: 112e9, poisson_ratio: 0.25 })
+}
+
+/// The volume flaws' σ̄ scale of a 1 mm particle (σ̄ at 100 N), the generator's truth.
+fn truth_scale() -> f64 {
+    let (contact, elastic) = fractography_contact();
+    partlife::strength::crush_contact(&elastic, &contact, 1e-3).at_force(100.0).unwrap().mean_tensile
+}
+
+#[test]
+fn crush_particles_with_failure_origins_give_each_origin_s_law_and_a_lifetime_with_every_origin_acting() {
+    let s = Scratch::new();
+    s.write("datasets/bruch.csv", &fractography_campaign(300, 21));
+    let data = r#"{ file = "../datasets/bruch.csv", broken = { column = "gebrochen", yes = "ja", no = "nein" } }"#;
+    let study = format!(
+        r#"# Purpose: failure origins of crushed particles. Good result: two laws, not one; the lifetime with both acting.
+kind = "discrepancy"
+seed = 5
+[discrepancy]
+bootstrap = 99
+permutations = 99
+[lifetime]
+bootstrap = 100
+[power]
+replicates = 0
+{}origin = "Bruchursprung"
+"#,
+        lab_material(data)
+    );
+    s.write("studies/origins.toml", &study);
+    let out = s.run(&["run", "studies/origins.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let dir = s.path("reports/origins");
+    // Each origin's law from its own breaks with the other's censored: the generator's moduli.
+    let o = dir.join("origins.csv");
+    let (origin, m, p) = (table_text(&o, "origin"), table_f64(&o, "weibull_modulus"), table_f64(&o, "shared_law_p"));
+    assert_eq!(origin, ["Oberfläche", "Volumen"]);
+    assert!((m[0] / 8.0 - 1.0).abs() < 0.25 && (m[1] / 15.0 - 1.0).abs() < 0.25, "moduli {m:?} against 8 and 15");
+    assert!(p[0] < 0.01, "the origins' laws differ, shared-law p {}", p[0]);
+    // The lifetime with both origins acting: P_N = 1 − Π_k (1 − P_N,k), checked from the report's
+    // own tables — the impact stress backed out of the base model's P_N and fit, each origin's
+    // P_N from its law in origins.csv.
+    let l = dir.join("lifetime.csv");
+    let (stage, years, pb) = (table_text(&l, "stage"), table_f64(&l, "years"), table_f64(&l, "p_break"));
+    let (q05, q95) = (table_f64(&l, "q05"), table_f64(&l, "q95"));
+    let f = dir.join("fits.csv");
+    let (fs, fm, fscale) = (table_text(&f, "stage"), table_f64(&f, "weibull_modulus"), table_f64(&f, "scale_pa"));
+    let b = fs.iter().position(|x| x == "before").unwrap();
+    let scale = table_f64(&o, "scale_pa");
+    let per_year = 730.0;
+    let mut checked = 0;
+    for i in (0..stage.len()).filter(|&i| stage[i] == "before") {
+        let n = years[i] * per_year;
+        let ln_sigma = fscale[b].ln() + ((-(-pb[i]).ln_1p()) / n).ln() / fm[b];
+        let survive: f64 = (0..2).map(|k| (-n * (m[k] * (ln_sigma - scale[k].ln())).exp()).exp()).product();
+        let j = (0..stage.len()).find(|&j| stage[j] == "origins" && years[j] == years[i]).expect("an origins row per horizon");
+        assert!(((1.0 - survive) / pb[j] - 1.0).abs() < 1e-6, "{} yr: origins P {} against 1 − Π(1 − P_k) = {}", years[i], pb[j], 1.0 - survive);
+        assert!(q05[j] <= pb[j] && pb[j] <= q95[j] && q05[j] < q95[j], "band {} [{}, {}]", pb[j], q05[j], q95[j]);
+        // The generator's truth at the impact stress (its scales at the campaign's mean
+        // diameter, 1 mm): inside the origins' band; one law fitted to all breaks understates it
+        // — its steeper modulus thins the tail the surface flaws carry.
+        let v = truth_scale() ;
+        let truth = -(-n * ((15.0 * (ln_sigma - v.ln())).exp() + (8.0 * (ln_sigma - (1.1 * v).ln())).exp())).exp_m1();
+        assert!(q05[j] <= truth && truth <= q95[j], "{} yr: truth {truth} outside the origins' band [{}, {}]", years[i], q05[j], q95[j]);
+        assert!(q95[i] < truth, "{} yr: one law's band [{}, {}] reaches the truth {truth}", years[i], q05[i], q95[i]);
+        checked += 1;
+    }
+    assert!(checked >= 1);
+    let summary = s.read("reports/origins/summary.md");
+    assert!(summary.contains("**The origins do not share one Weibull law**") && summary.contains("The lifetime below has every origin's law acting") && summary.contains("| horizon | base model | final model | known origins |"), "{summary}");
+    let plot = s.read("reports/origins/discrepancy_origins_lab.svg");
+    assert!(plot.contains("Volumen:") && plot.contains("Oberfläche:") && plot.contains("other origins censored"), "origins plot");
+    assert!(table_text(&dir.join("residuals.csv"), "failure_origin").iter().any(|x| x == "none"));
+
+    // `datasets check` of the study reads the file as the run does: the origin column used.
+    let out = s.run(&["datasets", "check", "--study", "studies/origins.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let line = out.stdout.lines().find(|l| l.contains("crush data")).unwrap_or_default().to_string();
+    let breaks = table_text(&o, "origin").len();
+    assert!(line.contains("failure origins (`Bruchursprung`) of the breaks: Oberfläche ") && line.contains(", Volumen ") && breaks == 2, "{}", out.stdout);
+    assert!(out.stdout.contains("`Bruchursprung` → failure origin (fractography)") && !out.stdout.contains("not used"), "{}", out.stdout);
+    // `none` on a particle that broke is refused, naming the row and column.
+    let text = s.read("datasets/bruch.csv");
+    let line = text.lines().find(|l| l.contains(";ja;Volumen;")).unwrap().to_string();
+    s.write("datasets/bruch.csv", &text.replace(&line, &line.replace(";ja;Volumen;", ";ja;none;")));
+    let out = s.run(&["run", "studies/origins.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("bruch.csv") && out.stderr.contains("Bruchursprung") && out.stderr.contains("failure origin `none` on a specimen that broke"), "{}", out.stderr);
+    s.write("datasets/bruch.csv", &text);
+    // A study that fits one law per material refuses the key rather than pass the column over.
+    s.write("studies/one_law.toml", &format!("{}origin = \"Bruchursprung\"\n", lifetime_study(data)));
+    let out = s.run(&["run", "studies/one_law.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("material[0].origin") && out.stderr.contains("discrepancy study"), "{}", out.stderr);
+}

@@ -236,4 +236,15 @@ fn exhaustive_allocation_evaluates_every_affordable_plan() {
     let share: f64 = summary.split(said).nth(1).and_then(|t| t.split(" %").next()).and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("no force-limit sentence in\n{summary}"));
     // About half of Gen 4's 45 crushed particles broke below 120 N.
     assert!((20.0..80.0).contains(&share), "{share} % unbroken at 120 N");
+    // plans.csv states the limit and the same share per limited candidate, NaN for the others.
+    let p = s.path("reports/experiments/plans.csv");
+    let df = partlife::io::read_table(&p).unwrap();
+    let (name, limit, unbroken) = (partlife::io::col_str(&df, &p, "candidate").unwrap(), partlife::io::col_f64(&df, &p, "force_limit_n").unwrap(), partlife::io::col_f64(&df, &p, "expected_unbroken_share").unwrap());
+    for i in 0..name.len() {
+        if name[i] == "crush Gen 4, shape not measured" {
+            assert!(limit[i] == 120.0 && (100.0 * unbroken[i] - share).abs() < 0.05, "{} N, {} against {share} %", limit[i], unbroken[i]);
+        } else {
+            assert!(limit[i].is_nan() && unbroken[i].is_nan(), "{}: {} {}", name[i], limit[i], unbroken[i]);
+        }
+    }
 }

@@ -1,7 +1,7 @@
 //! The report of a discrepancy study: `verdict.json`, headline and `summary.md`, each generated
 //! from the numbers it describes (its tables: [`super::tables`]).
 
-use super::study::{DiscrepancyStudy, MaterialResult, PowerRow};
+use super::study::{DiscrepancyStudy, LifetimeBand, MaterialResult, PowerRow};
 use super::workflow::GAP_MEASURE;
 use crate::schema::StudyFile;
 use crate::strength::Effect;
@@ -347,9 +347,15 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                     md.push_str(&format!("| {} | {} | — | — | — |\n", f.origin, f.breaks));
                 }
             }
-            md.push_str(&format!("\n{}\n", o.sentence(s.discrepancy.alpha)));
+            let lifetime = match (&r.crush, r.lifetime.iter().any(|(st, _)| st == "origins")) {
+                (None, _) => "No lifetime is computed from them: a strength file has no contact that carries a strength to impacts.".to_string(),
+                (Some(_), true) => "The lifetime below has every origin's law acting (column \"known origins\"): a particle survives N impacts only if it survives each origin's flaws, P_N = 1 − Π_k (1 − P_N,k).".to_string(),
+                (Some(_), false) => format!("No lifetime is computed from them: {}.", o.fits.iter().find(|f| !f.shape.is_finite()).map_or_else(|| "an origin has no law".to_string(), |f| format!("origin \"{}\" has {} break{}, and a Weibull law needs at least two", f.origin, f.breaks, if f.breaks == 1 { "" } else { "s" }))),
+            };
+            md.push_str(&format!("\n{}\n", o.sentence(s.discrepancy.alpha, &lifetime)));
         }
         if let Some(spec) = &r.crush {
+        let known = r.lifetime.iter().find(|(st, _)| st == "origins").map(|(_, v)| v);
         let how = match (r.outcome.before().model.pivotal(), r.outcome.after().model.pivotal(), r.outcome.after().model.location_scale()) {
             (true, true, _) => "pivotal bootstrap of its parameters",
             (true, false, _) => "pivotal bootstrap of the base model's parameters, parametric bootstrap (refits) of the final model's",
@@ -357,17 +363,22 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             (false, _, false) => "parametric bootstrap in pivotal form of the base model, refits of the final model's, each redraw censored as the campaign censored its row",
         };
         md.push_str(&format!(
-            "\n**Lifetime at {} m/s, η = {}, {} impacts a year** (particles with E = {} GPa, ν = {}, ρ = {} kg/m³; population of the measured particles; 90 % band of the strength model's joint draws — {how} — and Bayesian bootstrap of the population):\n\n| horizon | base model | final model |\n|---|---|---|\n",
+            "\n**Lifetime at {} m/s, η = {}, {} impacts a year** (particles with E = {} GPa, ν = {}, ρ = {} kg/m³; population of the measured particles; 90 % band of the strength model's joint draws — {how} — and Bayesian bootstrap of the population{}):\n\n| horizon | base model | final model |{}\n|---|---|---|{}\n",
             s.impact.reference_velocity_m_s,
             s.impact.energy_fraction,
             s.impact.impacts_per_year,
             spec.elastic.youngs_modulus_pa / 1e9,
             spec.elastic.poisson_ratio,
-            spec.density_kg_m3
+            spec.density_kg_m3,
+            if known.is_some() { "; known origins: each origin's two-parameter law, parametric bootstrap of each, combined draw by draw" } else { "" },
+            if known.is_some() { " known origins |" } else { "" },
+            if known.is_some() { "---|" } else { "" },
         ));
         let (lb, la) = (&r.lifetime[0].1, &r.lifetime[1].1);
-        for (x, y) in lb.iter().zip(la) {
-            md.push_str(&format!("| {} yr | {:.3e} [{:.2e}, {:.2e}] | {:.3e} [{:.2e}, {:.2e}] |\n", x.years, x.estimate, x.q05, x.q95, y.estimate, y.q05, y.q95));
+        let band = |x: &LifetimeBand| format!("{:.3e} [{:.2e}, {:.2e}]", x.estimate, x.q05, x.q95);
+        for (i, (x, y)) in lb.iter().zip(la).enumerate() {
+            let o = known.map(|k| format!(" {} |", band(&k[i]))).unwrap_or_default();
+            md.push_str(&format!("| {} yr | {} | {} |{o}\n", x.years, band(x), band(y)));
         }
         }
         if r.crush.is_some() && !r.outcome.named.is_empty() {

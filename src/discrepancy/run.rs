@@ -13,7 +13,8 @@
 //! [lifetime]       # bootstrap: replicates of the lifetime bands
 //! [power]          # particles = [20, 40, 80, 160], replicates, bootstrap (replicates = 0: off)
 //! [figures]        # width_cm
-//! [[material]]     # key, label, data, elastic, density_kg_m3 (as the lifetime study)
+//! [[material]]     # key, label, data, elastic, density_kg_m3 (as the lifetime study);
+//!                  # origin: the column naming each particle's failure origin
 //! ```
 //!
 //! # Lifetime change
@@ -23,7 +24,9 @@
 //! the breaking probability after N = years × impacts per year at the reference velocity,
 //! P = mean_i [1 − exp(−N H_i)] with each particle's own scale and contact curvature. The 90 %
 //! band comes from the model's joint draws (the parametric bootstrap in pivotal form, with the
-//! population's Bayesian bootstrap), as in the lifetime and main studies.
+//! population's Bayesian bootstrap), as in the lifetime and main studies. Where the study names
+//! each particle's failure origin, a third lifetime has every origin's own law acting
+//! (`origins_lifetime`).
 //!
 //! # Detection power
 //!
@@ -100,6 +103,7 @@ pub fn quick_study(data: &Path, elastic: crate::contact::Elastic, density_kg_m3:
         population: None,
         factors: Default::default(),
         predict: operating_c.map(|t| [("temperature_c".to_string(), toml::Value::Float(t))].into_iter().collect()).unwrap_or_default(),
+        origin: None,
     };
     let study = DiscrepancyStudy {
         kind: "discrepancy".into(),
@@ -132,6 +136,56 @@ fn lifetime_bands(model: &ModelFit, sample: &Sample, m: &Prepared, s: &Discrepan
     let counts: Vec<f64> = s.impact.years.iter().map(|y| impacts_in(*y, s.impact.impacts_per_year)).collect();
     let bands = lm.bands(&lm.fit.estimate(), s.impact.energy_fraction, s.impact.reference_velocity_m_s, &counts, Uncertainty::Bootstrap, s.lifetime.bootstrap, seed, 0.9)?;
     Ok(s.impact.years.iter().zip(bands).map(|(&years, (estimate, q05, q95))| LifetimeBand { years, estimate, q05, q95 }).collect())
+}
+
+/// The lifetime with every failure origin's law acting (crush data whose study names the origin
+/// column): each origin's two-parameter law fitted to its own breaks with the other origins'
+/// censored ([`crate::obs::Obs::of_origin`]) is one [`LifetimeModel`], and a particle
+/// survives N impacts only if it survives every origin's flaws, P_N = 1 − Π_k (1 − P_N,k)
+/// ([`crate::strength::origins::combined`]; exact for the base model's one σ̄ per impact). The
+/// band combines each origin's parametric-bootstrap draws index by index (the censored
+/// likelihoods factorise, so the origins' estimates are independent); each redraw is censored as
+/// the campaign censored its row, another origin's break counted as a limit at its value.
+/// `Ok(None)` where an origin has fewer than two breaks (no law to carry).
+fn origins_lifetime(origins: &crate::strength::origins::Origins, labels: &[String], m: &Prepared, s: &DiscrepancyStudy, seed: u64) -> Result<Option<Vec<LifetimeBand>>> {
+    if origins.fits.iter().any(|f| !f.shape.is_finite()) {
+        return Ok(None);
+    }
+    let counts: Vec<f64> = s.impact.years.iter().map(|y| impacts_in(*y, s.impact.impacts_per_year)).collect();
+    let horizons: Vec<crate::strength::Horizon> = counts.iter().map(|&n| crate::strength::Horizon::independent(n)).collect();
+    let (mut point, mut draws) = (Vec::new(), Vec::new());
+    for (k, f) in origins.fits.iter().enumerate() {
+        let (strength, _) = m.sample.strength.view().of_origin(labels, &f.origin);
+        let sample = Sample { source: format!("{} (origin {})", m.sample.source, f.origin), strength, particles: true, ..Sample::default() };
+        let fit = StrengthFit::new(&sample, &[], s.discrepancy.gamma, &m.spec.key)?;
+        let lm = LifetimeModel::new(&m.spec.key, &m.spec.label, m.spec.sphere(&m.data), s.impact.target, s.contact.averaging, fit, m.population.clone())?;
+        let ln_sigma = lm.ln_impact_stress(s.impact.energy_fraction, s.impact.reference_velocity_m_s)?;
+        point.push(lm.breakage(&lm.fit.estimate(), None, s.impact.energy_fraction, s.impact.reference_velocity_m_s, &counts)?);
+        let (params, _) = lm.draws(Uncertainty::Bootstrap, s.lifetime.bootstrap, seed.wrapping_add(k as u64))?;
+        draws.push(
+            params
+                .iter()
+                .map(|p| {
+                    let mut out = vec![0.0; counts.len()];
+                    lm.breakage_into(p, None, ln_sigma, &horizons, &mut out);
+                    out
+                })
+                .collect::<Vec<_>>(),
+        );
+    }
+    let a = 0.05;
+    Ok(Some(
+        s.impact
+            .years
+            .iter()
+            .enumerate()
+            .map(|(c, &years)| {
+                let per: Vec<f64> = (0..s.lifetime.bootstrap).map(|r| crate::strength::origins::combined(&draws.iter().map(|d| d[r][c]).collect::<Vec<_>>())).collect();
+                let q = crate::stats::interpolated_quantiles(per, &[a, 1.0 - a]);
+                LifetimeBand { years, estimate: crate::strength::origins::combined(&point.iter().map(|p| p[c]).collect::<Vec<_>>()), q05: q[0], q95: q[1] }
+            })
+            .collect(),
+    ))
 }
 
 /// One material's inputs: its study entry, crush data, sample and population.
@@ -248,9 +302,22 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         } else {
             Vec::new()
         };
+        // Known failure origins: each origin's law, the shared-law test, and the lifetime with
+        // every origin's law acting.
+        let origins = match &m.spec.origin {
+            Some(column) => Some(crate::strength::origins::analyse(m.sample.strength.view(), &m.data.origins, column)?),
+            None => None,
+        };
+        let mut lifetime = lifetime;
+        if let Some(o) = &origins
+            && let Some(bands) = origins_lifetime(o, &m.data.origins, &m, s, material_settings.seed ^ 0x0519)?
+        {
+            lifetime.push(("origins".to_string(), bands));
+        }
         let ids = m.data.records.iter().map(|r| r.id.clone()).collect();
         let temperatures_c = m.data.records.iter().filter_map(|r| r.temperature_c).collect();
-        results.push(MaterialResult { key: m.spec.key.clone(), label: m.spec.label.clone(), path: m.data.path.clone(), ids, crush: Some(m.spec), sample: m.sample, outcome, lifetime, power, temperatures_c, origins: None });
+        let failure_origins = m.data.origins.clone();
+        results.push(MaterialResult { key: m.spec.key.clone(), label: m.spec.label.clone(), path: m.data.path.clone(), ids, crush: Some(m.spec), sample: m.sample, outcome, lifetime, power, temperatures_c, origins, failure_origins });
     }
     for (j, (set, read)) in specimens.into_iter().enumerate() {
         let k = s.material.len() + j;
@@ -268,7 +335,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
             Some(column) => Some(crate::strength::origins::analyse(read.sample.strength.view(), &read.origins, column)?),
             None => None,
         };
-        results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power, temperatures_c: read.temperatures_c, origins });
+        results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power, temperatures_c: read.temperatures_c, origins, failure_origins: read.origins });
     }
 
     let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;

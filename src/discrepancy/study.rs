@@ -110,7 +110,7 @@ fn both_populations() -> Vec<crate::strength::flaws::Populations> {
 }
 
 /// Column names of `residuals.csv` a factor may not take.
-pub const RESERVED_COLUMNS: [&str; 6] = ["material", "id", "stage", "strength_pa", "adjusted_pa", "residual"];
+pub const RESERVED_COLUMNS: [&str; 7] = ["material", "id", "stage", "strength_pa", "adjusted_pa", "residual", "failure_origin"];
 
 impl DiscrepancyStudy {
     /// Validates every option (file named in messages).
@@ -215,5 +215,7 @@ pub struct MaterialResult {
     pub temperatures_c: Vec<f64>,
     /// Each failure origin's law and the shared-law test (a strength file with `origin`).
     pub origins: Option<crate::strength::origins::Origins>,
+    /// Each specimen's failure origin, where the study names the column (empty otherwise).
+    pub failure_origins: Vec<String>,
 }
 

@@ -148,6 +148,7 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
                 let obs = r.sample.strength.view();
                 num.entry("strength_pa".into()).or_default().push(x);
                 cols.entry("observed".into()).or_default().push(obs.kind(i).name().into());
+                cols.entry("failure_origin".into()).or_default().push(r.failure_origins.get(i).cloned().unwrap_or_default());
                 // With a modulus per level, each specimen's standardised residual is carried onto
                 // the reference level's modulus, so the adjusted strengths share one law.
                 // A two-population law: the strengths with the scale effects beside it taken out
@@ -186,6 +187,10 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         let v = cols.remove(&k).unwrap_or_default();
         columns.push(scol(&k, v));
     }
+    // Each specimen's failure origin, where a study names them (the probability plot by origin).
+    if results.iter().any(|r| !r.failure_origins.is_empty()) {
+        columns.push(scol("failure_origin", cols.remove("failure_origin").unwrap_or_default()));
+    }
     let mut t = table(columns)?;
     dir.write_table("residuals", &mut t)?;
 
@@ -210,7 +215,7 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
     ])?;
     dir.write_table("fits", &mut t)?;
 
-    // origins.csv: each failure origin's law (strength files that name origins).
+    // origins.csv: each failure origin's law (strength and crush files that name origins).
     let rows: Vec<(&str, &crate::strength::origins::Origins, &crate::strength::origins::OriginFit)> = results.iter().filter_map(|r| r.origins.as_ref().map(|o| (r.key.as_str(), o))).flat_map(|(k, o)| o.fits.iter().map(move |f| (k, o, f))).collect();
     if !rows.is_empty() {
         let shared = |o: &crate::strength::origins::Origins, f: fn(&crate::strength::origins::SharedLaw) -> f64| o.shared.as_ref().map_or(f64::NAN, f);

@@ -198,8 +198,6 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     };
     pb.set_position(pb.length().unwrap_or(0));
 
-    let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
-    write_tables(&mut dir, s, &state, &keys, &singles, &allocated)?;
     // Per crush candidate with a force limit: the limit and the prior's expected share of
     // particles not broken by it.
     let limits: Vec<(usize, f64, f64)> = built
@@ -210,6 +208,8 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
             _ => None,
         })
         .collect();
+    let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
+    write_tables(&mut dir, s, &state, &keys, &singles, &allocated, &limits)?;
     let summary = super::summary::summary(s, &state, &singles, &allocated, &limits);
     let mut text = summary.text.clone();
     if !notes.is_empty() {
@@ -296,7 +296,9 @@ fn greedy(s: &ExperimentsStudy, state: &State, built: &[Vec<Candidate>], singles
 /// every affordable plan by decreasing objective with the recommended one marked),
 /// `prior.csv` (the state of knowledge's prior metrics), `floor_sensitivity.csv` (the ranking
 /// by the log10 P bands at each floor of [`super::state::LOG_FLOORS`]).
-fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: &[String], singles: &[((usize, usize), Evaluated)], allocated: &Allocated) -> Result<()> {
+/// `limits`: per force-limited crush candidate, (candidate, limit in N, the prior's expected share
+/// of its particles not broken by it) — columns of `plans.csv`.
+fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: &[String], singles: &[((usize, usize), Evaluated)], allocated: &Allocated, limits: &[(usize, f64, f64)]) -> Result<()> {
     let h = state.years.len() - 1;
     let last = state.years[h];
     let qs = [state.p_quantity(0, h), state.p_quantity(1, h)];
@@ -350,6 +352,10 @@ fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: 
         ucol("size", singles.iter().map(|(_, e)| e.sizes[0]).collect()),
         scol("unit", singles.iter().map(|((i, _), _)| s.candidate[*i].test.unit().to_string()).collect()),
         scol("currency", vec![s.decision.currency.clone(); singles.len()]),
+        // A crush test at the rig's force limit (NaN without one) and the share of its particles
+        // today's state of knowledge expects not to break by it.
+        fcol("force_limit_n", singles.iter().map(|((i, _), _)| limits.iter().find(|l| l.0 == *i).map_or(f64::NAN, |l| l.1)).collect()),
+        fcol("expected_unbroken_share", singles.iter().map(|((i, _), _)| limits.iter().find(|l| l.0 == *i).map_or(f64::NAN, |l| l.2)).collect()),
     ];
     cols.extend(metric_columns(&rows));
     dir.write_table("plans", &mut table(cols)?)?;

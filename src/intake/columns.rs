@@ -108,12 +108,20 @@ impl Field {
         match self.kind {
             Kind::Text => format!("{} (`{}`)", self.key, self.names().skip(1).take(4).collect::<Vec<_>>().join("`, `")),
             Kind::Number(q) => {
-                let example = match q {
-                    Quantity::Length => format!("`{}`, `D [mm]`", self.column),
-                    Quantity::Force => format!("`{}`, `Fmax [N]`", self.column),
-                    Quantity::Stress => format!("`{}`, `strength [MPa]`", self.column),
-                    Quantity::Temperature => format!("`{}`, `T [°C]`", self.column),
-                    _ => format!("`{}`", self.column),
+                // A header a lab would write for this field, with its unit: the field's own
+                // (a curve's displacement is `s [mm]`, not a diameter's `D [mm]`).
+                let header = match (self.key, q) {
+                    ("diameter", _) => Some("D [mm]"),
+                    ("crush_force", _) => Some("Fmax [N]"),
+                    ("displacement", _) => Some("s [mm]"),
+                    ("force", _) => Some("F [N]"),
+                    (_, Quantity::Stress) => Some("strength [MPa]"),
+                    (_, Quantity::Temperature) => Some("T [°C]"),
+                    _ => None,
+                };
+                let example = match header {
+                    Some(h) => format!("`{}`, `{h}`", self.column),
+                    None => format!("`{}`", self.column),
                 };
                 format!("{} ({}, e.g. {example})", self.key, q.word())
             }

@@ -561,6 +561,35 @@ pub fn specimens(values: &[RowValue], places: &[String], src: &Source, provenanc
     Specimens { rows, copy, observations: crate::obs::Observations { x, censoring } }
 }
 
+/// Each row's failure origin (fractography: volume, surface, edge, pore …) from the column
+/// `column` that the study's key `key` names, over `rows`: an empty cell is refused (write the
+/// origin, or `none` for a specimen that did not break). Records the column in `provenance` and
+/// takes it off the unused columns; returns the origins and the column's index. Strength and
+/// crush files read it alike.
+pub fn failure_origins(table: &RawTable, rows: &[usize], column: &str, key: String, origin: &MapOrigin, provenance: &mut Provenance) -> Result<(Vec<String>, usize)> {
+    let c = super::factors::declared_columns(table, provenance, &[(key, column.to_string())], origin, &table.origin.path)?[0].1;
+    let mut out = Vec::with_capacity(rows.len());
+    for &row in rows {
+        match table.text(row, c).map(|t| t.trim().to_string()).filter(|t| !t.is_empty()) {
+            Some(t) => out.push(t),
+            None => return Err(table.error(row, Some(c), "an empty failure origin: every specimen needs one (write the origin, or `none` for a specimen that did not break)".to_string())),
+        }
+    }
+    provenance.columns.push(ColumnRecord { source: table.headers[c].clone(), field: "failure origin".into(), unit: String::new(), conversion: "fractography".into(), found_by: "study".into() });
+    provenance.unused.retain(|u| *u != table.headers[c]);
+    Ok((out, c))
+}
+
+/// The first specimen that broke (exact, in a class or at or below its value) and whose origin
+/// reads `none`, the word kept for a specimen that did not break; the caller refuses it with
+/// [`NONE_ON_A_BREAK`].
+pub fn break_without_origin(x: crate::obs::Obs, origins: &[String]) -> Option<usize> {
+    (0..x.len()).find(|&i| x.kind(i) != Censor::Right && origins[i].eq_ignore_ascii_case("none"))
+}
+
+/// The rule [`break_without_origin`] enforces, in words.
+pub const NONE_ON_A_BREAK: &str = "failure origin `none` on a specimen that broke: write where it broke (`none` is for a specimen that did not break)";
+
 /// A file's rows as specimens ([`specimens`]): a row counting k stands k times.
 #[derive(Debug, Clone)]
 pub struct Specimens {

@@ -97,6 +97,9 @@ pub struct LifetimeStudy {
 
 /// Validates every option of a lifetime study.
 pub fn validate_lifetime(s: &LifetimeStudy, file: &str) -> Result<()> {
+    for (i, m) in s.material.iter().enumerate() {
+        m.one_law(file, i, "lifetime study")?;
+    }
     elastic(file, "contact.platen", &s.contact.platen)?;
     s.contact.averaging.validate(file, "contact.averaging")?;
     s.strength.validate(file, &s.contact.averaging)?;

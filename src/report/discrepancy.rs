@@ -4,6 +4,7 @@
 //! |---|---|---|
 //! | `discrepancy_residuals_<key>` | quantile residuals vs every covariate diagnosed, base model (left) and final model (right), with the binned mean | `residuals.csv` |
 //! | `discrepancy_probability_<key>` | Weibull probability plot before (σ̄ as reduced) and after (σ̄ adjusted to the average covariates), with the fitted lines | `residuals.csv`, `fits.csv` |
+//! | `discrepancy_origins_<key>` | each failure origin's breaks (Kaplan–Meier positions, the other origins censored) and its fitted line | `residuals.csv`, `origins.csv` |
 //! | `discrepancy_gap` | gap measure G per round and material, with its expectation when nothing is missing | `stages.csv` |
 //! | `discrepancy_evidence` | likelihood ratio of every candidate per round against the round's critical value | `evidence.csv` |
 //! | `discrepancy_lifetime` | breaking probability of the population, base vs final model, 90 % bands | `lifetime.csv` |
@@ -39,6 +40,13 @@ pub fn render(dir: &Path, width_cm: f64) -> Result<Rendered> {
         }
         names.push(format!("discrepancy_probability_{key}"));
         drawn.push(probability(dir, width_cm, key, &labels[k], colour(k))?);
+        // Known failure origins: each origin's breaks and law (older reports lack the table).
+        if let Ok(o) = Table::load(dir, "origins")
+            && o.s("material")?.contains(key)
+        {
+            names.push(format!("discrepancy_origins_{key}"));
+            drawn.push(by_origin(dir, width_cm, key, &o)?);
+        }
     }
     names.push("discrepancy_gap".into());
     drawn.push(gap(dir, width_cm, &keys, &labels)?);
@@ -193,6 +201,18 @@ fn level_axis(name: &str) -> String {
     if name.chars().count() <= 9 { format!("{name} (level; band 10–90 %, triangle median)") } else { format!("{name} (10–90 % band, median)") }
 }
 
+/// Whether material `key` is crush data: unless materials.csv says it is a strength file (older
+/// reports have no `data` column: crush).
+fn is_crush(dir: &Path, key: &str) -> Result<bool> {
+    Ok(match Table::load(dir, "materials") {
+        Ok(m) if m.has("data") => {
+            let (k, d) = (m.s("key")?, m.s("data")?);
+            !(0..k.len()).any(|i| k[i] == key && d[i] == "strength")
+        }
+        _ => true,
+    })
+}
+
 fn probability(dir: &Path, width_cm: f64, key: &str, label: &str, c: RGBColor) -> Result<Drawn> {
     let p = probability_panel(dir, key, label, c)?;
     figure(&format!("discrepancy_probability_{key}"), width_cm, 0.8, &[(p, 1.0)])
@@ -203,15 +223,7 @@ fn probability(dir: &Path, width_cm: f64, key: &str, label: &str, c: RGBColor) -
 /// its curve. The line spans exactly the x axis and the y axis holds both its ends, so nothing
 /// of it is clipped and its drawn slope is the fitted m.
 fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<Panel> {
-    // Crush data unless materials.csv says the key is a strength file (older reports have no
-    // `data` column: crush).
-    let crush = match Table::load(dir, "materials") {
-        Ok(m) if m.has("data") => {
-            let (k, d) = (m.s("key")?, m.s("data")?);
-            !(0..k.len()).any(|i| k[i] == key && d[i] == "strength")
-        }
-        _ => true,
-    };
+    let crush = is_crush(dir, key)?;
     let t = Table::load(dir, "residuals")?;
     let (mat, stage, raw, adj) = (t.s("material")?, t.s("stage")?, t.f("strength_pa")?, t.f("adjusted_pa")?);
     // What each row says and an interval's upper end (reports without censoring lack them).
@@ -336,6 +348,60 @@ fn probability_panel(dir: &Path, key: &str, label: &str, c: RGBColor) -> Result<
     })
 }
 
+/// The probability plot by failure origin (ASTM C1239's figure for concurrent flaw
+/// populations): each origin's breaks at their Kaplan–Meier positions with the other origins'
+/// breaks censored, as its law is fitted, and its fitted line; a class or a break at or below a
+/// value of its own origin is not drawn (it has no single strength), only counted in its fit.
+fn by_origin(dir: &Path, width_cm: f64, key: &str, o: &Table) -> Result<Drawn> {
+    let t = Table::load(dir, "residuals")?;
+    let (mat, stage, raw, observed, origin) = (t.s("material")?, t.s("stage")?, t.f("strength_pa")?, t.s("observed")?, t.s("failure_origin")?);
+    let up = t.f("upper_pa")?;
+    let rows: Vec<usize> = (0..mat.len()).filter(|&i| mat[i] == key && stage[i] == "before").collect();
+    let x: Vec<f64> = rows.iter().map(|&i| raw[i] / 1e6).collect();
+    let kind: Vec<crate::obs::Censor> = rows.iter().map(|&i| crate::obs::Censor::parse(&observed[i]).unwrap_or(crate::obs::Censor::Exact)).collect();
+    let censoring = crate::obs::Censoring { kind, upper: rows.iter().map(|&i| up[i] / 1e6).collect(), scheme: Default::default() };
+    let obs = crate::obs::Obs { x: &x, censoring: Some(&censoring) };
+    let labels: Vec<String> = rows.iter().map(|&i| origin[i].clone()).collect();
+    let (om, oo, breaks, shape, scale) = (o.s("material")?, o.s("origin")?, o.f("breaks")?, o.f("weibull_modulus")?, o.f("scale_pa")?);
+    let mut series = Vec::new();
+    let mut lines = Vec::new();
+    let mut xs: Vec<f64> = Vec::new();
+    for (j, i) in (0..om.len()).filter(|&i| om[i] == key).enumerate() {
+        let (mine, _) = obs.of_origin(&labels, &oo[i]);
+        let pts: Vec<(f64, f64)> = crate::weibull::probability_plot_observed(mine.view())
+            .into_iter()
+            .filter(|p| p.kind == crate::obs::Censor::Exact && p.f > 0.0 && p.f < 1.0)
+            .map(|p| (p.x.ln(), (-(-p.f).ln_1p()).ln()))
+            .collect();
+        xs.extend(pts.iter().map(|p| p.0));
+        let c = colour(j);
+        let marker = [Marker::Circle, Marker::Triangle, Marker::Cross][j % 3];
+        if shape[i].is_finite() {
+            let label = format!("{}: {} breaks, m = {:.1}, σθ = {:.0} MPa", oo[i], breaks[i], shape[i], scale[i] / 1e6);
+            series.push(Series { label: Some(label), points: pts, colour: c, kind: Kind::Markers(marker, 2.0) });
+            lines.push((shape[i], (scale[i] / 1e6).ln(), c));
+        } else {
+            series.push(Series { label: Some(format!("{}: {} break{}, no law", oo[i], breaks[i], if breaks[i] == 1.0 { "" } else { "s" })), points: pts, colour: c, kind: Kind::Markers(marker, 2.0) });
+        }
+    }
+    let xr = padded(xs.iter().copied(), 0.05, 0.05);
+    for (m, s, c) in lines {
+        series.push(Series::line(None, vec![(xr.0, m * (xr.0 - s)), (xr.1, m * (xr.1 - s))], c, 1.0));
+    }
+    let crush = is_crush(dir, key)?;
+    let p = Panel {
+        x_categories: vec![],
+        x_desc: if crush { "ln(σ̄ at break / 1 MPa)".into() } else { "ln(specimen strength / 1 MPa)".into() },
+        y_desc: "ln(−ln(1 − F)), other origins censored".into(),
+        x_range: xr,
+        y_range: padded(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)), 0.05, 0.05),
+        y_log: false,
+        series,
+        legend: Some(SeriesLabelPosition::UpperLeft),
+    };
+    figure(&format!("discrepancy_origins_{key}"), width_cm, 0.8, &[(p, 1.0)])
+}
+
 fn gap(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<Drawn> {
     let t = Table::load(dir, "stages")?;
     // The expectation with nothing missing (Σ df; reports written before it was a column: the
@@ -424,9 +490,11 @@ fn lifetime(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Re
     for (hi, h) in horizons.iter().enumerate() {
         let mut series = Vec::new();
         let mut ys = Vec::new();
-        for (si, st) in ["before", "after"].iter().enumerate() {
-            let c = if si == 0 { GREY } else { colour(0) };
-            let off = if si == 0 { -0.12 } else { 0.12 };
+        // With known failure origins (a third stage) the three bands sit side by side.
+        let known = stage.iter().any(|st| st == "origins");
+        for (si, st) in ["before", "after", "origins"].iter().enumerate().take(if known { 3 } else { 2 }) {
+            let c = [GREY, colour(0), colour(1)][si];
+            let off = if known { [-0.18, 0.0, 0.18][si] } else { [-0.12, 0.12][si] };
             let mut pts = Vec::new();
             for (k, key) in keys.iter().enumerate() {
                 if let Some(i) = (0..mat.len()).find(|&i| &mat[i] == key && stage[i] == *st && years[i] == *h) {
@@ -436,8 +504,8 @@ fn lifetime(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Re
                     ys.extend([lg(q05[i]), lg(q95[i]), lg(p[i])]);
                 }
             }
-            let label = if si == 0 { "base model, 90 % band" } else { "with the named effects" };
-            series.push(Series { label: Some(label.into()), points: pts, colour: c, kind: Kind::Markers(if si == 0 { Marker::Cross } else { Marker::Circle }, 2.2) });
+            let label = ["base model, 90 % band", "with the named effects", "known origins, each its own law"][si];
+            series.push(Series { label: Some(label.into()), points: pts, colour: c, kind: Kind::Markers([Marker::Cross, Marker::Circle, Marker::Triangle][si], 2.2) });
         }
         let (lo, top) = padded(ys.iter().copied(), 0.1, 0.6);
         panels.push((

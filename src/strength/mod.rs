@@ -62,7 +62,7 @@ pub mod weights;
 pub use draws::{MAX_LINEAR, ParameterSummary, Params, summarise};
 pub use effects::{ALL, Effect, Term};
 pub use fit::{ModelFit, Sample, StrengthFit, contact_at_break, crush_contact, fit_model, fit_model_near, sample_of};
-pub use model::{LifetimeChain, LifetimeModel};
+pub use model::{Horizon, LifetimeChain, LifetimeModel};
 pub use options::{NamingSettings, StrengthOptions, StrengthSpec, Uncertainty};
 pub use crate::dist::PopulationSpec;
 pub use population::{Particle, Population};

@@ -25,16 +25,22 @@
 //! (a class or a left-censored row does not factorise this way); otherwise it is not made, and
 //! the reason is given.
 //!
+//! **In the lifetime** (crush files, the discrepancy study): the origins are independent flaw
+//! populations and the weakest breaks first, so a particle survives N impacts only if it
+//! survives every origin's flaws, P_N = 1 − Π_k (1 − P_N,k) ([`combined`]), each P_N,k from
+//! origin k's law through the one lifetime model.
+//!
 //! Files without origins keep the latent competing-risks law of [`super::flaws`] (two flaw
 //! populations in every specimen, causes unknown).
 //!
 //! Verified against the `reliability` package's right-censored fits (tests/bench/reliability/
-//! origins.py) on Nelson's connection-strength data in `tests/censoring.rs`.
+//! origins.py) on Nelson's connection-strength data in `tests/censoring.rs`; on crushed
+//! particles with two flaw populations and a rig limit against the generator's truth there.
 
 use serde::Serialize;
 
 use crate::error::Result;
-use crate::obs::{Censor, Censoring, Obs};
+use crate::obs::{Censor, Obs};
 use crate::strength::regress::{Design, fit};
 
 /// One origin's Weibull law, from its own breaks with the others censored.
@@ -78,6 +84,14 @@ pub struct Origins {
     pub shared: std::result::Result<SharedLaw, String>,
 }
 
+/// The probability that a particle breaks when each origin's flaws alone would break it with
+/// probability `p[k]`: the origins are independent flaw populations and the weakest breaks
+/// first, so the survivals multiply, P = 1 − Π_k (1 − p_k). Summed in ln(1 − p) so that a
+/// probability of 1e-12 keeps its digits.
+pub fn combined(p: &[f64]) -> f64 {
+    -p.iter().map(|q| (-q).ln_1p()).sum::<f64>().exp_m1()
+}
+
 /// Each origin's law from the observations `x` whose specimen i failed from `origin[i]` (ignored
 /// for a specimen that did not break), and the shared-law test (module docs).
 pub fn analyse(x: Obs, origin: &[String], column: &str) -> Result<Origins> {
@@ -88,29 +102,13 @@ pub fn analyse(x: Obs, origin: &[String], column: &str) -> Result<Origins> {
     let mut fits = Vec::new();
     let mut why: Option<String> = None;
     for lv in &levels {
-        let (mut xs, mut kinds, mut upper) = (Vec::new(), Vec::new(), Vec::new());
-        let mut breaks = 0;
-        for i in 0..n {
-            let k = x.kind(i);
-            if origin[i] == *lv || k == Censor::Right {
-                breaks += usize::from(k != Censor::Right);
-                xs.push(x.x[i]);
-                kinds.push(k);
-                upper.push(x.upper(i));
-            } else if k != Censor::Left {
-                // A break from another origin (exact or within a class): survived this one.
-                xs.push(x.x[i]);
-                kinds.push(Censor::Right);
-                upper.push(f64::NAN);
-            }
-        }
+        let (obs, breaks) = x.of_origin(origin, lv);
         if breaks < 2 {
             why.get_or_insert(format!("origin \"{lv}\" has {breaks} break: a Weibull law needs at least two"));
             fits.push(OriginFit { origin: lv.clone(), breaks, shape: f64::NAN, scale: f64::NAN, loglik: f64::NAN });
             continue;
         }
-        let c = Censoring::of_rows(kinds, &xs, upper);
-        let f = fit(Obs { x: &xs, censoring: c.as_ref() }, &Design::default())?;
+        let f = fit(obs.view(), &Design::default())?;
         fits.push(OriginFit { origin: lv.clone(), breaks, shape: f.shape(), scale: f.mu.exp(), loglik: f.loglik });
     }
     let k = levels.len();
@@ -134,11 +132,17 @@ pub fn analyse(x: Obs, origin: &[String], column: &str) -> Result<Origins> {
 }
 
 /// What the origins' analysis is not: said after it in the report.
-const NOT_IN_LOOP: &str = "Each origin's law here is a two-parameter Weibull law fitted on its own; the naming loop above does not use the origins (its competing-risks candidate is two populations of unknown cause), and no lifetime is computed from them.";
+const NOT_IN_LOOP: &str = "Each origin's law here is a two-parameter Weibull law fitted on its own; the naming loop above does not use the origins (its competing-risks candidate is two populations of unknown cause).";
 
 impl Origins {
-    /// The shared-law test in words, for the report.
-    pub fn sentence(&self, alpha: f64) -> String {
+    /// The shared-law test in words, for the report, followed by `lifetime`: what the report
+    /// does with the origins' laws in the lifetime (a strength file has no contact to carry a
+    /// strength to impacts; a crush file's lifetime has every origin acting).
+    pub fn sentence(&self, alpha: f64, lifetime: &str) -> String {
+        format!("{} {lifetime}", self.test_words(alpha))
+    }
+
+    fn test_words(&self, alpha: f64) -> String {
         match &self.shared {
             Ok(s) if s.p < alpha => format!(
                 "**The origins do not share one Weibull law**: likelihood ratio {:.2} on {} degrees of freedom, χ² p = {:.3} (ℓ per Pa: each origin its own law {:.3}; one law acting through all {} origins {:.3}, the one-law fit of all specimens less ln {} per break). {}",

@@ -106,9 +106,9 @@ pub struct SizeSpec {
     pub measure: SizeMeasure,
 }
 
-/// What a study's `[[strength]]` table says of its file's columns beside `data`: the size
-/// measure, the recorded factors and the failure-origin column (`datasets check --study` reads
-/// the file with them, as the run does).
+/// What a study's `[[strength]]` (or a crush file's `[[material]]`) table says of its file's
+/// columns beside `data`: the size measure, the recorded factors and the failure-origin column
+/// (`datasets check --study` reads the file with them, as the run does).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SetColumns {
     /// The size measure.
@@ -201,21 +201,13 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
         provenance.unused.retain(|u| *u != table.headers[c]);
     }
     let mut columns = read_factors(&table, &rows, factors, &mut provenance, origin, path)?;
-    let mut failure_origins: Vec<String> = Vec::new();
-    let mut origin_column = None;
-    if let Some(col) = origins {
-        let key = format!("{}.origin", table_key(origin));
-        let c = declared_columns(&table, &provenance, &[(key, col.to_string())], origin, path)?[0].1;
-        for &row in &rows {
-            match table.text(row, c).map(|t| t.trim().to_string()).filter(|t| !t.is_empty()) {
-                Some(t) => failure_origins.push(t),
-                None => return Err(table.error(row, Some(c), "an empty failure origin: every specimen needs one (write the origin, or `none` for a specimen that did not break)".to_string())),
-            }
+    let (mut failure_origins, origin_column) = match origins {
+        Some(col) => {
+            let (o, c) = crate::intake::observed::failure_origins(&table, &rows, col, format!("{}.origin", table_key(origin)), origin, &mut provenance)?;
+            (o, Some(c))
         }
-        origin_column = Some(c);
-        provenance.columns.push(ColumnRecord { source: table.headers[c].clone(), field: "failure origin".into(), unit: String::new(), conversion: "fractography".into(), found_by: "study".into() });
-        provenance.unused.retain(|u| *u != table.headers[c]);
-    }
+        None => (Vec::new(), None),
+    };
     let tc = r.column("temperature");
     let cells: Vec<Option<f64>> = rows.iter().map(|&row| r.number("temperature", row)).collect::<Result<_>>()?;
     let mut temperatures_c = crate::intake::observed::test_temperatures(&cells, &|k| table.place(rows[k], tc), tc.map(|c| format!("`{}`", table.headers[c])).as_deref(), src, origin, &mut provenance)?;
@@ -237,9 +229,8 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
     }
     // `none` is for a specimen that did not break: a break needs its origin.
     if let Some(c) = origin_column {
-        let o = sp.observations.view();
-        if let Some(i) = (0..o.len()).find(|&i| o.kind(i) != crate::obs::Censor::Right && failure_origins[i].eq_ignore_ascii_case("none")) {
-            return Err(table.error(rows[sp.rows[i]], Some(c), "failure origin `none` on a specimen that broke: write where it broke (`none` is for a specimen that did not break)"));
+        if let Some(i) = crate::intake::observed::break_without_origin(sp.observations.view(), &failure_origins) {
+            return Err(table.error(rows[sp.rows[i]], Some(c), crate::intake::observed::NONE_ON_A_BREAK));
         }
     }
     sample.strength = sp.observations;

@@ -67,6 +67,18 @@ pub(super) fn figure(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
             blocks: vec![Block::Table { header: vec!["material".into(), "round".into(), "effects".into(), "gap G".into(), "expected".into(), "AD p".into()], rows }],
         }));
     }
+    if let Some(key) = stem.strip_prefix("discrepancy_origins_") {
+        let t = Table::load(dir, "origins")?.filter("material", key)?;
+        let (origin, breaks, m, scale) = (t.s("origin")?, t.f("breaks")?, t.f("weibull_modulus")?, t.f("scale_pa")?);
+        let parts: Vec<String> = (0..origin.len())
+            .map(|i| if m[i].is_finite() { format!("{} {} breaks, m = {:.2}, σθ = {:.0} MPa", origin[i], breaks[i], m[i], scale[i] / 1e6) } else { format!("{} {} break(s), too few for a law", origin[i], breaks[i]) })
+            .collect();
+        return Ok(Some(FigureNote {
+            title: Some(format!("Weibull probability plot by failure origin, {}", material_labels(dir)?(key))),
+            caption: p(&format!("Each failure origin's breaks at their Kaplan–Meier plotting positions with the other origins' breaks right-censored at their strength (ASTM C1239's estimate per origin), with each origin's fitted law: {}.", parts.join("; "))),
+            blocks: vec![],
+        }));
+    }
     if let Some(key) = stem.strip_prefix("discrepancy_probability_") {
         let t = Table::load(dir, "fits")?.filter("material", key)?;
         let (stage, eff, m, scale, law) = (t.s("stage")?, t.s("effects")?, t.f("weibull_modulus")?, t.f("scale_pa")?, t.s("law")?);
@@ -130,26 +142,38 @@ fn lifetime(dir: &Path) -> Result<FigureNote> {
     let t = Table::load(dir, "lifetime")?;
     let (mat, stage, years, pb, q05, q95) = (t.s("material")?, t.s("stage")?, t.f("years")?, t.f("p_break")?, t.f("q05")?, t.f("q95")?);
     let band = |i: usize| format!("{} [{}, {}]", prob_text(pb[i]), prob_text(q05[i]), prob_text(q95[i]));
+    // Materials with known failure origins have a third stage: each origin's law, all acting.
+    let known = stage.iter().any(|s| s == "origins");
     let mut rows = Vec::new();
     let mut said = Vec::new();
     for m in distinct(&mat) {
         for y in distinct(&years) {
             let find = |s: &str| (0..mat.len()).find(|&i| mat[i] == m && years[i] == y && stage[i] == s);
-            let (b, a) = (find("before"), find("after"));
-            rows.push(vec![labels(&m), format!("{y}"), b.map_or("—".into(), band), a.map_or("—".into(), band)]);
+            let (b, a, o) = (find("before"), find("after"), find("origins"));
+            let mut row = vec![labels(&m), format!("{y}"), b.map_or("—".into(), band), a.map_or("—".into(), band)];
+            if known {
+                row.push(o.map_or("—".into(), band));
+            }
+            rows.push(row);
             if let (Some(b), Some(a), true) = (b, a, y == years[0]) {
-                said.push(format!("{} {} → {}", labels(&m), prob_text(pb[b]), prob_text(pb[a])));
+                let origins = o.map(|o| format!(", every failure origin's own law acting {}", prob_text(pb[o]))).unwrap_or_default();
+                said.push(format!("{} {} → {}{origins}", labels(&m), prob_text(pb[b]), prob_text(pb[a])));
             }
         }
+    }
+    let mut header = vec!["material".into(), "years".into(), "base model [90 %]".into(), "with the named effects [90 %]".into()];
+    if known {
+        header.push("known origins [90 %]".into());
     }
     Ok(FigureNote {
         title: Some("Breaking probability before and after the named effects".into()),
         caption: p(&format!(
-            "Breaking probability with its 90 % band per material, with the base model (crosses) and with the named effects (dots), one panel per horizon. After {} yr: {}.",
+            "Breaking probability with its 90 % band per material, with the base model (crosses) and with the named effects (dots){}, one panel per horizon. After {} yr: {}.",
+            if known { ", and with each known failure origin's own law acting together (triangles)" } else { "" },
             years.first().copied().unwrap_or(f64::NAN),
             said.join("; ")
         )),
-        blocks: vec![Block::Table { header: vec!["material".into(), "years".into(), "base model [90 %]".into(), "with the named effects [90 %]".into()], rows }],
+        blocks: vec![Block::Table { header, rows }],
     })
 }
 

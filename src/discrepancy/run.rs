@@ -302,7 +302,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         } else {
             Vec::new()
         };
-        // Known failure origins: each origin's law, the shared-law test, and the lifetime with
+        // Known failure origins: each origin's law, the shared-modulus test, and the lifetime with
         // every origin's law acting.
         let origins = match &m.spec.origin {
             Some(column) => Some(crate::strength::origins::analyse(m.sample.strength.view(), &m.data.origins, column)?),

@@ -100,7 +100,7 @@ pub struct SpecimenSet {
     pub populations: Vec<crate::strength::flaws::Populations>,
     /// The column naming each specimen's failure origin (fractography: volume, surface, edge,
     /// pore …): each origin's law with the other origins' breaks censored (ASTM C1239) and the
-    /// test of one shared law ([`crate::strength::origins`]).
+    /// test of one shared modulus ([`crate::strength::origins`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub origin: Option<String>,
 }
@@ -213,7 +213,7 @@ pub struct MaterialResult {
     pub power: Vec<PowerRow>,
     /// Each specimen's test temperature (°C).
     pub temperatures_c: Vec<f64>,
-    /// Each failure origin's law and the shared-law test (a strength file with `origin`).
+    /// Each failure origin's law and the shared-modulus test (a strength file with `origin`).
     pub origins: Option<crate::strength::origins::Origins>,
     /// Each specimen's failure origin, where the study names the column (empty otherwise).
     pub failure_origins: Vec<String>,

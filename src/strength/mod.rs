@@ -17,7 +17,7 @@
 //!   non-identifiability reported and profile bands; naming candidates in place of the one
 //!   Weibull law (`Effect::Populations`), beside the scale effects of recorded columns.
 //! * [`origins`]: known failure origins (fractography) — each origin's law with the other
-//!   origins' breaks censored (ASTM C1239), and the test of one law shared by all.
+//!   origins' breaks censored (ASTM C1239), and the test of one modulus shared by all (a scale each).
 //! * [`specimens`]: strength data as input — a file of specimen strengths with a size measure
 //!   and recorded factors, read through the intake into a [`Sample`] the naming loop takes
 //!   like a crush sample.

@@ -17,10 +17,15 @@
 //! (right-censored there); one that broke at or below a value from another origin says nothing
 //! of this origin and is left out of its fit.
 //!
-//! **Do the origins share one law?** Under H₀ every origin has the same Weibull law (σ, m), so
-//! Σ_k ℓ_k(σ, m) = ℓ_c − r ln K, with ℓ_c the two-parameter fit of all specimens together (the
-//! weakest of K equal risks is Weibull with the same m) and r the breaks. The likelihood ratio
-//! LR = 2[Σ_k ℓ̂_k − (ℓ̂_c − r ln K)] is referred to χ² with 2(K − 1) degrees of freedom. The
+//! **Do the origins share one modulus?** Under H₀ the origins' laws have one modulus m, each
+//! its own scale σ_k. Then the weakest of them is one Weibull law (m, σ) with
+//! σ^(−m) = Σ_k σ_k^(−m), and which origin breaks a specimen does not depend on its strength:
+//! origin k with probability p_k = (σ/σ_k)^m. The likelihood factorises into the one-law fit of
+//! all specimens together and the multinomial of the origins' counts, so its maximum is
+//! ℓ̂₀ = ℓ̂_c + Σ_k r_k ln(r_k / r), with r_k the breaks from origin k and r all breaks. The
+//! likelihood ratio LR = 2[Σ_k ℓ̂_k − ℓ̂₀] is referred to χ² with K − 1 degrees of freedom
+//! (2K parameters against K + 1). How often each origin occurs is not evidence against H₀ —
+//! testing "every origin the same law" instead (p_k = 1/K) rejects on unequal counts alone. The
 //! test needs every origin with at least two breaks and rows that are breaks or not broken
 //! (a class or a left-censored row does not factorise this way); otherwise it is not made, and
 //! the reason is given.
@@ -58,16 +63,17 @@ pub struct OriginFit {
     pub loglik: f64,
 }
 
-/// The likelihood-ratio test of one law shared by every origin.
+/// The likelihood-ratio test of one modulus shared by every origin (each its own scale).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SharedLaw {
     /// Σ_k ℓ̂_k, each origin its own law.
     pub loglik_separate: f64,
-    /// ℓ̂ with one law for every origin.
+    /// ℓ̂ with one modulus for every origin: the one-law fit of all specimens plus
+    /// Σ_k r_k ln(r_k / r).
     pub loglik_shared: f64,
     /// 2 (separate − shared).
     pub lr: f64,
-    /// 2 (K − 1).
+    /// K − 1.
     pub df: usize,
     /// χ² p-value.
     pub p: f64,
@@ -80,7 +86,7 @@ pub struct Origins {
     pub column: String,
     /// One law per origin, in the origins' sorted order.
     pub fits: Vec<OriginFit>,
-    /// The shared-law test, or why it is not made.
+    /// The shared-modulus test, or why it is not made.
     pub shared: std::result::Result<SharedLaw, String>,
 }
 
@@ -93,7 +99,7 @@ pub fn combined(p: &[f64]) -> f64 {
 }
 
 /// Each origin's law from the observations `x` whose specimen i failed from `origin[i]` (ignored
-/// for a specimen that did not break), and the shared-law test (module docs).
+/// for a specimen that did not break), and the shared-modulus test (module docs).
 pub fn analyse(x: Obs, origin: &[String], column: &str) -> Result<Origins> {
     let n = x.len();
     let mut levels: Vec<String> = (0..n).filter(|&i| x.kind(i) != Censor::Right).map(|i| origin[i].clone()).collect();
@@ -120,11 +126,11 @@ pub fn analyse(x: Obs, origin: &[String], column: &str) -> Result<Origins> {
         Err("rows that broke within a class or at or below a value do not factorise by origin; the test takes breaks and specimens not broken only".to_string())
     } else {
         let all = fit(x, &Design::default())?;
-        let r = (0..n).filter(|&i| x.kind(i) == Censor::Exact).count();
+        let r = fits.iter().map(|f| f.breaks).sum::<usize>() as f64;
         let separate: f64 = fits.iter().map(|f| f.loglik).sum();
-        let shared = all.loglik - r as f64 * (k as f64).ln();
+        let shared = all.loglik + fits.iter().map(|f| f.breaks as f64 * (f.breaks as f64 / r).ln()).sum::<f64>();
         let lr = (2.0 * (separate - shared)).max(0.0);
-        let df = 2 * (k - 1);
+        let df = k - 1;
         let p = crate::stats::chi2_upper_tail(lr, df as f64);
         Ok(SharedLaw { loglik_separate: separate, loglik_shared: shared, lr, df, p })
     };
@@ -132,10 +138,10 @@ pub fn analyse(x: Obs, origin: &[String], column: &str) -> Result<Origins> {
 }
 
 /// What the origins' analysis is not: said after it in the report.
-const NOT_IN_LOOP: &str = "Each origin's law here is a two-parameter Weibull law fitted on its own; the naming loop above does not use the origins (its competing-risks candidate is two populations of unknown cause).";
+const NOT_IN_LOOP: &str = "Each origin's law here is a two-parameter Weibull law fitted on its own; the naming loop above does not use the origins.";
 
 impl Origins {
-    /// The shared-law test in words, for the report, followed by `lifetime`: what the report
+    /// The shared-modulus test in words, for the report, followed by `lifetime`: what the report
     /// does with the origins' laws in the lifetime (a strength file has no contact to carry a
     /// strength to impacts; a crush file's lifetime has every origin acting).
     pub fn sentence(&self, alpha: f64, lifetime: &str) -> String {
@@ -143,16 +149,13 @@ impl Origins {
     }
 
     fn test_words(&self, alpha: f64) -> String {
+        let p = |p: f64| if p < 0.001 { "< 0.001".to_string() } else { format!("= {p:.3}") };
+        let df = |d: usize| if d == 1 { "1 degree of freedom".to_string() } else { format!("{d} degrees of freedom") };
+        let how = "each origin its own law, against one modulus for all with a scale each; under one modulus which origin breaks a specimen does not depend on its strength, so how often each origin occurs is no evidence either way";
         match &self.shared {
-            Ok(s) if s.p < alpha => format!(
-                "**The origins do not share one Weibull law**: likelihood ratio {:.2} on {} degrees of freedom, χ² p = {:.3} (ℓ per Pa: each origin its own law {:.3}; one law acting through all {} origins {:.3}, the one-law fit of all specimens less ln {} per break). {}",
-                s.lr, s.df, s.p, s.loglik_separate, self.fits.len(), s.loglik_shared, self.fits.len(), NOT_IN_LOOP
-            ),
-            Ok(s) => format!(
-                "The origins are consistent with one shared Weibull law: likelihood ratio {:.2} on {} degrees of freedom, χ² p = {:.3} (ℓ per Pa: each origin its own law {:.3}; one law acting through all {} origins {:.3}, the one-law fit of all specimens less ln {} per break). {}",
-                s.lr, s.df, s.p, s.loglik_separate, self.fits.len(), s.loglik_shared, self.fits.len(), NOT_IN_LOOP
-            ),
-            Err(why) => format!("Whether the origins share one law is not tested: {why}. {NOT_IN_LOOP}"),
+            Ok(s) if s.p < alpha => format!("**The origins' Weibull moduli differ**: likelihood ratio {:.2} on {}, χ² p {} ({how}). {NOT_IN_LOOP}", s.lr, df(s.df), p(s.p)),
+            Ok(s) => format!("The origins are consistent with one Weibull modulus: likelihood ratio {:.2} on {}, χ² p {} ({how}). {NOT_IN_LOOP}", s.lr, df(s.df), p(s.p)),
+            Err(why) => format!("Whether the origins share one modulus is not tested: {why}. {NOT_IN_LOOP}"),
         }
     }
 }
@@ -164,10 +167,12 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     #[test]
-    fn the_origins_fits_recover_their_laws_and_the_shared_law_test_tells_one_law_from_two() {
+    fn the_origins_fits_recover_their_laws_and_the_shared_modulus_test_tells_two_moduli_from_one_not_from_unequal_counts() {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let draw = |rng: &mut ChaCha8Rng, s: f64, m: f64| s * (-(-rng.random::<f64>()).ln_1p()).powf(1.0 / m);
-        for (second, differ) in [((1.5, 4.0), true), ((1.0, 10.0), false)] {
+        // Moduli 10 and 4: they differ. One law twice; one modulus with the second scale 1.3×,
+        // so the surface breaks are about 7 % of all: unequal counts are no evidence.
+        for (second, differ) in [((1.5, 4.0), true), ((1.0, 10.0), false), ((1.3, 10.0), false)] {
             let (mut x, mut o) = (Vec::new(), Vec::new());
             for _ in 0..400 {
                 let (a, b) = (draw(&mut rng, 1.0, 10.0), draw(&mut rng, second.0, second.1));
@@ -178,7 +183,7 @@ mod tests {
             let v = r.fits.iter().find(|f| f.origin == "volume").unwrap();
             assert!((v.shape / 10.0 - 1.0).abs() < 0.15 && (v.scale - 1.0).abs() < 0.03, "{r:?}");
             let s = r.shared.clone().unwrap();
-            assert_eq!(s.df, 2);
+            assert_eq!(s.df, 1);
             assert_eq!(s.p < 0.01, differ, "{r:?}");
             // The separate fits' ℓ is the full likelihood: at least the shared law's.
             assert!(s.loglik_separate >= s.loglik_shared - 1e-9);

@@ -386,7 +386,7 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
     }
     // `none` is for a particle that did not break: a break needs its origin.
     if let Some(c) = origin_column
-        && let Some(i) = crate::intake::observed::break_without_origin(sp.observations.view(), &origins)
+        && let Some(i) = crate::intake::observed::check_origins(sp.observations.view(), &origins, &mut provenance)
     {
         return Err(table.error(places[i].0, Some(c), crate::intake::observed::NONE_ON_A_BREAK));
     }

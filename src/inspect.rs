@@ -199,7 +199,7 @@ fn check_table(src: &Source, kind: Option<&'static str>, origin: &MapOrigin, set
                     what: if s.material.is_some() && src.material.is_none() { format!("{what} [{m}]") } else { what.clone() },
                     summary: match &d.censoring {
                         None => format!("crush data, {label}, {} particle{}, d = {dia} µm, F = {force} N{origins}", d.records.len(), if d.records.len() == 1 { "" } else { "s" }),
-                        Some(c) => format!("crush data, {label}, {}, d = {dia} µm, F = {force} N{origins}", crate::obs::Obs { x: &d.forces(), censoring: Some(c) }.tally().describe("particles")),
+                        Some(_) => format!("crush data, {label}, {}, d = {dia} µm, F = {force} N{origins}", forces.view().tally().describe("particles")),
                     },
                     read: Some(d.provenance),
                 });

@@ -670,8 +670,32 @@ replicates = 0
     let breaks = table_text(&o, "origin").len();
     assert!(line.contains("failure origins (`Bruchursprung`) of the breaks: Oberfläche ") && line.contains(", Volumen ") && breaks == 2, "{}", out.stdout);
     assert!(out.stdout.contains("`Bruchursprung` → failure origin (fractography)") && !out.stdout.contains("not used"), "{}", out.stdout);
-    // `none` on a particle that broke is refused, naming the row and column.
+    // The origins plot's caption says the unbroken particles are censored for every origin, not drawn.
+    let unbroken = table_text(&dir.join("residuals.csv"), "observed").iter().filter(|k| *k == "right").count() / 2;
+    let html = s.read("reports/origins/report.html");
+    assert!(unbroken > 0 && html.contains(&format!("The {unbroken} specimens that did not break enter every origin's fit as right-censored and are not drawn.")), "{unbroken} unbroken");
+    assert!(!summary.contains("Few breaks"), "{summary}");
+
+    // A rare third origin (three breaks relabelled `Pore`) is cautioned; an origin written on a
+    // particle that did not break is said not to be used.
     let text = s.read("datasets/bruch.csv");
+    let mut pores = 0;
+    let rare: String = text
+        .lines()
+        .map(|l| {
+            let l = if pores < 3 && l.contains(";ja;Volumen;") { pores += 1; l.replace(";ja;Volumen;", ";ja;Pore;") } else { l.to_string() };
+            l.replace(";nein;none;", ";nein;Volumen;") + "\n"
+        })
+        .collect();
+    s.write("datasets/bruch.csv", &rare);
+    let out = s.run(&["run", "studies/origins.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let summary = s.read("reports/origins/summary.md");
+    assert!(summary.contains("**Few breaks**: origin \"Pore\" (3 breaks) has its law from fewer than 10 breaks"), "{summary}");
+    let manifest = s.read("reports/origins/manifest.json");
+    assert!(manifest.contains("that did not break name an origin; not used") || manifest.contains("that did not break names an origin; not used"), "{manifest}");
+
+    // `none` on a particle that broke is refused, naming the row and column.
     let line = text.lines().find(|l| l.contains(";ja;Volumen;")).unwrap().to_string();
     s.write("datasets/bruch.csv", &text.replace(&line, &line.replace(";ja;Volumen;", ";ja;none;")));
     let out = s.run(&["run", "studies/origins.toml", "--quiet"]);

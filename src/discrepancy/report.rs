@@ -353,6 +353,10 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                 (Some(_), false) => format!("No lifetime is computed from them: {}.", o.fits.iter().find(|f| !f.shape.is_finite()).map_or_else(|| "an origin has no law".to_string(), |f| format!("origin \"{}\" has {} break{}, and a Weibull law needs at least two", f.origin, f.breaks, if f.breaks == 1 { "" } else { "s" }))),
             };
             md.push_str(&format!("\n{}\n", o.sentence(s.discrepancy.alpha, &lifetime)));
+            let few = o.few_words();
+            if !few.is_empty() {
+                md.push_str(&format!("\n{few}\n"));
+            }
         }
         if let Some(spec) = &r.crush {
         let known = r.lifetime.iter().find(|(st, _)| st == "origins").map(|(_, v)| v);

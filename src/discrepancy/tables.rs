@@ -223,7 +223,7 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
             scol("material", rows.iter().map(|r| r.0.to_string()).collect()),
             scol("column", rows.iter().map(|r| r.1.column.clone()).collect()),
             scol("origin", rows.iter().map(|r| r.2.origin.clone()).collect()),
-            fcol("breaks", rows.iter().map(|r| r.2.breaks as f64).collect()),
+            ucol("breaks", rows.iter().map(|r| r.2.breaks as u64).collect()),
             fcol("weibull_modulus", rows.iter().map(|r| r.2.shape).collect()),
             fcol("scale_pa", rows.iter().map(|r| r.2.scale).collect()),
             fcol("log_likelihood", rows.iter().map(|r| r.2.loglik).collect()),

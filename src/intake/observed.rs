@@ -580,14 +580,24 @@ pub fn failure_origins(table: &RawTable, rows: &[usize], column: &str, key: Stri
     Ok((out, c))
 }
 
-/// The first specimen that broke (exact, in a class or at or below its value) and whose origin
-/// reads `none`, the word kept for a specimen that did not break; the caller refuses it with
-/// [`NONE_ON_A_BREAK`].
-pub fn break_without_origin(x: crate::obs::Obs, origins: &[String]) -> Option<usize> {
-    (0..x.len()).find(|&i| x.kind(i) != Censor::Right && origins[i].eq_ignore_ascii_case("none"))
+/// Checks each specimen's failure origin against what its row says: the first specimen that
+/// broke (exact, in a class or at or below its value) and whose origin reads `none`, the word
+/// kept for a specimen that did not break, is returned for the caller to refuse with
+/// [`NONE_ON_A_BREAK`]. An origin written on a specimen that did not break is not used (it
+/// survived every origin's flaws, whatever the cell says): recorded in `provenance` with the
+/// count, so the run says it instead of dropping it.
+pub fn check_origins(x: crate::obs::Obs, origins: &[String], provenance: &mut Provenance) -> Option<usize> {
+    if let Some(i) = (0..x.len()).find(|&i| x.kind(i) != Censor::Right && origins[i].eq_ignore_ascii_case("none")) {
+        return Some(i);
+    }
+    let named = (0..x.len()).filter(|&i| x.kind(i) == Censor::Right && !origins[i].eq_ignore_ascii_case("none")).count();
+    if named > 0 {
+        provenance.observed.push(format!("failure origin: {named} specimen{} that did not break {} an origin; not used (a specimen that did not break survived every origin's flaws)", if named == 1 { "" } else { "s" }, if named == 1 { "names" } else { "name" }));
+    }
+    None
 }
 
-/// The rule [`break_without_origin`] enforces, in words.
+/// The rule [`check_origins`] enforces, in words.
 pub const NONE_ON_A_BREAK: &str = "failure origin `none` on a specimen that broke: write where it broke (`none` is for a specimen that did not break)";
 
 /// A file's rows as specimens ([`specimens`]): a row counting k stands k times.

@@ -16,7 +16,7 @@ use std::path::Path;
 use plotters::prelude::{BLACK, RGBColor, SeriesLabelPosition};
 
 use super::canvas::{Encoded, colour};
-use super::panel::{Kind, Marker, Panel, Series, figure, figure_grid, padded};
+use super::panel::{Kind, Marker, Panel, Series, figure, figure_grid, figure_legend_below, padded};
 use super::{Rendered, Table, distinct, lg};
 use crate::error::Result;
 
@@ -396,10 +396,13 @@ fn by_origin(dir: &Path, width_cm: f64, key: &str, o: &Table) -> Result<Drawn> {
         x_range: xr,
         y_range: padded(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)), 0.05, 0.05),
         y_log: false,
-        series,
-        legend: Some(SeriesLabelPosition::UpperLeft),
+        series: series.iter().map(|s| Series { label: None, ..s.clone() }).collect(),
+        legend: None,
     };
-    figure(&format!("discrepancy_origins_{key}"), width_cm, 0.8, &[(p, 1.0)])
+    // The legend below the plot, one origin a line: with three or more origins a legend inside
+    // covered points wherever it went.
+    let entries: Vec<Series> = series.into_iter().filter(|s| s.label.is_some()).collect();
+    figure_legend_below(&format!("discrepancy_origins_{key}"), width_cm, 0.8 + 0.045 * entries.len() as f64, &[(p, 1.0)], &entries, 1)
 }
 
 fn gap(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<Drawn> {

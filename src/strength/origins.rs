@@ -137,6 +137,9 @@ pub fn analyse(x: Obs, origin: &[String], column: &str) -> Result<Origins> {
     Ok(Origins { column: column.to_string(), fits, shared })
 }
 
+/// Fewer breaks than this from one origin: its law is said to be poorly determined.
+pub const FEW_BREAKS: usize = 10;
+
 /// What the origins' analysis is not: said after it in the report.
 const NOT_IN_LOOP: &str = "Each origin's law here is a two-parameter Weibull law fitted on its own; the naming loop above does not use the origins.";
 
@@ -146,6 +149,17 @@ impl Origins {
     /// strength to impacts; a crush file's lifetime has every origin acting).
     pub fn sentence(&self, alpha: f64, lifetime: &str) -> String {
         format!("{} {lifetime}", self.test_words(alpha))
+    }
+
+    /// A caution where an origin's law rests on fewer than [`FEW_BREAKS`] breaks (empty
+    /// otherwise): its law, and the lifetime with every origin acting, are poorly determined.
+    pub fn few_words(&self) -> String {
+        let few: Vec<String> = self.fits.iter().filter(|f| f.shape.is_finite() && f.breaks < FEW_BREAKS).map(|f| format!("\"{}\" ({} breaks)", f.origin, f.breaks)).collect();
+        match few.len() {
+            0 => String::new(),
+            1 => format!("**Few breaks**: origin {} has its law from fewer than {FEW_BREAKS} breaks, so its modulus and scale are poorly determined, and so is any lifetime it enters: read the bands, not the point values.", few[0]),
+            _ => format!("**Few breaks**: origins {} have their laws from fewer than {FEW_BREAKS} breaks each, so their moduli and scales are poorly determined, and so is any lifetime they enter: read the bands, not the point values.", few.join(", ")),
+        }
     }
 
     fn test_words(&self, alpha: f64) -> String {

@@ -229,7 +229,7 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
     }
     // `none` is for a specimen that did not break: a break needs its origin.
     if let Some(c) = origin_column {
-        if let Some(i) = crate::intake::observed::break_without_origin(sp.observations.view(), &failure_origins) {
+        if let Some(i) = crate::intake::observed::check_origins(sp.observations.view(), &failure_origins, &mut provenance) {
             return Err(table.error(rows[sp.rows[i]], Some(c), crate::intake::observed::NONE_ON_A_BREAK));
         }
     }

@@ -73,9 +73,18 @@ pub(super) fn figure(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
         let parts: Vec<String> = (0..origin.len())
             .map(|i| if m[i].is_finite() { format!("{} {} breaks, m = {:.2}, σθ = {:.0} MPa", origin[i], breaks[i], m[i], scale[i] / 1e6) } else { format!("{} {} break(s), too few for a law", origin[i], breaks[i]) })
             .collect();
+        // The specimens that did not break: censored for every origin, not drawn.
+        let r = Table::load(dir, "residuals")?.filter("material", key)?;
+        let (stage, observed) = (r.s("stage")?, r.s("observed")?);
+        let unbroken = (0..stage.len()).filter(|&i| stage[i] == "before" && observed[i] == crate::obs::Censor::Right.name()).count();
+        let not_drawn = match unbroken {
+            0 => String::new(),
+            1 => " The one specimen that did not break enters every origin's fit as right-censored and is not drawn.".to_string(),
+            n => format!(" The {n} specimens that did not break enter every origin's fit as right-censored and are not drawn."),
+        };
         return Ok(Some(FigureNote {
             title: Some(format!("Weibull probability plot by failure origin, {}", material_labels(dir)?(key))),
-            caption: p(&format!("Each failure origin's breaks at their Kaplan–Meier plotting positions with the other origins' breaks right-censored at their strength (ASTM C1239's estimate per origin), with each origin's fitted law: {}.", parts.join("; "))),
+            caption: p(&format!("Each failure origin's breaks at their Kaplan–Meier plotting positions with the other origins' breaks right-censored at their strength (ASTM C1239's estimate per origin), with each origin's fitted law: {}.{not_drawn}", parts.join("; "))),
             blocks: vec![],
         }));
     }

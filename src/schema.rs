@@ -193,7 +193,7 @@ pub struct MaterialSpec {
     /// The column naming each particle's failure origin (fractography: volume, surface, pore
     /// …; `none` for a particle that did not break). Read by the discrepancy study: each
     /// origin's law with the other origins' breaks censored (ASTM C1239), the test of one shared
-    /// law, and the lifetime with every origin's law acting ([`crate::strength::origins`]). The
+    /// modulus, and the lifetime with every origin's law acting ([`crate::strength::origins`]). The
     /// main and lifetime studies fit one law per material and refuse it
     /// ([`MaterialSpec::one_law`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]

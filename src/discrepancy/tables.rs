@@ -218,7 +218,7 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
     // origins.csv: each failure origin's law (strength and crush files that name origins).
     let rows: Vec<(&str, &crate::strength::origins::Origins, &crate::strength::origins::OriginFit)> = results.iter().filter_map(|r| r.origins.as_ref().map(|o| (r.key.as_str(), o))).flat_map(|(k, o)| o.fits.iter().map(move |f| (k, o, f))).collect();
     if !rows.is_empty() {
-        let shared = |o: &crate::strength::origins::Origins, f: fn(&crate::strength::origins::SharedLaw) -> f64| o.shared.as_ref().map_or(f64::NAN, f);
+        let shared = |o: &crate::strength::origins::Origins, f: fn(&crate::strength::origins::SharedModulus) -> f64| o.shared.as_ref().map_or(f64::NAN, f);
         let mut t = table(vec![
             scol("material", rows.iter().map(|r| r.0.to_string()).collect()),
             scol("column", rows.iter().map(|r| r.1.column.clone()).collect()),

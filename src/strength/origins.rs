@@ -65,7 +65,7 @@ pub struct OriginFit {
 
 /// The likelihood-ratio test of one modulus shared by every origin (each its own scale).
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct SharedLaw {
+pub struct SharedModulus {
     /// Σ_k ℓ̂_k, each origin its own law.
     pub loglik_separate: f64,
     /// ℓ̂ with one modulus for every origin: the one-law fit of all specimens plus
@@ -87,7 +87,7 @@ pub struct Origins {
     /// One law per origin, in the origins' sorted order.
     pub fits: Vec<OriginFit>,
     /// The shared-modulus test, or why it is not made.
-    pub shared: std::result::Result<SharedLaw, String>,
+    pub shared: std::result::Result<SharedModulus, String>,
 }
 
 /// The probability that a particle breaks when each origin's flaws alone would break it with
@@ -132,7 +132,7 @@ pub fn analyse(x: Obs, origin: &[String], column: &str) -> Result<Origins> {
         let lr = (2.0 * (separate - shared)).max(0.0);
         let df = k - 1;
         let p = crate::stats::chi2_upper_tail(lr, df as f64);
-        Ok(SharedLaw { loglik_separate: separate, loglik_shared: shared, lr, df, p })
+        Ok(SharedModulus { loglik_separate: separate, loglik_shared: shared, lr, df, p })
     };
     Ok(Origins { column: column.to_string(), fits, shared })
 }
@@ -199,7 +199,7 @@ mod tests {
             let s = r.shared.clone().unwrap();
             assert_eq!(s.df, 1);
             assert_eq!(s.p < 0.01, differ, "{r:?}");
-            // The separate fits' ℓ is the full likelihood: at least the shared law's.
+            // The separate fits' ℓ is the full likelihood: at least the shared modulus'.
             assert!(s.loglik_separate >= s.loglik_shared - 1e-9);
         }
     }

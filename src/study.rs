@@ -102,20 +102,20 @@ impl LoadedStudy {
         use crate::intake::{MapOrigin, Source};
         let study = &self.file.path;
         let origin = |key: String| MapOrigin { file: study.display().to_string(), key };
-        let curves = |file: &str, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, temperature_c: Option<f64>, key: String| {
-            (Source { columns: columns.clone(), units: units.clone(), temperature_c, ..Source::file(resolve_relative(study, Path::new(file))) }, Some("curves"), origin(key), None)
-        };
         let materials: &[MaterialSpec] = match &self.study {
             Study::Lifetime(s) => &s.material,
             Study::Uq(s) => &s.material,
             Study::Discrepancy(s) => &s.material,
             Study::Calibrate(s) => {
                 return vec![match &s.data {
-                    crate::calibrate::study::DataSpec::CrushCurves { file, columns, units, temperature_c, .. } => curves(file, columns, units, *temperature_c, "data".into()),
+                    crate::calibrate::study::DataSpec::CrushCurves { file, columns, units, temperature_c, sheet, header_row, .. } => {
+                        let src = Source { sheet: sheet.clone(), header_row: *header_row, columns: columns.clone(), units: units.clone(), temperature_c: *temperature_c, ..Source::file(resolve_relative(study, Path::new(file))) };
+                        (src, Some("curves"), origin("data".into()), None)
+                    }
                     crate::calibrate::study::DataSpec::Observations { file } => (Source::file(resolve_relative(study, Path::new(file))), Some("observations"), origin("data".into()), None),
                 }];
             }
-            Study::DiscrepancyCurves(s) => return s.data.iter().enumerate().map(|(i, d)| curves(&d.file, &d.columns, &d.units, Some(d.temperature_c), format!("data[{i}]"))).collect(),
+            Study::DiscrepancyCurves(s) => return s.data.iter().enumerate().map(|(i, d)| (d.source(&resolve_relative(study, Path::new(&d.file))), Some("curves"), origin(format!("data[{i}]")), None)).collect(),
             _ => &[],
         };
         // A crush file is read with its material's factor and origin columns, as the run reads it.

@@ -480,3 +480,51 @@ fn several_sheets_of_a_workbook_are_one_table_with_the_sheet_name_as_a_column() 
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("sheet \"800 °C\", row 6 (sheet row 6), column \"Festigkeit [MPa]\""), "{}", out.stderr);
 }
+
+/// A curve workbook as a lab keeps it — a notes sheet first, the curves on a later sheet under
+/// two lines of preamble — is read through `sheet` and `header_row` as the CSV it was made from,
+/// by a calibration's `[data]` and a curve study's `[[data]]` alike; several sheets are refused.
+#[test]
+fn a_curve_workbook_is_read_from_its_sheet_and_header_row() {
+    use partlife::intake::write::{Sheet, Value, xlsx};
+    let s = Scratch::new();
+    let si = root().join("datasets/crush_curves_gen3_rt.csv");
+    let text = std::fs::read_to_string(&si).unwrap();
+    let t = |v: &str| Value::Text(v.to_string());
+    let mut rows = vec![vec![t("Prüfmaschine Z010, 0,5 mm/min")], vec![t("Charge G3-RT")], vec![t("Probe"), t("D [mm]"), t("Weg [µm]"), t("Kraft [N]")]];
+    for line in text.lines().skip(1) {
+        let f: Vec<f64> = line.split(',').map(|v| v.parse().unwrap()).collect();
+        rows.push(vec![Value::Number(f[0]), Value::Number(f[1] * 1e3), Value::Number(f[2] * 1e6), Value::Number(f[3])]);
+    }
+    let book = xlsx(&[Sheet { name: "Notizen".into(), rows: vec![vec![t("nichts")]], merged: vec![] }, Sheet { name: "Kurven".into(), rows, merged: vec![] }]).unwrap();
+    std::fs::write(s.path("datasets/kurven.xlsx"), book).unwrap();
+    let columns: std::collections::BTreeMap<String, String> = [("displacement", "Weg [µm]"), ("force", "Kraft [N]")].into_iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+    let src = partlife::intake::Source { sheet: Some(partlife::intake::SheetRef::Name("Kurven".into())), header_row: Some(3), columns, temperature_c: Some(20.0), ..partlife::intake::Source::file(s.path("datasets/kurven.xlsx")) };
+    let (got, _) = partlife::calibrate::data::read_curves(&src, &Default::default()).unwrap();
+    let want = partlife::calibrate::data::load_curves(&si, Some(20.0)).unwrap();
+    assert_eq!(got.len(), want.len());
+    for (g, w) in got.iter().zip(&want) {
+        assert_eq!(g.particle, w.particle);
+        assert!((g.diameter / w.diameter - 1.0).abs() < 1e-12 && g.force.iter().zip(&w.force).all(|(a, b)| (a - b).abs() <= 1e-12 * b.abs().max(1e-9)), "particle {}", g.particle);
+        assert!(g.displacement.iter().zip(&w.displacement).all(|(a, b)| (a - b).abs() <= 1e-18 + 1e-12 * b.abs()), "particle {}", g.particle);
+    }
+    // Through the study keys: `datasets check --study` reads the file as the run does.
+    common::tiny_calibration(&s, "");
+    let keys = "kurven.xlsx\"\nsheet = \"Kurven\"\nheader_row = 3\ncolumns = { displacement = \"Weg [µm]\", force = \"Kraft [N]\" }";
+    let study = s.read("studies/cal.toml").replace("crush_curves_gen3_rt.csv\"", keys);
+    s.write("studies/cal.toml", &study);
+    let out = s.run(&["datasets", "check", "--study", "studies/cal.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains(&format!("crush curves, {} particles", want.len())) && out.stdout.contains("Kurven"), "{}", out.stdout);
+    let curves = std::fs::read_to_string(root().join("studies/discrepancy_curves.toml")).unwrap();
+    s.write("studies/curves.toml", &curves.replacen("crush_curves_gen3_rt.csv\"", keys, 1));
+    std::fs::copy(root().join("datasets/crush_curves_gen3_800c.csv"), s.path("datasets/crush_curves_gen3_800c.csv")).unwrap();
+    let out = s.run(&["datasets", "check", "--study", "studies/curves.toml"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(out.stdout.contains(&format!("crush curves, {} particles", want.len())), "{}", out.stdout);
+    // Several sheets would merge curves whose particle numbers repeat: refused, naming the key.
+    s.write("studies/cal.toml", &study.replace("sheet = \"Kurven\"", "sheet = [\"Notizen\", \"Kurven\"]"));
+    let out = s.run(&["run", "studies/cal.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("data.sheet") && out.stderr.contains("one sheet"), "{}", out.stderr);
+}

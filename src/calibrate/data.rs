@@ -114,13 +114,20 @@ pub fn load_curves(path: &Path, temperature_c: Option<f64>) -> Result<Vec<Curve>
 /// unit, for headers that state none), as every crush data table takes them; `origin` names the
 /// study table that holds the map; `temperature_c` the study's test temperature (module docs).
 pub fn load_curves_mapped(path: &Path, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, origin: &MapOrigin, temperature_c: Option<f64>) -> Result<Vec<Curve>> {
-    Ok(read_curves(path, columns, units, origin, temperature_c)?.0)
+    Ok(read_curves(&Source { columns: columns.clone(), units: units.clone(), temperature_c, ..Source::file(path) }, origin)?.0)
 }
 
-/// [`load_curves_mapped`] with the record of how the file was read (columns, units, the test
-/// temperature and where it came from), for a report's manifest and summary.
-pub fn read_curves(path: &Path, columns: &std::collections::BTreeMap<String, String>, units: &std::collections::BTreeMap<String, String>, origin: &MapOrigin, temperature_c: Option<f64>) -> Result<(Vec<Curve>, Provenance)> {
-    curves_of(&read_raw(&Source::file(path))?, path, columns, units, origin, temperature_c)
+/// The curves of `src` as a study describes the file (its sheet and header row, the column and
+/// unit maps, the test temperature where the file gives none), with the record of how it was
+/// read (columns, units, the test temperature and where it came from), for a report's manifest
+/// and summary.
+pub fn read_curves(src: &Source, origin: &MapOrigin) -> Result<(Vec<Curve>, Provenance)> {
+    // One sheet: curves of several sheets would merge where their particle numbers repeat.
+    if let Some(crate::intake::SheetRef::Several(_)) = &src.sheet {
+        let key = if origin.key.is_empty() { "sheet".to_string() } else { format!("{}.sheet", origin.key) };
+        return Err(crate::error::Error::config(&origin.file, key, "a curve file is read from one sheet (a name or a position): curves of several sheets would merge where their particle numbers repeat; give each sheet its own file entry"));
+    }
+    curves_of(&read_raw(src)?, &src.file, &src.columns, &src.units, origin, src.temperature_c)
 }
 
 /// The curves of a table already read from `path` (what [`load_curves_mapped`] does after

@@ -43,6 +43,12 @@ pub enum DataSpec {
         /// empty cell); a curve with neither is refused.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         temperature_c: Option<f64>,
+        /// The sheet of a workbook: its name, or its position from 1 (default: the first).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        sheet: Option<crate::intake::SheetRef>,
+        /// The line (text) or sheet row (workbook) of the header, from 1 (default: the first).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        header_row: Option<usize>,
     },
     /// Named observations (`output, unit, value, sd`).
     Observations {
@@ -236,7 +242,7 @@ impl CalibrateStudy {
             other => other,
         };
         let (built, observations, inputs, config, read) = match (&self.model, &self.data) {
-            (ModelSpec::Crush { crush }, DataSpec::CrushCurves { file: data, reference_diameter, points, fraction, sigma_floor, columns, units, temperature_c }) => {
+            (ModelSpec::Crush { crush }, DataSpec::CrushCurves { file: data, reference_diameter, points, fraction, sigma_floor, columns, units, temperature_c, sheet, header_row }) => {
                 if !(*points >= 2 && *points <= 40) {
                     return Err(Error::config(&file, "data.points", format!("must lie in [2, 40], got {points}")));
                 }
@@ -257,7 +263,8 @@ impl CalibrateStudy {
                 {
                     return Err(Error::config(&file, "data.temperature_c", rule));
                 }
-                let (curves, read) = read_curves(&path, columns, units, &crate::intake::MapOrigin { file: file.clone(), key: "data".into() }, *temperature_c)?;
+                let src = crate::intake::Source { sheet: sheet.clone(), header_row: *header_row, columns: columns.clone(), units: units.clone(), temperature_c: *temperature_c, ..crate::intake::Source::file(&path) };
+                let (curves, read) = read_curves(&src, &crate::intake::MapOrigin { file: file.clone(), key: "data".into() })?;
                 let d0 = match reference_diameter {
                     Some(d) if *d > 0.0 && d.is_finite() => *d,
                     Some(d) => return Err(Error::config(&file, "data.reference_diameter", format!("must be > 0, got {d}"))),

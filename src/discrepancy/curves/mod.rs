@@ -66,7 +66,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::koh::KohOptions;
-use crate::calibrate::data::load_curves_mapped;
+use crate::calibrate::data::read_curves;
 use crate::error::{Error, Result};
 use crate::io::InputFile;
 use crate::model::Simulator;
@@ -153,12 +153,26 @@ pub struct CurveFile {
     #[serde(default)]
     pub label: Option<String>,
     /// The file's header for a field its header does not name, as a calibration's `[data]`
-    /// takes it ([`crate::calibrate::data::load_curves_mapped`]).
+    /// takes it ([`crate::calibrate::data::read_curves`]).
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub columns: std::collections::BTreeMap<String, String>,
     /// A field's unit where its header states none.
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub units: std::collections::BTreeMap<String, String>,
+    /// The sheet of a workbook: its name, or its position from 1 (default: the first).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sheet: Option<crate::intake::SheetRef>,
+    /// The line (text) or sheet row (workbook) of the header, from 1 (default: the first).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub header_row: Option<usize>,
+}
+
+impl CurveFile {
+    /// How to read the file, found at `path` (resolved against the study), as every curve
+    /// reader takes it.
+    pub fn source(&self, path: &Path) -> crate::intake::Source {
+        crate::intake::Source { sheet: self.sheet.clone(), header_row: self.header_row, columns: self.columns.clone(), units: self.units.clone(), temperature_c: Some(self.temperature_c), ..crate::intake::Source::file(path) }
+    }
 }
 
 /// The FE table of the curvature candidate.
@@ -233,7 +247,7 @@ impl CurveStudy {
             if !path.is_file() {
                 return Err(Error::config(&file, format!("data[{i}].file"), format!("{} does not exist", path.display())));
             }
-            let curves = load_curves_mapped(&path, &d.columns, &d.units, &crate::intake::MapOrigin { file: file.clone(), key: format!("data[{i}]") }, Some(d.temperature_c))?;
+            let curves = read_curves(&d.source(&path), &crate::intake::MapOrigin { file: file.clone(), key: format!("data[{i}]") })?.0;
             // A temperature column that says otherwise than the study: each file is one
             // temperature of the model.
             if let Some(c) = curves.iter().find(|c| (c.temperature_c - d.temperature_c).abs() > crate::intake::observed::TEMPERATURE_TOLERANCE_C) {

@@ -59,15 +59,31 @@ impl Rows<'_> {
     }
 }
 
+/// The mixture's weight p and ln p_j at θ (logit p = θ₀), computed once per evaluation rather
+/// than once per row; zero for the other laws.
+#[derive(Clone, Copy)]
+struct Weight {
+    p: f64,
+    lw: [f64; 2],
+}
+
+impl Weight {
+    fn of(kind: Populations, t: &[f64]) -> Weight {
+        match kind {
+            Populations::Mixture => Weight { p: 1.0 / (1.0 + (-t[0]).exp()), lw: [-(1.0 + (-t[0]).exp()).ln(), -(1.0 + t[0].exp()).ln()] },
+            Populations::Competing | Populations::Threshold => Weight { p: 0.0, lw: [0.0; 2] },
+        }
+    }
+}
+
 /// ln S at ln x (less the row's shift) and its gradient: the law's coordinates in `gs[..k0]`,
 /// ∂/∂η (= Σ_j ∂/∂ ln σ_j) in `gs[k0]`.
-fn ln_sf_grad(kind: Populations, lx: f64, t: &[f64], gs: &mut [f64; 6]) -> f64 {
+fn ln_sf_grad(kind: Populations, lx: f64, t: &[f64], w: Weight, gs: &mut [f64; 6]) -> f64 {
     let k0 = kind.parameters();
     gs.iter_mut().for_each(|v| *v = 0.0);
     match kind {
         Populations::Mixture => {
-            let p = 1.0 / (1.0 + (-t[0]).exp());
-            let lw = [-(1.0 + (-t[0]).exp()).ln(), -(1.0 + t[0].exp()).ln()];
+            let Weight { p, lw } = w;
             let (u, m) = ([t[1], t[3]], [t[2].exp(), t[4].exp()]);
             let (y, e) = standardised(lx, u, m);
             let (ls, r) = log_sum_and_shares([lw[0] - e[0], lw[1] - e[1]]);
@@ -108,19 +124,19 @@ fn ln_sf_grad(kind: Populations, lx: f64, t: &[f64], gs: &mut [f64; 6]) -> f64 {
 
 /// A censored or interval row's ℓ and its gradient into `g` (the law's coordinates, then one β
 /// per column of `z`; module docs).
-fn censored_row(kind: Populations, rows: &Rows, i: usize, h: f64, z: &[Vec<f64>], t: &[f64], g: &mut [f64]) -> f64 {
+fn censored_row(kind: Populations, rows: &Rows, i: usize, h: f64, z: &[Vec<f64>], t: &[f64], w: Weight, g: &mut [f64]) -> f64 {
     let k0 = kind.parameters();
     let (mut ga, mut gb) = ([0.0; 6], [0.0; 6]);
     let (l, wa, wb) = match rows.kind[i] {
-        Censor::Right => (ln_sf_grad(kind, rows.lnx[i] - h, t, &mut ga), 1.0, 0.0),
+        Censor::Right => (ln_sf_grad(kind, rows.lnx[i] - h, t, w, &mut ga), 1.0, 0.0),
         Censor::Left => {
-            let lb = ln_sf_grad(kind, rows.lnx[i] - h, t, &mut gb);
+            let lb = ln_sf_grad(kind, rows.lnx[i] - h, t, w, &mut gb);
             let l = ln_one_minus_exp(lb);
             (l, 0.0, -(lb - l).exp())
         }
         Censor::Interval => {
-            let la = ln_sf_grad(kind, rows.lnx[i] - h, t, &mut ga);
-            let lb = ln_sf_grad(kind, rows.lnu[i] - h, t, &mut gb);
+            let la = ln_sf_grad(kind, rows.lnx[i] - h, t, w, &mut ga);
+            let lb = ln_sf_grad(kind, rows.lnu[i] - h, t, w, &mut gb);
             let rho = (lb - la).exp();
             (la + ln_one_minus_exp(lb - la), 1.0 / (1.0 - rho), -rho / (1.0 - rho))
         }
@@ -158,19 +174,21 @@ pub(super) fn loglik_grad(kind: Populations, rows: &Rows, z: &[Vec<f64>], t: &[f
     };
     let (u, v) = ([t[at], t[at + 2]], [t[at + 1], t[at + 3]]);
     let m = [v[0].exp(), v[1].exp()];
+    let weight = Weight::of(kind, t);
+    let Weight { p, lw } = weight;
+    // ln m_j − ln σ_j: the part of ln f_j that is the same for every row.
+    let c = [0, 1].map(|j| v[j] - u[j]);
     for (i, &lx0) in lnx.iter().enumerate() {
         let h = eta(i);
         if !rows.exact(i) {
-            l += censored_row(kind, rows, i, h, z, t, g);
+            l += censored_row(kind, rows, i, h, z, t, weight, g);
             continue;
         }
         let (y, e) = standardised(lx0 - h, u, m);
         let mut gu = 0.0;
         match kind {
             Populations::Mixture => {
-                let p = 1.0 / (1.0 + (-t[0]).exp());
-                let lw = [-(1.0 + (-t[0]).exp()).ln(), -(1.0 + t[0].exp()).ln()];
-                let a = [0, 1].map(|j| lw[j] + v[j] - u[j] + (m[j] - 1.0) * y[j] - e[j]);
+                let a = [0, 1].map(|j| lw[j] + c[j] + (m[j] - 1.0) * y[j] - e[j]);
                 // ln(e^a₀ + e^a₁) and the responsibilities from one exponential.
                 let (li, r) = log_sum_and_shares(a);
                 l += li - h;
@@ -185,8 +203,15 @@ pub(super) fn loglik_grad(kind: Populations, rows: &Rows, z: &[Vec<f64>], t: &[f
                 }
             }
             Populations::Competing => {
-                let lh = [0, 1].map(|j| v[j] - u[j] + (m[j] - 1.0) * y[j]);
-                let (lht, share) = log_sum_and_shares(lh);
+                // h_j = (m_j/σ_j)(x/σ_j)^(m_j − 1) = m_j e_j / x, so ln(h₁ + h₂) = ln(m₁e₁ + m₂e₂) − ln x
+                // and the shares are m_j e_j / Σ; in logs where that sum under- or overflows.
+                let me = [m[0] * e[0], m[1] * e[1]];
+                let sum = me[0] + me[1];
+                let (lht, share) = if sum > 1e-280 && sum < 1e280 {
+                    (sum.ln() - (lx0 - h), [me[0] / sum, me[1] / sum])
+                } else {
+                    log_sum_and_shares([0, 1].map(|j| c[j] + (m[j] - 1.0) * y[j]))
+                };
                 l += lht - e[0] - e[1] - h;
                 for j in 0..2 {
                     let w = share[j];
@@ -210,11 +235,12 @@ fn threshold_loglik_grad(rows: &Rows, z: &[Vec<f64>], t: &[f64], g: &mut [f64]) 
     let kind = Populations::Threshold;
     let k0 = kind.parameters();
     let (gam, u, m) = (t[0].exp(), t[1], t[2].exp());
+    let ln_m = m.ln();
     let mut l = 0.0;
     for (i, &lx) in rows.lnx.iter().enumerate() {
         let h = shift_at(z, &t[k0..], i);
         if !rows.exact(i) {
-            l += censored_row(kind, rows, i, h, z, t, g);
+            l += censored_row(kind, rows, i, h, z, t, Weight::of(kind, t), g);
             continue;
         }
         let x = (lx - h).exp();
@@ -224,7 +250,7 @@ fn threshold_loglik_grad(rows: &Rows, z: &[Vec<f64>], t: &[f64], g: &mut [f64]) 
         }
         let y = w.ln() - u;
         let e = (m * y).exp();
-        l += m.ln() - u + (m - 1.0) * y - e - h;
+        l += ln_m - u + (m - 1.0) * y - e - h;
         let a = (m * e - m + 1.0) / w;
         g[0] += gam * a;
         g[1] += m * (e - 1.0);
@@ -294,6 +320,24 @@ mod tests {
                     assert!((fd - g[k]).abs() < 1e-6 * (1.0 + fd.abs()), "{kind:?} coordinate {k}: analytic {} vs difference {fd}", g[k]);
                 }
             }
+        }
+    }
+
+    #[test]
+    fn competing_risks_hazards_far_below_and_far_above_both_scales_keep_their_logs() {
+        // ℓ = ln(h₁ + h₂) − e₁ − e₂ with ln h_j = ln m_j − ln σ_j + (m_j − 1)(ln x − ln σ_j):
+        // at ln x = −300 both m_j e_j underflow and ln(m₁e₁ + m₂e₂) must come from the logs; at
+        // ln x = 1.5 the sum is ordinary.
+        let t = [0.1f64, 1.2, -0.2, 0.9];
+        for lx in [-300.0f64, 1.5] {
+            let ln_h = [0, 1].map(|j| t[2 * j + 1] - t[2 * j] + (t[2 * j + 1].exp() - 1.0) * (lx - t[2 * j]));
+            let e = [0, 1].map(|j| (t[2 * j + 1].exp() * (lx - t[2 * j])).exp());
+            let hi = ln_h[0].max(ln_h[1]);
+            let expected = hi + ((ln_h[0] - hi).exp() + (ln_h[1] - hi).exp()).ln() - e[0] - e[1];
+            let mut g = [0.0; 4];
+            let l = loglik_grad(Populations::Competing, &Rows { lnx: &[lx], kind: &[], lnu: &[] }, &[], &t, &mut g);
+            assert!((l - expected).abs() < 1e-9 * expected.abs().max(1.0), "ln x = {lx}: {l} against {expected}");
+            assert!(g.iter().all(|v| v.is_finite()));
         }
     }
 }

@@ -516,7 +516,7 @@ const NELSON_ORIGINS: [(&str, f64, f64, f64); 2] = [("Bond", 3.9826198453, 1676.
 const NELSON_SHARED_LR: f64 = 0.0347152125;
 
 #[test]
-fn failure_origins_give_each_origin_s_law_with_the_others_censored_and_the_shared_law_test() {
+fn failure_origins_give_each_origin_s_law_and_bands_with_the_others_censored_and_the_shared_modulus_test() {
     let s = Scratch::new();
     std::fs::create_dir_all(s.path("datasets/real")).unwrap();
     let data = std::fs::read_to_string(common::root().join("datasets/real/nelson_connection_strength.csv")).unwrap();
@@ -526,7 +526,7 @@ fn failure_origins_give_each_origin_s_law_with_the_others_censored_and_the_share
     let out = s.run(&["run", "studies/origins.toml", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     let path = s.path("reports/origins/origins.csv");
-    let (origin, m, scale, l, lr) = (table_text(&path, "origin"), table_f64(&path, "weibull_modulus"), table_f64(&path, "scale_pa"), table_f64(&path, "log_likelihood"), table_f64(&path, "shared_law_lr"));
+    let (origin, m, scale, l, lr) = (table_text(&path, "origin"), table_f64(&path, "weibull_modulus"), table_f64(&path, "scale_pa"), table_f64(&path, "log_likelihood"), table_f64(&path, "shared_modulus_lr"));
     assert_eq!(origin, ["Bond", "Wire"]);
     for (i, (name, pm, ps, pl)) in NELSON_ORIGINS.iter().enumerate() {
         // Ten breaks per mode: a density per Pa is one per MPa over 1e6.
@@ -534,8 +534,14 @@ fn failure_origins_give_each_origin_s_law_with_the_others_censored_and_the_share
         assert!((m[i] / pm - 1.0).abs() < 1e-5 && (scale[i] / 1e6 / ps - 1.0).abs() < 1e-6 && (ours - pl).abs() < 1e-6, "{name}: m {} σ {} ℓ {ours} against reliability's {pm} {ps} {pl}", m[i], scale[i]);
         assert!((lr[i] - NELSON_SHARED_LR).abs() < 1e-6, "LR {}", lr[i]);
     }
+    // Each origin's 90 % bands hold its estimate, and the summary gives them beside it.
+    let (mq, sq) = ([table_f64(&path, "modulus_q05"), table_f64(&path, "modulus_q95")], [table_f64(&path, "scale_q05_pa"), table_f64(&path, "scale_q95_pa")]);
+    for i in 0..2 {
+        assert!(mq[0][i] < m[i] && m[i] < mq[1][i] && sq[0][i] < scale[i] && scale[i] < sq[1][i], "{}: m {} in [{}, {}], σ {} in [{}, {}]", origin[i], m[i], mq[0][i], mq[1][i], scale[i], sq[0][i], sq[1][i]);
+    }
     let summary = s.read("reports/origins/summary.md");
-    assert!(summary.contains("**Failure origins** (column `failure_mode`") && summary.contains("| Bond | 10 | 3.98 | 1676.7 |") && summary.contains("The origins are consistent with one Weibull modulus: likelihood ratio 0.03 on 1 degree of freedom, χ² p = 0.852"), "{summary}");
+    let bond = format!("| Bond | 10 | 3.98 | {:.2}–{:.2} | 1676.7 | {:.1}–{:.1} |", mq[0][0], mq[1][0], sq[0][0] / 1e6, sq[1][0] / 1e6);
+    assert!(summary.contains("**Failure origins** (column `failure_mode`") && summary.contains(&bond) && summary.contains("The origins are consistent with one Weibull modulus: likelihood ratio 0.03 on 1 degree of freedom, χ² p = 0.852"), "{summary}");
     // A column read twice — the origin also declared a factor — is refused with both keys' rule.
     s.write("studies/twice.toml", &study.replace("origin = \"failure_mode\"", "origin = \"failure_mode\"\nfactors = [\"failure_mode\"]"));
     let out = s.run(&["run", "studies/twice.toml", "--quiet"]);
@@ -624,7 +630,7 @@ replicates = 0
     let dir = s.path("reports/origins");
     // Each origin's law from its own breaks with the other's censored: the generator's moduli.
     let o = dir.join("origins.csv");
-    let (origin, m, p) = (table_text(&o, "origin"), table_f64(&o, "weibull_modulus"), table_f64(&o, "shared_law_p"));
+    let (origin, m, p) = (table_text(&o, "origin"), table_f64(&o, "weibull_modulus"), table_f64(&o, "shared_modulus_p"));
     assert_eq!(origin, ["Oberfläche", "Volumen"]);
     assert!((m[0] / 8.0 - 1.0).abs() < 0.25 && (m[1] / 15.0 - 1.0).abs() < 0.25, "moduli {m:?} against 8 and 15");
     assert!(p[0] < 0.01, "the origins' laws differ, shared-modulus p {}", p[0]);

@@ -337,14 +337,24 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         }
         if let Some(o) = &r.origins {
             md.push_str(&format!(
-                "\n**Failure origins** (column `{}`; ASTM C1239: each origin's Weibull law from its own breaks, the other origins' breaks right-censored at their strength, a specimen that did not break censored for every origin):\n\n| origin | breaks | Weibull m | scale σθ (MPa) | ℓ (per Pa) |\n|---|---|---|---|---|\n",
-                o.column
+                "\n**Failure origins** (column `{}`; ASTM C1239: each origin's Weibull law from its own breaks, the other origins' breaks right-censored at their strength, a specimen that did not break censored for every origin; 90 % bands from {} parametric-bootstrap refits, each redrawn specimen censored as its row was):\n\n| origin | breaks | Weibull m | m, 90 % band | scale σθ (MPa) | σθ, 90 % band (MPa) |\n|---|---|---|---|---|---|\n",
+                o.column, s.lifetime.bootstrap
             ));
             for f in &o.fits {
                 if f.shape.is_finite() {
-                    md.push_str(&format!("| {} | {} | {:.2} | {:.1} | {:.3} |\n", f.origin, f.breaks, f.shape, f.scale / 1e6, f.loglik));
+                    md.push_str(&format!(
+                        "| {} | {} | {:.2} | {:.2}–{:.2} | {:.1} | {:.1}–{:.1} |\n",
+                        f.origin,
+                        f.breaks,
+                        f.shape,
+                        f.shape_band.0,
+                        f.shape_band.1,
+                        f.scale / 1e6,
+                        f.scale_band.0 / 1e6,
+                        f.scale_band.1 / 1e6
+                    ));
                 } else {
-                    md.push_str(&format!("| {} | {} | — | — | — |\n", f.origin, f.breaks));
+                    md.push_str(&format!("| {} | {} | — | — | — | — |\n", f.origin, f.breaks));
                 }
             }
             let lifetime = match (&r.crush, r.lifetime.iter().any(|(st, _)| st == "origins")) {

@@ -138,6 +138,10 @@ fn lifetime_bands(model: &ModelFit, sample: &Sample, m: &Prepared, s: &Discrepan
     Ok(s.impact.years.iter().zip(bands).map(|(&years, (estimate, q05, q95))| LifetimeBand { years, estimate, q05, q95 }).collect())
 }
 
+/// Seed of the failure origins' bootstrap draws (xor the material's naming seed): one set of
+/// draws gives each origin's bands and the lifetime with every origin acting.
+const ORIGINS_SEED: u64 = 0x0519;
+
 /// The lifetime with every failure origin's law acting (crush data whose study names the origin
 /// column): each origin's two-parameter law fitted to its own breaks with the other origins'
 /// censored ([`crate::obs::Obs::of_origin`]) is one [`LifetimeModel`], and a particle
@@ -146,7 +150,9 @@ fn lifetime_bands(model: &ModelFit, sample: &Sample, m: &Prepared, s: &Discrepan
 /// band combines each origin's parametric-bootstrap draws index by index (the censored
 /// likelihoods factorise, so the origins' estimates are independent); each redraw is censored as
 /// the campaign censored its row, another origin's break counted as a limit at its value.
-/// `Ok(None)` where an origin has fewer than two breaks (no law to carry).
+/// `Ok(None)` where an origin has fewer than two breaks (no law to carry). Origin k's draws are
+/// those of its bands in `origins.csv` (the same fit, count and seed `seed + k`:
+/// [`crate::strength::origins::analyse`]).
 fn origins_lifetime(origins: &crate::strength::origins::Origins, labels: &[String], m: &Prepared, s: &DiscrepancyStudy, seed: u64) -> Result<Option<Vec<LifetimeBand>>> {
     if origins.fits.iter().any(|f| !f.shape.is_finite()) {
         return Ok(None);
@@ -156,8 +162,7 @@ fn origins_lifetime(origins: &crate::strength::origins::Origins, labels: &[Strin
     let (mut point, mut draws) = (Vec::new(), Vec::new());
     for (k, f) in origins.fits.iter().enumerate() {
         let (strength, _) = m.sample.strength.view().of_origin(labels, &f.origin);
-        let sample = Sample { source: format!("{} (origin {})", m.sample.source, f.origin), strength, particles: true, ..Sample::default() };
-        let fit = StrengthFit::new(&sample, &[], s.discrepancy.gamma, &m.spec.key)?;
+        let fit = crate::strength::origins::origin_fit(strength, &f.origin)?;
         let lm = LifetimeModel::new(&m.spec.key, &m.spec.label, m.spec.sphere(&m.data), s.impact.target, s.contact.averaging, fit, m.population.clone())?;
         let ln_sigma = lm.ln_impact_stress(s.impact.energy_fraction, s.impact.reference_velocity_m_s)?;
         point.push(lm.breakage(&lm.fit.estimate(), None, s.impact.energy_fraction, s.impact.reference_velocity_m_s, &counts)?);
@@ -305,12 +310,12 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         // Known failure origins: each origin's law, the shared-modulus test, and the lifetime with
         // every origin's law acting.
         let origins = match &m.spec.origin {
-            Some(column) => Some(crate::strength::origins::analyse(m.sample.strength.view(), &m.data.origins, column)?),
+            Some(column) => Some(crate::strength::origins::analyse(m.sample.strength.view(), &m.data.origins, column, s.lifetime.bootstrap, material_settings.seed ^ ORIGINS_SEED)?),
             None => None,
         };
         let mut lifetime = lifetime;
         if let Some(o) = &origins
-            && let Some(bands) = origins_lifetime(o, &m.data.origins, &m, s, material_settings.seed ^ 0x0519)?
+            && let Some(bands) = origins_lifetime(o, &m.data.origins, &m, s, material_settings.seed ^ ORIGINS_SEED)?
         {
             lifetime.push(("origins".to_string(), bands));
         }
@@ -332,7 +337,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
             Vec::new()
         };
         let origins = match &set.origin {
-            Some(column) => Some(crate::strength::origins::analyse(read.sample.strength.view(), &read.origins, column)?),
+            Some(column) => Some(crate::strength::origins::analyse(read.sample.strength.view(), &read.origins, column, s.lifetime.bootstrap, material_settings.seed ^ ORIGINS_SEED)?),
             None => None,
         };
         results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power, temperatures_c: read.temperatures_c, origins, failure_origins: read.origins });

@@ -13,7 +13,8 @@ use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSpec, 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LifetimeOptions {
-    /// Parametric-bootstrap replicates of the 90 % bands (default 200).
+    /// Parametric-bootstrap replicates of the 90 % bands (default 200): the lifetime's, and each
+    /// failure origin's modulus and scale (`origins.csv`).
     pub bootstrap: usize,
 }
 

@@ -226,10 +226,16 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
             ucol("breaks", rows.iter().map(|r| r.2.breaks as u64).collect()),
             fcol("weibull_modulus", rows.iter().map(|r| r.2.shape).collect()),
             fcol("scale_pa", rows.iter().map(|r| r.2.scale).collect()),
+            // 90 % bands: the bootstrap draws the lifetime with every origin acting combines.
+            fcol("modulus_q05", rows.iter().map(|r| r.2.shape_band.0).collect()),
+            fcol("modulus_q95", rows.iter().map(|r| r.2.shape_band.1).collect()),
+            fcol("scale_q05_pa", rows.iter().map(|r| r.2.scale_band.0).collect()),
+            fcol("scale_q95_pa", rows.iter().map(|r| r.2.scale_band.1).collect()),
+            // The log-likelihood of each origin's fit, a density per unit of the strengths (Pa).
             fcol("log_likelihood", rows.iter().map(|r| r.2.loglik).collect()),
-            fcol("shared_law_lr", rows.iter().map(|r| shared(r.1, |s| s.lr)).collect()),
-            fcol("shared_law_df", rows.iter().map(|r| shared(r.1, |s| s.df as f64)).collect()),
-            fcol("shared_law_p", rows.iter().map(|r| shared(r.1, |s| s.p)).collect()),
+            fcol("shared_modulus_lr", rows.iter().map(|r| shared(r.1, |s| s.lr)).collect()),
+            fcol("shared_modulus_df", rows.iter().map(|r| shared(r.1, |s| s.df as f64)).collect()),
+            fcol("shared_modulus_p", rows.iter().map(|r| shared(r.1, |s| s.p)).collect()),
         ])?;
         dir.write_table("origins", &mut t)?;
     }

@@ -528,3 +528,22 @@ fn a_curve_workbook_is_read_from_its_sheet_and_header_row() {
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("data.sheet") && out.stderr.contains("one sheet"), "{}", out.stderr);
 }
+
+/// Two materials tested at different temperatures: the warning heads the summary's headline
+/// section (it went to stderr and the Warnings page only), and is absent where they agree.
+#[test]
+fn materials_tested_at_different_temperatures_are_warned_of_in_the_summary_s_headline() {
+    let s = Scratch::new();
+    let out = s.run(&["run", "studies/lifetime.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert!(!s.read("reports/lifetime/summary.md").contains("**Warning**"));
+    let gen4 = s.read("datasets/crush_gen4.csv");
+    let hot: String = gen4.lines().map(|l| if l.ends_with(",20") { format!("{}800\n", &l[..l.len() - 2]) } else { format!("{l}\n") }).collect();
+    assert_ne!(hot, gen4);
+    s.write("datasets/crush_gen4.csv", &hot);
+    let out = s.run(&["run", "studies/lifetime.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let summary = s.read("reports/lifetime/summary.md");
+    let warning = "## Headline\n\n**Warning**: the two materials were tested at different temperatures (BL 16/30 at 20 °C, Gen 4 at 800 °C): the comparison sets a strength measured at one temperature against one measured at another.\n\n* BL 16/30:";
+    assert!(summary.contains(warning), "{summary}");
+}

@@ -142,9 +142,36 @@ pub fn warnings(materials: &[Tested]) -> Vec<String> {
     out
 }
 
+/// `md` with each of `warnings` stated at the head of its headline section (after the line
+/// `## Headline`), so that a comparison or lifetime is not read without them (they also go to
+/// stderr and the report's Warnings page); at the end where there is no such section.
+pub fn with_warnings(md: &str, warnings: &[String]) -> String {
+    if warnings.is_empty() {
+        return md.to_string();
+    }
+    let block: String = warnings.iter().map(|w| format!("**Warning**: {w}.\n\n")).collect();
+    let head = "## Headline\n";
+    match md.find(head) {
+        Some(i) => {
+            let j = i + head.len();
+            format!("{}\n{block}{}", &md[..j], md[j..].trim_start_matches('\n'))
+        }
+        None => format!("{md}\n{block}"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn warnings_head_the_headline_section() {
+        let md = "# T\n\nlead\n\n## Headline\n\n* A is better\n";
+        let w = vec!["the two materials were tested at different temperatures (A at 800 °C, B at 20 °C)".to_string()];
+        assert_eq!(with_warnings(md, &w), "# T\n\nlead\n\n## Headline\n\n**Warning**: the two materials were tested at different temperatures (A at 800 °C, B at 20 °C).\n\n* A is better\n");
+        assert_eq!(with_warnings(md, &[]), md);
+        assert!(with_warnings("# T\n", &w).ends_with("**Warning**: the two materials were tested at different temperatures (A at 800 °C, B at 20 °C).\n\n"));
+    }
 
     #[test]
     fn the_sentences_follow_the_temperatures() {

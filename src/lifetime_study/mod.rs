@@ -389,7 +389,8 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
         crate::intake::warn(w);
     }
     let lead = crate::lifetime::tested::paragraph(&tested, &crate::lifetime::tested::named_or_tests(&tested, &predicted));
-    let md = crate::runkit::headline_summary("Breaking probability after repeated impacts (the deliverable's chain)", &headlines).replacen("\n## Headline", &format!("\n{lead}\n\n## Headline"), 1) + &attrition;
+    let md = crate::runkit::headline_summary("Breaking probability after repeated impacts (the deliverable's chain)", &headlines).replacen("\n## Headline", &format!("\n{lead}\n\n## Headline"), 1);
+    let md = crate::lifetime::tested::with_warnings(&md, &warnings) + &attrition;
     dir.write_bytes("summary.md", md.as_bytes())?;
     pb.inc(1);
 

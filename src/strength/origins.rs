@@ -109,10 +109,10 @@ pub fn combined(p: &[f64]) -> f64 {
 /// for a specimen that did not break), its 90 % bands from `draws` bootstrap draws, and the
 /// shared-modulus test (module docs).
 ///
-/// The bands are the 5 and 95 % quantiles of [`origin_draws`] (origin k's with seed
-/// `seed + k`): the plain parametric bootstrap, each redrawn specimen censored as its row was
-/// (another origin's break a limit at its value), in pivotal form — the draws the lifetime with
-/// every origin acting combines.
+/// The bands are the 5 and 95 % quantiles of the bootstrap draws of [`origin_fit`]
+/// ([`StrengthFit::draws`], origin k's with seed `seed + k`): the plain parametric bootstrap,
+/// each redrawn specimen censored as its row was (another origin's break a limit at its value),
+/// in pivotal form — the draws the lifetime with every origin acting combines.
 pub fn analyse(x: Obs, origin: &[String], column: &str, draws: usize, seed: u64) -> Result<Origins> {
     let n = x.len();
     let mut levels: Vec<String> = (0..n).filter(|&i| x.kind(i) != Censor::Right).map(|i| origin[i].clone()).collect();

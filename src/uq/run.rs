@@ -121,6 +121,7 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     for w in &warnings {
         crate::intake::warn(w);
     }
+    md = crate::lifetime::tested::with_warnings(&md, &warnings);
     md.push_str(&super::attrition::markdown(&attrition, &impacts_per_year_text(&primary.setup), &primary.setup.materials[0].model.label));
     dir.write_bytes("summary.md", md.as_bytes())?;
     pb.set_message("figures");

@@ -139,7 +139,7 @@ fn lifetime_bands(model: &ModelFit, sample: &Sample, m: &Prepared, s: &Discrepan
 }
 
 /// Seed of the failure origins' bootstrap draws (xor the material's naming seed): one set of
-/// draws gives each origin's bands and the lifetime with every origin acting.
+/// draws per origin gives its bands and enters the lifetime with every origin acting.
 const ORIGINS_SEED: u64 = 0x0519;
 
 /// The lifetime with every failure origin's law acting (crush data whose study names the origin
@@ -150,25 +150,23 @@ const ORIGINS_SEED: u64 = 0x0519;
 /// band combines each origin's parametric-bootstrap draws index by index (the censored
 /// likelihoods factorise, so the origins' estimates are independent); each redraw is censored as
 /// the campaign censored its row, another origin's break counted as a limit at its value.
-/// `Ok(None)` where an origin has fewer than two breaks (no law to carry). Origin k's draws are
-/// those of its bands in `origins.csv` (the same fit, count and seed `seed + k`:
-/// [`crate::strength::origins::analyse`]).
-fn origins_lifetime(origins: &crate::strength::origins::Origins, labels: &[String], m: &Prepared, s: &DiscrepancyStudy, seed: u64) -> Result<Option<Vec<LifetimeBand>>> {
+/// `Ok(None)` where an origin has fewer than two breaks (no law to carry). Each origin's draws
+/// are those its bands in `origins.csv` are quantiles of ([`crate::strength::origins::OriginFit::draws`]).
+fn origins_lifetime(origins: &crate::strength::origins::Origins, labels: &[String], m: &Prepared, s: &DiscrepancyStudy) -> Result<Option<Vec<LifetimeBand>>> {
     if origins.fits.iter().any(|f| !f.shape.is_finite()) {
         return Ok(None);
     }
     let counts: Vec<f64> = s.impact.years.iter().map(|y| impacts_in(*y, s.impact.impacts_per_year)).collect();
     let horizons: Vec<crate::strength::Horizon> = counts.iter().map(|&n| crate::strength::Horizon::independent(n)).collect();
     let (mut point, mut draws) = (Vec::new(), Vec::new());
-    for (k, f) in origins.fits.iter().enumerate() {
+    for f in &origins.fits {
         let (strength, _) = m.sample.strength.view().of_origin(labels, &f.origin);
         let fit = crate::strength::origins::origin_fit(strength, &f.origin)?;
         let lm = LifetimeModel::new(&m.spec.key, &m.spec.label, m.spec.sphere(&m.data), s.impact.target, s.contact.averaging, fit, m.population.clone())?;
         let ln_sigma = lm.ln_impact_stress(s.impact.energy_fraction, s.impact.reference_velocity_m_s)?;
         point.push(lm.breakage(&lm.fit.estimate(), None, s.impact.energy_fraction, s.impact.reference_velocity_m_s, &counts)?);
-        let (params, _) = lm.draws(Uncertainty::Bootstrap, s.lifetime.bootstrap, seed.wrapping_add(k as u64))?;
         draws.push(
-            params
+            f.draws
                 .iter()
                 .map(|p| {
                     let mut out = vec![0.0; counts.len()];
@@ -315,7 +313,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         };
         let mut lifetime = lifetime;
         if let Some(o) = &origins
-            && let Some(bands) = origins_lifetime(o, &m.data.origins, &m, s, material_settings.seed ^ ORIGINS_SEED)?
+            && let Some(bands) = origins_lifetime(o, &m.data.origins, &m, s)?
         {
             lifetime.push(("origins".to_string(), bands));
         }

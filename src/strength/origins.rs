@@ -68,6 +68,10 @@ pub struct OriginFit {
     pub shape_band: (f64, f64),
     /// The scale's 90 % band, as `shape_band`.
     pub scale_band: (f64, f64),
+    /// The bootstrap draws the bands are quantiles of (empty with fewer than two breaks): the
+    /// lifetime with every origin acting combines these, not a second bootstrap.
+    #[serde(skip)]
+    pub draws: Vec<crate::strength::Params>,
 }
 
 /// The likelihood-ratio test of one modulus shared by every origin (each its own scale).
@@ -112,7 +116,7 @@ pub fn combined(p: &[f64]) -> f64 {
 /// The bands are the 5 and 95 % quantiles of the bootstrap draws of [`origin_fit`]
 /// ([`StrengthFit::draws`], origin k's with seed `seed + k`): the plain parametric bootstrap,
 /// each redrawn specimen censored as its row was (another origin's break a limit at its value),
-/// in pivotal form — the draws the lifetime with every origin acting combines.
+/// in pivotal form — kept in [`OriginFit::draws`] for the lifetime with every origin acting.
 pub fn analyse(x: Obs, origin: &[String], column: &str, draws: usize, seed: u64) -> Result<Origins> {
     let n = x.len();
     let mut levels: Vec<String> = (0..n).filter(|&i| x.kind(i) != Censor::Right).map(|i| origin[i].clone()).collect();
@@ -125,11 +129,12 @@ pub fn analyse(x: Obs, origin: &[String], column: &str, draws: usize, seed: u64)
         let (obs, breaks) = x.of_origin(origin, lv);
         if breaks < 2 {
             why.get_or_insert(format!("origin \"{lv}\" has {breaks} break: a Weibull law needs at least two"));
-            fits.push(OriginFit { origin: lv.clone(), breaks, shape: f64::NAN, scale: f64::NAN, loglik: f64::NAN, shape_band: nan, scale_band: nan });
+            fits.push(OriginFit { origin: lv.clone(), breaks, shape: f64::NAN, scale: f64::NAN, loglik: f64::NAN, shape_band: nan, scale_band: nan, draws: Vec::new() });
             continue;
         }
-        let f = fit(obs.view(), &Design::default())?;
-        let d = origin_fit(obs, lv)?.draws(Uncertainty::Bootstrap, draws, seed.wrapping_add(k as u64))?;
+        let sf = origin_fit(obs, lv)?;
+        let f = &sf.model.reg;
+        let d = sf.draws(Uncertainty::Bootstrap, draws, seed.wrapping_add(k as u64))?;
         let band = |v: Vec<f64>| {
             let q = crate::stats::interpolated_quantiles(v, &[0.05, 0.95]);
             (q[0], q[1])
@@ -142,6 +147,7 @@ pub fn analyse(x: Obs, origin: &[String], column: &str, draws: usize, seed: u64)
             loglik: f.loglik,
             shape_band: band(d.iter().map(|p| p.shape).collect()),
             scale_band: band(d.iter().map(|p| p.mu.exp()).collect()),
+            draws: d,
         });
     }
     let k = levels.len();

@@ -235,12 +235,12 @@ fn threshold_loglik_grad(rows: &Rows, z: &[Vec<f64>], t: &[f64], g: &mut [f64]) 
     let kind = Populations::Threshold;
     let k0 = kind.parameters();
     let (gam, u, m) = (t[0].exp(), t[1], t[2].exp());
-    let ln_m = m.ln();
+    let (ln_m, weight) = (m.ln(), Weight::of(kind, t));
     let mut l = 0.0;
     for (i, &lx) in rows.lnx.iter().enumerate() {
         let h = shift_at(z, &t[k0..], i);
         if !rows.exact(i) {
-            l += censored_row(kind, rows, i, h, z, t, Weight::of(kind, t), g);
+            l += censored_row(kind, rows, i, h, z, t, weight, g);
             continue;
         }
         let x = (lx - h).exp();

@@ -146,12 +146,12 @@ pub const CRUSH_COLUMNS: [&str; 7] =
 
 /// The fields of a crush file (module docs).
 pub const CRUSH_FIELDS: [Field; 8] = [
-    Field { key: "id", column: "id", kind: Kind::Text, synonyms: &["particle", "particle_id", "probe", "sample", "sample_id", "specimen", "nr"], required: true, plausible: None },
+    Field { key: "id", column: "id", kind: Kind::Text, synonyms: &["particle", "particle_id", "probe", "sample", "sample_id", "specimen", "nr", "probennummer", "probennr", "partikel", "partikelnummer"], required: true, plausible: None },
     Field { key: "material", column: "material", kind: Kind::Text, synonyms: &[], required: false, plausible: None },
-    Field { key: "diameter", column: "diameter_m", kind: Kind::Number(Quantity::Length), synonyms: &["d", "dp", "particle_diameter"], required: true, plausible: Some(DIAMETER) },
-    Field { key: "crush_force", column: "crush_force_n", kind: Kind::Number(Quantity::Force), synonyms: &["f", "fmax", "force", "load", "breaking_force", "peak_force", "crushing_force"], required: true, plausible: Some(CRUSH_FORCE) },
-    Field { key: "roundness", column: "roundness", kind: Kind::Number(Quantity::Ratio), synonyms: &["wadell_roundness"], required: false, plausible: Some(ROUNDNESS) },
-    Field { key: "sphericity", column: "sphericity", kind: Kind::Number(Quantity::Ratio), synonyms: &["b/l"], required: false, plausible: Some(SPHERICITY) },
+    Field { key: "diameter", column: "diameter_m", kind: Kind::Number(Quantity::Length), synonyms: &["d", "dp", "particle_diameter", "durchmesser", "partikeldurchmesser", "korndurchmesser"], required: true, plausible: Some(DIAMETER) },
+    Field { key: "crush_force", column: "crush_force_n", kind: Kind::Number(Quantity::Force), synonyms: &["f", "fmax", "force", "load", "breaking_force", "peak_force", "crushing_force", "bruchkraft", "bruchlast", "höchstkraft", "hoechstkraft", "maximalkraft", "druckkraft"], required: true, plausible: Some(CRUSH_FORCE) },
+    Field { key: "roundness", column: "roundness", kind: Kind::Number(Quantity::Ratio), synonyms: &["wadell_roundness", "rundheit"], required: false, plausible: Some(ROUNDNESS) },
+    Field { key: "sphericity", column: "sphericity", kind: Kind::Number(Quantity::Ratio), synonyms: &["b/l", "sphärizität", "sphaerizitaet"], required: false, plausible: Some(SPHERICITY) },
     Field { key: "temperature", column: "temperature_c", kind: Kind::Number(Quantity::Temperature), synonyms: &["t", "temp", "test_temperature", "temperatur", "prüftemperatur", "prueftemperatur"], required: false, plausible: Some(TEMPERATURE) },
     Field { key: "impacts", column: "impacts", kind: Kind::Number(Quantity::Count), synonyms: &["prior_impacts", "n_impacts"], required: false, plausible: Some(IMPACTS) },
 ];
@@ -386,9 +386,9 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
     }
     // `none` is for a particle that did not break: a break needs its origin.
     if let Some(c) = origin_column
-        && let Some(i) = crate::intake::observed::check_origins(sp.observations.view(), &origins, &mut provenance)
+        && let Some((i, rule)) = crate::intake::observed::check_origins(sp.observations.view(), &mut origins, &records.iter().map(|r| r.id.clone()).collect::<Vec<_>>(), &mut provenance)
     {
-        return Err(table.error(places[i].0, Some(c), crate::intake::observed::NONE_ON_A_BREAK));
+        return Err(table.error(places[i].0, Some(c), rule));
     }
     let censoring = sp.observations.censoring;
     if records.is_empty() {
@@ -534,6 +534,19 @@ mod tests {
         assert_eq!(d.records[1].roundness, None);
         assert_eq!(d.records[0].sphericity, None);
         assert_eq!(d.material(), "X");
+    }
+
+    #[test]
+    fn german_headers_of_a_crush_export_are_recognised() {
+        let dir = crate::io::TempDir::new("german").unwrap();
+        let p = write(dir.path(), "b.csv", "Probe;Durchmesser [mm];Bruchkraft [N];Prüftemperatur [°C]\nA-1;1,5;55,3;800\nA-2;1,3;38,3;800\n");
+        let d = read_crush(&p).unwrap();
+        let want = [("A-1", 1.5e-3, 55.3), ("A-2", 1.3e-3, 38.3)];
+        assert_eq!(d.records.len(), 2);
+        for (r, (id, dm, f)) in d.records.iter().zip(want) {
+            assert!(r.id == id && (r.diameter_m / dm - 1.0).abs() < 1e-12 && (r.crush_force_n / f - 1.0).abs() < 1e-12, "{r:?}");
+        }
+        assert!(d.provenance.unused.is_empty(), "{:?}", d.provenance.unused);
     }
 
     #[test]

@@ -80,6 +80,18 @@ pub enum Error {
 }
 
 impl Error {
+    /// The error with `note` appended to its rule where the rule tells the user to declare
+    /// something in a study (a `Config` or `Data` error whose rule names a study key); any
+    /// other error unchanged. For callers that have no study to declare it in (`--data`).
+    pub fn noted_where_declared(self, note: &str) -> Self {
+        let asks = |rule: &str| rule.contains("declare") || rule.contains("in the study") || rule.contains("ignore = [");
+        match self {
+            Error::Config { file, key, rule } if asks(&rule) => Error::Config { file, key, rule: format!("{rule}{note}") },
+            Error::Data { file, location, rule } if asks(&rule) => Error::Data { file, location, rule: format!("{rule}{note}") },
+            other => other,
+        }
+    }
+
     /// True when the user can fix the problem by changing the input (exit code 2).
     pub fn is_bad_input(&self) -> bool {
         matches!(

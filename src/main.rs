@@ -437,6 +437,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Datasets { command: DatasetsCommand::Check { files, study, sheet, header_row, material, temperature_c } } => {
+            let bare = study.is_none();
             let sources: Vec<(partlife::intake::Source, Option<&'static str>, partlife::intake::MapOrigin, Option<partlife::strength::specimens::SetColumns>)> = match study {
                 Some(path) => partlife::study::load(&path)?.data_sources(),
                 None => files
@@ -454,7 +455,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     .collect(),
             };
             for (src, kind, origin, set) in sources {
-                for checked in partlife::inspect::check(&src, kind, &origin, set.as_ref())? {
+                // A bare file has no study to hold a declaration the message asks for.
+                let checked = partlife::inspect::check(&src, kind, &origin, set.as_ref()).map_err(|e| if bare { e.noted_where_declared(" — `datasets check <file>` declares nothing: write the declaration in a study's `data` table and check the file as the study reads it with `datasets check --study <study.toml>`") } else { e })?;
+                for checked in checked {
                     for line in checked.lines() {
                         out!("{line}");
                     }

@@ -218,7 +218,7 @@ impl MaterialSpec {
             Some(col) => Err(Error::config(
                 file,
                 format!("material[{index}].origin"),
-                format!("the {kind} fits one Weibull law per material and does not read failure origins (`{col}`): each origin's law, the test of one shared modulus and the lifetime with every origin acting are the discrepancy study's (`kind = \"discrepancy\"` with this `[[material]]` and its `origin`); remove `origin` here (the column is then listed among the unused columns)"),
+                format!("the {kind} fits one Weibull law per material and does not read failure origins (`{col}`): each origin's law, the test of one shared modulus and the lifetime with every origin acting are the discrepancy study's (`kind = \"discrepancy\"` with this `[[material]]` and its `origin`); here remove `origin` and list the column in `material[{index}].data.ignore = [\"{col}\"]` (looked at and left out on purpose: the one law pools every origin)"),
             )),
             None => Ok(()),
         }

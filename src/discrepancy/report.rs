@@ -129,6 +129,34 @@ fn finite(v: f64) -> serde_json::Value {
     if v.is_finite() { serde_json::json!(v) } else { serde_json::Value::Null }
 }
 
+/// Why a law in place of the Weibull law is not identified (its fit's verdict, which the guard
+/// requires whatever its numbers), or None.
+fn unidentified(e: &super::workflow::Evidence) -> Option<&str> {
+    match e.candidate {
+        Effect::Populations(_) => e.meaning.split_once(" — not identified: ").map(|(_, why)| why),
+        _ => None,
+    }
+}
+
+/// The laws of `tried` that did not pass the guard in round `round`, in words: those whose fit
+/// is not identified with the reason (the guard requires it, whatever Λ, ΔBIC and the
+/// cross-validated score say), then the others ("do not pass the guard").
+fn laws_not_passing(r: &MaterialResult, round: usize, tried: &[crate::strength::flaws::Populations]) -> String {
+    use crate::strength::flaws::Populations;
+    let mut parts = Vec::new();
+    let mut rest = Vec::new();
+    for k in tried {
+        match r.outcome.evidence.iter().find(|e| e.round == round && e.candidate == Effect::Populations(*k)).and_then(unidentified) {
+            Some(why) => parts.push(format!("{} {} not identified on these data ({why})", Populations::words(&[*k]), if *k == Populations::Threshold { "is" } else { "are" })),
+            None => rest.push(*k),
+        }
+    }
+    if !rest.is_empty() {
+        parts.insert(0, format!("{} {} not pass the guard", Populations::words(&rest), if rest.len() == 1 { "does" } else { "do" }));
+    }
+    parts.join("; ")
+}
+
 /// One row of the summary's evidence table: the numbers of the guard and the verdict they gave.
 fn evidence_row(e: &super::workflow::Evidence) -> String {
     if let Some(reason) = &e.skipped {
@@ -148,8 +176,59 @@ fn evidence_row(e: &super::workflow::Evidence) -> String {
             if se.is_finite() { format!("{k} = {:.d$} ± {:.d$}{unit}{band}", v * scale, se * scale) } else { format!("{k} = {:.d$}{unit}{band}", v * scale) }
         })
         .unwrap_or_default();
-    let verdict = if e.named { "**named**" } else if e.passed { "passed, weaker" } else { "not supported" };
+    let verdict = if e.named {
+        "**named**".to_string()
+    } else if e.passed {
+        "passed, weaker".to_string()
+    } else if let Some(why) = unidentified(e) {
+        format!("not identified: {why}")
+    } else {
+        "not supported".to_string()
+    };
     format!("| {} | {} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {} | {} |\n", e.round, e.candidate.name(), e.lr, e.lr_critical, e.p_family, e.delta_bic, e.delta_cv, par, verdict)
+}
+
+/// Why the lifetime with every known origin acting (`known`, at the first horizon) differs
+/// from the one-law base model's (`base`, modulus `one_m`), generated from the numbers: within
+/// a factor of two they agree; above, the origin of smallest modulus has the heavier lower tail,
+/// where impacts act; below, one law of mixed origins is broadened by the mixture. The
+/// shared-modulus test says which column the data support.
+pub(super) fn known_against_one_law(o: &crate::strength::origins::Origins, one_m: f64, base: &LifetimeBand, known: &LifetimeBand, alpha: f64) -> String {
+    let fits: Vec<&crate::strength::origins::OriginFit> = o.fits.iter().filter(|f| f.shape.is_finite()).collect();
+    let moduli = fits.iter().map(|f| format!("{:.1} (\"{}\")", f.shape, f.origin)).collect::<Vec<_>>().join(", ");
+    let ratio = known.estimate / base.estimate;
+    if let [one] = fits.as_slice()
+        && o.fits.len() == 1
+    {
+        return format!("Every break has one origin (\"{}\"): its law is the one law of every break, and the known-origins column's breaking probability is the base model's ({ratio:.2} times it); the bands differ by their bootstrap draws alone.", one.origin);
+    }
+    let at = format!("At {} yr the breaking probability with every origin acting is", known.years);
+    let why = if !(ratio.is_finite() && ratio > 0.0) {
+        return format!("{at} {:.3e} against the one-law base model's {:.3e}.", known.estimate, base.estimate);
+    } else if (0.5..=2.0).contains(&ratio) {
+        format!("{at} within a factor of 2 of the one-law base model's ({ratio:.2} times it).")
+    } else if ratio > 2.0 {
+        let weakest = fits.iter().min_by(|a, b| a.shape.total_cmp(&b.shape));
+        let tail = match weakest {
+            Some(w) if w.shape < one_m => format!(
+                " The impacts act in the lower tail of the strength laws, where a small modulus falls off slowly: origin \"{}\" has modulus {:.1}, below the {one_m:.1} of one law fitted to every break, and its law sets the probability there",
+                w.origin, w.shape
+            ),
+            _ => format!(" The origins' moduli ({moduli}) and scales together put more probability in the lower tail, where impacts act, than one law of modulus {one_m:.1} fitted to every break"),
+        };
+        format!("{at} {ratio:.0} times the one-law base model's.{tail}.")
+    } else {
+        format!(
+            "{at} {:.2} times the one-law base model's: one law fitted to breaks of several origins is broadened by their mixture (modulus {one_m:.1}, the origins' own {moduli}), and its lower tail, where impacts act, lies above theirs.",
+            ratio
+        )
+    };
+    let support = match &o.shared {
+        Ok(t) if t.p < alpha => " The shared-modulus test rejects one modulus for every origin, so the known-origins column is the breaking probability the fractography supports.",
+        Ok(t) => return format!("{why} The shared-modulus test does not reject one modulus for every origin (p = {:.3}): the moduli do not tell the two columns apart; read both with their bands.", t.p),
+        Err(_) => "",
+    };
+    format!("{why}{support}")
 }
 
 pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> String {
@@ -178,12 +257,18 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         let held = match &r.crush {
             Some(spec) if !r.lifetime.is_empty() => match spec.predict.get("temperature_c").filter(|_| r.outcome.after().model.effects.contains(&crate::strength::Effect::Temperature)) {
                 Some(t) => format!(" Its lifetime after the named effects is at the study's predict.temperature_c = {t} (°C), not at the tests' temperature."),
-                None if r.temperatures_c.iter().any(|t| *t != r.temperatures_c[0]) => " Its lifetimes below are for the tested particles at their own test temperatures, pooled, not at an operating temperature.".to_string(),
+                None if r.temperatures_c.iter().any(|t| *t != r.temperatures_c[0]) => format!(
+                    " Its lifetimes below are for the tested particles at their own test temperatures, pooled, not at an operating temperature{}.",
+                    spec.predict.get("temperature_c").map(|t| format!(": the study's predict.temperature_c = {t} (°C) applies only after the loop names temperature softening, and it named none")).unwrap_or_default()
+                ),
                 None => " Its lifetimes below hold at the tests' temperature, not at an operating temperature other than it.".to_string(),
             },
             _ => String::new(),
         };
         md.push_str(&format!("Tested at {tested}.{held}\n\n"));
+        if !r.read_notes.is_empty() {
+            md.push_str(&format!("Read from the file: {}.\n\n", r.read_notes.join("; ")));
+        }
         let tally = r.sample.strength.view().tally();
         if !tally.complete() {
             md.push_str(&format!(
@@ -303,7 +388,7 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             let tried = kinds(Some(0));
             let explained = match (r.outcome.named.is_empty(), tried.is_empty()) {
                 (true, true) => "and nothing recorded in the data explains the misfit".to_string(),
-                (true, false) => format!("and nothing recorded in the data explains the misfit; {}, tried in its place, {} not pass the guard", crate::strength::flaws::Populations::words(&tried), if tried.len() == 1 { "does" } else { "do" }),
+                (true, false) => format!("and nothing recorded in the data explains the misfit; of the laws tried in its place, {}", laws_not_passing(r, 0, &tried)),
                 (false, true) => "even with the named effects".to_string(),
                 (false, false) => {
                     // Were the laws offered in the last round (beside the named effects)?
@@ -313,7 +398,7 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                     let law_named = r.outcome.named.iter().any(|e| matches!(e, crate::strength::Effect::Populations(_)));
                     match (law_named, offered) {
                         (true, _) => "even with the named effects".to_string(),
-                        (false, true) => format!("even with the named effects; {} beside them {} not pass the guard", crate::strength::flaws::Populations::words(&kinds(Some(last))), if kinds(Some(last)).len() == 1 { "does" } else { "do" }),
+                        (false, true) => format!("even with the named effects; of the laws tried beside them, {}", laws_not_passing(r, last, &kinds(Some(last)))),
                         (false, false) => format!(
                             "even with the named effects; {} {} not tried beside {} (a law in place of the Weibull law is fitted beside scale effects of recorded columns only, not beside a partially pooled factor, a modulus per level or damage)",
                             crate::strength::flaws::Populations::words(&kinds(None)),
@@ -360,9 +445,16 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             let lifetime = match (&r.crush, r.lifetime.iter().any(|(st, _)| st == "origins")) {
                 (None, _) => "No lifetime is computed from them: a strength file has no contact that carries a strength to impacts.".to_string(),
                 (Some(_), true) => "The lifetime below has every origin's law acting (column \"known origins\"): a particle survives N impacts only if it survives each origin's flaws, P_N = 1 − Π_k (1 − P_N,k).".to_string(),
+                (Some(_), false) if r.temperatures_c.windows(2).any(|w| w[0] != w[1]) => format!(
+                    "No lifetime is computed from them: the tests span {}, and each origin's law above pools them without a temperature term (the naming loop's effects do not enter the origins' laws), so no lifetime at one temperature follows; one `[[material]]` per test temperature (a file each) gives each temperature its origins' laws and their lifetime.",
+                    crate::intake::observed::describe_temperatures(&r.temperatures_c)
+                ),
                 (Some(_), false) => format!("No lifetime is computed from them: {}.", o.fits.iter().find(|f| !f.shape.is_finite()).map_or_else(|| "an origin has no law".to_string(), |f| format!("origin \"{}\" has {} break{}, and a Weibull law needs at least two", f.origin, f.breaks, if f.breaks == 1 { "" } else { "s" }))),
             };
             md.push_str(&format!("\n{}\n", o.sentence(s.discrepancy.alpha, &lifetime)));
+            if s.strength.iter().any(|set| set.key == r.key && set.competing_left_out()) {
+                md.push_str("\nThe naming loop does not offer the latent competing-risks law (two flaw populations whose causes are unknown): the origins are known, and each origin's law above takes its place (`populations = [\"mixture\", \"competing_risks\", \"threshold\"]` offers it all the same).\n");
+            }
             let few = o.few_words();
             if !few.is_empty() {
                 md.push_str(&format!("\n{few}\n"));
@@ -393,6 +485,9 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         for (i, (x, y)) in lb.iter().zip(la).enumerate() {
             let o = known.map(|k| format!(" {} |", band(&k[i]))).unwrap_or_default();
             md.push_str(&format!("| {} yr | {} | {} |{o}\n", x.years, band(x), band(y)));
+        }
+        if let (Some(k), Some(o)) = (known, &r.origins) {
+            md.push_str(&format!("\n{}\n", known_against_one_law(o, b.model.shape(), &lb[0], &k[0], s.discrepancy.alpha)));
         }
         }
         if r.crush.is_some() && !r.outcome.named.is_empty() {

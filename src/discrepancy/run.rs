@@ -61,6 +61,9 @@ use crate::strength::regress::draw_rows;
 use crate::strength::{Effect, LifetimeModel, ModelFit, NamingSettings, Sample, StrengthFit, Term, Uncertainty, sample_of};
 use crate::schema::{ContactOptions, FigureOptions, ImpactOptions, MaterialSpec, StudyFile};
 
+/// What a `--data` run says where the file needs a declaration: the command line has none.
+pub const QUICK_DECLARES_NOTHING: &str = " — `--data` declares nothing: write a discrepancy study (`kind = \"discrepancy\"`, the file under `[[material]]` as `data = { file = \"…\", … }`) and put the key named above in its `data` table or `[[material]]`";
+
 /// The quick study of `partlife discrepancy --data <crush.csv> --model weibull-hertz`: the
 /// lifetime study's defaults (steel platens and tube, line average to 2a, η = 0.1, 5 m/s,
 /// 730 impacts a year) and the particles' elastic constants and density as given (`elastic`,
@@ -74,7 +77,7 @@ pub fn quick_study(data: &Path, elastic: crate::contact::Elastic, density_kg_m3:
     {
         return Err(Error::config("--data", "--temperature-c", format!("a test temperature must lie in {} (got {t})", crate::data::TEMPERATURE.shown)));
     }
-    let crush = crate::data::read_crush_source(&source, &crate::intake::MapOrigin { file: "--data".into(), key: String::new() })?;
+    let crush = crate::data::read_crush_source(&source, &crate::intake::MapOrigin { file: "--data".into(), key: String::new() }).map_err(|e| e.noted_where_declared(QUICK_DECLARES_NOTHING))?;
     // Tests at several temperatures: the lifetime after a named temperature term is at the
     // temperature the command line names.
     let tested: Vec<f64> = crush.records.iter().filter_map(|r| r.temperature_c).collect();
@@ -279,7 +282,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
     for (k, m) in s.strength.iter().enumerate() {
         let origin = crate::intake::MapOrigin { file: loaded.path.display().to_string(), key: format!("strength[{k}].data") };
         let mut read = crate::strength::specimens::read_specimens_with_origins(&m.data.resolved(&loaded.path), m.size.as_ref(), &m.factors, m.origin.as_deref(), &origin)?;
-        read.sample.populations = m.populations.clone();
+        read.sample.populations = m.offered();
         inputs.extend(InputFile::read(&read.path, &read.provenance)?);
         validate(&read.sample)?;
         specimens.push((m.clone(), read));
@@ -294,10 +297,11 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         let outcome = analyse(&m.sample, &material_settings, true)?;
         pb.inc(1);
         pb.set_message(format!("{}: lifetime before/after", m.spec.label));
-        let lifetime = vec![
-            ("before".to_string(), lifetime_bands(&outcome.before().model, &m.sample, &m, s, material_settings.seed ^ 0x11FE)?),
-            ("after".to_string(), lifetime_bands(&outcome.after().model, &m.sample, &m, s, material_settings.seed ^ 0x11FF)?),
-        ];
+        // Nothing named: the final model is the base model, with the same bands (not a second
+        // bootstrap of the same model, whose bands would differ by their draws alone).
+        let before = lifetime_bands(&outcome.before().model, &m.sample, &m, s, material_settings.seed ^ 0x11FE)?;
+        let after = if outcome.named.is_empty() { before.clone() } else { lifetime_bands(&outcome.after().model, &m.sample, &m, s, material_settings.seed ^ 0x11FF)? };
+        let lifetime = vec![("before".to_string(), before), ("after".to_string(), after)];
         pb.inc(1);
         let power = if s.power.replicates > 0 {
             pb.set_message(format!("{}: detection power", m.spec.label));
@@ -312,7 +316,11 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
             None => None,
         };
         let mut lifetime = lifetime;
+        // Each origin's law pools the tests' temperatures (no temperature term enters it): no
+        // lifetime at one temperature follows from laws of tests at several.
+        let one_temperature = m.data.records.windows(2).all(|w| w[0].temperature_c == w[1].temperature_c);
         if let Some(o) = &origins
+            && one_temperature
             && let Some(bands) = origins_lifetime(o, &m.data.origins, &m, s)?
         {
             lifetime.push(("origins".to_string(), bands));
@@ -320,7 +328,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         let ids = m.data.records.iter().map(|r| r.id.clone()).collect();
         let temperatures_c = m.data.records.iter().filter_map(|r| r.temperature_c).collect();
         let failure_origins = m.data.origins.clone();
-        results.push(MaterialResult { key: m.spec.key.clone(), label: m.spec.label.clone(), path: m.data.path.clone(), ids, crush: Some(m.spec), sample: m.sample, outcome, lifetime, power, temperatures_c, origins, failure_origins });
+        results.push(MaterialResult { key: m.spec.key.clone(), label: m.spec.label.clone(), path: m.data.path.clone(), ids, crush: Some(m.spec), sample: m.sample, outcome, lifetime, power, temperatures_c, origins, failure_origins, read_notes: super::study::read_notes(&m.data.provenance) });
     }
     for (j, (set, read)) in specimens.into_iter().enumerate() {
         let k = s.material.len() + j;
@@ -338,7 +346,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
             Some(column) => Some(crate::strength::origins::analyse(read.sample.strength.view(), &read.origins, column, s.lifetime.bootstrap, material_settings.seed ^ ORIGINS_SEED)?),
             None => None,
         };
-        results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power, temperatures_c: read.temperatures_c, origins, failure_origins: read.origins });
+        results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power, temperatures_c: read.temperatures_c, origins, failure_origins: read.origins, read_notes: super::study::read_notes(&read.provenance) });
     }
 
     let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;
@@ -353,6 +361,11 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         .iter()
         .flat_map(|r| crate::lifetime::tested::warnings(&[crate::lifetime::tested::Tested { label: &r.label, temperatures_c: &r.temperatures_c, temperature_term: r.outcome.after().model.effects.contains(&crate::strength::Effect::Temperature) }]))
         .collect();
+    for r in results.iter().filter(|r| r.origins.is_some() && r.temperatures_c.windows(2).any(|w| w[0] != w[1])) {
+        warnings.push(format!("{}: each failure origin's law pools the tests at {} without a temperature term (the naming loop's effects do not enter the origins' laws), so no lifetime with every origin acting is computed", r.label, crate::intake::observed::describe_temperatures(&r.temperatures_c)));
+    }
+    let crushed: Vec<crate::lifetime::tested::Tested> = results.iter().filter(|r| r.crush.is_some()).map(|r| crate::lifetime::tested::Tested { label: &r.label, temperatures_c: &r.temperatures_c, temperature_term: r.outcome.after().model.effects.contains(&crate::strength::Effect::Temperature) }).collect();
+    warnings.extend(crate::lifetime::tested::side_by_side(&crushed));
     for r in &results {
         for (name, levels) in &r.sample.levels {
             warnings.extend(crate::lifetime::tested::confounded(&r.label, name, levels, &r.temperatures_c));
@@ -361,7 +374,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
     for w in &warnings {
         crate::intake::warn(w);
     }
-    dir.write_bytes("summary.md", summary(s, &results).as_bytes())?;
+    dir.write_bytes("summary.md", crate::lifetime::tested::with_warnings(&summary(s, &results), &warnings).as_bytes())?;
     pb.set_message("figures");
     let mut failures = Vec::new();
     let rendered = crate::report::discrepancy::render(dir.path(), s.figures.width_cm)?;

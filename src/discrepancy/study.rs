@@ -94,11 +94,13 @@ pub struct SpecimenSet {
     #[serde(default)]
     pub factors: Factors,
     /// Laws offered as candidates in place of the one Weibull law: two flaw populations and a
-    /// threshold strength, `["mixture", "competing_risks", "threshold"]` (the default) or a part
-    /// of it; `[]` for none. Each bootstrap replicate refits them from six or seven starts (the Jahanmir study's 480 bars with 499
-    /// replicates: 7 s on two cores).
-    #[serde(default = "both_populations")]
-    pub populations: Vec<crate::strength::flaws::Populations>,
+    /// threshold strength, `["mixture", "competing_risks", "threshold"]` or a part of it; `[]`
+    /// for none. Default ([`SpecimenSet::offered`]): all three, and without the latent
+    /// competing-risks law (two populations, causes unknown) where `origin` makes the causes
+    /// known. Each bootstrap replicate refits them from six or seven starts (the Jahanmir
+    /// study's 480 bars with 499 replicates: 7 s on two cores).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub populations: Option<Vec<crate::strength::flaws::Populations>>,
     /// The column naming each specimen's failure origin (fractography: volume, surface, edge,
     /// pore …): each origin's law with the other origins' breaks censored (ASTM C1239) and the
     /// test of one shared modulus ([`crate::strength::origins`]).
@@ -106,8 +108,24 @@ pub struct SpecimenSet {
     pub origin: Option<String>,
 }
 
-fn both_populations() -> Vec<crate::strength::flaws::Populations> {
-    vec![crate::strength::flaws::Populations::Mixture, crate::strength::flaws::Populations::Competing, crate::strength::flaws::Populations::Threshold]
+impl SpecimenSet {
+    /// The laws the naming loop offers ([`SpecimenSet::populations`]): the study's list, else
+    /// the mixture, the threshold law and — where no `origin` column names the causes — the
+    /// latent competing-risks law.
+    pub fn offered(&self) -> Vec<crate::strength::flaws::Populations> {
+        use crate::strength::flaws::Populations;
+        match &self.populations {
+            Some(list) => list.clone(),
+            None if self.origin.is_some() => vec![Populations::Mixture, Populations::Threshold],
+            None => vec![Populations::Mixture, Populations::Competing, Populations::Threshold],
+        }
+    }
+
+    /// Whether the default left out the latent competing-risks law because the origins are
+    /// known (for the summary to say).
+    pub fn competing_left_out(&self) -> bool {
+        self.populations.is_none() && self.origin.is_some()
+    }
 }
 
 /// Column names of `residuals.csv` a factor may not take.
@@ -218,5 +236,26 @@ pub struct MaterialResult {
     pub origins: Option<crate::strength::origins::Origins>,
     /// Each specimen's failure origin, where the study names the column (empty otherwise).
     pub failure_origins: Vec<String>,
+    /// What the file's reading says the summary must repeat ([`read_notes`]): columns not
+    /// used or ignored, rows counting several specimens (and those counting none, dropped),
+    /// failure-origin labels read as one, origins on specimens that did not break.
+    pub read_notes: Vec<String>,
+}
+
+/// The lines of a file's reading (`p`) that change what the fit saw and that the summary
+/// states beside the material, not only the report's Inputs page: columns not used (read by
+/// no field and no declaration), columns ignored as the study says, the count column (rows →
+/// specimens, rows counting 0 dropped) and what was read of the failure origins.
+pub fn read_notes(p: &crate::intake::Provenance) -> Vec<String> {
+    let list = |v: &[String]| v.iter().map(|u| format!("`{u}`")).collect::<Vec<_>>().join(", ");
+    let mut out = Vec::new();
+    if !p.unused.is_empty() {
+        out.push(format!("column{} not used: {} (read by no field of the file's kind and no declaration of the study)", if p.unused.len() == 1 { "" } else { "s" }, list(&p.unused)));
+    }
+    if !p.ignored.is_empty() {
+        out.push(format!("column{} ignored as the study's `ignore` says: {}", if p.ignored.len() == 1 { "" } else { "s" }, list(&p.ignored)));
+    }
+    out.extend(p.observed.iter().filter(|l| l.starts_with("failure origin") || l.starts_with("count column")).cloned());
+    out
 }
 

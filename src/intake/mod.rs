@@ -324,7 +324,7 @@ pub fn select(r: &Resolved, key: &str, wanted: Option<&str>, origin: &MapOrigin,
     if !r.has(key) {
         return match wanted {
             None => Ok(((0..n).collect(), None)),
-            Some(w) => Err(Error::config(&origin.file, format!("{}.{option}", origin.key), format!("picks the rows of {key} \"{w}\", but {} has no {key} column", r.table.origin.path.display()))),
+            Some(w) => Err(Error::config(&origin.file, format!("{}.{option}", origin.key), format!("picks the rows of {key} \"{w}\", but {} has no {key} column (its columns: {}); if one of them names the {key}, map it: {}.columns = {{ {key} = \"…\" }}", r.table.origin.path.display(), r.table.headers.iter().map(|h| format!("`{h}`")).collect::<Vec<_>>().join(", "), origin.key))),
         };
     }
     let mut values: Vec<(String, usize)> = Vec::new();

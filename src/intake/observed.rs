@@ -33,7 +33,10 @@
 //! (`ja`/`nein`, `yes`/`no`, `true`/`false`, `broken`/`intact` …; a 0/1 column whose header
 //! names an outcome), an unused column of whole numbers whose header names a count (`count`,
 //! `n`, `Anzahl`, `frequency` …), and a pile-up of rows at the file's highest value (at least
-//! [`PILE_UP_ROWS`] rows and [`PILE_UP_SHARE`] of the file) — what a rig's limit leaves.
+//! [`PILE_UP_ROWS`] rows and [`PILE_UP_SHARE`] of the file) — what a rig's limit leaves —
+//! and an unused column of failure origins (a header such as `origin`, `failure_mode`,
+//! `Bruchursprung`, or values that are all origin words: `volume`, `surface`, `Oberfläche`,
+//! `Kante` …), which the discrepancy study reads by the material's `origin` key.
 //!
 //! Verified by the unit tests below and `tests/censoring.rs`.
 
@@ -351,8 +354,29 @@ const OUTCOME_HEADERS: [&str; 14] = ["broken", "gebrochen", "bruch", "failed", "
 /// Header words of a count column.
 const COUNT_HEADERS: [&str; 18] = ["count", "counts", "n", "anzahl", "number", "numberof", "frequency", "freq", "häufigkeit", "haeufigkeit", "stückzahl", "stueckzahl", "stück", "stk", "specimens", "nspecimens", "quantity", "qty"];
 
+/// Header words of a failure-origin column (fractography), compared folded.
+const ORIGIN_HEADERS: [&str; 24] = [
+    "origin", "origins", "failureorigin", "fractureorigin", "flaworigin", "originoffracture", "originoffailure", "failuremode", "failuresite", "fracturesite", "initiationsite", "flawtype", "flaw", "defect", "defecttype", "fractography", "bruchursprung", "bruchausgang", "bruchausgangsort", "bruchstelle", "ursprung", "fehlerart", "fraktographie", "origine",
+];
+
+/// Words of failure origins (English, German, French), compared folded; `none` and its kin
+/// alone do not make a column of origins.
+const ORIGIN_WORDS: [&str; 40] = [
+    "volume", "surface", "edge", "corner", "pore", "pores", "porosity", "inclusion", "agglomerate", "machining", "machiningdamage", "internal", "bulk", "subsurface", "nearsurface", "chamfer", "handling", "volumen", "oberfläche", "oberflaeche", "kante", "ecke", "poren", "porosität", "einschluss", "einschluß", "agglomerat", "bearbeitung", "innen", "rand", "arête", "arete", "coin", "pore(s)", "none", "keiner", "kein", "aucun", "unknown", "unbekannt",
+];
+
+/// Whether an unused column (folded header `name`, folded distinct values `values`) looks
+/// like failure origins: a header naming origins over text values, or values that are all
+/// origin words, at least one of them more than `none` or `unknown`.
+fn looks_like_origins(name: &str, values: &[String]) -> bool {
+    let text = values.iter().any(|v| v.parse::<f64>().is_err());
+    let blank = ["none", "keiner", "kein", "aucun", "unknown", "unbekannt"];
+    let words = values.iter().all(|v| ORIGIN_WORDS.contains(&v.as_str())) && values.iter().any(|v| !blank.contains(&v.as_str()));
+    text && ((ORIGIN_HEADERS.contains(&name) && values.len() <= 20) || words)
+}
+
 /// Refuses every unused column of `rows` that looks like what a study must declare (module
-/// docs): yes/no values, or a count. `ignore`d columns move from the unused to the ignored ones
+/// docs): yes/no values, a count, or failure origins. `ignore`d columns move from the unused to the ignored ones
 /// of `provenance`; an `ignore` naming no column is refused.
 pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenance, src: &Source, origin: &MapOrigin) -> Result<()> {
     let key = prefix(origin);
@@ -410,6 +434,17 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
                 &table.origin.path,
                 format!("column {h}"),
                 format!("holds whole numbers under a count's name, and nothing declares it: if each row stands for that many specimens, declare it: {key}count = \"{h}\"; if it is something else, {key}ignore = [\"{h}\"]"),
+            ));
+        }
+        if looks_like_origins(&name, &folded_values) {
+            let shown = distinct.iter().take(6).map(|v| format!("\"{v}\"")).collect::<Vec<_>>().join(", ");
+            let more = if distinct.len() > 6 { format!(" and {} more", distinct.len() - 6) } else { String::new() };
+            let table_key = super::factors::table_key(origin);
+            let origin_key = if table_key.is_empty() { "origin".to_string() } else { format!("{table_key}.origin") };
+            return Err(Error::data_file(
+                &table.origin.path,
+                format!("column {h}"),
+                format!("looks like failure origins (fractography: {shown}{more}) that nothing declares: in a discrepancy study, declare it: {origin_key} = \"{h}\" (each origin's Weibull law with the other origins' breaks censored, the test of one shared modulus, the lifetime with every origin acting); if it is a recorded factor, declare it in `factors`; if the study fits one law of every origin (the main and lifetime studies), {key}ignore = [\"{h}\"]"),
             ));
         }
     }
@@ -562,40 +597,90 @@ pub fn specimens(values: &[RowValue], places: &[String], src: &Source, provenanc
 }
 
 /// Each row's failure origin (fractography: volume, surface, edge, pore …) from the column
-/// `column` that the study's key `key` names, over `rows`: an empty cell is refused (write the
-/// origin, or `none` for a specimen that did not break). Records the column in `provenance` and
-/// takes it off the unused columns; returns the origins and the column's index. Strength and
+/// `column` that the study's key `key` names, over `rows`, as written (an empty cell empty:
+/// [`check_origins`] refuses it on a break and reads it `none` on a specimen that did not
+/// break). Records the column in `provenance` and
+/// takes it off the unused columns; returns the origins and the column's index. Labels that
+/// differ only in case are one origin ([`one_spelling`], said in `provenance`). Strength and
 /// crush files read it alike.
 pub fn failure_origins(table: &RawTable, rows: &[usize], column: &str, key: String, origin: &MapOrigin, provenance: &mut Provenance) -> Result<(Vec<String>, usize)> {
     let c = super::factors::declared_columns(table, provenance, &[(key, column.to_string())], origin, &table.origin.path)?[0].1;
     let mut out = Vec::with_capacity(rows.len());
     for &row in rows {
-        match table.text(row, c).map(|t| t.trim().to_string()).filter(|t| !t.is_empty()) {
-            Some(t) => out.push(t),
-            None => return Err(table.error(row, Some(c), "an empty failure origin: every specimen needs one (write the origin, or `none` for a specimen that did not break)".to_string())),
-        }
+        // An empty cell is `none` where the specimen did not break, refused where it broke
+        // ([`check_origins`], once the rows say which).
+        out.push(table.text(row, c).map(|t| t.trim().to_string()).unwrap_or_default());
     }
     provenance.columns.push(ColumnRecord { source: table.headers[c].clone(), field: "failure origin".into(), unit: String::new(), conversion: "fractography".into(), found_by: "study".into() });
     provenance.unused.retain(|u| *u != table.headers[c]);
+    provenance.observed.extend(one_spelling(&mut out));
     Ok((out, c))
 }
 
-/// Checks each specimen's failure origin against what its row says: the first specimen that
-/// broke (exact, in a class or at or below its value) and whose origin reads `none`, the word
-/// kept for a specimen that did not break, is returned for the caller to refuse with
-/// [`NONE_ON_A_BREAK`]. An origin written on a specimen that did not break is not used (it
-/// survived every origin's flaws, whatever the cell says): recorded in `provenance` with the
-/// count, so the run says it instead of dropping it.
-pub fn check_origins(x: crate::obs::Obs, origins: &[String], provenance: &mut Provenance) -> Option<usize> {
-    if let Some(i) = (0..x.len()).find(|&i| x.kind(i) != Censor::Right && origins[i].eq_ignore_ascii_case("none")) {
-        return Some(i);
+/// Reads labels that differ only in case (`Oberfläche`, `oberfläche`) as one origin, spelt as
+/// most rows spell it (the first seen among equals) — as the `broken` column's values are
+/// compared without case; returns a line per label so read, for the run to say.
+fn one_spelling(labels: &mut [String]) -> Vec<String> {
+    let mut spellings: Vec<(String, Vec<(String, usize)>)> = Vec::new();
+    for l in labels.iter() {
+        let key = l.to_lowercase();
+        let k = match spellings.iter().position(|(f, _)| *f == key) {
+            Some(k) => k,
+            None => {
+                spellings.push((key, Vec::new()));
+                spellings.len() - 1
+            }
+        };
+        match spellings[k].1.iter_mut().find(|(s, _)| s == l) {
+            Some(e) => e.1 += 1,
+            None => spellings[k].1.push((l.clone(), 1)),
+        }
     }
-    let named = (0..x.len()).filter(|&i| x.kind(i) == Censor::Right && !origins[i].eq_ignore_ascii_case("none")).count();
-    if named > 0 {
-        provenance.observed.push(format!("failure origin: {named} specimen{} that did not break {} an origin; not used (a specimen that did not break survived every origin's flaws)", if named == 1 { "" } else { "s" }, if named == 1 { "names" } else { "name" }));
+    let mut said = Vec::new();
+    for (_, forms) in spellings.iter().filter(|(_, forms)| forms.len() > 1) {
+        let main = forms.iter().fold(&forms[0], |best, f| if f.1 > best.1 { f } else { best }).0.clone();
+        for (form, n) in forms.iter().filter(|(f, _)| *f != main) {
+            for l in labels.iter_mut().filter(|l| *l == form) {
+                *l = main.clone();
+            }
+            said.push(format!("failure origin `{form}` ({n} row{}) read as `{main}` (origin labels are compared without case)", if *n == 1 { "" } else { "s" }));
+        }
+    }
+    said
+}
+
+/// Checks each specimen's failure origin against what its row says: the first specimen that
+/// broke (exact, in a class or at or below its value) and whose origin is empty or reads
+/// `none`, the word kept for a specimen that did not break, is returned with the rule for the
+/// caller to refuse ([`EMPTY_ON_A_BREAK`], [`NONE_ON_A_BREAK`]); an empty cell of a specimen
+/// that did not break becomes `none`. An origin written on a specimen that did not break is not used (it
+/// survived every origin's flaws, whatever the cell says): recorded in `provenance` with the
+/// count and the specimens' `ids` (the first eight), so the run says it instead of dropping it.
+pub fn check_origins(x: crate::obs::Obs, origins: &mut [String], ids: &[String], provenance: &mut Provenance) -> Option<(usize, &'static str)> {
+    if let Some(i) = (0..x.len()).find(|&i| x.kind(i) != Censor::Right && origins[i].is_empty()) {
+        return Some((i, EMPTY_ON_A_BREAK));
+    }
+    if let Some(i) = (0..x.len()).find(|&i| x.kind(i) != Censor::Right && origins[i].eq_ignore_ascii_case("none")) {
+        return Some((i, NONE_ON_A_BREAK));
+    }
+    for o in origins.iter_mut().filter(|o| o.is_empty()) {
+        *o = "none".into();
+    }
+    let named: Vec<usize> = (0..x.len()).filter(|&i| x.kind(i) == Censor::Right && !origins[i].eq_ignore_ascii_case("none")).collect();
+    if !named.is_empty() {
+        const SHOWN: usize = 8;
+        let mut which = named.iter().take(SHOWN).map(|&i| format!("{} (`{}`)", ids[i], origins[i])).collect::<Vec<_>>().join(", ");
+        if named.len() > SHOWN {
+            which.push_str(&format!(" and {} more", named.len() - SHOWN));
+        }
+        let n = named.len();
+        provenance.observed.push(format!("failure origin: {n} specimen{} that did not break {} an origin ({which}); not used: a specimen that did not break survived every origin's flaws", if n == 1 { "" } else { "s" }, if n == 1 { "names" } else { "name" }));
     }
     None
 }
+
+/// The rule [`check_origins`] enforces on an empty cell, in words.
+pub const EMPTY_ON_A_BREAK: &str = "an empty failure origin on a specimen that broke: write where it broke (an empty cell, like `none`, is for a specimen that did not break)";
 
 /// The rule [`check_origins`] enforces, in words.
 pub const NONE_ON_A_BREAK: &str = "failure origin `none` on a specimen that broke: write where it broke (`none` is for a specimen that did not break)";
@@ -666,7 +751,7 @@ mod tests {
     }
 
     #[test]
-    fn undeclared_yes_no_and_count_columns_and_pile_ups_are_refused() {
+    fn undeclared_yes_no_count_and_origin_columns_and_pile_ups_are_refused() {
         let e = read("id;force_n;gebrochen\nA;100;ja\nB;150;nein\nC;120;ja\n", |_| {}).unwrap_err().to_string();
         assert!(e.contains("column gebrochen") && e.contains("material[0].data.broken = { column = \"gebrochen\"") && e.contains("ignore"), "{e}");
         let e = read("id;force_n;n\nA;100;3\nB;150;2\nC;120;1\n", |_| {}).unwrap_err().to_string();
@@ -675,6 +760,15 @@ mod tests {
         assert!(e.contains("yes/no"), "{e}");
         // Ignored, it passes.
         read("id;force_n;gebrochen\nA;100;ja\nB;150;nein\nC;120;ja\n", |s| s.ignore = vec!["gebrochen".into()]).unwrap();
+        // Failure origins, by the header or by the values alone.
+        let e = read("id;force_n;Bruchursprung\nA;100;Volumen\nB;150;Oberfläche\nC;120;Pore 3\n", |_| {}).unwrap_err().to_string();
+        assert!(e.contains("column Bruchursprung") && e.contains("failure origins") && e.contains("material[0].origin = \"Bruchursprung\"") && e.contains("material[0].data.ignore = [\"Bruchursprung\"]"), "{e}");
+        let e = read("id;force_n;where\nA;100;volume\nB;150;Surface\nC;120;none\n", |_| {}).unwrap_err().to_string();
+        assert!(e.contains("column where") && e.contains("material[0].origin = \"where\""), "{e}");
+        read("id;force_n;Bruchursprung\nA;100;Volumen\nB;150;Oberfläche\nC;120;Volumen\n", |s| s.ignore = vec!["Bruchursprung".into()]).unwrap();
+        // Not origins: a remark column, and a column holding only `none`.
+        read("id;force_n;remark\nA;100;chipped\nB;150;ok then\nC;120;none\n", |_| {}).unwrap();
+        read("id;force_n;remark\nA;100;none\nB;150;none\nC;120;none\n", |_| {}).unwrap();
         // A pile-up at the highest force.
         let body = "id;force_n\nA;100\nB;150\nC;150\nD;150\nE;120\n";
         let e = read(body, |_| {}).unwrap_err().to_string();
@@ -683,6 +777,16 @@ mod tests {
         assert_eq!(v.iter().filter(|r| r.kind == Censor::Right).count(), 3);
         let (v, _) = read(body, |s| s.at_highest = Some(AtHighest::Broken)).unwrap();
         assert!(v.iter().all(|r| r.kind == Censor::Exact));
+    }
+
+    #[test]
+    fn origin_labels_that_differ_in_case_are_one_origin_and_said() {
+        let mut l: Vec<String> = ["Oberfläche", "Volumen", "oberfläche", "Oberfläche", "VOLUMEN", "Volumen"].iter().map(|s| s.to_string()).collect();
+        let said = one_spelling(&mut l);
+        assert_eq!(l, ["Oberfläche", "Volumen", "Oberfläche", "Oberfläche", "Volumen", "Volumen"]);
+        assert_eq!(said, ["failure origin `oberfläche` (1 row) read as `Oberfläche` (origin labels are compared without case)", "failure origin `VOLUMEN` (1 row) read as `Volumen` (origin labels are compared without case)"]);
+        let mut same: Vec<String> = vec!["a".into(), "b".into()];
+        assert!(one_spelling(&mut same).is_empty());
     }
 
     #[test]

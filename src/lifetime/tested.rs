@@ -144,7 +144,8 @@ pub fn warnings(materials: &[Tested]) -> Vec<String> {
 
 /// `md` with each of `warnings` stated at the head of its headline section (after the line
 /// `## Headline`), so that a comparison or lifetime is not read without them (they also go to
-/// stderr and the report's Warnings page); at the end where there is no such section.
+/// stderr and the report's Warnings page); where there is no such section, before the first
+/// section (`## `), else at the end.
 pub fn with_warnings(md: &str, warnings: &[String]) -> String {
     if warnings.is_empty() {
         return md.to_string();
@@ -156,8 +157,22 @@ pub fn with_warnings(md: &str, warnings: &[String]) -> String {
             let j = i + head.len();
             format!("{}\n{block}{}", &md[..j], md[j..].trim_start_matches('\n'))
         }
-        None => format!("{md}\n{block}"),
+        None => match md.find("\n## ") {
+            Some(i) => format!("{}{block}{}", &md[..=i], &md[i + 1..]),
+            None => format!("{md}\n{block}"),
+        },
     }
+}
+
+/// The warning for materials side by side (a discrepancy study's lifetimes) tested at
+/// different temperatures: each lifetime holds at its own tests' temperature, so the table
+/// does not compare the materials at one temperature. None where every material was tested at
+/// the same temperatures, or there is one.
+pub fn side_by_side(materials: &[Tested]) -> Option<String> {
+    (materials.len() > 1 && materials.windows(2).any(|w| w[0].distinct() != w[1].distinct())).then(|| {
+        let each = materials.iter().map(|m| format!("{} at {}", m.label, describe_temperatures(m.temperatures_c))).collect::<Vec<_>>().join(", ");
+        format!("the materials were tested at different temperatures ({each}): each one's lifetime holds at its own tests' temperature, so side by side they set a strength measured at one temperature against one measured at another, not one material against the other")
+    })
 }
 
 #[cfg(test)]
@@ -171,6 +186,8 @@ mod tests {
         assert_eq!(with_warnings(md, &w), "# T\n\nlead\n\n## Headline\n\n**Warning**: the two materials were tested at different temperatures (A at 800 °C, B at 20 °C).\n\n* A is better\n");
         assert_eq!(with_warnings(md, &[]), md);
         assert!(with_warnings("# T\n", &w).ends_with("**Warning**: the two materials were tested at different temperatures (A at 800 °C, B at 20 °C).\n\n"));
+        // Without a headline, before the first section.
+        assert_eq!(with_warnings("# T\n\nlead\n\n## A\n\nx\n", &w), "# T\n\nlead\n\n**Warning**: the two materials were tested at different temperatures (A at 800 °C, B at 20 °C).\n\n## A\n\nx\n");
     }
 
     #[test]
@@ -188,6 +205,9 @@ mod tests {
         let p = paragraph(&[a_rt, b_rt], &LifetimeAt::Tests);
         assert!(p.contains("both materials were tested at 20 °C") && p.contains("hold at 20 °C, the tests' temperature"), "{p}");
         assert!(warnings(&[a_rt, b_rt]).is_empty());
+        // Side by side (a discrepancy study's lifetimes): warned where the temperatures differ.
+        assert!(side_by_side(&[a, b]).is_some_and(|w| w.contains("(Gen 4 at 800 °C, BL 16/30 at 20 °C): each one's lifetime holds at its own tests' temperature")));
+        assert!(side_by_side(&[a_rt, b_rt]).is_none() && side_by_side(&[a]).is_none());
         let p = paragraph(&[a_rt, b_rt], &LifetimeAt::Operating { per_material: vec!["800 °C".into(), "700–800 °C".into()], by: "the temperature laws of `temperature.toml`".into() });
         assert!(p.contains("Gen 4 at 800 °C; BL 16/30 at 700–800 °C") && p.contains("while both materials were tested at 20 °C"), "{p}");
         // One material's tests at two temperatures, pooled: warned; with a term: not.

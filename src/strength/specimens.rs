@@ -56,7 +56,7 @@ pub const SPECIMEN_STRENGTH: Plausible = Plausible {
 
 /// Fields of a strength file.
 pub const STRENGTH_FIELDS: [Field; 4] = [
-    Field { key: "id", column: "id", kind: Kind::Text, synonyms: &["specimen", "specimen_id", "sample", "sample_id"], required: false, plausible: None },
+    Field { key: "id", column: "id", kind: Kind::Text, synonyms: &["specimen", "specimen_id", "sample", "sample_id", "probe", "probennummer", "probennr", "nr"], required: false, plausible: None },
     Field { key: "material", column: "material", kind: Kind::Text, synonyms: &["grade"], required: false, plausible: None },
     Field {
         key: "strength",
@@ -229,8 +229,8 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
     }
     // `none` is for a specimen that did not break: a break needs its origin.
     if let Some(c) = origin_column {
-        if let Some(i) = crate::intake::observed::check_origins(sp.observations.view(), &failure_origins, &mut provenance) {
-            return Err(table.error(rows[sp.rows[i]], Some(c), crate::intake::observed::NONE_ON_A_BREAK));
+        if let Some((i, rule)) = crate::intake::observed::check_origins(sp.observations.view(), &mut failure_origins, &ids, &mut provenance) {
+            return Err(table.error(rows[sp.rows[i]], Some(c), rule));
         }
     }
     sample.strength = sp.observations;

@@ -129,6 +129,19 @@ fn finite(v: f64) -> serde_json::Value {
     if v.is_finite() { serde_json::json!(v) } else { serde_json::Value::Null }
 }
 
+/// A covariate's range in words and in its unit: `diameter_m` in mm, `temperature_c` in °C, a
+/// range whose ends print alike as one value.
+fn covariate_range(name: &str, lo: f64, hi: f64) -> String {
+    let (scale, unit, d) = match name {
+        "diameter_m" => (1e3, " mm", 3),
+        "temperature_c" => (1.0, " °C", 0),
+        _ => (1.0, "", 4),
+    };
+    let (a, b) = (format!("{:.d$}", lo * scale), format!("{:.d$}", hi * scale));
+    let shown = name.strip_suffix("_m").or_else(|| name.strip_suffix("_c")).filter(|_| !unit.is_empty()).unwrap_or(name);
+    if a == b { format!("{shown} = {a}{unit}") } else { format!("{shown} in [{a}, {b}]{unit}") }
+}
+
 /// Why a law in place of the Weibull law is not identified (its fit's verdict, which the guard
 /// requires whatever its numbers), or None.
 fn unidentified(e: &super::workflow::Evidence) -> Option<&str> {
@@ -351,8 +364,8 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         if let Some(f) = b.findings.first() {
             match &f.worst_level {
                 None => md.push_str(&format!(
-                    "\nLargest residual trend before: `{}` (Spearman ρ = {:.2}, permutation p = {:.3}); the residuals depart most for {} in [{:.4}, {:.4}] (mean residual {:+.2}).\n",
-                    f.covariate, f.rho, f.p, f.covariate, f.worst_range.0, f.worst_range.1, f.worst_range.2
+                    "\nLargest residual trend before: `{}` (Spearman ρ = {:.2}, permutation p = {:.3}); the residuals depart most for {} (mean residual {:+.2}).\n",
+                    f.covariate, f.rho, f.p, covariate_range(&f.covariate, f.worst_range.0, f.worst_range.1), f.worst_range.2
                 )),
                 Some(level) if f.scatter => md.push_str(&format!(
                     "\nLargest residual difference before: in the scatter between the levels of `{}` (Kruskal–Wallis H of the absolute deviations from the level medians = {:.2} on {} df, permutation p = {:.3}); the scatter departs most at \"{level}\" (mean absolute deviation {:.2} against {:.2} over all specimens).\n",
@@ -518,6 +531,13 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn covariate_ranges_are_in_their_units_and_one_value_is_one() {
+        assert_eq!(covariate_range("diameter_m", 0.00102, 0.00141), "diameter in [1.020, 1.410] mm");
+        assert_eq!(covariate_range("temperature_c", 20.0, 20.0), "temperature = 20 °C");
+        assert_eq!(covariate_range("roundness", 0.7, 0.81), "roundness in [0.7000, 0.8100]");
+    }
     use crate::discrepancy::workflow::Evidence;
 
     /// The Wilson bounds are where the score test is just significant at 90 %:

@@ -328,7 +328,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         let ids = m.data.records.iter().map(|r| r.id.clone()).collect();
         let temperatures_c = m.data.records.iter().filter_map(|r| r.temperature_c).collect();
         let failure_origins = m.data.origins.clone();
-        results.push(MaterialResult { key: m.spec.key.clone(), label: m.spec.label.clone(), path: m.data.path.clone(), ids, crush: Some(m.spec), sample: m.sample, outcome, lifetime, power, temperatures_c, origins, failure_origins, read_notes: super::study::read_notes(&m.data.provenance) });
+        results.push(MaterialResult { key: m.spec.key.clone(), label: m.spec.label.clone(), path: m.data.path.clone(), ids, crush: Some(m.spec), sample: m.sample, outcome, lifetime, power, temperatures_c, origins, failure_origins, read_notes: m.data.provenance.summary_notes() });
     }
     for (j, (set, read)) in specimens.into_iter().enumerate() {
         let k = s.material.len() + j;
@@ -346,7 +346,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
             Some(column) => Some(crate::strength::origins::analyse(read.sample.strength.view(), &read.origins, column, s.lifetime.bootstrap, material_settings.seed ^ ORIGINS_SEED)?),
             None => None,
         };
-        results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power, temperatures_c: read.temperatures_c, origins, failure_origins: read.origins, read_notes: super::study::read_notes(&read.provenance) });
+        results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power, temperatures_c: read.temperatures_c, origins, failure_origins: read.origins, read_notes: read.provenance.summary_notes() });
     }
 
     let mut dir = crate::runkit::report_dir(opts, &loaded.name)?;

@@ -236,26 +236,11 @@ pub struct MaterialResult {
     pub origins: Option<crate::strength::origins::Origins>,
     /// Each specimen's failure origin, where the study names the column (empty otherwise).
     pub failure_origins: Vec<String>,
-    /// What the file's reading says the summary must repeat ([`read_notes`]): columns not
+    /// What the file's reading says the summary must repeat
+    /// ([`crate::intake::Provenance::summary_notes`]): columns not
     /// used or ignored, rows counting several specimens (and those counting none, dropped),
     /// failure-origin labels read as one, origins on specimens that did not break.
     pub read_notes: Vec<String>,
 }
 
-/// The lines of a file's reading (`p`) that change what the fit saw and that the summary
-/// states beside the material, not only the report's Inputs page: columns not used (read by
-/// no field and no declaration), columns ignored as the study says, the count column (rows →
-/// specimens, rows counting 0 dropped) and what was read of the failure origins.
-pub fn read_notes(p: &crate::intake::Provenance) -> Vec<String> {
-    let list = |v: &[String]| v.iter().map(|u| format!("`{u}`")).collect::<Vec<_>>().join(", ");
-    let mut out = Vec::new();
-    if !p.unused.is_empty() {
-        out.push(format!("column{} not used: {} (read by no field of the file's kind and no declaration of the study)", if p.unused.len() == 1 { "" } else { "s" }, list(&p.unused)));
-    }
-    if !p.ignored.is_empty() {
-        out.push(format!("column{} ignored as the study's `ignore` says: {}", if p.ignored.len() == 1 { "" } else { "s" }, list(&p.ignored)));
-    }
-    out.extend(p.observed.iter().filter(|l| l.starts_with("failure origin") || l.starts_with("count column")).cloned());
-    out
-}
 

@@ -213,6 +213,23 @@ pub struct Provenance {
 }
 
 impl Provenance {
+    /// The lines of the reading that change what a fit saw, for a summary to state beside the
+    /// material and not only on the report's Inputs page: columns not used (read by no field
+    /// and no declaration), columns ignored as the study says, the count column (rows →
+    /// specimens, rows counting 0 dropped) and what was read of the failure origins.
+    pub fn summary_notes(&self) -> Vec<String> {
+        let list = |v: &[String]| v.iter().map(|u| format!("`{u}`")).collect::<Vec<_>>().join(", ");
+        let mut out = Vec::new();
+        if !self.unused.is_empty() {
+            out.push(format!("column{} not used: {} (read by no field of the file's kind and no declaration of the study)", if self.unused.len() == 1 { "" } else { "s" }, list(&self.unused)));
+        }
+        if !self.ignored.is_empty() {
+            out.push(format!("column{} ignored as the study's `ignore` says: {}", if self.ignored.len() == 1 { "" } else { "s" }, list(&self.ignored)));
+        }
+        out.extend(self.observed.iter().filter(|l| l.starts_with("failure origin") || l.starts_with("count column")).cloned());
+        out
+    }
+
     /// One line, e.g. "semicolon-separated, decimal comma, UTF-8; `D [mm]` → diameter_m (× 1e-3); …".
     pub fn describe(&self) -> String {
         let mut parts = vec![self.format.clone()];

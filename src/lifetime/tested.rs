@@ -164,6 +164,14 @@ pub fn with_warnings(md: &str, warnings: &[String]) -> String {
     }
 }
 
+/// The summary's section on what each material's file said beyond its values
+/// ([`crate::intake::Provenance::summary_notes`]), one line per material with any; empty when
+/// none has any.
+pub fn read_section(materials: &[(&str, Vec<String>)]) -> String {
+    let lines: Vec<String> = materials.iter().filter(|(_, n)| !n.is_empty()).map(|(label, n)| format!("* **{label}**: {}.\n", n.join("; "))).collect();
+    if lines.is_empty() { String::new() } else { format!("\n## Read from the files\n\n{}", lines.concat()) }
+}
+
 /// The warning for materials side by side (a discrepancy study's lifetimes) tested at
 /// different temperatures: each lifetime holds at its own tests' temperature, so the table
 /// does not compare the materials at one temperature. None where every material was tested at
@@ -188,6 +196,12 @@ mod tests {
         assert!(with_warnings("# T\n", &w).ends_with("**Warning**: the two materials were tested at different temperatures (A at 800 °C, B at 20 °C).\n\n"));
         // Without a headline, before the first section.
         assert_eq!(with_warnings("# T\n\nlead\n\n## A\n\nx\n", &w), "# T\n\nlead\n\n**Warning**: the two materials were tested at different temperatures (A at 800 °C, B at 20 °C).\n\n## A\n\nx\n");
+    }
+
+    #[test]
+    fn the_read_section_lists_only_materials_with_notes() {
+        assert_eq!(read_section(&[("A", vec![]), ("B", vec![])]), "");
+        assert_eq!(read_section(&[("A", vec!["column not used: `x`".into()]), ("B", vec![])]), "\n## Read from the files\n\n* **A**: column not used: `x`.\n");
     }
 
     #[test]

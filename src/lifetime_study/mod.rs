@@ -390,7 +390,8 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
     }
     let lead = crate::lifetime::tested::paragraph(&tested, &crate::lifetime::tested::named_or_tests(&tested, &predicted));
     let md = crate::runkit::headline_summary("Breaking probability after repeated impacts (the deliverable's chain)", &headlines).replacen("\n## Headline", &format!("\n{lead}\n\n## Headline"), 1);
-    let md = crate::lifetime::tested::with_warnings(&md, &warnings) + &attrition;
+    let notes: Vec<(&str, Vec<String>)> = runs.iter().map(|r| (r.label.as_str(), r.data.provenance.summary_notes())).collect();
+    let md = crate::lifetime::tested::with_warnings(&md, &warnings) + &attrition + &crate::lifetime::tested::read_section(&notes);
     dir.write_bytes("summary.md", md.as_bytes())?;
     pb.inc(1);
 

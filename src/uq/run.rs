@@ -123,6 +123,8 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     }
     md = crate::lifetime::tested::with_warnings(&md, &warnings);
     md.push_str(&super::attrition::markdown(&attrition, &impacts_per_year_text(&primary.setup), &primary.setup.materials[0].model.label));
+    let notes: Vec<(&str, Vec<String>)> = primary.setup.materials.iter().map(|m| (m.model.label.as_str(), m.read.summary_notes())).collect();
+    md.push_str(&crate::lifetime::tested::read_section(&notes));
     dir.write_bytes("summary.md", md.as_bytes())?;
     pb.set_message("figures");
     let mut failures = Vec::new();

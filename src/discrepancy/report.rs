@@ -201,11 +201,12 @@ fn evidence_row(e: &super::workflow::Evidence) -> String {
     format!("| {} | {} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {} | {} |\n", e.round, e.candidate.name(), e.lr, e.lr_critical, e.p_family, e.delta_bic, e.delta_cv, par, verdict)
 }
 
-/// Why the lifetime with every known origin acting (`known`, at the first horizon) differs
-/// from the one-law base model's (`base`, modulus `one_m`), generated from the numbers: within
-/// a factor of two they agree; above, the origin of smallest modulus has the heavier lower tail,
-/// where impacts act; below, one law of mixed origins is broadened by the mixture. The
-/// shared-modulus test says which column the data support.
+/// Why the breaking probability with every known origin acting (`known`, at the first horizon)
+/// differs from the one-law base model's (`base`, modulus `one_m`), generated from the numbers:
+/// with one origin they are one law; within a factor of two they agree; above, the origin of
+/// smallest modulus has the heavier lower tail, where impacts act; below, one law of mixed
+/// origins is broadened by the mixture. The shared-modulus test says which column the data
+/// support.
 pub(super) fn known_against_one_law(o: &crate::strength::origins::Origins, one_m: f64, base: &LifetimeBand, known: &LifetimeBand, alpha: f64) -> String {
     let fits: Vec<&crate::strength::origins::OriginFit> = o.fits.iter().filter(|f| f.shape.is_finite()).collect();
     let moduli = fits.iter().map(|f| format!("{:.1} (\"{}\")", f.shape, f.origin)).collect::<Vec<_>>().join(", ");
@@ -216,9 +217,10 @@ pub(super) fn known_against_one_law(o: &crate::strength::origins::Origins, one_m
         return format!("Every break has one origin (\"{}\"): its law is the one law of every break, and the known-origins column's breaking probability is the base model's ({ratio:.2} times it); the bands differ by their bootstrap draws alone.", one.origin);
     }
     let at = format!("At {} yr the breaking probability with every origin acting is", known.years);
-    let why = if !(ratio.is_finite() && ratio > 0.0) {
+    if !(ratio.is_finite() && ratio > 0.0) {
         return format!("{at} {:.3e} against the one-law base model's {:.3e}.", known.estimate, base.estimate);
-    } else if (0.5..=2.0).contains(&ratio) {
+    }
+    let why = if (0.5..=2.0).contains(&ratio) {
         format!("{at} within a factor of 2 of the one-law base model's ({ratio:.2} times it).")
     } else if ratio > 2.0 {
         let weakest = fits.iter().min_by(|a, b| a.shape.total_cmp(&b.shape));

@@ -376,7 +376,8 @@ fn looks_like_origins(name: &str, values: &[String]) -> bool {
 }
 
 /// Refuses every unused column of `rows` that looks like what a study must declare (module
-/// docs): yes/no values, a count, or failure origins. `ignore`d columns move from the unused to the ignored ones
+/// docs): yes/no values, a count, or failure origins — every such column in one message, so
+/// that a file with several to declare needs one run. `ignore`d columns move from the unused to the ignored ones
 /// of `provenance`; an `ignore` naming no column is refused.
 pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenance, src: &Source, origin: &MapOrigin) -> Result<()> {
     let key = prefix(origin);
@@ -391,6 +392,8 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
         provenance.unused.retain(|u| *u != h);
         provenance.ignored.push(h);
     }
+    // Every refusal at once, so that a file with several columns to declare needs one run.
+    let mut refused: Vec<(String, String)> = Vec::new();
     for h in &provenance.unused {
         let Some(c) = table.headers.iter().position(|x| x == h) else { continue };
         let cells: Vec<&Cell> = rows.iter().map(|&row| &table.rows[row][c]).filter(|cell| !matches!(cell, Cell::Empty)).collect();
@@ -415,11 +418,11 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
         if (words || zero_one) && distinct.len() <= 3 {
             let shown = distinct.iter().map(|v| format!("\"{v}\"")).collect::<Vec<_>>().join(", ");
             let (yes, no) = (distinct.first().cloned().unwrap_or_default(), distinct.get(1).cloned().unwrap_or_default());
-            return Err(Error::data_file(
-                &table.origin.path,
+            refused.push((
                 format!("column {h}"),
                 format!("holds yes/no values ({shown}) that nothing declares: if it says which specimens broke, declare it: {key}broken = {{ column = \"{h}\", yes = \"{yes}\", no = \"{no}\" }} (yes: broke at the row's value; no: did not break by it); if it is a recorded factor, declare it in `factors`; if it says nothing of the strength, {key}ignore = [\"{h}\"]"),
             ));
+            continue;
         }
         let whole = cells.iter().all(|cell| {
             let t = match cell {
@@ -430,25 +433,30 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
             t.is_some_and(|v| v >= 0.0 && v.fract() == 0.0)
         });
         if whole && COUNT_HEADERS.contains(&name.as_str()) {
-            return Err(Error::data_file(
-                &table.origin.path,
+            refused.push((
                 format!("column {h}"),
                 format!("holds whole numbers under a count's name, and nothing declares it: if each row stands for that many specimens, declare it: {key}count = \"{h}\"; if it is something else, {key}ignore = [\"{h}\"]"),
             ));
+            continue;
         }
         if looks_like_origins(&name, &folded_values) {
             let shown = distinct.iter().take(6).map(|v| format!("\"{v}\"")).collect::<Vec<_>>().join(", ");
             let more = if distinct.len() > 6 { format!(" and {} more", distinct.len() - 6) } else { String::new() };
             let table_key = super::factors::table_key(origin);
             let origin_key = if table_key.is_empty() { "origin".to_string() } else { format!("{table_key}.origin") };
-            return Err(Error::data_file(
-                &table.origin.path,
+            refused.push((
                 format!("column {h}"),
                 format!("looks like failure origins (fractography: {shown}{more}) that nothing declares: in a discrepancy study, declare it: {origin_key} = \"{h}\" (each origin's Weibull law with the other origins' breaks censored, the test of one shared modulus, the lifetime with every origin acting); if it is a recorded factor, declare it in `factors`; if the study fits one law of every origin (the main and lifetime studies), {key}ignore = [\"{h}\"]"),
             ));
         }
     }
-    Ok(())
+    match refused.split_first() {
+        None => Ok(()),
+        Some(((location, rule), rest)) => {
+            let more: String = rest.iter().map(|(l, r)| format!("; and {l}: {r}")).collect();
+            Err(Error::data_file(&table.origin.path, location.clone(), format!("{rule}{more}")))
+        }
+    }
 }
 
 /// The header `T [°C]` — a `t` that states a temperature unit — where the study maps no
@@ -766,6 +774,9 @@ mod tests {
         let e = read("id;force_n;where\nA;100;volume\nB;150;Surface\nC;120;none\n", |_| {}).unwrap_err().to_string();
         assert!(e.contains("column where") && e.contains("material[0].origin = \"where\""), "{e}");
         read("id;force_n;Bruchursprung\nA;100;Volumen\nB;150;Oberfläche\nC;120;Volumen\n", |s| s.ignore = vec!["Bruchursprung".into()]).unwrap();
+        // Several columns to declare: one message names them all.
+        let e = read("id;force_n;gebrochen;Anzahl;Bruchursprung\nA;100;ja;1;Volumen\nB;150;nein;2;none\nC;120;ja;1;Oberfläche\n", |_| {}).unwrap_err().to_string();
+        assert!(e.contains("column gebrochen: holds yes/no") && e.contains("; and column Anzahl: holds whole numbers") && e.contains("; and column Bruchursprung: looks like failure origins"), "{e}");
         // Not origins: a remark column, and a column holding only `none`.
         read("id;force_n;remark\nA;100;chipped\nB;150;ok then\nC;120;none\n", |_| {}).unwrap();
         read("id;force_n;remark\nA;100;none\nB;150;none\nC;120;none\n", |_| {}).unwrap();

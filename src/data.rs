@@ -277,7 +277,7 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
     let mut factors = crate::intake::factors::read_factors(&table, &rows, factor_spec, &mut provenance, origin, path)?;
     let (mut origins, origin_column) = match failure_origin {
         Some(col) => {
-            let (o, c) = crate::intake::observed::failure_origins(&table, &rows, col, format!("{}.origin", crate::intake::factors::table_key(origin)), origin, &mut provenance)?;
+            let (o, c) = crate::intake::origins::failure_origins(&table, &rows, col, format!("{}.origin", crate::intake::factors::table_key(origin)), origin, &mut provenance)?;
             (o, Some(c))
         }
         None => (Vec::new(), None),
@@ -386,7 +386,7 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
     }
     // `none` is for a particle that did not break: a break needs its origin.
     if let Some(c) = origin_column
-        && let Some((i, rule)) = crate::intake::observed::check_origins(sp.observations.view(), &mut origins, &records.iter().map(|r| r.id.clone()).collect::<Vec<_>>(), &mut provenance)
+        && let Some((i, rule)) = crate::intake::origins::check_origins(sp.observations.view(), &mut origins, &records.iter().map(|r| r.id.clone()).collect::<Vec<_>>(), &mut provenance)
     {
         return Err(table.error(places[i].0, Some(c), rule));
     }

@@ -26,6 +26,7 @@ pub mod columns;
 pub mod decimal;
 pub mod factors;
 pub mod observed;
+pub mod origins;
 pub mod sheet;
 pub mod table;
 pub mod text;

@@ -203,7 +203,7 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
     let mut columns = read_factors(&table, &rows, factors, &mut provenance, origin, path)?;
     let (mut failure_origins, origin_column) = match origins {
         Some(col) => {
-            let (o, c) = crate::intake::observed::failure_origins(&table, &rows, col, format!("{}.origin", table_key(origin)), origin, &mut provenance)?;
+            let (o, c) = crate::intake::origins::failure_origins(&table, &rows, col, format!("{}.origin", table_key(origin)), origin, &mut provenance)?;
             (o, Some(c))
         }
         None => (Vec::new(), None),
@@ -229,7 +229,7 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
     }
     // `none` is for a specimen that did not break: a break needs its origin.
     if let Some(c) = origin_column {
-        if let Some((i, rule)) = crate::intake::observed::check_origins(sp.observations.view(), &mut failure_origins, &ids, &mut provenance) {
+        if let Some((i, rule)) = crate::intake::origins::check_origins(sp.observations.view(), &mut failure_origins, &ids, &mut provenance) {
             return Err(table.error(rows[sp.rows[i]], Some(c), rule));
         }
     }

@@ -191,11 +191,12 @@ pub struct MaterialSpec {
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub predict: std::collections::BTreeMap<String, toml::Value>,
     /// The column naming each particle's failure origin (fractography: volume, surface, pore
-    /// …; `none` for a particle that did not break). Read by the discrepancy study: each
+    /// …; `none` for a particle that did not break). Read by the discrepancy study (each
     /// origin's law with the other origins' breaks censored (ASTM C1239), the test of one shared
-    /// modulus, and the lifetime with every origin's law acting ([`crate::strength::origins`]). The
-    /// main and lifetime studies fit one law per material and refuse it
-    /// ([`MaterialSpec::one_law`]).
+    /// modulus, and the lifetime with every origin's law acting: [`crate::strength::origins`]) and
+    /// by the main study (every origin's law acting in its strength models without effects on
+    /// the material: [`crate::uq::setup`]). The lifetime study fits one law per material and
+    /// refuses it ([`MaterialSpec::one_law`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub origin: Option<String>,
 }
@@ -211,14 +212,14 @@ impl MaterialSpec {
     }
 
     /// Refuses a declared failure-origin column in a study that fits one Weibull law per
-    /// material (`kind`: the main or the lifetime study), naming the key and where the origins
-    /// are used: never read and passed over.
+    /// material (`kind`: the lifetime study), naming the key and where the origins are used:
+    /// never read and passed over.
     pub fn one_law(&self, file: &str, index: usize, kind: &str) -> Result<()> {
         match &self.origin {
             Some(col) => Err(Error::config(
                 file,
                 format!("material[{index}].origin"),
-                format!("the {kind} fits one Weibull law per material and does not read failure origins (`{col}`): each origin's law, the test of one shared modulus and the lifetime with every origin acting are the discrepancy study's (`kind = \"discrepancy\"` with this `[[material]]` and its `origin`); here remove `origin` and list the column in `material[{index}].data.ignore = [\"{col}\"]` (looked at and left out on purpose: the one law pools every origin)"),
+                format!("the {kind} fits one Weibull law per material and does not read failure origins (`{col}`): each origin's law, the test of one shared modulus and the lifetime with every origin acting are the discrepancy study's (`kind = \"discrepancy\"` with this `[[material]]` and its `origin`), and the main study (`kind = \"uq\"`) carries every origin's law to the comparison; here remove `origin` and list the column in `material[{index}].data.ignore = [\"{col}\"]` (looked at and left out on purpose: the one law pools every origin)"),
             )),
             None => Ok(()),
         }

@@ -608,6 +608,122 @@ fn truth_scale() -> f64 {
     partlife::strength::crush_contact(&elastic, &contact, 1e-3).at_force(100.0).unwrap().mean_tensile
 }
 
+/// A main study comparing the fractography campaign (`lab`, its origins declared or not) with a
+/// second campaign read as one law; η, V and the impacts fixed, so the bands are the strength
+/// models' alone.
+fn origins_main_study(origin: &str) -> String {
+    let lab = r#"{ file = "../datasets/bruch.csv", broken = { column = "gebrochen", yes = "ja", no = "nein" } }"#;
+    let reference = r#"{ file = "../datasets/ref.csv", broken = { column = "gebrochen", yes = "ja", no = "nein" }, ignore = ["Bruchursprung"] }"#;
+    format!(
+        r#"# Purpose: failure origins in the main study. Good result: the origins' band holds the truth.
+kind = "uq"
+seed = 9
+compare = {{ candidate = "lab", reference = "ref" }}
+[impact]
+years = [1, 10]
+impacts_per_year = {{ distribution = "fixed", value = 730 }}
+energy_fraction = {{ distribution = "fixed", value = 0.1 }}
+velocity = {{ distribution = "fixed", value = 5.0 }}
+[strength]
+effects = []
+draws = 400
+[damage]
+models = ["independent"]
+[propagation]
+method = "plain"
+samples = 2048
+replicates = 2
+[sensitivity]
+n = 128
+bootstrap = 20
+[model_form]
+strength = [[], ["size"]]
+{}{origin}
+[[material]]
+key = "ref"
+label = "Reference"
+data = {reference}
+elastic = {{ youngs_modulus_pa = 112e9, poisson_ratio = 0.25 }}
+density_kg_m3 = 3060
+"#,
+        lab_material(lab)
+    )
+}
+
+#[test]
+fn the_main_study_carries_every_failure_origin_s_law_in_its_models_without_effects() {
+    let s = Scratch::new();
+    s.write("datasets/bruch.csv", &fractography_campaign(300, 21));
+    s.write("datasets/ref.csv", &fractography_campaign(120, 5));
+    s.write("studies/main.toml", &origins_main_study("origin = \"Bruchursprung\""));
+    let out = s.run(&["run", "studies/main.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let dir = s.path("reports/main");
+    // The deliverable's model carries each origin's law (the generator's moduli 8 and 15); the
+    // size model, with an effect on the material, one law.
+    let t = dir.join("strength_models.csv");
+    let (form, material, origin, parameter, mle) = (table_text(&t, "strength_model"), table_text(&t, "material"), table_text(&t, "failure_origin"), table_text(&t, "parameter"), table_f64(&t, "mle"));
+    let modulus = |f: &str, o: &str| (0..form.len()).find(|&i| form[i] == f && material[i] == "lab" && origin[i] == o && parameter[i] == "weibull_modulus").map(|i| mle[i]);
+    let (surface, volume) = (modulus("deliverable", "Oberfläche").unwrap(), modulus("deliverable", "Volumen").unwrap());
+    assert!((surface / 8.0 - 1.0).abs() < 0.25 && (volume / 15.0 - 1.0).abs() < 0.25, "moduli {surface} and {volume} against 8 and 15");
+    assert!(modulus("deliverable", "").is_none() && modulus("size", "").is_some() && modulus("size", "Volumen").is_none());
+    assert!((0..form.len()).all(|i| material[i] != "ref" || origin[i].is_empty()));
+    // The origins' 90 % band at each horizon holds the generator's truth at the impact stress
+    // (σ̄ of the impact does not depend on the diameter; the truth's scales at 1 mm).
+    let elastic = partlife::contact::Elastic { youngs_modulus_pa: 112e9, poisson_ratio: 0.25 };
+    let sphere = partlife::contact::Sphere { diameter: 1e-3, density: 3060.0, elastic };
+    let steel = partlife::contact::Elastic { youngs_modulus_pa: 210e9, poisson_ratio: 0.3 };
+    let sigma = partlife::lifetime::ImpactLoad::on_wall(&sphere, &steel, 0.1, partlife::contact::ContactOptions::default().averaging).at_velocity(5.0).unwrap().mean_tensile;
+    let v = truth_scale();
+    let band = |dir: &std::path::Path, years: f64| {
+        let b = dir.join("breakage.csv");
+        let (form, material, y, q05, q95) = (table_text(&b, "strength_model"), table_text(&b, "material"), table_f64(&b, "years"), table_f64(&b, "q05"), table_f64(&b, "q95"));
+        let i = (0..form.len()).find(|&i| form[i] == "deliverable" && material[i] == "lab" && y[i] == years).expect("a deliverable row of lab");
+        (q05[i], q95[i])
+    };
+    let truth = |years: f64| -(-years * 730.0 * ((15.0 * (sigma / v).ln()).exp() + (8.0 * (sigma / (1.1 * v)).ln()).exp())).exp_m1();
+    for years in [1.0, 10.0] {
+        let (lo, hi) = band(&dir, years);
+        assert!(lo <= truth(years) && truth(years) <= hi, "{years} yr: truth {} outside the origins' band [{lo}, {hi}]", truth(years));
+    }
+    // Every strength model scored by cross-validation (the origins' by the density of the
+    // strength whatever the origin), and the summary says which models carry the origins.
+    let w = dir.join("weights.csv");
+    assert!(table_f64(&w, "elpd_candidate").iter().all(|v| v.is_finite()));
+    let summary = s.read("reports/main/summary.md");
+    assert!(
+        summary.contains("**Known failure origins of BL 16/30 (lab)** (column `Bruchursprung`): in the strength model `deliverable` each origin (\"Oberfläche\", \"Volumen\") has its own two-parameter Weibull law")
+            && summary.contains("The strength model `size` carries effects on BL 16/30 (lab), and fits one law to the breaks of every origin")
+            && summary.contains("| deliverable | BL 16/30 (lab) | failure origin \"Oberfläche\" ("),
+        "{summary}"
+    );
+    // One law of every origin (the column ignored) puts the truth above its band: the steeper
+    // single law thins the tail the surface flaws carry.
+    let pooled = origins_main_study("").replacen(r#"no = "nein" } }"#, r#"no = "nein" }, ignore = ["Bruchursprung"] }"#, 1);
+    s.write("studies/pooled.toml", &pooled);
+    let out = s.run(&["run", "studies/pooled.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    for years in [1.0, 10.0] {
+        let (_, hi) = band(&s.path("reports/pooled"), years);
+        assert!(hi < truth(years), "{years} yr: one law's band reaches the truth {} (upper end {hi})", truth(years));
+    }
+    assert!(!s.read("reports/pooled/summary.md").contains("Known failure origins"));
+    // The experiments study's test models draw one law per material: it refuses the main study
+    // with origins, naming the key, rather than design tests on a model it does not carry.
+    let experiments = "kind = \"experiments\"\nseed = 1\nstudy = \"main.toml\"\n[decision]\nhorizon_years = 1\nloss = 1.0e6\n[analysis]\nsamples = 400\nreserve = 400\nouter = 30\n[budget]\ntotal = 2000\n[[candidate]]\nname = \"crush lab\"\ntest = \"crush\"\nmaterial = \"lab\"\nsizes = [25]\ncost_per_unit = 40\n";
+    s.write("studies/experiments.toml", experiments);
+    let out = s.run(&["run", "studies/experiments.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("main.toml") && out.stderr.contains("material[0].origin") && out.stderr.contains("one law per failure origin"), "{}", out.stderr);
+    // An origin with a single break has no law: refused with the file, the column and what to do.
+    let text = s.read("datasets/bruch.csv");
+    let one = text.replacen(";ja;Volumen;", ";ja;Pore;", 1);
+    s.write("datasets/bruch.csv", &one);
+    let out = s.run(&["run", "studies/main.toml", "--quiet"]);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(out.stderr.contains("bruch.csv") && out.stderr.contains("column Bruchursprung") && out.stderr.contains("failure origin \"Pore\" has 1 break;") && out.stderr.contains("material[0].data.ignore"), "{}", out.stderr);
+}
+
 #[test]
 fn crush_particles_with_failure_origins_give_each_origin_s_law_and_a_lifetime_with_every_origin_acting() {
     let s = Scratch::new();

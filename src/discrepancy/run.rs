@@ -312,7 +312,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         // Known failure origins: each origin's law, the shared-modulus test, and the lifetime with
         // every origin's law acting.
         let origins = match &m.spec.origin {
-            Some(column) => Some(crate::strength::origins::analyse(m.sample.strength.view(), &m.data.origins, column, s.lifetime.bootstrap, material_settings.seed ^ ORIGINS_SEED)?),
+            Some(column) => Some(crate::strength::origins::analyse(m.sample.strength.view(), &m.data.origins, column, crate::strength::Uncertainty::Bootstrap, s.lifetime.bootstrap, material_settings.seed ^ ORIGINS_SEED)?),
             None => None,
         };
         let mut lifetime = lifetime;
@@ -343,7 +343,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
             Vec::new()
         };
         let origins = match &set.origin {
-            Some(column) => Some(crate::strength::origins::analyse(read.sample.strength.view(), &read.origins, column, s.lifetime.bootstrap, material_settings.seed ^ ORIGINS_SEED)?),
+            Some(column) => Some(crate::strength::origins::analyse(read.sample.strength.view(), &read.origins, column, crate::strength::Uncertainty::Bootstrap, s.lifetime.bootstrap, material_settings.seed ^ ORIGINS_SEED)?),
             None => None,
         };
         results.push(MaterialResult { key: set.key.clone(), label: set.label.clone(), path: read.path, ids: read.ids, crush: None, sample: read.sample, outcome, lifetime: Vec::new(), power, temperatures_c: read.temperatures_c, origins, failure_origins: read.origins, read_notes: read.provenance.summary_notes() });

@@ -529,7 +529,13 @@ pub fn unclaimed(spec: &crate::strength::StrengthSpec, samples: &[&Sample]) -> O
 /// settings' folds and seed; for `"diagnosed"` the naming loop runs on each training fold, so
 /// the selection is part of what is validated. An explicit effect whose covariate is missing is
 /// an error naming `material`, the file and the column.
-pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings: &NamingSettings, material: &str) -> Result<Vec<f64>> {
+///
+/// `origins` (each row's failure origin, where the material's file names them): a model without
+/// effects on this material is then every origin's two-parameter law acting, scored by the
+/// density of the strength whatever the origin ([`crate::strength::origins::cv_ln_prob`]), as
+/// the main study evaluates it; for `"diagnosed"` so in every training fold where the loop
+/// names nothing.
+pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings: &NamingSettings, material: &str, origins: Option<&[String]>) -> Result<Vec<f64>> {
     let x = sample.strength.view();
     let n = x.len();
     if n < MIN_PARTICLES {
@@ -548,14 +554,40 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
             .collect()
     };
     let failed = || Error::numerical("cross-validated log score", format!("material `{material}`: a training fit of the `{}` strength model failed", spec.name()));
+    let origins = origins.filter(|o| !o.is_empty());
+    // Fold f's test rows under every origin's law fitted to the other folds.
+    let by_origins = |origin: &[String], f: usize, out: &mut [f64]| -> Result<()> {
+        let (train, test): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| fold[i] != f);
+        let p = crate::strength::origins::cv_ln_prob(x, origin, &train, &test).ok_or_else(failed)?;
+        for (i, v) in test.into_iter().zip(p) {
+            out[i] = v;
+        }
+        Ok(())
+    };
     match spec {
-        crate::strength::StrengthSpec::Effects(v) => cv_pointwise(x, &terms_for(&applying(v, sample))?, &fold, k).ok_or_else(failed),
+        crate::strength::StrengthSpec::Effects(v) => {
+            let effects = applying(v, sample);
+            match origins {
+                Some(origin) if effects.is_empty() => {
+                    let mut out = vec![f64::NAN; n];
+                    for f in 0..k {
+                        by_origins(origin, f, &mut out)?;
+                    }
+                    Ok(out)
+                }
+                _ => cv_pointwise(x, &terms_for(&effects)?, &fold, k).ok_or_else(failed),
+            }
+        }
         crate::strength::StrengthSpec::Diagnosed => {
             let mut out = vec![f64::NAN; n];
             for f in 0..k {
                 let train: Vec<usize> = (0..n).filter(|&i| fold[i] != f).collect();
                 let sub = sample.rows(&train, sample.source.clone());
                 let named = names(&sub, settings)?;
+                if let (Some(origin), true) = (origins, named.is_empty()) {
+                    by_origins(origin, f, &mut out)?;
+                    continue;
+                }
                 let terms = terms_for(&named)?;
                 let fit = fit_model(sub.strength.view(), &crate::strength::fit::subset(&terms, &train)).map_err(|_| failed())?;
                 for i in (0..n).filter(|&i| fold[i] == f) {

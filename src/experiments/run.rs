@@ -85,6 +85,15 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     let (main_path, u, keys) = main_study(loaded, s)?;
     s.validate(&file, Some(&keys))?;
     let horizon = u.impact.years.iter().position(|&y| y == s.decision.horizon_years).ok_or_else(|| Error::config(&file, "decision.horizon_years", format!("must be one of the main study's horizons {:?}, got {}", u.impact.years, s.decision.horizon_years)))?;
+    // The candidate tests' models draw one Weibull law per material; the main study's models
+    // with known failure origins carry one law per origin.
+    if let Some((k, m)) = u.material.iter().enumerate().find(|(_, m)| m.origin.is_some()) {
+        return Err(Error::config(
+            &main_path.display().to_string(),
+            format!("material[{k}].origin"),
+            format!("the experiments study models each candidate test with one Weibull law per material, and material `{}` carries one law per failure origin here; run the experiments on a main study that fits one law (the column in `material[{k}].data.ignore` instead of `origin`)", m.key),
+        ));
+    }
     let shared = crate::uq::setup::Shared::new(&u, &main_path, &opts.reports_root)?;
     let damage_weights = s.decision.damage_weights.clone().unwrap_or_else(|| vec![1.0; shared.models.len()]);
     if damage_weights.len() != shared.models.len() {

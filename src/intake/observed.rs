@@ -425,7 +425,7 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
             let origin_key = if table_key.is_empty() { "origin".to_string() } else { format!("{table_key}.origin") };
             refused.push((
                 format!("column {h}"),
-                format!("looks like failure origins (fractography: {shown}{more}) that nothing declares: in a discrepancy study, declare it: {origin_key} = \"{h}\" (each origin's Weibull law with the other origins' breaks censored, the test of one shared modulus, the lifetime with every origin acting); if it is a recorded factor, declare it in `factors`; if the study fits one law of every origin (the main and lifetime studies), {key}ignore = [\"{h}\"]"),
+                format!("looks like failure origins (fractography: {shown}{more}) that nothing declares: declare it: {origin_key} = \"{h}\" (a discrepancy study: each origin's Weibull law with the other origins' breaks censored, the test of one shared modulus, the lifetime with every origin acting; a main study: every origin's law acting in its strength models without effects); if it is a recorded factor, declare it in `factors`; to fit one law to the breaks of every origin (the lifetime study does), {key}ignore = [\"{h}\"]"),
             ));
         }
     }

@@ -106,18 +106,31 @@ pub struct Origins {
 /// first, so the survivals multiply, P = 1 − Π_k (1 − p_k). Summed in ln(1 − p) so that a
 /// probability of 1e-12 keeps its digits.
 pub fn combined(p: &[f64]) -> f64 {
-    -p.iter().map(|q| (-q).ln_1p()).sum::<f64>().exp_m1()
+    from_ln_survival(p.iter().map(|&q| ln_survival(q)).sum())
+}
+
+/// ln(1 − p): the log survival of one origin's flaws, which [`combined`] sums.
+#[inline]
+pub fn ln_survival(p: f64) -> f64 {
+    (-p).ln_1p()
+}
+
+/// The breaking probability 1 − e^s of a summed log survival s ([`combined`]).
+#[inline]
+pub fn from_ln_survival(s: f64) -> f64 {
+    -s.exp_m1()
 }
 
 /// Each origin's law from the observations `x` whose specimen i failed from `origin[i]` (ignored
 /// for a specimen that did not break), its 90 % bands from `draws` bootstrap draws, and the
 /// shared-modulus test (module docs).
 ///
-/// The bands are the 5 and 95 % quantiles of the bootstrap draws of [`origin_fit`]
-/// ([`StrengthFit::draws`], origin k's with seed `seed + k`): the plain parametric bootstrap,
-/// each redrawn specimen censored as its row was (another origin's break a limit at its value),
-/// in pivotal form — kept in [`OriginFit::draws`] for the lifetime with every origin acting.
-pub fn analyse(x: Obs, origin: &[String], column: &str, draws: usize, seed: u64) -> Result<Origins> {
+/// The bands are the 5 and 95 % quantiles of the draws of [`origin_fit`] ([`StrengthFit::draws`]
+/// by `how`, origin k's with seed `seed + k`): with [`Uncertainty::Bootstrap`] the plain
+/// parametric bootstrap, each redrawn specimen censored as its row was (another origin's break a
+/// limit at its value), in pivotal form — kept in [`OriginFit::draws`] for the lifetime with
+/// every origin acting.
+pub fn analyse(x: Obs, origin: &[String], column: &str, how: Uncertainty, draws: usize, seed: u64) -> Result<Origins> {
     let n = x.len();
     let mut levels: Vec<String> = (0..n).filter(|&i| x.kind(i) != Censor::Right).map(|i| origin[i].clone()).collect();
     levels.sort();
@@ -134,7 +147,7 @@ pub fn analyse(x: Obs, origin: &[String], column: &str, draws: usize, seed: u64)
         }
         let sf = origin_fit(obs, lv)?;
         let f = &sf.model.reg;
-        let d = sf.draws(Uncertainty::Bootstrap, draws, seed.wrapping_add(k as u64))?;
+        let d = sf.draws(how, draws, seed.wrapping_add(k as u64))?;
         let band = |v: Vec<f64>| {
             let q = crate::stats::interpolated_quantiles(v, &[0.05, 0.95]);
             (q[0], q[1])
@@ -175,6 +188,46 @@ pub fn analyse(x: Obs, origin: &[String], column: &str, draws: usize, seed: u64)
 pub fn origin_fit(obs: Observations, origin: &str) -> Result<StrengthFit> {
     let sample = Sample { source: format!("origin {origin}"), strength: obs, ..Sample::default() };
     StrengthFit::new(&sample, &[], 0.0, origin)
+}
+
+/// ln P(row i of `x`) when every origin's Weibull law acts and the weakest flaw breaks the
+/// specimen: `laws` holds each origin's (ln σ_k, m_k) in the units of x. The survival is
+/// S(v) = Π_k S_k(v) and the density of the strength (whatever the origin)
+/// f(v) = Σ_k h_k(v) · S(v), h_k = f_k/S_k the origin's hazard; a censored or class row takes S
+/// as [`Obs::ln_prob`] does. This is the density of the strength alone, comparable with one
+/// law's: what the main study's cross-validation weighs strength models by.
+pub fn ln_prob_weakest(x: Obs, i: usize, laws: &[(f64, f64)]) -> f64 {
+    let ln_sf = |v: f64| laws.iter().map(|&(ls, m)| -(m * (v.ln() - ls)).exp()).sum::<f64>();
+    let ln_pdf = |v: f64| {
+        // ln h_k = ln f_k − ln S_k = ln m_k − ln v + m_k (ln v − ln σ_k).
+        let h: Vec<f64> = laws.iter().map(|&(ls, m)| m.ln() - v.ln() + m * (v.ln() - ls)).collect();
+        let top = h.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        top + h.iter().map(|a| (a - top).exp()).sum::<f64>().ln() + ln_sf(v)
+    };
+    x.ln_prob(i, ln_pdf, ln_sf)
+}
+
+/// The cross-validated ln P of the rows `test` of `x` under every origin's two-parameter law
+/// fitted to the rows `train` alone (each origin's breaks, the others' censored: [`Obs::of_origin`]),
+/// acting together ([`ln_prob_weakest`]). `origin[i]` names row i's origin; the origins are those
+/// of every break of `x`. None where an origin has fewer than two breaks among `train` or a fit fails.
+pub fn cv_ln_prob(x: Obs, origin: &[String], train: &[usize], test: &[usize]) -> Option<Vec<f64>> {
+    let mut levels: Vec<&String> = (0..x.len()).filter(|&i| x.kind(i) != Censor::Right).map(|i| &origin[i]).collect();
+    levels.sort();
+    levels.dedup();
+    let sub = x.rows(train);
+    let sub_origin: Vec<String> = train.iter().map(|&i| origin[i].clone()).collect();
+    let mut laws = Vec::with_capacity(levels.len());
+    for lv in levels {
+        let (obs, breaks) = sub.view().of_origin(&sub_origin, lv);
+        if breaks < 2 {
+            return None;
+        }
+        let f = fit(obs.view(), &Design::default()).ok()?;
+        laws.push((f.mu, f.shape()));
+    }
+    let out: Vec<f64> = test.iter().map(|&i| ln_prob_weakest(x, i, &laws)).collect();
+    out.iter().all(|v| v.is_finite()).then_some(out)
 }
 
 /// Fewer breaks than this from one origin: its law is said to be poorly determined.
@@ -233,7 +286,7 @@ mod tests {
                 x.push(a.min(b));
                 o.push(if a <= b { "volume".to_string() } else { "surface".to_string() });
             }
-            let r = analyse(Obs::exact(&x), &o, "origin", 100, 1).unwrap();
+            let r = analyse(Obs::exact(&x), &o, "origin", Uncertainty::Bootstrap, 100, 1).unwrap();
             let v = r.fits.iter().find(|f| f.origin == "volume").unwrap();
             assert!((v.shape / 10.0 - 1.0).abs() < 0.15 && (v.scale - 1.0).abs() < 0.03, "{r:?}");
             let s = r.shared.clone().unwrap();
@@ -242,6 +295,50 @@ mod tests {
             // The separate fits' ℓ is the full likelihood: at least the shared modulus'.
             assert!(s.loglik_separate >= s.loglik_shared - 1e-9);
         }
+    }
+
+    #[test]
+    fn the_weakest_of_the_origins_laws_has_the_density_of_its_survival_and_one_law_is_the_one_law_s() {
+        let laws = [(1.0f64.ln(), 10.0), (1.2f64.ln(), 4.0), (0.9f64.ln(), 20.0)];
+        let ln_s = |v: f64| -laws.iter().map(|&(ls, m)| (m * (v.ln() - ls)).exp()).sum::<f64>();
+        for v in [0.3, 0.7, 0.95, 1.1] {
+            // The density is −dS/dv (central difference); a right-censored row is S, a class S(a) − S(b).
+            let h = 1e-6 * v;
+            let numeric = -((ln_s(v + h)).exp() - (ln_s(v - h)).exp()) / (2.0 * h);
+            let exact = ln_prob_weakest(Obs::exact(&[v]), 0, &laws);
+            assert!((exact - numeric.ln()).abs() < 1e-6, "{v}: {exact} against {}", numeric.ln());
+            let right = Observations { censoring: crate::obs::Censoring::of_rows(vec![Censor::Right], &[v], vec![f64::NAN]), x: vec![v] };
+            assert!((ln_prob_weakest(right.view(), 0, &laws) - ln_s(v)).abs() < 1e-12);
+            let class = Observations { censoring: crate::obs::Censoring::of_rows(vec![Censor::Interval], &[v], vec![1.2 * v]), x: vec![v] };
+            let p = ln_s(v).exp() - ln_s(1.2 * v).exp();
+            assert!((ln_prob_weakest(class.view(), 0, &laws) - p.ln()).abs() < 1e-9);
+            // One origin: the one law's ln P.
+            let one = ln_prob_weakest(Obs::exact(&[v]), 0, &laws[..1]);
+            assert!((one - crate::strength::loglik::ln_prob(Obs::exact(&[v]), 0, laws[0].0, 1.0 / laws[0].1)).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn cross_validated_origins_score_the_held_out_rows_and_need_two_breaks_per_origin_in_training() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let draw = |rng: &mut ChaCha8Rng, s: f64, m: f64| s * (-(-rng.random::<f64>()).ln_1p()).powf(1.0 / m);
+        let (mut x, mut o) = (Vec::new(), Vec::new());
+        for _ in 0..200 {
+            let (a, b) = (draw(&mut rng, 1.0, 12.0), draw(&mut rng, 1.2, 4.0));
+            x.push(a.min(b));
+            o.push(if a <= b { "volume" } else { "surface" }.to_string());
+        }
+        let (train, test): (Vec<usize>, Vec<usize>) = (0..200).partition(|i| i % 5 != 0);
+        let p = cv_ln_prob(Obs::exact(&x), &o, &train, &test).unwrap();
+        assert_eq!(p.len(), test.len());
+        // The held-out rows score better under the two origins' laws than under one law fitted
+        // to the same training rows (the data are two moduli).
+        let one = fit(Obs::exact(&x).rows(&train).view(), &Design::default()).unwrap();
+        let pooled: f64 = test.iter().map(|&i| crate::strength::loglik::ln_prob(Obs::exact(&x), i, one.mu, 1.0 / one.shape())).sum();
+        assert!(p.iter().sum::<f64>() > pooled, "{} against one law's {pooled}", p.iter().sum::<f64>());
+        // Training rows with a single surface break: no law for it.
+        let few: Vec<usize> = (0..200).filter(|&i| o[i] == "volume").chain((0..200).filter(|&i| o[i] == "surface").take(1)).collect();
+        assert!(cv_ln_prob(Obs::exact(&x), &o, &few, &test).is_none());
     }
 
     #[test]
@@ -264,7 +361,7 @@ mod tests {
                 o.push(if !broke { "none" } else if a < b { truth[0].0 } else { truth[1].0 }.to_string());
             }
             let obs = Observations { censoring: crate::obs::Censoring::of_rows(kind, &x, vec![f64::NAN; x.len()]), x };
-            let r = analyse(obs.view(), &o, "origin", 200, c as u64).unwrap();
+            let r = analyse(obs.view(), &o, "origin", Uncertainty::Bootstrap, 200, c as u64).unwrap();
             for (k, (name, m, scale)) in truth.iter().enumerate() {
                 let f = r.fits.iter().find(|f| f.origin == *name).unwrap();
                 assert!(f.shape_band.0 < f.shape && f.shape < f.shape_band.1 && f.scale_band.0 < f.scale && f.scale < f.scale_band.1, "{f:?}");

@@ -134,7 +134,7 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
     let mut evaluations = BTreeMap::new();
     evaluations.insert("propagation_samples".to_string(), forms.iter().map(|f| f.prop.count() as u64).sum());
     evaluations.insert("sobol_model_runs".to_string(), sens_sizes.iter().map(|n| (n * (varying.len() + 2)) as u64).sum());
-    evaluations.insert("strength_draws".to_string(), forms.iter().map(|f| 2 * f.setup.materials[0].draws.len() as u64).sum());
+    evaluations.insert("strength_draws".to_string(), forms.iter().flat_map(|f| &f.setup.materials).map(|m| ((1 + m.origins.len()) * m.draws.len()) as u64).sum());
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures, warnings })?;
     pb.finish_and_clear();
@@ -281,25 +281,36 @@ fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
     Ok(Headline { lines, rows })
 }
 
-/// `strength_models.csv` (every model's effects and parameters per material, with the largest
+/// `strength_models.csv` (every model's effects and parameters per material — per failure
+/// origin (`failure_origin`) where the model carries each origin's law — with the largest
 /// correlation between the effect draws and the base draws) and `weights.csv`.
 fn write_strength_models(dir: &mut ReportDir, forms: &[Form]) -> Result<()> {
     let mut t: (Vec<String>, Vec<String>, Vec<String>, Vec<String>, Vec<u64>, Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = Default::default();
+    let mut origin: Vec<String> = Vec::new();
     for f in forms {
         for m in &f.setup.materials {
+            // One law, or every failure origin's (its own fit and draws), as the model evaluates.
+            let laws: Vec<(&crate::strength::StrengthFit, &[crate::strength::Params], String)> = if m.origins.is_empty() {
+                vec![(&m.model.fit, &m.draws[..], String::new())]
+            } else {
+                m.origins.iter().map(|o| (&o.model.fit, &o.fit.draws[..], o.fit.origin.clone())).collect()
+            };
             let model = &m.model;
             let corr = split_correlation(m);
-            for p in summarise(&model.fit, &m.draws) {
-                t.0.push(f.setup.spec.name());
-                t.1.push(model.key.clone());
-                t.2.push(crate::strength::fit::names(model.fit.effects()));
-                t.3.push(model.population.source.clone());
-                t.4.push(model.population.len() as u64);
-                t.5.push(p.name);
-                t.6.push(p.estimate);
-                t.7.push(p.q05);
-                t.8.push(p.q95);
-                t.9.push(corr);
+            for (fit, draws, o) in laws {
+                for p in summarise(fit, draws) {
+                    origin.push(o.clone());
+                    t.0.push(f.setup.spec.name());
+                    t.1.push(model.key.clone());
+                    t.2.push(law_name(m));
+                    t.3.push(model.population.source.clone());
+                    t.4.push(model.population.len() as u64);
+                    t.5.push(p.name);
+                    t.6.push(p.estimate);
+                    t.7.push(p.q05);
+                    t.8.push(p.q95);
+                    t.9.push(corr);
+                }
             }
         }
     }
@@ -309,6 +320,7 @@ fn write_strength_models(dir: &mut ReportDir, forms: &[Form]) -> Result<()> {
             scol("strength_model", t.0),
             scol("material", t.1),
             scol("effects", t.2),
+            scol("failure_origin", origin),
             scol("population", t.3),
             ucol("population_particles", t.4),
             scol("parameter", t.5),
@@ -323,8 +335,8 @@ fn write_strength_models(dir: &mut ReportDir, forms: &[Form]) -> Result<()> {
         "weights",
         &mut table(vec![
             scol("strength_model", forms.iter().map(|f| f.setup.spec.name()).collect()),
-            scol("effects_candidate", forms.iter().map(|f| crate::strength::fit::names(f.setup.materials[0].model.fit.effects())).collect()),
-            scol("effects_reference", forms.iter().map(|f| crate::strength::fit::names(f.setup.materials[1].model.fit.effects())).collect()),
+            scol("effects_candidate", forms.iter().map(|f| law_name(&f.setup.materials[0])).collect()),
+            scol("effects_reference", forms.iter().map(|f| law_name(&f.setup.materials[1])).collect()),
             fcol("elpd_candidate", forms.iter().map(|f| elpd(f, 0)).collect()),
             fcol("elpd_reference", forms.iter().map(|f| elpd(f, 1)).collect()),
             fcol("elpd", forms.iter().map(|f| elpd(f, 0) + elpd(f, 1)).collect()),
@@ -332,6 +344,16 @@ fn write_strength_models(dir: &mut ReportDir, forms: &[Form]) -> Result<()> {
             fcol("weight_pseudo_bma", forms.iter().map(|f| f.weight_pbma).collect()),
         ])?,
     )
+}
+
+/// A material's strength law under a model, for tables: its effects (`none`, `size+roundness`)
+/// or, with known failure origins, `failure origins (Oberfläche+Volumen)`.
+fn law_name(m: &super::setup::Material) -> String {
+    if m.origins.is_empty() {
+        crate::strength::fit::names(m.model.fit.effects())
+    } else {
+        format!("failure origins ({})", m.origins.iter().map(|o| o.fit.origin.as_str()).collect::<Vec<_>>().join("+"))
+    }
 }
 
 /// The largest |correlation| between an effect's β draws and the base (μ_c, ln m) draws — how
@@ -506,8 +528,13 @@ fn write_inputs(dir: &mut ReportDir, st: &Setup) -> Result<()> {
         it.0.push(i.name.clone());
         let qs = match (&i.marginal, st.materials.iter().find(|m| i.name == format!("strength_{}", m.model.key))) {
             (Marginal::Index(_), Some(m)) => {
-                let q = interpolated_quantiles(m.draws.iter().map(|d| d.shape).collect(), &[0.05, 0.5, 0.95]);
-                it.1.push("Weibull m of the joint draws".into());
+                // With failure origins, the origin of smallest modulus: it carries the lower tail.
+                let (draws, what) = match m.origins.iter().min_by(|a, b| a.fit.shape.total_cmp(&b.fit.shape)) {
+                    Some(o) => (&o.fit.draws, format!("Weibull m of failure origin \"{}\" (smallest of the origins' moduli), joint draws", o.fit.origin)),
+                    None => (&m.draws, "Weibull m of the joint draws".to_string()),
+                };
+                let q = interpolated_quantiles(draws.iter().map(|d| d.shape).collect(), &[0.05, 0.5, 0.95]);
+                it.1.push(what);
                 [q[0], q[1], q[2]]
             }
             (mg, _) => {

@@ -29,6 +29,21 @@
 //! information of the Weibull regression is block-diagonal between (μ_c, b) and β, so their
 //! estimates are asymptotically independent; `strength_models.csv` reports the largest sample
 //! correlation of the draws so the approximation can be judged.
+//!
+//! # Known failure origins
+//!
+//! A material whose crush file names each particle's failure origin (`origin = "…"` of its
+//! `[[material]]`) carries, in every strength model without effects on it (the deliverable's,
+//! and `"diagnosed"` where the loop names nothing), each origin's two-parameter Weibull law
+//! fitted to its own breaks with the other origins' censored (ASTM C1239;
+//! [`crate::strength::origins`]). The origins are independent flaw populations and the weakest
+//! breaks first, so a particle survives N impacts only if it survives every origin's flaws:
+//! P_N = 1 − Π_k (1 − P_N,k), each P_N,k through the same [`LifetimeModel`] at the same impact
+//! stress. Exact under independent trials; under Vogel–Peukert and Tavares–King each origin's
+//! flaws are taken to accumulate damage on their own. The sample's joint draw j of the material
+//! is draw j of every origin (independent draws: the censored likelihoods factorise); an
+//! operating temperature scales every origin's strength alike. A model with effects on the
+//! material fits one law to the breaks of every origin, and the summary says so.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -39,6 +54,7 @@ use crate::dist::Marginal;
 use crate::error::{Error, Result};
 use crate::lifetime::damage::{CriticalRatioTable, DamageModel};
 use crate::strength::model::{Horizon, LAWS};
+use crate::strength::origins::{OriginFit, from_ln_survival, ln_survival};
 use crate::strength::{LifetimeModel, NamingSettings, Params, Sample, StrengthFit, StrengthSpec, sample_of};
 use crate::thermal::ParameterLaws;
 
@@ -83,7 +99,27 @@ pub struct Material {
     effect_inputs: Vec<usize>,
     /// The single-column effects of those inputs, with their β index (same order).
     effect_columns: Vec<(crate::strength::Effect, usize)>,
+    /// Each failure origin's law, where the crush file names the origins and this strength
+    /// model has no effect on the material (module docs): together they replace `model` and
+    /// `draws` in every evaluation. Empty otherwise.
+    pub origins: Vec<OriginLaw>,
+    /// The column naming each crush test's failure origin (`origin = "…"`), if the study names one.
+    pub origin_column: Option<String>,
+    /// Each crush test's failure origin (rows of `sample`; empty without `origin_column`).
+    pub failure_origins: Vec<String>,
 }
+
+/// One failure origin's law in a material's lifetime (module docs).
+#[derive(Debug, Clone)]
+pub struct OriginLaw {
+    /// Its fit: breaks, modulus, scale, 90 % bands and the draws the samples take.
+    pub fit: OriginFit,
+    /// Its lifetime model (the origin's two-parameter law, the material's impact and population).
+    pub model: LifetimeModel,
+}
+
+/// Seed of the failure origins' draws (xor the study's seed, + the material's slot).
+const ORIGINS_SEED: u64 = 0x0519_A5A5;
 
 /// The crush data's temperature of a sample without a `temperature_c` covariate (°C): only a
 /// sample built by hand, since the intake gives every crush row a test temperature.
@@ -256,6 +292,10 @@ impl Setup {
             let population = crate::strength::Population::of_material(m, i, &data, path, s.seed)?;
             let model = LifetimeModel::new(&m.key, &m.label, m.sphere(&data), s.impact.target, *domain, fit, population).map_err(|e| e.in_study(&file, &format!("material[{i}]")))?;
             let (draws, weights) = model.draws(s.strength.uncertainty, s.strength.draws, s.seed ^ (0xA5A5 + slot as u64))?;
+            let origins = match &m.origin {
+                Some(column) if effects.is_empty() => origin_laws(s, &model, &sample, &data, column, i, s.seed ^ (ORIGINS_SEED + slot as u64))?,
+                _ => Vec::new(),
+            };
             let strength_input = inputs.len();
             inputs.push(Input { name: format!("strength_{}", m.key), unit: "joint draw".into(), marginal: Marginal::Index(draws.len()) });
             let mut effect_inputs = Vec::new();
@@ -269,7 +309,7 @@ impl Setup {
                 effect_inputs.push(inputs.len());
                 inputs.push(Input { name: format!("{}_{sym}_{}", e.name(), m.key), unit: "-".into(), marginal: Marginal::Quantiles { p, v } });
             }
-            materials.push(Material { model, draws, weights, sample, path: dpath, read: data.provenance.clone(), strength_input, effect_inputs, effect_columns });
+            materials.push(Material { model, draws, weights, sample, path: dpath, read: data.provenance.clone(), strength_input, effect_inputs, effect_columns, origins, origin_column: m.origin.clone(), failure_origins: data.origins.clone() });
         }
         let samples: Vec<&Sample> = materials.iter().map(|m: &Material| &m.sample).collect();
         if let Some(e) = crate::discrepancy::workflow::unclaimed(spec, &samples) {
@@ -406,6 +446,33 @@ impl Setup {
         self.evaluate_at(strength, moduli, shared, out)
     }
 
+    /// Material j's P per horizon of `laws`, added into `out` (which the caller zeroes), at the
+    /// impact stress `ln_sigma`: its one law at the sample's strength `s`, or with known failure
+    /// origins every origin's law at the sample's draw, its scale shifted as `s`'s was, combined
+    /// (module docs).
+    fn material_into(&self, j: usize, s: &Strength, ln_sigma: f64, laws: &[Horizon], out: &mut [f64]) {
+        let mat = &self.materials[j];
+        if mat.origins.is_empty() {
+            mat.model.breakage_into(&s.params, s.weights, ln_sigma, laws, out);
+            return;
+        }
+        for (h, o) in laws.chunks(LAWS).zip(out.chunks_mut(LAWS)) {
+            let mut survival = [0.0; LAWS];
+            for origin in &mat.origins {
+                let mut p = origin.fit.draws[s.draw];
+                p.mu += s.shift;
+                let mut each = [0.0; LAWS];
+                origin.model.breakage_into(&p, None, ln_sigma, h, &mut each[..h.len()]);
+                for (sv, e) in survival.iter_mut().zip(&each[..h.len()]) {
+                    *sv += ln_survival(*e);
+                }
+            }
+            for (o, sv) in o.iter_mut().zip(&survival) {
+                *o += from_ln_survival(*sv);
+            }
+        }
+    }
+
     /// The operating temperatures of sample x (candidate, reference; °C), where the study has them.
     fn sample_temperatures(&self, x: &[f64]) -> Option<[f64; 2]> {
         self.thermal.as_ref().map(|th| [x[th.temperature_inputs[0]], x[th.temperature_inputs[1]]])
@@ -413,16 +480,19 @@ impl Setup {
 
     /// The chain's inputs of sample x: strength parameters and population weights, Young's
     /// modulus factors (candidate, reference) and the shared inputs (η, V, impacts per year, γ).
-    #[allow(clippy::type_complexity)]
-    fn chain_inputs<'a>(&'a self, x: &'a [f64], mode: Mode, temperatures: Option<[f64; 2]>) -> Result<([(Params, Option<&'a [f64]>); 2], [f64; 2], [f64; 4])> {
-        let mut strength = [self.params(0, x, mode), self.params(1, x, mode)];
+    fn chain_inputs<'a>(&'a self, x: &'a [f64], mode: Mode, temperatures: Option<[f64; 2]>) -> Result<([Strength<'a>; 2], [f64; 2], [f64; 4])> {
+        let mut strength = [0, 1].map(|j| {
+            let (params, weights) = self.params(j, x, mode);
+            Strength { params, weights, draw: x[self.materials[j].strength_input] as usize, shift: 0.0 }
+        });
         let mut moduli = [1.0; 2];
         if let Some(t) = temperatures {
             let th = self.thermal.as_ref().ok_or_else(|| Error::numerical("comparison", "operating temperatures without temperature laws"))?;
             let j = x[th.law_input] as usize;
             for k in 0..2 {
                 let f = th.laws.factors(j, t[k], th.data_c[k])?;
-                strength[k].0.mu += f.strength.ln();
+                strength[k].shift = f.strength.ln();
+                strength[k].params.mu += strength[k].shift;
                 moduli[k] = f.modulus;
             }
         }
@@ -464,22 +534,21 @@ impl Setup {
                 models.iter().map(move |&model| Horizon { model, impacts: y * per_year, ln_x_star })
             })
             .collect();
-        for (j, (p, w)) in strength.into_iter().enumerate() {
-            let model = &self.materials[j].model;
-            let ln_sigma = model.ln_impact_stress_with_modulus(eta, v, moduli[j])?;
-            model.breakage_into(&p, w, ln_sigma, &laws, &mut out[j * per..(j + 1) * per]);
+        for (j, st) in strength.iter().enumerate() {
+            let ln_sigma = self.materials[j].model.ln_impact_stress_with_modulus(eta, v, moduli[j])?;
+            self.material_into(j, st, ln_sigma, &laws, &mut out[j * per..(j + 1) * per]);
         }
         Ok(())
     }
 
-    /// P per material, horizon and damage model at explicit strength parameters and population
-    /// weights (candidate, reference), Young's modulus factors (candidate, reference; 1 at the
-    /// crush data's temperature) and shared inputs (η, V, impacts per year, γ), into `out`.
-    pub fn evaluate_at(&self, strength: [(Params, Option<&[f64]>); 2], moduli: [f64; 2], [eta, v, per_year, gamma]: [f64; 4], out: &mut [f64]) -> Result<()> {
+    /// P per material, horizon and damage model at a sample's strengths (candidate, reference),
+    /// Young's modulus factors (candidate, reference; 1 at the crush data's temperature) and
+    /// shared inputs (η, V, impacts per year, γ), into `out`.
+    fn evaluate_at(&self, strength: [Strength; 2], moduli: [f64; 2], [eta, v, per_year, gamma]: [f64; 4], out: &mut [f64]) -> Result<()> {
         out.fill(0.0);
         let per = self.years.len() * self.models.len();
         let mut laws = [Horizon::independent(0.0); LAWS];
-        for (j, (p, w)) in strength.into_iter().enumerate() {
+        for (j, st) in strength.iter().enumerate() {
             let mut c = 0;
             for (h, years) in self.years.iter().enumerate() {
                 let ln_x_star = self.tk[h].as_ref().map_or(0.0, |t| t.ln_ratio(gamma));
@@ -488,9 +557,8 @@ impl Setup {
                     c += 1;
                 }
             }
-            let model = &self.materials[j].model;
-            let ln_sigma = model.ln_impact_stress_with_modulus(eta, v, moduli[j])?;
-            model.breakage_into(&p, w, ln_sigma, &laws[..per], &mut out[j * per..(j + 1) * per]);
+            let ln_sigma = self.materials[j].model.ln_impact_stress_with_modulus(eta, v, moduli[j])?;
+            self.material_into(j, st, ln_sigma, &laws[..per], &mut out[j * per..(j + 1) * per]);
         }
         Ok(())
     }
@@ -502,4 +570,46 @@ impl Setup {
         self.evaluate_into(&x, mode, &mut p)?;
         Ok((x, p))
     }
+}
+
+/// One material's strength in a sample: its one law's parameters and population weights, the
+/// index of its joint draw, and the ln factor of the operating temperature on its scale
+/// (already in `params`; 0 at the crush data's temperature).
+struct Strength<'a> {
+    params: Params,
+    weights: Option<&'a [f64]>,
+    draw: usize,
+    shift: f64,
+}
+
+/// Each failure origin's law of material `i` of study `s` (crush data `data` in `sample`, the
+/// origins named in `column`) for a strength model without effects on it, with `s`'s draws
+/// (module docs), its lifetime model `model`'s impact and population. An origin with fewer than
+/// two breaks is refused, naming the file, the column and what to do.
+fn origin_laws(s: &UqStudy, model: &LifetimeModel, sample: &Sample, data: &crate::data::CrushData, column: &str, i: usize, seed: u64) -> Result<Vec<OriginLaw>> {
+    let x = sample.strength.view();
+    let analysed = crate::strength::origins::analyse(x, &data.origins, column, s.strength.uncertainty, s.strength.draws, seed)?;
+    if let Some(f) = analysed.fits.iter().find(|f| !f.shape.is_finite()) {
+        return Err(Error::Data {
+            file: data.path.display().to_string(),
+            location: format!("column {column}"),
+            rule: format!(
+                "material `{}`: failure origin \"{}\" has {} break{}; each origin's Weibull law needs at least two. Relabel its particles with another origin in the file, or fit one law to every origin: list the column in `material[{i}].data.ignore = [\"{column}\"]` instead of `origin`",
+                model.key,
+                f.origin,
+                f.breaks,
+                if f.breaks == 1 { "" } else { "s" }
+            ),
+        });
+    }
+    analysed
+        .fits
+        .into_iter()
+        .map(|fit| {
+            let (obs, _) = x.of_origin(&data.origins, &fit.origin);
+            let strength = crate::strength::origins::origin_fit(obs, &fit.origin)?;
+            let model = LifetimeModel::new(&model.key, &model.label, model.sphere, model.wall, model.domain, strength, model.population.clone())?;
+            Ok(OriginLaw { fit, model })
+        })
+        .collect()
 }

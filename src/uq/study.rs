@@ -270,9 +270,6 @@ impl UqStudy {
         let pos = |k: &str, key: &str| -> Result<usize> {
             self.material.iter().position(|m| m.key == k).ok_or_else(|| Error::config(file, key, format!("`{k}` is not a material key ({}, {})", self.material[0].key, self.material[1].key)))
         };
-        for (i, m) in self.material.iter().enumerate() {
-            m.one_law(file, i, "main study")?;
-        }
         if pos(&self.compare.candidate, "compare.candidate")? == pos(&self.compare.reference, "compare.reference")? {
             return bad("compare", "candidate and reference must differ".into());
         }

@@ -34,7 +34,53 @@ pub(super) fn verdict(p: f64, names: [&str; 2]) -> String {
 
 /// The effects each material carries under a model, in words.
 pub(super) fn effects_phrase(f: &Form) -> String {
-    f.setup.materials.iter().map(|m| format!("{}: {}", m.model.label, crate::strength::fit::names(m.model.fit.effects()).replace('+', ", "))).collect::<Vec<_>>().join("; ")
+    f.setup
+        .materials
+        .iter()
+        .map(|m| match origin_list(m) {
+            Some(list) => format!("{}: each failure origin's law ({list})", m.model.label),
+            None => format!("{}: {}", m.model.label, crate::strength::fit::names(m.model.fit.effects()).replace('+', ", ")),
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// The failure origins a material's model carries ("\"Oberfläche\", \"Volumen\""), or None
+/// where it carries one law.
+fn origin_list(m: &super::setup::Material) -> Option<String> {
+    (!m.origins.is_empty()).then(|| m.origins.iter().map(|o| format!("\"{}\"", o.fit.origin)).collect::<Vec<_>>().join(", "))
+}
+
+/// What the main study did with each material's failure-origin column, per strength model,
+/// from the models themselves: which carry every origin's law and which fit one law to the
+/// breaks of every origin (empty where no material names its origins).
+pub(super) fn origins_paragraph(forms: &[Form]) -> String {
+    let mut md = String::new();
+    for j in 0..2 {
+        let m = &forms[0].setup.materials[j];
+        let Some(column) = &m.origin_column else { continue };
+        let (known, pooled): (Vec<&Form>, Vec<&Form>) = forms.iter().partition(|f| !f.setup.materials[j].origins.is_empty());
+        let quote = |v: &[&Form]| v.iter().map(|f| format!("`{}`", f.setup.spec.name())).collect::<Vec<_>>().join(", ");
+        md.push_str(&format!("\n**Known failure origins of {}** (column `{column}`): ", m.model.label));
+        if let Some(f) = known.first() {
+            let list = origin_list(&f.setup.materials[j]).unwrap_or_default();
+            md.push_str(&format!(
+                "in {} each origin ({list}) has its own two-parameter Weibull law, fitted to its breaks with the other origins' breaks censored (ASTM C1239), and a particle breaks at the first origin to fail: P = 1 − Π (1 − P_origin), exact under independent trials; under the damage models each origin's flaws accumulate damage on their own. ",
+                if known.len() == 1 { format!("the strength model {}", quote(&known)) } else { format!("the strength models {}", quote(&known)) }
+            ));
+        }
+        if !pooled.is_empty() {
+            md.push_str(&format!(
+                "{} {} effects on {}, and fit{} one law to the breaks of every origin (the origins' laws carry no effects).",
+                if pooled.len() == 1 { format!("The strength model {}", quote(&pooled)) } else { format!("The strength models {}", quote(&pooled)) },
+                if pooled.len() == 1 { "carries" } else { "carry" },
+                m.model.label,
+                if pooled.len() == 1 { "s" } else { "" }
+            ));
+        }
+        md.push('\n');
+    }
+    md
 }
 
 /// The plain-language summary; every sentence with a number is built from the numbers it
@@ -171,11 +217,33 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
     md.push_str("\n## The strength models (per material: effects, modulus and 90 % range of the draws)\n\n| strength model | material | effects | m | other parameters |\n|---|---|---|---|---|\n");
     for f in forms {
         for m in &f.setup.materials {
+            for o in &m.origins {
+                let sums = summarise(&o.model.fit, &o.fit.draws);
+                let scale = &sums[1];
+                md.push_str(&format!(
+                    "| {} | {} | failure origin \"{}\" ({} breaks) | {:.2} [{:.2}, {:.2}] | scale σθ = {:.1} [{:.1}, {:.1}] MPa |\n",
+                    f.setup.spec.name(),
+                    m.model.label,
+                    o.fit.origin,
+                    o.fit.breaks,
+                    sums[0].estimate,
+                    sums[0].q05,
+                    sums[0].q95,
+                    scale.estimate / 1e6,
+                    scale.q05 / 1e6,
+                    scale.q95 / 1e6
+                ));
+            }
+            if !m.origins.is_empty() {
+                continue;
+            }
             let sums = summarise(&m.model.fit, &m.draws);
             let other: Vec<String> = sums.iter().skip(2).map(|p| format!("{} = {:.3} [{:.3}, {:.3}]", p.name, p.estimate, p.q05, p.q95)).collect();
             md.push_str(&format!("| {} | {} | {} | {:.2} [{:.2}, {:.2}] | {} |\n", f.setup.spec.name(), m.model.label, crate::strength::fit::names(m.model.fit.effects()), sums[0].estimate, sums[0].q05, sums[0].q95, other.join("; ")));
         }
     }
+
+    md.push_str(&origins_paragraph(forms));
 
     // What the recorded factors of a model are predicted for.
     for (j, m) in st.materials.iter().enumerate() {

@@ -282,8 +282,13 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
         }
         None => (Vec::new(), None),
     };
-    crate::intake::observed::check_unused(&table, &rows, &mut provenance, src, origin)?;
-    crate::intake::observed::pile_up(&r, &rows, &values, "crush_force", src, origin, "force")?;
+    // What the file must declare, said with a missing test temperature in one message.
+    // (a pile-up at the highest value is asked about once every column is declared: an undeclared
+    // yes/no column is its likely cause)
+    let undeclared = match crate::intake::observed::check_unused(&table, &rows, &mut provenance, src, origin) {
+        Err(e) => Some(e),
+        Ok(()) => crate::intake::observed::pile_up(&r, &rows, &values, "crush_force", src, origin, "force").err(),
+    };
     // The temperature column, of this file or (below) of the joined shape file.
     let mut temperature_column = r.column("temperature").map(|c| format!("`{}`", table.headers[c]));
     if let Some(shape) = &src.shape {
@@ -358,7 +363,13 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
         src,
         origin,
         &mut provenance,
-    )?;
+    );
+    let temperatures = match (temperatures, undeclared) {
+        (Ok(t), None) => t,
+        (Ok(_), Some(e)) => return Err(e),
+        (Err(t), Some(u)) => return Err(u.then(t)),
+        (Err(t), None) => return Err(t),
+    };
     for (rec, t) in records.iter_mut().zip(temperatures) {
         rec.temperature_c = Some(t);
     }
@@ -516,6 +527,10 @@ mod tests {
         let d = read_crush_source(&Source { temperature_c: Some(20.0), ..Source::file(&p) }, &origin).unwrap();
         assert_eq!(d.records.iter().map(|r| r.temperature_c.unwrap()).collect::<Vec<_>>(), [800.0, 20.0, 20.0]);
         assert!(d.provenance.observed.iter().any(|l| l == "test temperature: 20 °C (2) and 800 °C (1) (column `T [°C]`; 1 empty cells from the study's material[1].data.temperature_c)"), "{:?}", d.provenance.observed);
+        // A column to declare and no test temperature: both in one message.
+        let p = write(dir.path(), "c.csv", "id,diameter_m,crush_force_n,gebrochen\nA1,0.0009,120.5,ja\nA2,0.001,99,nein\nA3,0.001,90,ja\n");
+        let e = read_crush_source(&Source::file(&p), &origin).unwrap_err().to_string();
+        assert!(e.contains("c.csv") && e.contains("column gebrochen: holds yes/no") && e.contains("; and file: states no test temperature") && e.contains("material[1].data.temperature_c = 20"), "{e}");
         // A key outside the physical range is refused before reading.
         let e = Source { temperature_c: Some(-300.0), ..Source::file(&p) }.validate("s.toml", "material[1].data").unwrap_err().to_string();
         assert!(e.contains("material[1].data.temperature_c") && e.contains("[-273.15, 2100] °C"), "{e}");

@@ -80,6 +80,16 @@ pub enum Error {
 }
 
 impl Error {
+    /// This error, then `other`, as one message where both are about the same data file ("…;
+    /// and <location>: <rule>"), so a file with several things to mend needs one run; this error
+    /// alone otherwise.
+    pub fn then(self, other: Error) -> Error {
+        match (self, other) {
+            (Error::Data { file, location, rule }, Error::Data { file: f2, location: l2, rule: r2 }) if file == f2 => Error::Data { file, location, rule: format!("{rule}; and {l2}: {r2}") },
+            (first, _) => first,
+        }
+    }
+
     /// The error with `note` appended to its rule where the rule tells the user to declare
     /// something in a study (a `Config` or `Data` error whose rule names a study key); any
     /// other error unchanged. For callers that have no study to declare it in (`--data`).

@@ -96,7 +96,7 @@ fn true_model_weight(count: usize, seeds: std::ops::Range<u64>) -> (f64, f64) {
         let data = CrushData::new("generated.csv", records);
         let sample = sample_of(&data, &g.material[0].elastic, &ContactOptions::default()).unwrap();
         let naming = NamingSettings { seed, ..NamingSettings::default() };
-        let lpd: Vec<Vec<f64>> = specs.iter().map(|s| cv_scores(s, &sample, &naming, "bl").unwrap()).collect();
+        let lpd: Vec<Vec<f64>> = specs.iter().map(|s| cv_scores(s, &sample, &naming, "bl", None).unwrap()).collect();
         w += weights::stacking(&lpd).unwrap()[3];
         wp += weights::pseudo_bma(&lpd).unwrap()[3];
         k += 1.0;

@@ -542,7 +542,13 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
         return Err(data_err(sample, "all rows".into(), format!("material `{material}`: {n} crush tests are too few to weigh strength models by cross-validation (at least {MIN_PARTICLES})")));
     }
     let k = settings.cv_folds.clamp(2, n);
-    let fold = folds(n, k, settings.seed ^ 0xF01D);
+    let origins = origins.filter(|o| !o.is_empty());
+    // With failure origins, each origin's breaks spread over the folds, so that a training set
+    // keeps every origin with three breaks or more.
+    let fold = match origins {
+        Some(o) => crate::strength::fit::folds_stratified(o, k, settings.seed ^ 0xF01D),
+        None => folds(n, k, settings.seed ^ 0xF01D),
+    };
     let terms_for = |effects: &[Effect]| -> Result<Vec<(Effect, Term)>> {
         effects
             .iter()
@@ -554,11 +560,16 @@ pub fn cv_scores(spec: &crate::strength::StrengthSpec, sample: &Sample, settings
             .collect()
     };
     let failed = || Error::numerical("cross-validated log score", format!("material `{material}`: a training fit of the `{}` strength model failed", spec.name()));
-    let origins = origins.filter(|o| !o.is_empty());
     // Fold f's test rows under every origin's law fitted to the other folds.
     let by_origins = |origin: &[String], f: usize, out: &mut [f64]| -> Result<()> {
         let (train, test): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| fold[i] != f);
-        let p = crate::strength::origins::cv_ln_prob(x, origin, &train, &test).ok_or_else(failed)?;
+        let p = crate::strength::origins::cv_ln_prob(x, origin, &train, &test).map_err(|why| {
+            data_err(
+                sample,
+                "all rows".into(),
+                format!("material `{material}`: the stacking weights of the strength models come from cross-validation, and the `{}` model carries every failure origin's law: {why}. With several strength models every origin needs at least three breaks: merge this origin with another (relabel its particles, where the fractography allows), compare one strength model (`model_form.strength = [[]]`), or fit one law to every origin (the column in `data.ignore` instead of `origin`)", spec.name()),
+            )
+        })?;
         for (i, v) in test.into_iter().zip(p) {
             out[i] = v;
         }

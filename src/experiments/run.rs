@@ -91,7 +91,7 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
         return Err(Error::config(
             &main_path.display().to_string(),
             format!("material[{k}].origin"),
-            format!("the experiments study models each candidate test with one Weibull law per material, and material `{}` carries one law per failure origin here; run the experiments on a main study that fits one law (the column in `material[{k}].data.ignore` instead of `origin`)", m.key),
+            format!("the experiments study {file} models each candidate test with one Weibull law per material, and material `{}` carries one law per failure origin in this main study; the experiments need a main study that fits one law (the column in `material[{k}].data.ignore` instead of `origin`) — which pools the origins and can change the comparison: read both main studies' answers", m.key),
         ));
     }
     let shared = crate::uq::setup::Shared::new(&u, &main_path, &opts.reports_root)?;

@@ -354,6 +354,22 @@ const OUTCOME_HEADERS: [&str; 14] = ["broken", "gebrochen", "bruch", "failed", "
 /// Header words of a count column.
 const COUNT_HEADERS: [&str; 18] = ["count", "counts", "n", "anzahl", "number", "numberof", "frequency", "freq", "häufigkeit", "haeufigkeit", "stückzahl", "stueckzahl", "stück", "stk", "specimens", "nspecimens", "quantity", "qty"];
 
+/// The distinct non-empty values of column `c` over `rows`, as text, in order of appearance.
+fn distinct_cells(table: &RawTable, rows: &[usize], c: usize) -> Vec<String> {
+    let mut distinct: Vec<String> = Vec::new();
+    for &row in rows {
+        let t = match &table.rows[row][c] {
+            Cell::Number(v) => format!("{v}"),
+            Cell::Text(t) | Cell::Other(t) => t.trim().to_string(),
+            Cell::Empty => continue,
+        };
+        if !distinct.contains(&t) {
+            distinct.push(t);
+        }
+    }
+    distinct
+}
+
 /// Refuses every unused column of `rows` that looks like what a study must declare (module
 /// docs): yes/no values, a count, or failure origins — every such column in one message, so
 /// that a file with several to declare needs one run. `ignore`d columns move from the unused to the ignored ones
@@ -369,6 +385,14 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
             return Err(Error::config(&origin.file, format!("{key}ignore"), format!("`{name}` is a column the study reads; `ignore` is for columns it does not")));
         }
         provenance.unused.retain(|u| *u != h);
+        // Failure origins ignored on purpose still change what a fit saw: said with the material.
+        let distinct = distinct_cells(table, rows, c);
+        if super::origins::looks_like_origins(&fold(&super::units::parse_header(&h).name), &distinct.iter().map(|v| fold(v)).collect::<Vec<_>>()) {
+            let key = if origin.key.is_empty() { "origin".to_string() } else { format!("{}.origin", super::factors::table_key(origin)) };
+            provenance.observed.push(format!(
+                "failure origins (`{h}`, ignored): one law is fitted to the breaks of every origin; {key} = \"{h}\" would give each origin its own law (discrepancy and main studies), which can change a comparison"
+            ));
+        }
         provenance.ignored.push(h);
     }
     // Every refusal at once, so that a file with several columns to declare needs one run.
@@ -379,17 +403,7 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
         if cells.is_empty() {
             continue;
         }
-        let texts: Vec<String> = cells.iter().map(|cell| match cell {
-            Cell::Number(v) => format!("{v}"),
-            Cell::Text(t) | Cell::Other(t) => t.trim().to_string(),
-            Cell::Empty => String::new(),
-        }).collect();
-        let mut distinct: Vec<String> = Vec::new();
-        for t in &texts {
-            if !distinct.contains(t) {
-                distinct.push(t.clone());
-            }
-        }
+        let distinct = distinct_cells(table, rows, c);
         let name = fold(&super::units::parse_header(h).name);
         let folded_values: Vec<String> = distinct.iter().map(|v| fold(v)).collect();
         let words = folded_values.iter().all(|v| YES_NO.contains(&v.as_str()));

@@ -275,12 +275,31 @@ pub fn subset(terms: &[(Effect, Term)], rows: &[usize]) -> Vec<(Effect, Term)> {
 
 /// A seeded fold assignment of n rows to k folds (balanced, shuffled).
 pub fn folds(n: usize, k: usize, seed: u64) -> Vec<usize> {
+    deal(&shuffled(n, seed), k)
+}
+
+/// [`folds`] stratified by `group` (row i's group): each group's rows, shuffled, dealt over
+/// the folds in turn, so a group of r rows puts at most ⌈r/k⌉ in one fold and every training
+/// set keeps at least r − ⌈r/k⌉ of them.
+pub fn folds_stratified(group: &[String], k: usize, seed: u64) -> Vec<usize> {
+    let mut idx = shuffled(group.len(), seed);
+    idx.sort_by(|&a, &b| group[a].cmp(&group[b]));
+    deal(&idx, k)
+}
+
+/// 0..n in a seeded random order (Fisher–Yates).
+fn shuffled(n: usize, seed: u64) -> Vec<usize> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut idx: Vec<usize> = (0..n).collect();
     for i in (1..n).rev() {
         idx.swap(i, rand::Rng::random_range(&mut rng, 0..=i));
     }
-    let mut f = vec![0; n];
+    idx
+}
+
+/// Fold of each row when the rows in order `idx` are dealt over k folds in turn.
+fn deal(idx: &[usize], k: usize) -> Vec<usize> {
+    let mut f = vec![0; idx.len()];
     for (pos, &i) in idx.iter().enumerate() {
         f[i] = pos % k;
     }

@@ -210,8 +210,9 @@ pub fn ln_prob_weakest(x: Obs, i: usize, laws: &[(f64, f64)]) -> f64 {
 /// The cross-validated ln P of the rows `test` of `x` under every origin's two-parameter law
 /// fitted to the rows `train` alone (each origin's breaks, the others' censored: [`Obs::of_origin`]),
 /// acting together ([`ln_prob_weakest`]). `origin[i]` names row i's origin; the origins are those
-/// of every break of `x`. None where an origin has fewer than two breaks among `train` or a fit fails.
-pub fn cv_ln_prob(x: Obs, origin: &[String], train: &[usize], test: &[usize]) -> Option<Vec<f64>> {
+/// of every break of `x`. Err (why) where an origin has fewer than two breaks among `train` or
+/// a fit fails.
+pub fn cv_ln_prob(x: Obs, origin: &[String], train: &[usize], test: &[usize]) -> std::result::Result<Vec<f64>, String> {
     let mut levels: Vec<&String> = (0..x.len()).filter(|&i| x.kind(i) != Censor::Right).map(|i| &origin[i]).collect();
     levels.sort();
     levels.dedup();
@@ -221,17 +222,29 @@ pub fn cv_ln_prob(x: Obs, origin: &[String], train: &[usize], test: &[usize]) ->
     for lv in levels {
         let (obs, breaks) = sub.view().of_origin(&sub_origin, lv);
         if breaks < 2 {
-            return None;
+            let all = (0..x.len()).filter(|&i| x.kind(i) != Censor::Right && origin[i] == *lv).count();
+            return Err(format!("failure origin \"{lv}\" has {all} breaks, and a training fold of the cross-validation keeps {breaks}: too few for its law"));
         }
-        let f = fit(obs.view(), &Design::default()).ok()?;
+        let f = fit(obs.view(), &Design::default()).map_err(|e| format!("the fit of failure origin \"{lv}\" on a training fold failed ({e})"))?;
         laws.push((f.mu, f.shape()));
     }
     let out: Vec<f64> = test.iter().map(|&i| ln_prob_weakest(x, i, &laws)).collect();
-    out.iter().all(|v| v.is_finite()).then_some(out)
+    if out.iter().all(|v| v.is_finite()) { Ok(out) } else { Err("a held-out crush test has no finite density under the origins' laws".into()) }
 }
 
 /// Fewer breaks than this from one origin: its law is said to be poorly determined.
 pub const FEW_BREAKS: usize = 10;
+
+/// A caution where an origin's law rests on fewer than [`FEW_BREAKS`] breaks (empty
+/// otherwise): its law, and any lifetime it enters, are poorly determined.
+pub fn few_breaks<'a>(fits: impl IntoIterator<Item = &'a OriginFit>) -> String {
+    let few: Vec<String> = fits.into_iter().filter(|f| f.shape.is_finite() && f.breaks < FEW_BREAKS).map(|f| format!("\"{}\" ({} breaks)", f.origin, f.breaks)).collect();
+    match few.len() {
+        0 => String::new(),
+        1 => format!("**Few breaks**: origin {} has its law from fewer than {FEW_BREAKS} breaks, so its modulus and scale are poorly determined, and so is any lifetime it enters: read the bands, not the point values.", few[0]),
+        _ => format!("**Few breaks**: origins {} have their laws from fewer than {FEW_BREAKS} breaks each, so their moduli and scales are poorly determined, and so is any lifetime they enter: read the bands, not the point values.", few.join(", ")),
+    }
+}
 
 /// What the origins' analysis is not: said after it in the report.
 const NOT_IN_LOOP: &str = "Each origin's law here is a two-parameter Weibull law fitted on its own; the naming loop above does not use the origins.";
@@ -245,14 +258,9 @@ impl Origins {
     }
 
     /// A caution where an origin's law rests on fewer than [`FEW_BREAKS`] breaks (empty
-    /// otherwise): its law, and the lifetime with every origin acting, are poorly determined.
+    /// otherwise): [`few_breaks`] of its fits.
     pub fn few_words(&self) -> String {
-        let few: Vec<String> = self.fits.iter().filter(|f| f.shape.is_finite() && f.breaks < FEW_BREAKS).map(|f| format!("\"{}\" ({} breaks)", f.origin, f.breaks)).collect();
-        match few.len() {
-            0 => String::new(),
-            1 => format!("**Few breaks**: origin {} has its law from fewer than {FEW_BREAKS} breaks, so its modulus and scale are poorly determined, and so is any lifetime it enters: read the bands, not the point values.", few[0]),
-            _ => format!("**Few breaks**: origins {} have their laws from fewer than {FEW_BREAKS} breaks each, so their moduli and scales are poorly determined, and so is any lifetime they enter: read the bands, not the point values.", few.join(", ")),
-        }
+        few_breaks(&self.fits)
     }
 
     fn test_words(&self, alpha: f64) -> String {
@@ -338,7 +346,8 @@ mod tests {
         assert!(p.iter().sum::<f64>() > pooled, "{} against one law's {pooled}", p.iter().sum::<f64>());
         // Training rows with a single surface break: no law for it.
         let few: Vec<usize> = (0..200).filter(|&i| o[i] == "volume").chain((0..200).filter(|&i| o[i] == "surface").take(1)).collect();
-        assert!(cv_ln_prob(Obs::exact(&x), &o, &few, &test).is_none());
+        let e = cv_ln_prob(Obs::exact(&x), &o, &few, &test).unwrap_err();
+        assert!(e.starts_with("failure origin \"surface\" has ") && e.contains("a training fold of the cross-validation keeps 1"), "{e}");
     }
 
     #[test]

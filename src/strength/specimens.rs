@@ -210,9 +210,20 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
     };
     let tc = r.column("temperature");
     let cells: Vec<Option<f64>> = rows.iter().map(|&row| r.number("temperature", row)).collect::<Result<_>>()?;
-    let mut temperatures_c = crate::intake::observed::test_temperatures(&cells, &|k| table.place(rows[k], tc), tc.map(|c| format!("`{}`", table.headers[c])).as_deref(), src, origin, &mut provenance)?;
-    crate::intake::observed::check_unused(&table, &rows, &mut provenance, src, origin)?;
-    crate::intake::observed::pile_up(&r, &rows, &values, "strength", src, origin, "strength")?;
+    let temperatures = crate::intake::observed::test_temperatures(&cells, &|k| table.place(rows[k], tc), tc.map(|c| format!("`{}`", table.headers[c])).as_deref(), src, origin, &mut provenance);
+    // What the file must declare and a missing test temperature, in one message.
+    // (a pile-up at the highest value is asked about once every column is declared: an undeclared
+    // yes/no column is its likely cause)
+    let undeclared = match crate::intake::observed::check_unused(&table, &rows, &mut provenance, src, origin) {
+        Err(e) => Some(e),
+        Ok(()) => crate::intake::observed::pile_up(&r, &rows, &values, "strength", src, origin, "strength").err(),
+    };
+    let mut temperatures_c = match (temperatures, undeclared) {
+        (Ok(t), None) => t,
+        (Ok(_), Some(e)) => return Err(e),
+        (Err(t), Some(u)) => return Err(u.then(t)),
+        (Err(t), None) => return Err(t),
+    };
     // Rows counting several specimens become that many (ids `A#1` … `A#k`); then what the rows say.
     let named: Vec<String> = rows.iter().map(|&row| table.place(row, None)).collect();
     let sp = crate::intake::observed::specimens(&values, &named, src, &mut provenance, "specimens");
@@ -311,6 +322,9 @@ mod tests {
         };
         let e = at("sigma_f [MPa]\n300\n310\n", None).unwrap_err().to_string();
         assert!(e.contains("states no test temperature") && e.contains("strength[0].data.temperature_c = 20"), "{e}");
+        // With a count column to declare as well: both in one message.
+        let e = at("sigma_f [MPa];Anzahl\n300;2\n310;1\n", None).unwrap_err().to_string();
+        assert!(e.contains("column Anzahl: holds whole numbers") && e.contains("; and file: states no test temperature"), "{e}");
         assert_eq!(at("sigma_f [MPa]\n300\n310\n", Some(1000.0)).unwrap().temperatures_c, [1000.0, 1000.0]);
         // `T [°C]` is the test temperature; `t [mm]` (a bar's thickness) is not.
         assert_eq!(at("sigma_f [MPa];T [°C]\n300;20\n310;1200\n", None).unwrap().temperatures_c, [20.0, 1200.0]);

@@ -530,7 +530,7 @@ fn write_inputs(dir: &mut ReportDir, st: &Setup) -> Result<()> {
             (Marginal::Index(_), Some(m)) => {
                 // With failure origins, the origin of smallest modulus: it carries the lower tail.
                 let (draws, what) = match m.origins.iter().min_by(|a, b| a.fit.shape.total_cmp(&b.fit.shape)) {
-                    Some(o) => (&o.fit.draws, format!("Weibull m of failure origin \"{}\" (smallest of the origins' moduli), joint draws", o.fit.origin)),
+                    Some(o) => (&o.fit.draws, format!("joint draw of every failure origin's law; shown: Weibull m of \"{}\", the origin of smallest modulus", o.fit.origin)),
                     None => (&m.draws, "Weibull m of the joint draws".to_string()),
                 };
                 let q = interpolated_quantiles(draws.iter().map(|d| d.shape).collect(), &[0.05, 0.5, 0.95]);

@@ -9,9 +9,16 @@ use crate::strength::{StrengthSpec, summarise};
 use super::forms::Form;
 use super::headline::{AVERAGED, AveragingRow, Headline, Row, pm};
 
-/// "the deliverable's model" or "the `x` model".
-pub(super) fn model_phrase(name: &str) -> String {
-    if name == "deliverable" { "the deliverable's model (no effects)".into() } else { format!("the `{name}` model") }
+/// "the deliverable's model (no effects)" or "the `x` model"; where a material carries its
+/// failure origins' laws under it, said ("…; Gen 4: each failure origin's law").
+pub(super) fn model_phrase(f: &Form) -> String {
+    let name = f.setup.spec.name();
+    let origins: Vec<String> = f.setup.materials.iter().filter_map(|m| origin_list(m).map(|l| format!("{}: each failure origin's law ({l})", m.model.label))).collect();
+    match (name == "deliverable", origins.is_empty()) {
+        (true, true) => "the deliverable's model (no effects)".into(),
+        (true, false) => format!("the deliverable's model (no effects; {})", origins.join("; ")),
+        (false, _) => format!("the `{name}` model"),
+    }
 }
 
 /// The better particle for P(candidate worse) = p, and how sure.
@@ -62,6 +69,7 @@ pub(super) fn origins_paragraph(forms: &[Form]) -> String {
         let (known, pooled): (Vec<&Form>, Vec<&Form>) = forms.iter().partition(|f| !f.setup.materials[j].origins.is_empty());
         let quote = |v: &[&Form]| v.iter().map(|f| format!("`{}`", f.setup.spec.name())).collect::<Vec<_>>().join(", ");
         md.push_str(&format!("\n**Known failure origins of {}** (column `{column}`): ", m.model.label));
+        let few = known.first().map_or_else(String::new, |f| crate::strength::origins::few_breaks(f.setup.materials[j].origins.iter().map(|o| &o.fit)));
         if let Some(f) = known.first() {
             let list = origin_list(&f.setup.materials[j]).unwrap_or_default();
             md.push_str(&format!(
@@ -79,6 +87,9 @@ pub(super) fn origins_paragraph(forms: &[Form]) -> String {
             ));
         }
         md.push('\n');
+        if !few.is_empty() {
+            md.push_str(&format!("\n{few}\n"));
+        }
     }
     md
 }
@@ -156,13 +167,18 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
         md.push_str(&format!("\n## Does accounting for the effects change which particle is better? ({first_h} yr, {})\n\n", primary_damage.label()));
         let base = forms.iter().find(|f| f.setup.spec == StrengthSpec::default());
         if let Some(r0) = base.and_then(|f| row(&f.setup.spec.name(), primary_damage, first_h)) {
-            md.push_str(&format!("Under {} {a} breaks more than {b} with probability {}: {}.\n", model_phrase("deliverable"), pm(r0.worse, r0.se, n), verdict(r0.worse, names)));
+            md.push_str(&format!("Under {} {a} breaks more than {b} with probability {}: {}.\n", base.map(model_phrase).unwrap_or_default(), pm(r0.worse, r0.se, n), verdict(r0.worse, names)));
             for f in forms.iter().filter(|f| f.setup.spec != StrengthSpec::default()) {
                 let Some(r) = row(&f.setup.spec.name(), primary_damage, first_h) else { continue };
+                // The naming loop may name nothing: then the model is the deliverable's.
+                if f.setup.spec == StrengthSpec::Diagnosed && f.setup.materials.iter().all(|m| m.model.fit.effects().is_empty()) {
+                    md.push_str(&format!("Under {}, the naming loop named no effect in either material's data: it is the deliverable's model, with probability {}.\n", model_phrase(f), pm(r.worse, r.se, n)));
+                    continue;
+                }
                 let same = (r.worse > 0.5) == (r0.worse > 0.5);
                 md.push_str(&format!(
                     "Under {} ({}), with probability {}: {}; accounting for these effects {} which particle is better.\n",
-                    model_phrase(&f.setup.spec.name()),
+                    model_phrase(f),
                     effects_phrase(f),
                     pm(r.worse, r.se, n),
                     verdict(r.worse, names),
@@ -170,12 +186,12 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
                 ));
             }
             if let Some(r) = row(AVERAGED, primary_damage, first_h) {
-                let best = forms.iter().max_by(|x, y| x.weight.total_cmp(&y.weight)).map(|f| (f.setup.spec.name(), f.weight)).unwrap_or_default();
+                let best = forms.iter().max_by(|x, y| x.weight.total_cmp(&y.weight)).map(|f| (model_phrase(f), f.weight)).unwrap_or_default();
                 md.push_str(&format!(
                     "\nThe stacking weights (from the cross-validated log density of the {} crush tests) put {:.3} on {}. Averaged over the strength models, P({a} breaks more) = {}: {}.\n",
                     forms[0].lpd[0].len() + forms[0].lpd[1].len(),
                     best.1,
-                    model_phrase(&best.0),
+                    best.0,
                     pm(r.worse, r.se, n),
                     verdict(r.worse, names)
                 ));
@@ -189,7 +205,7 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
                 let parts: Vec<String> = shape
                     .iter()
                     .filter_map(|f| row(&f.setup.spec.name(), primary_damage, first_h).map(|r| (f, r)))
-                    .map(|(f, r)| format!("under {} P({a} breaks less than {b}) = {:.3}", model_phrase(&f.setup.spec.name()), 1.0 - r.worse))
+                    .map(|(f, r)| format!("under {} P({a} breaks less than {b}) = {:.3}", model_phrase(f), 1.0 - r.worse))
                     .collect();
                 let favoured = shape.iter().filter_map(|f| row(&f.setup.spec.name(), primary_damage, first_h)).any(|r| r.worse < 0.5);
                 md.push_str(&format!(

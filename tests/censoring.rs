@@ -686,6 +686,26 @@ fn the_main_study_carries_every_failure_origin_s_law_in_its_models_without_effec
         let (lo, hi) = band(&dir, years);
         assert!(lo <= truth(years) && truth(years) <= hi, "{years} yr: truth {} outside the origins' band [{lo}, {hi}]", truth(years));
     }
+    // The chain at every origin's maximum-likelihood law is the discrepancy study's lifetime
+    // with every origin acting, on the same file and impact (η 0.1, 5 m/s, 730 a year): one model.
+    let loaded = partlife::study::load(&s.path("studies/main.toml")).unwrap();
+    let partlife::study::Study::Uq(u) = &loaded.study else { panic!("not a main study") };
+    let shared = partlife::uq::setup::Shared::new(u, &loaded.file.path, &s.path("reports")).unwrap();
+    let setup = partlife::uq::setup::Setup::new(u, &loaded.file.path, &partlife::strength::StrengthSpec::default(), &u.contact.averaging, &shared).unwrap();
+    assert_eq!(setup.materials[0].origins.len(), 2);
+    let mut at_mle = vec![0.0; setup.outputs()];
+    setup.evaluate_at_estimates([1.0, 1.0], [0.1, 5.0, 730.0, 5.0], &mut at_mle).unwrap();
+    let lab = r#"{ file = "../datasets/bruch.csv", broken = { column = "gebrochen", yes = "ja", no = "nein" } }"#;
+    s.write("studies/disc.toml", &format!("# Purpose: the origins' lifetime. Good result: the main study's.\nkind = \"discrepancy\"\nseed = 5\n[discrepancy]\nbootstrap = 99\npermutations = 99\n[lifetime]\nbootstrap = 100\n[power]\nreplicates = 0\n{}origin = \"Bruchursprung\"\n", lab_material(lab)));
+    let out = s.run(&["run", "studies/disc.toml", "--quiet"]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let l = s.path("reports/disc/lifetime.csv");
+    let (stage, y, p) = (table_text(&l, "stage"), table_f64(&l, "years"), table_f64(&l, "p_break"));
+    for (h, years) in [1.0, 10.0].into_iter().enumerate() {
+        let known = (0..stage.len()).find(|&i| stage[i] == "origins" && y[i] == years).map(|i| p[i]).unwrap();
+        let main = at_mle[setup.slot(0, h, 0)];
+        assert!((main / known - 1.0).abs() < 1e-9, "{years} yr: main study {main} against the discrepancy study's {known}");
+    }
     // Every strength model scored by cross-validation (the origins' by the density of the
     // strength whatever the origin), and the summary says which models carry the origins.
     let w = dir.join("weights.csv");

@@ -678,6 +678,9 @@ mod tests {
         let e = read("id;force_n;where\nA;100;volume\nB;150;Surface\nC;120;none\n", |_| {}).unwrap_err().to_string();
         assert!(e.contains("column where") && e.contains("material[0].origin = \"where\""), "{e}");
         read("id;force_n;Bruchursprung\nA;100;Volumen\nB;150;Oberfläche\nC;120;Volumen\n", |s| s.ignore = vec!["Bruchursprung".into()]).unwrap();
+        // Origins written as codes under a header that names them.
+        let e = read("id;force_n;Bruch-Typ\nA;100;V\nB;150;O\nC;120;V\n", |_| {}).unwrap_err().to_string();
+        assert!(e.contains("column Bruch-Typ: looks like failure origins") && e.contains("\"V\", \"O\""), "{e}");
         // Several columns to declare: one message names them all.
         let e = read("id;force_n;gebrochen;Anzahl;Bruchursprung\nA;100;ja;1;Volumen\nB;150;nein;2;none\nC;120;ja;1;Oberfläche\n", |_| {}).unwrap_err().to_string();
         assert!(e.contains("column gebrochen: holds yes/no") && e.contains("; and column Anzahl: holds whole numbers") && e.contains("; and column Bruchursprung: looks like failure origins"), "{e}");

@@ -11,8 +11,10 @@ use crate::error::Result;
 use crate::obs::Censor;
 
 /// Header words of a failure-origin column (fractography), compared folded.
-const ORIGIN_HEADERS: [&str; 24] = [
+const ORIGIN_HEADERS: [&str; 36] = [
     "origin", "origins", "failureorigin", "fractureorigin", "flaworigin", "originoffracture", "originoffailure", "failuremode", "failuresite", "fracturesite", "initiationsite", "flawtype", "flaw", "defect", "defecttype", "fractography", "bruchursprung", "bruchausgang", "bruchausgangsort", "bruchstelle", "ursprung", "fehlerart", "fraktographie", "origine",
+    // Headers under which labs write origins as codes (`V`, `O`, `K`): the values say nothing.
+    "failuretype", "fracturetype", "fracturemode", "modeoffailure", "failurelocation", "fracturelocation", "bruchtyp", "bruchart", "bruchort", "fehlertyp", "versagensart", "typedefracture",
 ];
 
 /// Words of failure origins (English, German, French), compared folded; `none` and its kin

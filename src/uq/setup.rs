@@ -459,7 +459,7 @@ impl Setup {
         for (h, o) in laws.chunks(LAWS).zip(out.chunks_mut(LAWS)) {
             let mut survival = [0.0; LAWS];
             for origin in &mat.origins {
-                let mut p = origin.fit.draws[s.draw];
+                let mut p = s.draw.map_or_else(|| origin.model.fit.estimate(), |d| origin.fit.draws[d]);
                 p.mu += s.shift;
                 let mut each = [0.0; LAWS];
                 origin.model.breakage_into(&p, None, ln_sigma, h, &mut each[..h.len()]);
@@ -483,7 +483,7 @@ impl Setup {
     fn chain_inputs<'a>(&'a self, x: &'a [f64], mode: Mode, temperatures: Option<[f64; 2]>) -> Result<([Strength<'a>; 2], [f64; 2], [f64; 4])> {
         let mut strength = [0, 1].map(|j| {
             let (params, weights) = self.params(j, x, mode);
-            Strength { params, weights, draw: x[self.materials[j].strength_input] as usize, shift: 0.0 }
+            Strength { params, weights, draw: Some(x[self.materials[j].strength_input] as usize), shift: 0.0 }
         });
         let mut moduli = [1.0; 2];
         if let Some(t) = temperatures {
@@ -563,6 +563,15 @@ impl Setup {
         Ok(())
     }
 
+    /// P per material, horizon and damage model at each material's maximum-likelihood estimate
+    /// (its one law with the population's point weights, or every failure origin's law), Young's
+    /// modulus factors (candidate, reference) and shared inputs (η, V, impacts per year, γ), into
+    /// `out`.
+    pub fn evaluate_at_estimates(&self, moduli: [f64; 2], shared: [f64; 4], out: &mut [f64]) -> Result<()> {
+        let strength = [0, 1].map(|j| Strength { params: self.materials[j].model.fit.estimate(), weights: None, draw: None, shift: 0.0 });
+        self.evaluate_at(strength, moduli, shared, out)
+    }
+
     /// [`Setup::evaluate_into`] from a unit point.
     pub fn evaluate(&self, u: &[f64], mode: Mode) -> Result<(Vec<f64>, Vec<f64>)> {
         let x = self.values(u, mode);
@@ -573,12 +582,13 @@ impl Setup {
 }
 
 /// One material's strength in a sample: its one law's parameters and population weights, the
-/// index of its joint draw, and the ln factor of the operating temperature on its scale
-/// (already in `params`; 0 at the crush data's temperature).
+/// index of its joint draw (None: the maximum-likelihood estimates, each origin's where it has
+/// them), and the ln factor of the operating temperature on its scale (already in `params`; 0 at
+/// the crush data's temperature).
 struct Strength<'a> {
     params: Params,
     weights: Option<&'a [f64]>,
-    draw: usize,
+    draw: Option<usize>,
     shift: f64,
 }
 

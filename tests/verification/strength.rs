@@ -88,8 +88,7 @@ fn three_studies_give_the_same_breakage_at_fixed_inputs() {
         let shared = Shared::new(s, &loaded.file.path, std::path::Path::new("reports")).unwrap();
         let setup = Setup::new(s, &loaded.file.path, &spec, &AveragingDomain::default(), &shared).unwrap();
         let mut out = vec![0.0; setup.outputs()];
-        let mle = [0, 1].map(|j| (setup.materials[j].model.fit.estimate(), None));
-        setup.evaluate_at(mle, [1.0, 1.0], [0.1, 5.0, 730.0, 5.0], &mut out).unwrap();
+        setup.evaluate_at_estimates([1.0, 1.0], [0.1, 5.0, 730.0, 5.0], &mut out).unwrap();
 
         for (j, m) in setup.materials.iter().enumerate() {
             let key = &m.model.key;

@@ -153,9 +153,10 @@ const ORIGINS_SEED: u64 = 0x0519;
 /// band combines each origin's parametric-bootstrap draws index by index (the censored
 /// likelihoods factorise, so the origins' estimates are independent); each redraw is censored as
 /// the campaign censored its row, another origin's break counted as a limit at its value.
-/// `Ok(None)` where an origin has fewer than two breaks (no law to carry). Each origin's draws
-/// are those its bands in `origins.csv` are quantiles of ([`crate::strength::origins::OriginFit::draws`]).
-fn origins_lifetime(origins: &crate::strength::origins::Origins, labels: &[String], m: &Prepared, s: &DiscrepancyStudy) -> Result<Option<Vec<LifetimeBand>>> {
+/// `Ok(None)` where an origin has fewer than two breaks (no law to carry). Each origin's fit and
+/// draws are those of its row in `origins.csv` ([`crate::strength::origins::OriginFit::strength`],
+/// [`crate::strength::origins::OriginFit::draws`]): nothing is refitted.
+fn origins_lifetime(origins: &crate::strength::origins::Origins, m: &Prepared, s: &DiscrepancyStudy) -> Result<Option<Vec<LifetimeBand>>> {
     if origins.fits.iter().any(|f| !f.shape.is_finite()) {
         return Ok(None);
     }
@@ -163,8 +164,7 @@ fn origins_lifetime(origins: &crate::strength::origins::Origins, labels: &[Strin
     let horizons: Vec<crate::strength::Horizon> = counts.iter().map(|&n| crate::strength::Horizon::independent(n)).collect();
     let (mut point, mut draws) = (Vec::new(), Vec::new());
     for f in &origins.fits {
-        let (strength, _) = m.sample.strength.view().of_origin(labels, &f.origin);
-        let fit = crate::strength::origins::origin_fit(strength, &f.origin)?;
+        let Some(fit) = f.strength.clone() else { return Ok(None) };
         let lm = LifetimeModel::new(&m.spec.key, &m.spec.label, m.spec.sphere(&m.data), s.impact.target, s.contact.averaging, fit, m.population.clone())?;
         let ln_sigma = lm.ln_impact_stress(s.impact.energy_fraction, s.impact.reference_velocity_m_s)?;
         point.push(lm.breakage(&lm.fit.estimate(), None, s.impact.energy_fraction, s.impact.reference_velocity_m_s, &counts)?);
@@ -321,7 +321,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
         let one_temperature = m.data.records.windows(2).all(|w| w[0].temperature_c == w[1].temperature_c);
         if let Some(o) = &origins
             && one_temperature
-            && let Some(bands) = origins_lifetime(o, &m.data.origins, &m, s)?
+            && let Some(bands) = origins_lifetime(o, &m, s)?
         {
             lifetime.push(("origins".to_string(), bands));
         }

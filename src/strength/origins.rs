@@ -72,6 +72,10 @@ pub struct OriginFit {
     /// lifetime with every origin acting combines these, not a second bootstrap.
     #[serde(skip)]
     pub draws: Vec<crate::strength::Params>,
+    /// The origin's strength fit ([`origin_fit`]; None with fewer than two breaks): what its
+    /// lifetime model carries.
+    #[serde(skip)]
+    pub strength: Option<StrengthFit>,
 }
 
 /// The likelihood-ratio test of one modulus shared by every origin (each its own scale).
@@ -142,12 +146,12 @@ pub fn analyse(x: Obs, origin: &[String], column: &str, how: Uncertainty, draws:
         let (obs, breaks) = x.of_origin(origin, lv);
         if breaks < 2 {
             why.get_or_insert(format!("origin \"{lv}\" has {breaks} break: a Weibull law needs at least two"));
-            fits.push(OriginFit { origin: lv.clone(), breaks, shape: f64::NAN, scale: f64::NAN, loglik: f64::NAN, shape_band: nan, scale_band: nan, draws: Vec::new() });
+            fits.push(OriginFit { origin: lv.clone(), breaks, shape: f64::NAN, scale: f64::NAN, loglik: f64::NAN, shape_band: nan, scale_band: nan, draws: Vec::new(), strength: None });
             continue;
         }
         let sf = origin_fit(obs, lv)?;
-        let f = &sf.model.reg;
         let d = sf.draws(how, draws, seed.wrapping_add(k as u64))?;
+        let f = &sf.model.reg;
         let band = |v: Vec<f64>| {
             let q = crate::stats::interpolated_quantiles(v, &[0.05, 0.95]);
             (q[0], q[1])
@@ -161,6 +165,7 @@ pub fn analyse(x: Obs, origin: &[String], column: &str, how: Uncertainty, draws:
             shape_band: band(d.iter().map(|p| p.shape).collect()),
             scale_band: band(d.iter().map(|p| p.mu.exp()).collect()),
             draws: d,
+            strength: Some(sf.clone()),
         });
     }
     let k = levels.len();

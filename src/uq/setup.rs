@@ -604,7 +604,7 @@ fn origin_laws(s: &UqStudy, model: &LifetimeModel, sample: &Sample, data: &crate
             file: data.path.display().to_string(),
             location: format!("column {column}"),
             rule: format!(
-                "material `{}`: failure origin \"{}\" has {} break{}; each origin's Weibull law needs at least two. Relabel its particles with another origin in the file, or fit one law to every origin: list the column in `material[{i}].data.ignore = [\"{column}\"]` instead of `origin`",
+                "material `{}`: failure origin \"{}\" has {} break{}; each origin's Weibull law needs at least two. Merge it with another origin (relabel its particles, where the fractography allows), or fit one law to every origin: list the column in `material[{i}].data.ignore = [\"{column}\"]` instead of `origin`",
                 model.key,
                 f.origin,
                 f.breaks,
@@ -615,9 +615,8 @@ fn origin_laws(s: &UqStudy, model: &LifetimeModel, sample: &Sample, data: &crate
     analysed
         .fits
         .into_iter()
-        .map(|fit| {
-            let (obs, _) = x.of_origin(&data.origins, &fit.origin);
-            let strength = crate::strength::origins::origin_fit(obs, &fit.origin)?;
+        .map(|mut fit| {
+            let strength = fit.strength.take().ok_or_else(|| Error::numerical("failure origins", format!("origin \"{}\" has a law but no fit", fit.origin)))?;
             let model = LifetimeModel::new(&model.key, &model.label, model.sphere, model.wall, model.domain, strength, model.population.clone())?;
             Ok(OriginLaw { fit, model })
         })

@@ -99,7 +99,18 @@ fn origins_of_breaks(o: crate::obs::Obs, origins: &[String], column: Option<&str
     for i in (0..o.len()).filter(|&i| o.kind(i) != crate::obs::Censor::Right) {
         *counts.entry(origins[i].as_str()).or_default() += 1;
     }
-    format!("; failure origins (`{col}`) of the breaks: {}", counts.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", "))
+    // What a study can do with a rare origin, said before the run refuses it.
+    let rare = |n: usize| counts.iter().filter(|(_, v)| **v == n).map(|(k, _)| format!("\"{k}\"")).collect::<Vec<_>>();
+    let mut caution = String::new();
+    if let [one @ .., last] = &rare(1)[..] {
+        let who = if one.is_empty() { last.clone() } else { format!("{} and {last}", one.join(", ")) };
+        caution.push_str(&format!(" ({who} with one break: too few for a law of its own, which a study fitting each origin refuses)"));
+    }
+    if let [two @ .., last] = &rare(2)[..] {
+        let who = if two.is_empty() { last.clone() } else { format!("{} and {last}", two.join(", ")) };
+        caution.push_str(&format!(" ({who} with two breaks: a law of its own, but a main study weighing several strength models by cross-validation needs three)"));
+    }
+    format!("; failure origins (`{col}`) of the breaks: {}{caution}", counts.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", "))
 }
 
 fn sheet_names(path: &Path) -> Result<Vec<String>> {

@@ -743,6 +743,9 @@ fn the_main_study_carries_every_failure_origin_s_law_in_its_models_without_effec
     let out = s.run(&["run", "studies/main.toml", "--quiet"]);
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("bruch.csv") && out.stderr.contains("column Bruchursprung") && out.stderr.contains("failure origin \"Pore\" has 1 break;") && out.stderr.contains("material[0].data.ignore"), "{}", out.stderr);
+    // `datasets check` of the study says so before a run.
+    let out = s.run(&["datasets", "check", "--study", "studies/main.toml"]);
+    assert!(out.stdout.contains("Pore 1") && out.stdout.contains("(\"Pore\" with one break: too few for a law of its own, which a study fitting each origin refuses)"), "{}", out.stdout);
     // Two breaks give a law, but the cross-validation of two strength models leaves one in a
     // training fold: refused with why and what to do. Three (spread over the folds) run, cautioned.
     let mut pores = 0;
@@ -753,6 +756,8 @@ fn the_main_study_carries_every_failure_origin_s_law_in_its_models_without_effec
     let out = s.run(&["run", "studies/main.toml", "--quiet"]);
     assert_eq!(out.code, 2, "{}", out.stderr);
     assert!(out.stderr.contains("failure origin \"Pore\" has 2 breaks, and a training fold of the cross-validation keeps 1") && out.stderr.contains("model_form.strength = [[]]"), "{}", out.stderr);
+    let out = s.run(&["datasets", "check", "--study", "studies/main.toml"]);
+    assert!(out.stdout.contains("(\"Pore\" with two breaks: a law of its own, but a main study weighing several strength models by cross-validation needs three)"), "{}", out.stdout);
     pores = 0;
     s.write("datasets/bruch.csv", &relabel(3, &mut pores));
     let out = s.run(&["run", "studies/main.toml", "--quiet"]);

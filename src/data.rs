@@ -285,7 +285,7 @@ pub fn read_crush_with_factors(src: &Source, factor_spec: &crate::intake::factor
     // What the file must declare, said with a missing test temperature in one message.
     // (a pile-up at the highest value is asked about once every column is declared: an undeclared
     // yes/no column is its likely cause)
-    let undeclared = match crate::intake::observed::check_unused(&table, &rows, &mut provenance, src, origin) {
+    let undeclared = match crate::intake::undeclared::check_unused(&table, &rows, &mut provenance, src, origin) {
         Err(e) => Some(e),
         Ok(()) => crate::intake::observed::pile_up(&r, &rows, &values, "crush_force", src, origin, "force").err(),
     };

@@ -16,7 +16,7 @@ mod common;
 use common::bl_generator;
 use partlife::contact::{ContactOptions, Elastic, Sphere};
 use partlife::data::CrushData;
-use partlife::discrepancy::workflow::{cv_scores, resolve};
+use partlife::discrepancy::specs::{cv_scores, resolve};
 use partlife::strength::{Effect, LifetimeModel, NamingSettings, Population, StrengthFit, StrengthSpec, Uncertainty, sample_of, weights};
 use partlife::synth::{SynthSettings, generate};
 

@@ -8,6 +8,8 @@
 //!   [`crate::strength::regress`]): the fits before and after naming are instances of it.
 //! * [`workflow`]: the name → add → diagnose-again loop with the bootstrap-calibrated
 //!   false-discovery guard and the gap measure.
+//! * [`specs`]: what a strength specification means on one material's data (an explicit list, or
+//!   what the loop names) and its cross-validated evidence for the main study's stacking weights.
 //! * [`run`]: the study (`kind = "discrepancy"`, `partlife discrepancy`): lifetime before and
 //!   after, detection power vs number of particles; its tables, `verdict.json` and `summary.md`
 //!   are written by the private `report` module.
@@ -24,4 +26,5 @@ mod report;
 mod tables;
 pub mod run;
 pub mod study;
+pub mod specs;
 pub mod workflow;

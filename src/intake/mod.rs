@@ -27,6 +27,7 @@ pub mod decimal;
 pub mod factors;
 pub mod observed;
 pub mod origins;
+pub mod undeclared;
 pub mod sheet;
 pub mod table;
 pub mod text;

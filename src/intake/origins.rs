@@ -3,7 +3,7 @@
 //! in case are one origin), checked against what each row says once the rows are read
 //! ([`check_origins`]: a break needs its origin, an empty cell or `none` is for a specimen that
 //! did not break), and the words by which an undeclared column is recognised as origins
-//! ([`looks_like_origins`], for [`super::observed::check_unused`] to refuse it with the key to
+//! ([`looks_like_origins`], for [`super::undeclared::check_unused`] to refuse it with the key to
 //! declare). Strength and crush files read them alike.
 
 use super::{ColumnRecord, MapOrigin, Provenance, RawTable};

@@ -308,7 +308,7 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
         let strength = Weibull::new(shape, fit.mle.scale)?;
         // The strength model: the deliverable's unless the study names effects.
         let naming = crate::strength::NamingSettings { seed: s.seed.wrapping_add(7919 * index as u64), ..s.strength.naming.clone() };
-        let effects = crate::discrepancy::workflow::resolve(&s.strength.effects, &sample, &naming)?;
+        let effects = crate::discrepancy::specs::resolve(&s.strength.effects, &sample, &naming)?;
         let sfit = match base_fit {
             Some(base) if effects.is_empty() => base,
             _ => StrengthFit::new(&sample, &effects, s.strength.naming.gamma, &m.key)?,
@@ -351,7 +351,7 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
         });
     }
 
-    if let Some(e) = crate::discrepancy::workflow::unclaimed(&s.strength.effects, &samples.iter().collect::<Vec<_>>()) {
+    if let Some(e) = crate::discrepancy::specs::unclaimed(&s.strength.effects, &samples.iter().collect::<Vec<_>>()) {
         return Err(Error::config(loaded.path.display().to_string(), "strength.effects", format!("`{}`: no material declares the factor `{}` in its `factors`", e.name(), e.covariate())));
     }
 

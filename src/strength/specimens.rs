@@ -214,7 +214,7 @@ pub fn read_specimens_with_origins(src: &Source, size: Option<&SizeSpec>, factor
     // What the file must declare and a missing test temperature, in one message.
     // (a pile-up at the highest value is asked about once every column is declared: an undeclared
     // yes/no column is its likely cause)
-    let undeclared = match crate::intake::observed::check_unused(&table, &rows, &mut provenance, src, origin) {
+    let undeclared = match crate::intake::undeclared::check_unused(&table, &rows, &mut provenance, src, origin) {
         Err(e) => Some(e),
         Ok(()) => crate::intake::observed::pile_up(&r, &rows, &values, "strength", src, origin, "strength").err(),
     };

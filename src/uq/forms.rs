@@ -80,7 +80,7 @@ fn weigh(s: &UqStudy, setups: &[Setup]) -> Result<Vec<([Vec<f64>; 2], f64, f64)>
     let cells: Vec<(&Setup, usize)> = setups.iter().flat_map(|st| [(st, 0), (st, 1)]).collect();
     let scores: Vec<Result<Vec<f64>>> = cells.par_iter().map(|&(st, j)| {
         let m = &st.materials[j];
-        crate::discrepancy::workflow::cv_scores(&st.spec, &m.sample, &naming(s, order[j]), &m.model.key, m.origin_column.as_ref().map(|_| &m.failure_origins[..]))
+        crate::discrepancy::specs::cv_scores(&st.spec, &m.sample, &naming(s, order[j]), &m.model.key, m.origin_column.as_ref().map(|_| &m.failure_origins[..]))
     }).collect();
     let mut scores = scores.into_iter();
     let mut next = || scores.next().expect("two cross-validations per model");

@@ -287,7 +287,7 @@ impl Setup {
             let dpath = data.path.clone();
             let sample = sample_of(&data, &m.elastic, &contact)?;
             let naming = NamingSettings { seed: s.seed.wrapping_add(7919 * i as u64), ..s.strength.naming.clone() };
-            let effects = crate::discrepancy::workflow::resolve(spec, &sample, &naming)?;
+            let effects = crate::discrepancy::specs::resolve(spec, &sample, &naming)?;
             let fit = StrengthFit::new(&sample, &effects, naming.gamma, &m.key)?;
             let population = crate::strength::Population::of_material(m, i, &data, path, s.seed)?;
             let model = LifetimeModel::new(&m.key, &m.label, m.sphere(&data), s.impact.target, *domain, fit, population).map_err(|e| e.in_study(&file, &format!("material[{i}]")))?;
@@ -312,7 +312,7 @@ impl Setup {
             materials.push(Material { model, draws, weights, sample, path: dpath, read: data.provenance.clone(), strength_input, effect_inputs, effect_columns, origins, origin_column: m.origin.clone(), failure_origins: data.origins.clone() });
         }
         let samples: Vec<&Sample> = materials.iter().map(|m: &Material| &m.sample).collect();
-        if let Some(e) = crate::discrepancy::workflow::unclaimed(spec, &samples) {
+        if let Some(e) = crate::discrepancy::specs::unclaimed(spec, &samples) {
             return Err(Error::config(&file, "strength.effects", format!("`{}`: neither material declares the factor `{}` in its `factors`", e.name(), e.covariate())));
         }
         let shared_at = inputs.len();

@@ -465,6 +465,7 @@ fn the_bofors_steel_table_equals_the_peers_and_its_threshold_is_named_not_a_seco
     let out = s.run(&["run", "studies/bofors.toml", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     let dir = s.path("reports/bofors");
+    assert!(common::guard_agrees_with_critical(&dir.join("evidence.csv"), 0.05) > 3);
     let material_of = table_text(&dir.join("stages.csv"), "material");
     let rounds = table_f64(&dir.join("stages.csv"), "round");
     let loglik = table_f64(&dir.join("stages.csv"), "log_likelihood");
@@ -545,6 +546,7 @@ fn failure_origins_give_each_origin_s_law_and_bands_with_the_others_censored_and
     // With the origins known, the default candidates leave out the latent competing-risks law, and say so.
     let names = table_text(&path.with_file_name("evidence.csv"), "candidate");
     assert!(names.iter().any(|c| c == "mixture") && !names.iter().any(|c| c == "competing_risks"), "{names:?}");
+    assert!(common::guard_agrees_with_critical(&path.with_file_name("evidence.csv"), 0.05) > 0);
     assert!(summary.contains("The naming loop does not offer the latent competing-risks law"), "{summary}");
     // A column read twice — the origin also declared a factor — is refused with both keys' rule.
     s.write("studies/twice.toml", &study.replace("origin = \"failure_mode\"", "origin = \"failure_mode\"\nfactors = [\"failure_mode\"]"));

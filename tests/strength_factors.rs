@@ -353,6 +353,8 @@ fn the_shipped_real_data_studies_say_what_the_readme_reports_and_a_lab_export_ag
     for (name, _) in [("strength_glass_fibres", 0), ("strength_carbon_fibres", 1), ("carbon_lab", 2), ("glass_lab", 3)] {
         let out = s.run(&["run", &format!("studies/{name}.toml"), "--reports-dir", "reports", "--quiet"]);
         assert_eq!(out.code, 0, "{name}: {}", out.stderr);
+        // The printed critical Λ is the decision's (α 0.05 in both studies).
+        common::guard_agrees_with_critical(&s.path(&format!("reports/{name}/evidence.csv")), 0.05);
         let v: serde_json::Value = serde_json::from_str(&s.read(&format!("reports/{name}/verdict.json"))).unwrap();
         verdicts.push((v, s.read(&format!("reports/{name}/summary.md"))));
     }
@@ -869,6 +871,7 @@ fn the_jahanmir_study_names_the_batch_and_a_lab_export_agrees() {
     for name in ["jahanmir_factors", "jahanmir", "jahanmir_lab"] {
         let out = s.run(&["run", &format!("studies/{name}.toml"), "--quiet"]);
         assert_eq!(out.code, 0, "{name}: {}", out.stderr);
+        assert!(common::guard_agrees_with_critical(&s.path(&format!("reports/{name}/evidence.csv")), 0.05) > 5, "{name}");
         let v: serde_json::Value = serde_json::from_str(&s.read(&format!("reports/{name}/verdict.json"))).unwrap();
         runs.push((v, s.read(&format!("reports/{name}/summary.md"))));
     }

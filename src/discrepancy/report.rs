@@ -81,6 +81,8 @@ pub(super) fn verdict_json(loaded: &StudyFile, s: &DiscrepancyStudy, results: &[
                     "parameter": e.parameter.as_ref().map(|(k, v, se)| json!({"name": k, "value": finite(*v), "se": finite(*se), "band_90": e.band.map(|(a, b)| json!([finite(a), finite(b)])), "band_kind": e.band.map(|_| if e.band_pivotal { "pivotal" } else { "profile likelihood" })})),
                     "meaning": e.meaning,
                     "weibull_modulus": finite(e.shape),
+                    "bootstrap_failures": e.failures,
+                    "bootstrap_replicates": e.replicates,
                     "passed_guard": e.passed,
                     "named": e.named,
                     "extra_parameters": e.parameters,
@@ -195,10 +197,43 @@ fn evidence_row(e: &super::workflow::Evidence) -> String {
         "passed, weaker".to_string()
     } else if let Some(why) = unidentified(e) {
         format!("not identified: {why}")
+    } else if e.skipped.is_none() && !super::workflow::decided(e.failures, e.replicates) {
+        format!("no verdict: {} of {} bootstrap refits failed (more than {:.0} %)", e.failures, e.replicates, 100.0 * super::workflow::MAX_FAILED_SHARE)
     } else {
         "not supported".to_string()
     };
     format!("| {} | {} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {} | {} |\n", e.round, e.candidate.name(), e.lr, e.lr_critical, e.p_family, e.delta_bic, e.delta_cv, par, verdict)
+}
+
+/// For a named temperature softening (strength × r per 100 °C) in a crush material with an
+/// operating temperature to predict at: what the rate means there — the strength at that
+/// temperature as a multiple of the strength at each tested temperature, r^((T − T_test)/100).
+/// Empty otherwise.
+fn temperature_ratio(e: &super::workflow::Evidence, r: &MaterialResult) -> String {
+    let (Some(spec), crate::strength::Effect::Temperature, Some((_, per_100, _))) = (&r.crush, &e.candidate, &e.parameter) else { return String::new() };
+    let Some(t) = spec.predict.get("temperature_c").and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64))) else { return String::new() };
+    let mut tested = r.temperatures_c.clone();
+    tested.sort_by(f64::total_cmp);
+    tested.dedup();
+    let parts: Vec<String> = tested.iter().filter(|&&at| at != t).map(|&at| format!("× {:.3} of its strength at {at} °C", per_100.powf((t - at) / 100.0))).collect();
+    if parts.is_empty() || !per_100.is_finite() {
+        return String::new();
+    }
+    format!("; at the study's operating temperature, {t} °C, the strength is {}", parts.join(", "))
+}
+
+/// The candidates whose bootstrap refits failed, per round, with the rule they are judged by
+/// (empty when none failed).
+fn failures_sentence(evidence: &[super::workflow::Evidence]) -> String {
+    let failed: Vec<String> = evidence.iter().filter(|e| e.failures > 0).map(|e| format!("`{}` in round {}: {} of {}", e.candidate.name(), e.round, e.failures, e.replicates)).collect();
+    if failed.is_empty() {
+        return String::new();
+    }
+    format!(
+        "\nBootstrap refits that failed — {}. Each counts as a replicate exceeding the observed Λ (so failures can only raise p); a candidate with more than {:.0} % of its refits failed gets no verdict.\n",
+        failed.join("; "),
+        100.0 * super::workflow::MAX_FAILED_SHARE
+    )
 }
 
 /// Why the breaking probability with every known origin acting (`known`, at the first horizon)
@@ -303,10 +338,10 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             ));
         }
         md.push_str(&format!("**Effects named, in order: {}.**\n\n", names(&r.outcome.named)));
-        md.push_str("| model | Weibull m | AD (p) | KS (p) | gap G |\n|---|---|---|---|---|\n");
+        md.push_str("| model | Weibull m | AD (p) | KS (p) | gap G | G, nothing missing |\n|---|---|---|---|---|---|\n");
         for (i, st) in r.outcome.stages.iter().enumerate() {
             md.push_str(&format!(
-                "| {}{} | {} | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.1} |\n",
+                "| {}{} | {} | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.1} | {:.1} |\n",
                 if i == 0 { "base" } else { "+ " },
                 if i == 0 { String::new() } else { names(&st.model.effects) },
                 modulus_text(&st.model),
@@ -314,14 +349,18 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                 st.p_ad,
                 st.ks,
                 st.p_ks,
-                st.gap
+                st.gap,
+                st.gap_expected
             ));
         }
         let df: usize = b.findings.iter().map(|f| f.df).sum();
         if b.findings.is_empty() {
             md.push_str("\nThe file records no factor to diagnose the residuals against: G is 0 by construction and says nothing here.\n\n");
         } else {
-            md.push_str(&format!("\nWith nothing missing G ≈ {df} (one per numeric covariate diagnosed; per categorical factor of L levels, L − 1 for the location and again for the scatter of its levels of 3 or more specimens).\n\n"));
+            md.push_str(&format!(
+                "\nWith nothing missing, G of the base model would be about {df} (one per numeric covariate diagnosed; per categorical factor of L levels, L − 1 for the location and again for the scatter of its levels of 3 or more specimens); the column \"G, nothing missing\" gives each model's own expectation, G's mean over that round's parametric bootstrap ({:.1} for the base model): a covariate whose effect a model fits leaves its term near 0, so the expectation falls as effects are named.\n\n",
+                b.gap_expected
+            ));
         }
         if r.outcome.evidence.is_empty() {
             md.push_str("The data record no factor and no size measure and no two-population law was asked for: there is no candidate effect to name, and the workflow can only diagnose the Weibull law itself (below).\n");
@@ -330,10 +369,11 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             for e in &r.outcome.evidence {
                 md.push_str(&evidence_row(e));
             }
+            md.push_str(&failures_sentence(&r.outcome.evidence));
             // What each named effect says, as fitted in the round that named it (a size effect's
             // weakest-link test in the final model follows below).
             for e in r.outcome.evidence.iter().filter(|e| e.named && e.weakest_link.is_none() && !e.meaning.is_empty()) {
-                md.push_str(&format!("\n`{}` (named in round {}): {}.\n", e.candidate.name(), e.round, e.meaning));
+                md.push_str(&format!("\n`{}` (named in round {}): {}{}.\n", e.candidate.name(), e.round, e.meaning, temperature_ratio(e, r)));
             }
             // Several laws in place of the Weibull law passing: why the named one.
             let is_law = |e: &&crate::discrepancy::workflow::Evidence| matches!(e.candidate, crate::strength::Effect::Populations(_));
@@ -515,7 +555,7 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         }
         if !r.power.is_empty() {
             if r.crush.is_some() {
-                md.push_str("\n**Detection power** (new datasets of that many particles alone, drawn from the fitted model by the generator experiment design's crush tests use; rate of naming every effect found here, and the false-positive rate with no effect; an experiments study with `naming_draws` asks the same loop about today's particles plus more, with truths from the main study's state of knowledge):\n\n| particles | power | false positives |\n|---|---|---|\n");
+                md.push_str("\n**Detection power** (new datasets of that many particles alone, drawn from the fitted model by the same generator the experiments study's crush tests use; rate of naming every effect found here, and the false-positive rate with no effect; an experiments study with `naming_draws` asks the same loop about today's particles plus more, with truths from the main study's state of knowledge):\n\n| particles | power | false positives |\n|---|---|---|\n");
             } else {
                 md.push_str("\n**Detection power** (new datasets of that many specimens alone, their factor rows resampled from this file and their strengths drawn from the fitted model; rate of naming every effect found here, and the false-positive rate with no effect):\n\n| specimens | power | false positives |\n|---|---|---|\n");
             }
@@ -585,7 +625,21 @@ mod tests {
             named,
             parameters: 1,
             weakest_link: None,
+            failures: 0,
+            replicates: 199,
         }
+    }
+
+    #[test]
+    fn failed_refits_are_reported_and_too_many_leave_no_verdict() {
+        let name = Effect::Roundness.name();
+        let mut e = evidence(false, false, None, 0.125);
+        assert_eq!(failures_sentence(std::slice::from_ref(&e)), "");
+        e.failures = 25;
+        assert_eq!(evidence_row(&e), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 ± 0.125 | no verdict: 25 of 199 bootstrap refits failed (more than 10 %) |\n"));
+        assert!(failures_sentence(std::slice::from_ref(&e)).contains(&format!("`{name}` in round 2: 25 of 199")));
+        e.failures = 19;
+        assert!(evidence_row(&e).ends_with("| not supported |\n"));
     }
 
     #[test]

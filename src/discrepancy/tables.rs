@@ -55,6 +55,10 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         fcol("band_q95", ev.iter().map(|(_, e)| e.band.map_or(f64::NAN, |b| b.1)).collect()),
         scol("band", ev.iter().map(|(_, e)| e.band.map_or("", |_| if e.band_pivotal { "pivotal" } else { "profile likelihood" }).to_string()).collect()),
         fcol("weibull_modulus", ev.iter().map(|(_, e)| e.shape).collect()),
+        // Replicates whose refit failed, each counted as exceeding Λ; above the stated share
+        // (`discrepancy::workflow::MAX_FAILED_SHARE`) no verdict.
+        ucol("bootstrap_failures", ev.iter().map(|(_, e)| e.failures as u64).collect()),
+        ucol("bootstrap_replicates", ev.iter().map(|(_, e)| e.replicates as u64).collect()),
         scol("passed_guard", ev.iter().map(|(_, e)| e.passed.to_string()).collect()),
         scol("named", ev.iter().map(|(_, e)| e.named.to_string()).collect()),
     ])?;
@@ -78,7 +82,10 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         ucol("covariates_diagnosed", st.iter().map(|(_, _, s)| s.findings.len() as u64).collect()),
         // E(G) with nothing missing: one per numeric covariate, 2(L − 1) per categorical factor.
         // 0.0 + …: an empty sum of f64 is −0.0.
-        fcol("gap_expected", st.iter().map(|(_, _, s)| 0.0 + s.findings.iter().map(|f| f.df as f64).sum::<f64>()).collect()),
+        // G's mean over the round's bootstrap from the fitted model (each term as it is after
+        // fitting); the naive Σ df beside it, which counts every covariate as unfitted.
+        fcol("gap_expected", st.iter().map(|(_, _, s)| s.gap_expected).collect()),
+        fcol("gap_degrees_of_freedom", st.iter().map(|(_, _, s)| 0.0 + s.findings.iter().map(|f| f.df as f64).sum::<f64>()).collect()),
     ])?;
     dir.write_table("stages", &mut t)?;
 

@@ -16,11 +16,19 @@
 //!      refitted with and without every candidate. The marginal p-value counts Λ*_c ≥ Λ_c; the
 //!      **false-discovery guard** uses the family-wise (max-T) p-value, which counts
 //!      max_c Λ*_c ≥ Λ_c, so the chance of naming any effect when none is there is α whatever
-//!      the number of candidates;
+//!      the number of candidates. The critical Λ reported is the order statistic of the maxima
+//!      that decision uses ([`critical_value`]: p < α exactly when Λ > critical). A replicate
+//!      whose refit fails (the current model's, or the candidate's) counts as Λ* = +∞ — as
+//!      exceeding, so failures can only raise p — and a candidate with more than
+//!      [`MAX_FAILED_SHARE`] of its replicates failed gets no verdict (neither named nor
+//!      rejected; evidence.csv and the report give the count);
 //!    * ΔBIC = −Λ + k ln n, k the candidate's extra parameters (1 for a particle effect or a
 //!      numeric factor, L − 1 for a scale or a modulus per level, 3 or 2 for a two-population
 //!      law; a partially pooled factor's effective degrees of freedom, between 0 and L − 1);
-//!    * the K-fold cross-validated log score, Δ against the current model;
+//!    * the K-fold cross-validated log score, Δ against the current model; the folds are
+//!      stratified by the levels of the categorical factors (`strength::fit::folds_stratified`),
+//!      so no level of two or more specimens falls wholly in one fold and leaves a training
+//!      set without it;
 //! 3. **names** the candidate with the largest Λ among those passing the guard — max-T
 //!    p < α, ΔBIC < 0 and a better cross-validated log score — adds it and starts the next
 //!    round; otherwise it says no (further) missing effect was found. Where that candidate is a
@@ -29,11 +37,16 @@
 //!
 //! The gap measure is the residual-structure statistic G = n Σ_c ρ_c² over the covariates the
 //! data carry (ρ_c Spearman's correlation of the quantile residuals with covariate c). Under a
-//! model that misses nothing each term is ≈ χ²₁, so E(G) ≈ the number of covariates; a missing
-//! effect with covariate c adds ≈ n ρ_c². A categorical factor g adds two Kruskal–Wallis
-//! statistics, each ≈ χ²_(L−1) when nothing is missing: of the residuals by level (a scale per
-//! level missing) and of their absolute deviations from the level medians (a modulus per level
-//! missing: the levels scatter differently).
+//! model that misses nothing each term of a covariate whose effect is not in the model is ≈ χ²₁;
+//! a missing effect with covariate c adds ≈ n ρ_c². A categorical factor g adds two
+//! Kruskal–Wallis statistics, each ≈ χ²_(L−1) when nothing is missing: of the residuals by level
+//! (a scale per level missing) and of their absolute deviations from the level medians (a
+//! modulus per level missing: the levels scatter differently). A covariate whose effect the
+//! model fits leaves its residuals nearly uncorrelated with it, so its term falls far below its
+//! degrees of freedom (≈ 0.3 for one numeric covariate at n = 80, not 1). The expectation each
+//! round reports ([`Stage::gap_expected`]) is therefore not Σ df but G's mean over the round's
+//! parametric bootstrap — data drawn from the fitted model, refitted, G computed alike — every
+//! term's expectation after fitting.
 //!
 //! Deterministic for a seed and any thread count: every replicate has its own ChaCha8 stream.
 
@@ -45,7 +58,7 @@ use statrs::distribution::{ChiSquared, ContinuousCDF, Normal};
 use super::gof::{CovariateFinding, ad_ks_of_u, covariate_findings, level_findings, normal_scores};
 use crate::strength::factors::{Factor, Form, WeakestLink, weakest_link};
 use crate::error::{Error, Result};
-use crate::strength::fit::{cv_pointwise, folds};
+use crate::strength::fit::{cv_pointwise, folds, folds_stratified};
 use crate::obs::Obs;
 use crate::strength::{Effect, ModelFit, NamingSettings, Sample, Term, fit_model, fit_model_near};
 
@@ -72,7 +85,9 @@ pub struct Evidence {
     pub p_bootstrap: f64,
     /// Family-wise (max-T) bootstrap p-value: the guard.
     pub p_family: f64,
-    /// The round's critical Λ: the (1 − α) quantile of max_c Λ*_c over the bootstrap.
+    /// The round's critical Λ on this candidate's scale: the order statistic of max_c Λ*_c
+    /// over the bootstrap that the guard's decision uses, so p_family < α exactly when
+    /// Λ > lr_critical ([`critical_value`]).
     pub lr_critical: f64,
     /// ΔBIC (negative favours the candidate).
     pub delta_bic: f64,
@@ -98,6 +113,12 @@ pub struct Evidence {
     pub parameters: usize,
     /// For a size measure: the test of the weakest-link exponent.
     pub weakest_link: Option<WeakestLink>,
+    /// Bootstrap replicates whose Λ* could not be computed (the candidate's refit or the
+    /// current model's failed), each counted as exceeding Λ; above [`MAX_FAILED_SHARE`] of
+    /// `replicates` the candidate gets no verdict.
+    pub failures: usize,
+    /// Bootstrap replicates of the round.
+    pub replicates: usize,
 }
 
 /// Diagnosis of one model.
@@ -119,6 +140,15 @@ pub struct Stage {
     pub findings: Vec<CovariateFinding>,
     /// Gap measure G = n Σ ρ² + Σ_g (H_g + S_g) ([`GAP_MEASURE`]).
     pub gap: f64,
+    /// G's expectation when the model misses nothing: its mean over the round's bootstrap
+    /// replicates (drawn from this model and refitted), so a term whose effect the model fits
+    /// counts what it is after fitting (module docs). NaN when no replicate computed it.
+    pub gap_expected: f64,
+}
+
+/// G of residuals `res` ([`GAP_MEASURE`]): numeric covariates `covs`, categorical `levels`.
+fn gap_of(res: &[f64], covs: &[(String, Vec<f64>)], levels: &[(String, Vec<String>)]) -> f64 {
+    0.0 + res.len() as f64 * covs.iter().map(|(_, v)| super::gof::spearman(res, v).powi(2)).sum::<f64>() + levels.iter().map(|(_, v)| super::gof::kruskal_wallis_by(res, v) + super::gof::scatter_by(res, v)).sum::<f64>()
 }
 
 /// Result of the loop.
@@ -149,7 +179,7 @@ impl Outcome {
 }
 
 /// Gap measure used, as written in verdict.json.
-pub const GAP_MEASURE: &str = "residual structure G = n·Σ_c ρ_c² + Σ_g (H_g + S_g), ρ_c = Spearman correlation of the quantile residuals with numeric covariate c, H_g = Kruskal–Wallis statistic of the residuals by the levels of categorical factor g (location), S_g = the same statistic of the residuals' absolute deviations from their level medians (scatter), over the columns the data carry; ≈ the number of numeric covariates plus 2·Σ_g (levels − 1) when nothing is missing";
+pub const GAP_MEASURE: &str = "residual structure G = n·Σ_c ρ_c² + Σ_g (H_g + S_g), ρ_c = Spearman correlation of the quantile residuals with numeric covariate c, H_g = Kruskal–Wallis statistic of the residuals by the levels of categorical factor g (location), S_g = the same statistic of the residuals' absolute deviations from their level medians (scatter), over the columns the data carry; with nothing missing its expectation is its mean over the round's parametric bootstrap from the fitted model (gap_expected: ≈ the number of numeric covariates plus 2·Σ_g (levels − 1) for a model that fits none of them, less for each fitted one)";
 
 pub(super) fn data_err(sample: &Sample, location: String, rule: String) -> Error {
     Error::Data { file: sample.source.clone(), location, rule }
@@ -243,6 +273,19 @@ fn from_one_df_scale(l1: f64, df: usize) -> f64 {
     ChiSquared::new(df as f64).map_or(f64::NAN, |c| c.inverse_cdf(1.0 - p))
 }
 
+/// The cross-validation folds of a sample: stratified by the levels of its categorical
+/// factors (by the first factor's level, then the next's, …: every level of the first of two or
+/// more specimens is spread over at least two folds, and the others nearly always), the plain
+/// seeded folds when it has none.
+pub fn cv_folds(sample: &Sample, k: usize, seed: u64) -> Vec<usize> {
+    let n = sample.strength.len();
+    if sample.levels.is_empty() {
+        return folds(n, k, seed);
+    }
+    let key: Vec<String> = (0..n).map(|i| sample.levels.iter().map(|(_, v)| v[i].as_str()).collect::<Vec<_>>().join("\u{1f}")).collect();
+    folds_stratified(&key, k, seed)
+}
+
 /// K-fold cross-validated log score of a model (None if a training fit fails).
 fn cv_log_score(x: Obs, terms: &[(Effect, Term)], folds: &[usize], k: usize) -> Option<f64> {
     cv_pointwise(x, terms, folds, k).map(|v| v.iter().sum())
@@ -266,8 +309,8 @@ pub fn residuals(fit: &ModelFit, x: Obs, seed: u64) -> (Vec<f64>, Vec<f64>) {
 /// Seed of the randomised residuals of the observed sample (one draw for every round).
 const RESIDUAL_SEED: u64 = 0x5E51_D0A1;
 
-/// What one bootstrap replicate returns: (AD*, KS*, Λ* per candidate).
-type Replicate = (f64, f64, Vec<f64>);
+/// What one bootstrap replicate returns: (AD*, KS*, Λ* per candidate, G*).
+type Replicate = (f64, f64, Vec<f64>, f64);
 
 /// Runs the loop on a sample. `diagnose = false` skips the residual-trend permutation tests.
 /// Callers that read only the names use [`names`].
@@ -282,7 +325,14 @@ pub fn analyse(sample: &Sample, settings: &NamingSettings, diagnose: bool) -> Re
 /// Used by every caller that needs only them: a `"diagnosed"` strength model, its
 /// cross-validation, the power replicates and the experiments' naming check.
 pub fn names(sample: &Sample, settings: &NamingSettings) -> Result<Vec<Effect>> {
-    Ok(walk(sample, settings, false, false)?.named)
+    Ok(decide(sample, settings)?.named)
+}
+
+/// The loop's decisions with their evidence (the guard's p-values and critical values, ΔBIC,
+/// ΔCV, the stages), without what only a report reads ([`names`]): for studies of the guard
+/// itself, such as its size over campaigns with nothing missing.
+pub fn decide(sample: &Sample, settings: &NamingSettings) -> Result<Outcome> {
+    walk(sample, settings, false, false)
 }
 
 /// The loop; `report = false` leaves the evidence's band, parameter, meaning and weakest-link
@@ -294,7 +344,7 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
     let (covs, level_cols, skipped_covariates) = diagnosable(sample);
     let cov_refs: Vec<(&str, Vec<f64>)> = covs.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
     let folds_k = settings.cv_folds.clamp(2, n);
-    let fold = folds(n, folds_k, settings.seed ^ 0xF01D);
+    let fold = cv_folds(sample, folds_k, settings.seed ^ 0xF01D);
 
     // Every candidate's term, or why it is skipped.
     let mut available: Vec<(Effect, Term)> = Vec::new();
@@ -338,11 +388,17 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
 
         // Parametric bootstrap from the current model.
         let seed = settings.seed.wrapping_add(1_000_003 * round as u64);
-        let reps: Vec<Option<Replicate>> = (0..settings.bootstrap)
+        // A replicate whose refit fails counts as exceeding every observed statistic (Λ* = AD*
+        // = KS* = +∞): dropped or counted as not exceeding, failures would lower the p-values
+        // and the critical value (module docs).
+        let reps: Vec<Replicate> = (0..settings.bootstrap)
             .into_par_iter()
             .map(|r| {
-                let (xs, m0) = model.bootstrap_refit(x, &current, seed, r)?;
-                let (_, u) = residuals(&m0, xs.view(), settings.seed ^ RESIDUAL_SEED ^ ((r as u64 + 1) << 20));
+                let Some((xs, m0)) = model.bootstrap_refit(x, &current, seed, r) else {
+                    return (f64::INFINITY, f64::INFINITY, vec![f64::INFINITY; remaining.len()], f64::NAN);
+                };
+                let (res, u) = residuals(&m0, xs.view(), settings.seed ^ RESIDUAL_SEED ^ ((r as u64 + 1) << 20));
+                let g = gap_of(&res, &covs, &level_cols);
                 let xs = xs.view();
                 let (ad, ks) = ad_ks_of_u(u);
                 let l: Vec<f64> = remaining
@@ -354,18 +410,21 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
                         }
                         let mut terms = current.clone();
                         terms.push((c.clone(), t.clone()));
-                        fit_model_near(xs, &terms, e.as_ref()).map_or(f64::NAN, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0))
+                        fit_model_near(xs, &terms, e.as_ref()).map_or(f64::INFINITY, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0))
                     })
                     .collect();
-                Some((ad, ks, l))
+                (ad, ks, l, g)
             })
             .collect();
-        let reps: Vec<Replicate> = reps.into_iter().flatten().collect();
-        if reps.len() < settings.bootstrap / 2 || reps.is_empty() {
-            return Err(Error::numerical("discrepancy bootstrap", format!("only {} of {} refits converged", reps.len(), settings.bootstrap)));
+        let null_failed = reps.iter().filter(|r| r.0.is_infinite()).count();
+        if reps.is_empty() || 2 * null_failed > settings.bootstrap {
+            return Err(Error::numerical("discrepancy bootstrap", format!("only {} of {} refits of the current model converged", settings.bootstrap - null_failed, settings.bootstrap)));
         }
         let b = reps.len() as f64;
         let p_of = |count: usize| (1 + count) as f64 / (b + 1.0);
+        // Per candidate, the replicates whose Λ* could not be computed (its refit or the
+        // current model's failed).
+        let failures: Vec<usize> = (0..remaining.len()).map(|j| reps.iter().filter(|r| r.2[j].is_infinite()).count()).collect();
 
         // Diagnosis of the current model.
         let (res, u) = residuals(&model, x, settings.seed ^ RESIDUAL_SEED);
@@ -380,13 +439,17 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
         } else {
             Vec::new()
         };
-        let gap = 0.0 + n as f64 * covs.iter().map(|(_, v)| super::gof::spearman(&res, v).powi(2)).sum::<f64>() + level_cols.iter().map(|(_, v)| super::gof::kruskal_wallis_by(&res, v) + super::gof::scatter_by(&res, v)).sum::<f64>();
-        stages.push(Stage { model: model.clone(), residuals: res, ad, ks, p_ad, p_ks, findings, gap });
+        let gap = gap_of(&res, &covs, &level_cols);
+        let gap_expected = {
+            let g: Vec<f64> = reps.iter().map(|r| r.3).filter(|g| g.is_finite()).collect();
+            if g.is_empty() { f64::NAN } else { g.iter().sum::<f64>() / g.len() as f64 }
+        };
+        stages.push(Stage { model: model.clone(), residuals: res, ad, ks, p_ad, p_ks, findings, gap, gap_expected });
 
         // Evidence: the family-wise guard on the one-parameter scale of every candidate.
         let cv0 = cv_log_score(x, &current, &fold, folds_k);
-        let max_star: Vec<f64> = reps.iter().map(|r| r.2.iter().zip(&df).map(|(v, d)| one_df_scale(*v, *d)).filter(|v| v.is_finite()).fold(0.0, f64::max)).collect();
-        let critical_1 = crate::stats::interpolated_quantiles(max_star.clone(), &[1.0 - settings.alpha])[0];
+        let max_star = family_maxima(&reps.iter().map(|r| r.2.as_slice()).collect::<Vec<_>>(), &df);
+        let critical_1 = critical_value(&max_star, settings.alpha);
         let mut round_ev: Vec<(Evidence, f64)> = Vec::new();
         for (j, ((c, t), e)) in remaining.iter().zip(&ext).enumerate() {
             let Some(m) = e else {
@@ -431,10 +494,12 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
                     band_pivotal: false,
                     meaning,
                     shape: m.shape(),
-                    passed: p_f < settings.alpha && dbic < 0.0 && dcv > 0.0 && identified,
+                    passed: p_f < settings.alpha && dbic < 0.0 && dcv > 0.0 && identified && decided(failures[j], reps.len()),
                     named: false,
                     parameters: df[j],
                     weakest_link,
+                    failures: failures[j],
+                    replicates: reps.len(),
                 },
                 l1,
             ));
@@ -589,5 +654,105 @@ fn skipped_evidence(round: usize, candidate: Effect, reason: String) -> Evidence
         named: false,
         parameters: 0,
         weakest_link: None,
+        failures: 0,
+        replicates: 0,
+    }
+}
+
+/// Largest share of a round's bootstrap replicates whose refits may fail for a candidate to
+/// get a verdict: above it the candidate is neither named nor rejected (its failures, counted
+/// as exceeding, would make any p-value an upper bound too loose to read).
+pub const MAX_FAILED_SHARE: f64 = 0.10;
+
+/// Whether a candidate with `failures` failed refits among `replicates` gets a verdict
+/// ([`MAX_FAILED_SHARE`]).
+pub fn decided(failures: usize, replicates: usize) -> bool {
+    failures as f64 <= MAX_FAILED_SHARE * replicates as f64
+}
+
+/// Per bootstrap replicate, max_c Λ*_c on the one-parameter scale (candidate c with `df[c]`
+/// extra parameters): a failed refit (+∞) dominates, so it counts as exceeding every observed
+/// Λ; a candidate not fitted on the data (NaN throughout) is left out.
+pub fn family_maxima(lstar: &[&[f64]], df: &[usize]) -> Vec<f64> {
+    lstar.iter().map(|r| r.iter().zip(df).map(|(v, d)| one_df_scale(*v, *d)).filter(|v| !v.is_nan()).fold(0.0, f64::max)).collect()
+}
+
+/// The critical value of the guard: the order statistic of the bootstrap maxima `max_star`
+/// that the decision p = (1 + #{max* ≥ Λ})/(B + 1) < α uses, so that p < α exactly when
+/// Λ > critical. With m the largest count for which (1 + m)/(B + 1) < α, it is the
+/// (m + 1)-th largest maximum; +∞ when no count passes (B too small for α), −∞ when every
+/// count does.
+pub fn critical_value(max_star: &[f64], alpha: f64) -> f64 {
+    let b = max_star.len();
+    let passes = |count: usize| ((1 + count) as f64) / (b as f64 + 1.0) < alpha;
+    let Some(m) = (0..=b).take_while(|&c| passes(c)).last() else { return f64::INFINITY };
+    if m >= b {
+        return f64::NEG_INFINITY;
+    }
+    let mut sorted = max_star.to_vec();
+    sorted.sort_by(|a, b| b.total_cmp(a));
+    sorted[m]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The family-wise p-value as the loop computes it.
+    fn p_family(max_star: &[f64], l1: f64) -> f64 {
+        (1 + max_star.iter().filter(|&&s| s >= l1).count()) as f64 / (max_star.len() as f64 + 1.0)
+    }
+
+    #[test]
+    fn the_critical_value_is_the_order_statistic_the_decision_uses() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for (b, alpha) in [(199, 0.05), (99, 0.05), (499, 0.05), (200, 0.05), (999, 0.01), (57, 0.1)] {
+            let max_star: Vec<f64> = (0..b).map(|_| (rng.random::<f64>() * 10.0).round() / 2.0).collect();
+            let c = critical_value(&max_star, alpha);
+            // Every candidate Λ, ties with the maxima included.
+            for l in (0..=24).map(|k| k as f64 * 0.25) {
+                assert_eq!(p_family(&max_star, l) < alpha, l > c, "B {b}, α {alpha}: Λ {l}, critical {c}, p {}", p_family(&max_star, l));
+            }
+        }
+        // B = 199, α = 0.05: the 9th largest maximum ((1 + 8)/200 < 0.05 ≤ (1 + 9)/200).
+        let max_star: Vec<f64> = (1..=199).map(f64::from).collect();
+        assert_eq!(critical_value(&max_star, 0.05), 191.0);
+        // Too few replicates for α: nothing passes.
+        assert_eq!(critical_value(&[1.0; 19], 0.05), f64::INFINITY);
+    }
+
+    /// A replicate whose candidate refit failed counts as exceeding: with 15 of 199 failed and
+    /// the observed Λ above every computed Λ*, p = 16/200 — above α, not the 1/200 of leaving
+    /// them out; 15 of 199 still allow a verdict (under 10 %), 20 do not.
+    #[test]
+    fn failed_refits_count_as_exceeding_and_too_many_leave_no_verdict() {
+        let lstar: Vec<Vec<f64>> = (0..199).map(|r| vec![if r % 13 == 0 && r < 195 { f64::INFINITY } else { 1.0 + (r % 7) as f64 }, 0.5]).collect();
+        let failed = lstar.iter().filter(|r| r[0].is_infinite()).count();
+        assert_eq!(failed, 15);
+        let rows: Vec<&[f64]> = lstar.iter().map(|r| r.as_slice()).collect();
+        let max_star = family_maxima(&rows, &[1, 1]);
+        assert_eq!(p_family(&max_star, 50.0), 16.0 / 200.0);
+        assert!(critical_value(&max_star, 0.05) > 50.0);
+        assert!(decided(failed, 199) && decided(19, 199) && !decided(20, 199));
+        // A candidate never fitted on the data (NaN) does not enter the maxima.
+        let nan: Vec<Vec<f64>> = (0..199).map(|_| vec![f64::NAN, 2.0]).collect();
+        assert!(family_maxima(&nan.iter().map(|r| r.as_slice()).collect::<Vec<_>>(), &[1, 1]).iter().all(|&m| m == 2.0));
+    }
+
+    /// A level of two specimens never falls wholly in one fold.
+    #[test]
+    fn cross_validation_folds_spread_every_level() {
+        let mut s = Sample { strength: crate::obs::Observations::exact(vec![1.0; 40]), ..Sample::default() };
+        let lot: Vec<String> = (0..40).map(|i| if i == 7 || i == 31 { "rare".to_string() } else { format!("lot{}", i % 3) }).collect();
+        s.levels = vec![("lot".into(), lot.clone())];
+        for seed in 0..50 {
+            let f = cv_folds(&s, 10, seed);
+            assert_ne!(f[7], f[31], "seed {seed}: the rare level in one fold");
+            for l in ["lot0", "lot1", "lot2"] {
+                let folds: std::collections::BTreeSet<usize> = (0..40).filter(|&i| lot[i] == l).map(|i| f[i]).collect();
+                assert!(folds.len() >= 10, "seed {seed}: {l} in folds {folds:?}");
+            }
+        }
     }
 }

@@ -407,8 +407,8 @@ fn by_origin(dir: &Path, width_cm: f64, key: &str, o: &Table) -> Result<Drawn> {
 
 fn gap(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<Drawn> {
     let t = Table::load(dir, "stages")?;
-    // The expectation with nothing missing (Σ df; reports written before it was a column: the
-    // number of findings, which equals it when every covariate is numeric).
+    // The expectation with nothing missing per round (the bootstrap's mean G; reports written
+    // before it was a column: the number of findings, Σ df when every covariate is numeric).
     let (mat, round, g, ncov) = (t.s("material")?, t.f("round")?, t.f("gap")?, t.f("gap_expected").or_else(|_| t.f("covariates_diagnosed"))?);
     let mut series = Vec::new();
     let mut max_round: f64 = 0.0;
@@ -418,8 +418,13 @@ fn gap(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<
         max_round = max_round.max(rows.iter().map(|&i| round[i]).fold(0.0, f64::max));
         series.push(Series::line(Some(labels[k].clone()), pts.clone(), colour(k), 1.2));
         series.push(Series { label: None, points: pts, colour: colour(k), kind: Kind::Markers([Marker::Circle, Marker::Triangle, Marker::Cross][k % 3], 2.0) });
-        if let Some(&i) = rows.first() {
-            series.push(Series { label: Some(format!("{}: no missing effect (≈ {})", labels[k], ncov[i])), points: vec![(0.7, ncov[i]), (max_round + 1.3, ncov[i])], colour: colour(k), kind: Kind::Dashed(0.8, 3.0, 2.0) });
+        // Each round's expectation when nothing is missing (the bootstrap's mean G: it falls as
+        // fitted effects take their terms), joined across the rounds.
+        let expected: Vec<(f64, f64)> = rows.iter().filter(|&&i| ncov[i].is_finite()).map(|&i| (round[i] + 1.0, ncov[i])).collect();
+        match expected.as_slice() {
+            [] => {}
+            [(_, e)] => series.push(Series { label: Some(format!("{}: nothing missing (≈ {e:.1})", labels[k])), points: vec![(0.7, *e), (max_round + 1.3, *e)], colour: colour(k), kind: Kind::Dashed(0.8, 3.0, 2.0) }),
+            _ => series.push(Series { label: Some(format!("{}: nothing missing", labels[k])), points: expected, colour: colour(k), kind: Kind::Dashed(0.8, 3.0, 2.0) }),
         }
     }
     let cats: Vec<String> = (0..=max_round as usize).map(|r| if r == 0 { "base".into() } else { format!("+{r} effect{}", if r > 1 { "s" } else { "" }) }).collect();
@@ -436,13 +441,22 @@ fn gap(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<
     figure("discrepancy_gap", width_cm, 0.75, &[(p, 1.0)])
 }
 
+/// The evidence figure's candidates on one material's axis (those fitted, in evidence.csv
+/// order) and whether they are numbered 1, 2, … because their names would overlap under the
+/// axis (the caption then gives the numbers' names).
+pub fn evidence_axis(fitted: &[String]) -> (Vec<String>, bool) {
+    let cats = distinct(fitted);
+    let numbered = cats.iter().map(|c| c.chars().count() + 2).sum::<usize>() > 48;
+    (cats, numbered)
+}
+
 fn evidence(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Result<Drawn> {
     let t = Table::load(dir, "evidence")?;
     let (mat, round, cand, skipped, lr, crit) = (t.s("material")?, t.f("round")?, t.s("candidate")?, t.s("skipped")?, t.f("likelihood_ratio")?, t.f("likelihood_ratio_critical")?);
     let mut panels = Vec::new();
     for (k, key) in keys.iter().enumerate() {
         let rows: Vec<usize> = (0..mat.len()).filter(|&i| &mat[i] == key && skipped[i].is_empty()).collect();
-        let cats: Vec<String> = distinct(&rows.iter().map(|&i| cand[i].clone()).collect::<Vec<_>>());
+        let (cats, numbered) = evidence_axis(&rows.iter().map(|&i| cand[i].clone()).collect::<Vec<_>>());
         let rounds = rows.iter().map(|&i| round[i] as usize).max().map_or(0, |r| r + 1);
         let mut series = Vec::new();
         for r in 0..rounds {
@@ -450,25 +464,23 @@ fn evidence(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Re
             let off = 0.12 * (r as f64 - 0.5 * (rounds as f64 - 1.0));
             let pts: Vec<(f64, f64)> = idx.iter().map(|&i| (cats.iter().position(|c| *c == cand[i]).unwrap_or(0) as f64 + 1.0 + off, lr[i])).collect();
             let c = colour(r);
-            series.push(Series { label: Some(format!("round {} Λ", r + 1)), points: pts, colour: c, kind: Kind::Markers([Marker::Circle, Marker::Triangle, Marker::Cross][r % 3], 2.2) });
+            // Rounds numbered from 0 as in evidence.csv, the summary and the caption.
+            series.push(Series { label: Some(format!("round {r} Λ")), points: pts, colour: c, kind: Kind::Markers([Marker::Circle, Marker::Triangle, Marker::Cross][r % 3], 2.2) });
             // Each candidate's critical Λ (its own degrees of freedom) as a dash across its slot.
             for (j, &i) in idx.iter().enumerate() {
                 let x = cats.iter().position(|c| *c == cand[i]).unwrap_or(0) as f64 + 1.0;
-                let label = (j == 0).then(|| format!("round {} critical", r + 1));
+                let label = (j == 0).then(|| format!("round {r} critical"));
                 series.push(Series { label, points: vec![(x - 0.4, crit[i]), (x + 0.4, crit[i])], colour: c, kind: Kind::Dashed(0.8, 3.0, 2.0) });
             }
         }
         let top = rows.iter().map(|&i| lr[i]).filter(|v| v.is_finite()).fold(1.0, f64::max);
-        let fits_under = cats.iter().map(|c| c.chars().count() + 2).sum::<usize>() <= 48;
         panels.push((
             Panel {
-                // Names that would overlap under the axis are numbered in their order of
-                // evidence.csv (and of the summary's evidence table).
-                x_categories: if fits_under { cats.clone() } else { (1..=cats.len()).map(|j| j.to_string()).collect() },
-                x_desc: match (k + 1 == keys.len(), fits_under) {
+                x_categories: if numbered { (1..=cats.len()).map(|j| j.to_string()).collect() } else { cats.clone() },
+                x_desc: match (k + 1 == keys.len(), numbered) {
                     (false, _) => String::new(),
-                    (true, true) => "Candidate effect".into(),
-                    (true, false) => "Candidate (no. in evidence.csv order)".into(),
+                    (true, false) => "Candidate effect".into(),
+                    (true, true) => "Candidate (numbered: see the caption)".into(),
                 },
                 // A long label does not fit beside the axis: the key then (the legend of the
                 // other figures and materials.csv give the label).

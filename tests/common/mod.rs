@@ -231,3 +231,22 @@ pub fn figure_captions(dir: &Path) -> Vec<(String, String)> {
     assert!(!out.is_empty(), "{}: no figure in report.html", dir.display());
     out
 }
+
+/// Every row of an `evidence.csv` whose guard was computed: the printed critical Λ is the one the
+/// decision uses, (p_family < α) exactly when (Λ > critical); and the failure counts are
+/// present (at most the replicates). Returns the rows checked.
+#[allow(dead_code)]
+pub fn guard_agrees_with_critical(evidence: &Path, alpha: f64) -> usize {
+    let (lr, crit, p) = (table_f64(evidence, "likelihood_ratio"), table_f64(evidence, "likelihood_ratio_critical"), table_f64(evidence, "p_family"));
+    let (failed, reps) = (table_f64(evidence, "bootstrap_failures"), table_f64(evidence, "bootstrap_replicates"));
+    let mut checked = 0;
+    for i in 0..lr.len() {
+        assert!(failed[i] <= reps[i], "{}: row {i}: {} failures of {} replicates", evidence.display(), failed[i], reps[i]);
+        if p[i].is_nan() {
+            continue;
+        }
+        assert_eq!(p[i] < alpha, lr[i] > crit[i], "{}: row {i}: Λ {} against critical {} but p_family {} (α {alpha})", evidence.display(), lr[i], crit[i], p[i]);
+        checked += 1;
+    }
+    checked
+}

@@ -29,9 +29,18 @@ pub(super) fn figure(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
     if stem == "discrepancy_evidence" {
         let t = Table::load(dir, "evidence")?;
         let (mat, round, cand, lr, crit, pf, dbic, named) = (t.s("material")?, t.f("round")?, t.s("candidate")?, t.f("likelihood_ratio")?, t.f("likelihood_ratio_critical")?, t.f("p_family")?, t.f("delta_bic")?, t.s("named")?);
+        let skipped = t.s("skipped")?;
         let labels = material_labels(dir)?;
         let mut rows = Vec::new();
         let mut said = Vec::new();
+        // Where the figure numbers a material's candidates, which number is which.
+        let mut keyed = Vec::new();
+        for m in distinct(&mat) {
+            let (cats, numbered) = crate::report::discrepancy::evidence_axis(&(0..mat.len()).filter(|&i| mat[i] == m && skipped[i].is_empty()).map(|i| cand[i].clone()).collect::<Vec<_>>());
+            if numbered {
+                keyed.push(format!("{}: {}", labels(&m), cats.iter().enumerate().map(|(j, c)| format!("{} {c}", j + 1)).collect::<Vec<_>>().join(", ")));
+            }
+        }
         for m in distinct(&mat) {
             for r in distinct(&round) {
                 let mut idx: Vec<usize> = (0..mat.len()).filter(|&i| mat[i] == m && round[i] == r && lr[i].is_finite()).collect();
@@ -52,7 +61,11 @@ pub(super) fn figure(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
         }
         return Ok(Some(FigureNote {
             title: Some("Evidence for each candidate effect".into()),
-            caption: p(&format!("Likelihood ratio Λ of every candidate effect per round of the naming loop, against the round's critical value for the whole family of candidates: {}. The three strongest candidates of each round are in the table below.", said.join("; "))),
+            caption: p(&format!(
+                "Likelihood ratio Λ of every candidate effect per round of the naming loop (round 0: against the base model), against the round's critical value for the whole family of candidates: {}.{} The three strongest candidates of each round are in the table below.",
+                said.join("; "),
+                if keyed.is_empty() { String::new() } else { format!(" Candidates by number on the axis — {}.", keyed.join("; ")) }
+            )),
             blocks: vec![Block::Table { header: vec!["material".into(), "round".into(), "candidate".into(), "Λ".into(), "critical".into(), "p (family)".into(), "ΔBIC".into(), "named".into()], rows }],
         }));
     }
@@ -63,7 +76,7 @@ pub(super) fn figure(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
         let rows: Vec<Vec<String>> = (0..mat.len()).map(|i| vec![labels(&mat[i]), format!("{}", round[i]), eff[i].clone(), format!("{:.1}", gap[i]), format!("{:.1}", exp[i]), prob_text(pad[i])]).collect();
         return Ok(Some(FigureNote {
             title: Some("The gap between model and data, round by round".into()),
-            caption: p("Gap measure G per round of the naming loop and material, with its expectation when nothing is missing; the Anderson–Darling p-value of the model's fit at each round is in the table below."),
+            caption: p("Gap measure G per round of the naming loop and material, with its expectation when nothing is missing (dashed: G's mean over the round's parametric bootstrap from the fitted model, which falls as the named effects' covariates are fitted); the Anderson–Darling p-value of the model's fit at each round is in the table below."),
             blocks: vec![Block::Table { header: vec!["material".into(), "round".into(), "effects".into(), "gap G".into(), "expected".into(), "AD p".into()], rows }],
         }));
     }

@@ -132,6 +132,12 @@ pub struct Evaluated {
     pub metrics: Metrics,
     /// The objective and its Monte Carlo standard error.
     pub objective: (f64, f64),
+    /// The objective per outer draw (mean: `objective.0`), for paired comparisons.
+    pub objective_draws: Vec<f64>,
+    /// A greedy step: its gain over the plan before it (over the prior at the first step);
+    /// an exhaustive plan: its shortfall below the largest objective. Each with its paired
+    /// Monte Carlo error (`experiments::run::objective_difference`). None for a single.
+    pub compared: Option<(f64, f64)>,
 }
 
 /// The allocation of the budget.

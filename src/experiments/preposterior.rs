@@ -336,6 +336,30 @@ pub struct Metrics {
     pub score: Option<Scored>,
     /// Every outer draw.
     pub draws: Vec<Draw>,
+    /// The per-draw values whose means are `pcs`, `evsi` and `true_label_weight`, in the order
+    /// of `draws`: two analyses on the same outer draws (common random numbers) are compared
+    /// by the standard error of their per-draw differences ([`paired`]).
+    pub per_draw: PerDraw,
+}
+
+/// Per outer draw: the values averaged into [`Metrics`]' `pcs`, `evsi` and
+/// `true_label_weight`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct PerDraw {
+    /// 1 when the posterior Bayes action is the best under the truth, else 0.
+    pub pcs: Vec<f64>,
+    /// The value of sample information of the draw (module docs).
+    pub evsi: Vec<f64>,
+    /// The posterior weight of the truth's label, per label kind.
+    pub true_label_weight: Vec<Vec<f64>>,
+}
+
+/// The mean of `a − b` over paired outer draws with its standard error sd(a_j − b_j)/√J: the
+/// Monte Carlo error of a difference between two analyses on the same truths and data (common
+/// random numbers), usually far smaller than either's own error. `None` when the two are not
+/// paired (different numbers of draws).
+pub fn paired(a: &[f64], b: &[f64]) -> Option<Estimate> {
+    (a.len() == b.len() && !a.is_empty()).then(|| Estimate::of(&a.iter().zip(b).map(|(x, y)| x - y).collect::<Vec<_>>()))
 }
 
 /// The experiment's score ([`Experiment::score`]) over the outer draws that computed it, with
@@ -444,22 +468,27 @@ impl Metrics {
     let truth_w: Vec<f64> = eligible.iter().map(|w| w / truths.total()).collect();
     let loss = |k: usize, a: usize| kn.loss[k * kn.actions + a];
     let prior_pcs = (0..active).filter(|&k| kn.is_best(k, a0)).map(|k| truth_w[k]).sum();
-    let col = |f: &dyn Fn(&Draw) -> f64| Estimate::of(&draws.iter().map(f).collect::<Vec<_>>());
-    let pcs = col(&|d| if kn.is_best(d.truth, d.posterior.action()) { 1.0 } else { 0.0 });
-    let evsi = match settings.truth {
-        // Prior Bayes risk minus the posterior Bayes risk (module docs; ≥ 0 in expectation).
-        None => {
-            let prior_risk = prior.expected_loss[a0];
-            col(&|d| prior_risk - d.posterior.expected_loss[d.posterior.action()])
-        }
-        // Under a conditioned truth the posterior risk is not an expectation over the truths'
-        // distribution; the value is then the loss the data save under the truth itself,
-        // L(t, a₀) − L(t, a*) (its expectation over the unconditioned prior is the EVSI above),
-        // which may be negative: data can mislead under a given truth.
-        Some(_) => col(&|d| loss(d.truth, a0) - loss(d.truth, d.posterior.action())),
-    };
+    let values = |f: &dyn Fn(&Draw) -> f64| draws.iter().map(f).collect::<Vec<_>>();
+    let col = |f: &dyn Fn(&Draw) -> f64| Estimate::of(&values(f));
     let label = |kind: usize, k: usize| kn.labels[k * kn.label_kinds + kind] as usize;
     let true_weight = |kind: usize, d: &Draw| d.posterior.label_weights[kind].get(label(kind, d.truth)).copied().unwrap_or(0.0);
+    let per_draw = PerDraw {
+        pcs: values(&|d| if kn.is_best(d.truth, d.posterior.action()) { 1.0 } else { 0.0 }),
+        evsi: match settings.truth {
+            // Prior Bayes risk minus the posterior Bayes risk (module docs; ≥ 0 in expectation).
+            None => {
+                let prior_risk = prior.expected_loss[a0];
+                values(&|d| prior_risk - d.posterior.expected_loss[d.posterior.action()])
+            }
+            // Under a conditioned truth the posterior risk is not an expectation over the
+            // truths' distribution; the value is then the loss the data save under the truth
+            // itself, L(t, a₀) − L(t, a*) (its expectation over the unconditioned prior is the
+            // EVSI above), which may be negative: data can mislead under a given truth.
+            Some(_) => values(&|d| loss(d.truth, a0) - loss(d.truth, d.posterior.action())),
+        },
+        true_label_weight: (0..kn.label_kinds).map(|kind| values(&|d| true_weight(kind, d))).collect(),
+    };
+    let (pcs, evsi) = (Estimate::of(&per_draw.pcs), Estimate::of(&per_draw.evsi));
     let scored: Vec<&Draw> = draws.iter().filter(|d| d.score.is_some()).collect();
     let score = (!scored.is_empty()).then(|| {
         let of = |f: &dyn Fn(&Draw) -> f64| Estimate::of(&scored.iter().map(|d| f(d)).collect::<Vec<_>>());
@@ -474,7 +503,7 @@ impl Metrics {
         mean: (0..kn.quantities).map(|j| col(&|d| d.posterior.mean[j])).collect(),
         var: (0..kn.quantities).map(|j| col(&|d| d.posterior.var[j])).collect(),
         width90: (0..kn.quantities).map(|j| col(&|d| d.posterior.width90[j])).collect(),
-        true_label_weight: (0..kn.label_kinds).map(|kind| col(&|d| true_weight(kind, d))).collect(),
+        true_label_weight: per_draw.true_label_weight.iter().map(|v| Estimate::of(v)).collect(),
         // Over the truths' distribution (the prior, or its part with the conditioned label).
         prior_true_label_weight: (0..kn.label_kinds).map(|kind| (0..active).map(|k| eligible[k] / truths.total() * prior.label_weights[kind][label(kind, k)]).sum()).collect(),
         median_ess: crate::stats::sorted_quantile(&ess, 0.5),
@@ -484,6 +513,7 @@ impl Metrics {
         score,
         prior,
         draws,
+        per_draw,
     })
 }
 }

@@ -15,7 +15,11 @@
 //! **Greedy** (the default): starting from no experiment, each step adds the (candidate, size)
 //! whose addition to the plan so far gives the largest gain of the objective per cost among
 //! those that fit the remaining budget. It stops when nothing fits or no addition gains more
-//! than two Monte Carlo standard errors. Its first step is the "most informative next step" of
+//! than two Monte Carlo standard errors of the gain. The gain's error is paired: every step's
+//! additions and the plan so far are scored on the same outer draws (common random numbers), so
+//! the error of the gain is sd(per-draw difference)/√J ([`super::preposterior::paired`]),
+//! usually far smaller than either plan's own error (at the first step the plan so far is the
+//! prior, a constant, and the error is the single's own). Its first step is the "most informative next step" of
 //! the summary under either rule (chosen by the singles' ranking). Every step's additions are
 //! evaluated on the same outer draws — truths and the earlier tests' data — and the chosen
 //! addition's posteriors are carried to the next step ([`super::smc`], sequential plans), where
@@ -29,8 +33,8 @@
 //! **Exhaustive** (`allocation = "exhaustive"`, for small grids): every affordable plan is
 //! evaluated with the same outer draws (common random numbers, so plans are compared on the
 //! same simulated truths); the recommended plan is the cheapest whose objective lies within two
-//! Monte Carlo standard errors of the largest — more money for a difference the analysis
-//! cannot resolve is not recommended. Greedy allocation can miss the best plan when a costly
+//! Monte Carlo standard errors of the largest, the error that of the paired difference — more
+//! money for a difference the analysis cannot resolve is not recommended. Greedy allocation can miss the best plan when a costly
 //! test is worth more than two cheap ones together (a knapsack); exhaustive cannot, on its grid.
 
 
@@ -39,7 +43,7 @@ use super::impact::ImpactTest;
 use super::measure::{Measured, Measurement};
 pub use super::plan::{Allocated, Evaluated, first_step};
 use super::plan::Candidate;
-use super::preposterior::{Metrics, Settings};
+use super::preposterior::{Estimate, Metrics, Settings, paired};
 use super::smc::{self, Moves};
 use super::state::State;
 use super::study::{Allocation, ExperimentsStudy, Objective, TestKind};
@@ -51,11 +55,29 @@ use crate::uq::study::UqStudy;
 
 /// The objective of metrics `m` on `state` (value, Monte Carlo se).
 pub fn objective(o: Objective, state: &State, m: &Metrics) -> (f64, f64) {
+    let e = Estimate::of(&objective_per_draw(o, state, m));
+    (e.mean, e.se)
+}
+
+/// The objective's value per outer draw of `m` (its mean is [`objective`]), in the order of
+/// `m.draws`: what a paired comparison of two plans on the same draws differences.
+pub fn objective_per_draw(o: Objective, state: &State, m: &Metrics) -> Vec<f64> {
+    let minus = |v: &[f64], c: f64| v.iter().map(|x| x - c).collect();
     match o {
-        Objective::Evsi => (m.evsi.mean, m.evsi.se),
-        Objective::Pcs => (m.pcs.mean - m.prior_pcs, m.pcs.se),
-        Objective::DamageModel => (m.true_label_weight[0].mean - m.prior_true_label_weight[0], m.true_label_weight[0].se),
-        Objective::BandWidth => state.band_narrowing(m, &|b| b.1 - b.0),
+        Objective::Evsi => m.per_draw.evsi.clone(),
+        Objective::Pcs => minus(&m.per_draw.pcs, m.prior_pcs),
+        Objective::DamageModel => minus(&m.per_draw.true_label_weight[0], m.prior_true_label_weight[0]),
+        Objective::BandWidth => state.band_narrowing_per_draw(m, &|b| b.1 - b.0),
+    }
+}
+
+/// The difference of two plans' objectives evaluated on the same outer draws, a − b, with its
+/// paired Monte Carlo error ([`paired`]); where they are not paired, with the two errors
+/// combined as independent.
+pub fn objective_difference(a: &Evaluated, b: &Evaluated) -> (f64, f64) {
+    match paired(&a.objective_draws, &b.objective_draws) {
+        Some(d) => (d.mean, d.se),
+        None => (a.objective.0 - b.objective.0, a.objective.1.hypot(b.objective.1)),
     }
 }
 
@@ -147,13 +169,16 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
     let settings = |salt: u64, scored: usize| Settings { outer: a.outer, min_ess: a.min_ess, seed: s.seed ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15), truth: None, active: Some(a.samples), scored };
     let moves = Some(Moves { particles: a.particles, sweeps: a.sweeps });
     let evaluated = |picks: &[(usize, usize)], metrics: Metrics| -> Evaluated {
-        let objective = objective(s.decision.objective, &state, &metrics);
+        let objective_draws = objective_per_draw(s.decision.objective, &state, &metrics);
+        let e = Estimate::of(&objective_draws);
         Evaluated {
             names: picks.iter().map(|&(i, _)| s.candidate[i].name.clone()).collect(),
             sizes: picks.iter().map(|&(i, j)| s.candidate[i].sizes[j] as u64).collect(),
             cost: picks.iter().map(|&(i, j)| s.candidate[i].cost(s.candidate[i].sizes[j] as u64)).sum(),
             metrics,
-            objective,
+            objective: (e.mean, e.se),
+            objective_draws,
+            compared: None,
         }
     };
     // A plan evaluated test after test from the prior (resample-move where reweighting
@@ -198,10 +223,15 @@ pub fn run_experiments(loaded: &StudyFile, s: &ExperimentsStudy, opts: &RunOptio
                 pb.inc(1);
             }
             evaluated.sort_by(|a, b| b.objective.0.total_cmp(&a.objective.0).then(a.cost.total_cmp(&b.cost)));
-            let chosen = evaluated.first().map(|best| {
-                let floor = best.objective.0 - 2.0 * best.objective.1;
-                (0..evaluated.len()).filter(|&i| evaluated[i].objective.0 >= floor).min_by(|&a, &b| evaluated[a].cost.total_cmp(&evaluated[b].cost).then(a.cmp(&b))).unwrap_or(0)
-            });
+            // Each plan's shortfall below the largest objective, with the paired error of the
+            // difference (the same truths and data for every plan).
+            if let Some(best) = evaluated.first().cloned() {
+                for e in &mut evaluated {
+                    e.compared = Some(objective_difference(&best, e));
+                }
+            }
+            let within = |e: &Evaluated| e.compared.is_some_and(|(d, se)| d <= 2.0 * se);
+            let chosen = (0..evaluated.len()).filter(|&i| within(&evaluated[i])).min_by(|&a, &b| evaluated[a].cost.total_cmp(&evaluated[b].cost).then(a.cmp(&b)));
             Allocated::Exhaustive { plans: evaluated, chosen }
         }
     };
@@ -260,7 +290,7 @@ fn greedy(s: &ExperimentsStudy, state: &State, built: &[Vec<Candidate>], singles
     // Started at the first step, on the chosen single's outer draws.
     let mut tracks = Vec::new();
     let mut settings = settings_of(0);
-    let (mut spent, mut current) = (0.0, 0.0);
+    let mut spent = 0.0;
     loop {
         let options: Vec<(usize, usize)> = (0..s.candidate.len()).filter(|i| !plan.iter().any(|p| p.0 == *i)).flat_map(|i| (0..s.candidate[i].sizes.len()).map(move |j| (i, j))).filter(|&(i, j)| spent + s.candidate[i].cost(s.candidate[i].sizes[j] as u64) <= s.budget.total).collect();
         if options.is_empty() {
@@ -281,8 +311,20 @@ fn greedy(s: &ExperimentsStudy, state: &State, built: &[Vec<Candidate>], singles
             }
             tried
         };
-        let gain = |e: &Evaluated| (e.objective.0 - current) / (e.cost - spent);
-        let Some((p, _)) = tried.into_iter().filter(|(_, e)| e.objective.0 - current > 2.0 * e.objective.1).max_by(|x, y| gain(&x.1).total_cmp(&gain(&y.1))) else { break };
+        // The gain over the plan so far with its Monte Carlo error: at the first step over the
+        // prior (a constant: the single's own error), after it paired on the step's outer draws.
+        let tried: Vec<((usize, usize), Evaluated)> = tried
+            .into_iter()
+            .map(|(p, mut e)| {
+                e.compared = Some(match steps.last() {
+                    None => e.objective,
+                    Some(last) => objective_difference(&e, last),
+                });
+                (p, e)
+            })
+            .collect();
+        let gain = |e: &Evaluated| e.compared.map_or(f64::NAN, |g| g.0) / (e.cost - spent);
+        let Some((p, chosen)) = tried.into_iter().filter(|(_, e)| e.compared.is_some_and(|(g, se)| g > 2.0 * se)).max_by(|x, y| gain(&x.1).total_cmp(&gain(&y.1))) else { break };
         // The chosen addition again, keeping its posteriors (the same seeds: the same numbers as
         // the search's, or at the first step as the single's).
         if plan.is_empty() {
@@ -293,9 +335,9 @@ fn greedy(s: &ExperimentsStudy, state: &State, built: &[Vec<Candidate>], singles
         let (m, next) = smc::extend(kn, state, &tracks, &earlier, &built[p.0][p.1], &settings, moves, seed, true)?;
         tracks = next.expect("kept");
         plan.push(p);
-        let step = evaluated(&plan, m);
+        let mut step = evaluated(&plan, m);
+        step.compared = chosen.compared;
         spent = step.cost;
-        current = step.objective.0;
         steps.push(step);
     }
     Ok(steps)
@@ -373,13 +415,23 @@ fn write_tables(dir: &mut ReportDir, s: &ExperimentsStudy, state: &State, keys: 
     let steps_ref: Vec<&Evaluated> = steps.iter().collect();
     let plan_names = scol("plan", steps.iter().map(|e| e.names.iter().zip(&e.sizes).map(|(n, k)| format!("{n} × {k}")).collect::<Vec<_>>().join(" + ")).collect());
     let mut cols = match allocated {
+        // The step's gain over the plan before it (the prior at step 1) with its paired error.
         Allocated::Greedy(_) => vec![
             ucol("step", (1..=steps.len() as u64).collect()),
             scol("added", steps.iter().map(|e| e.names.last().cloned().unwrap_or_default()).collect()),
             ucol("added_size", steps.iter().map(|e| *e.sizes.last().unwrap_or(&0)).collect()),
             plan_names,
+            fcol("gain", steps.iter().map(|e| e.compared.map_or(f64::NAN, |c| c.0)).collect()),
+            fcol("gain_se_paired", steps.iter().map(|e| e.compared.map_or(f64::NAN, |c| c.1)).collect()),
         ],
-        Allocated::Exhaustive { chosen, .. } => vec![ucol("rank", (1..=steps.len() as u64).collect()), plan_names, scol("recommended", (0..steps.len()).map(|i| if Some(i) == *chosen { "yes" } else { "" }.to_string()).collect())],
+        // The plan's shortfall below the largest objective with the paired error.
+        Allocated::Exhaustive { chosen, .. } => vec![
+            ucol("rank", (1..=steps.len() as u64).collect()),
+            plan_names,
+            scol("recommended", (0..steps.len()).map(|i| if Some(i) == *chosen { "yes" } else { "" }.to_string()).collect()),
+            fcol("below_best", steps.iter().map(|e| e.compared.map_or(f64::NAN, |c| c.0)).collect()),
+            fcol("below_best_se_paired", steps.iter().map(|e| e.compared.map_or(f64::NAN, |c| c.1)).collect()),
+        ],
     };
     cols.extend(metric_columns(&steps_ref));
     dir.write_table("allocation", &mut table(cols)?)?;

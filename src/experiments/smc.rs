@@ -22,8 +22,10 @@
 //! 2. while the population is still the prior's active samples, the reserve samples join it
 //!    (w ∝ prior weight × e^(ln L_prev + ℓ)); if that reaches `min_ess`, done;
 //! 3. otherwise ℓ is tempered in: from φ = 0, the next φ' ≤ 1 is the one at which the ESS of
-//!    w e^((φ' − φ) ℓ) is [`TEMPERING_ESS`] of the population size (bisection; φ' = 1 when the whole
-//!    step keeps that ESS); the population is resampled to `particles` equally weighted members
+//!    w e^((φ' − φ) ℓ), identical members merged as in step 4, is [`TEMPERING_ESS`] of the
+//!    number of distinct members (at most `particles`; bisection; φ' = 1 when the whole step
+//!    keeps that ESS) — counted member by member, a population of many copies of one point
+//!    would pass at once and end collapsed, never resampled nor moved; the population is resampled to `particles` equally weighted members
 //!    (systematic resampling) and each member is moved by `sweeps` or more sweeps — until half
 //!    the members are distinct points, at most [`MAX_SWEEPS`] — of a Metropolis–Hastings
 //!    kernel whose invariant distribution is prior × e^(ln L_prev + φ' ℓ): the preconditioned
@@ -308,17 +310,33 @@ fn top(w: &[f64], ll: &[f64], a: f64) -> f64 {
     w.iter().zip(ll).filter(|(w, l)| **w > 0.0 && l.is_finite()).map(|(_, l)| a * l).fold(f64::NEG_INFINITY, f64::max)
 }
 
-/// 1/Σ w'² of the weights w' ∝ w_i e^(a ℓ_i), without forming them (the tempering's bisection).
-fn tilted_ess(w: &[f64], ll: &[f64], a: f64) -> f64 {
+/// Each member's group of identical members (numbered from 0 in key order) and the number of
+/// groups.
+fn groups<P>(members: &[Member<P>]) -> (Vec<usize>, usize) {
+    let mut order: Vec<usize> = (0..members.len()).collect();
+    order.sort_by_key(|&i| members[i].key());
+    let mut group = vec![0; members.len()];
+    let mut g = 0;
+    for (r, &i) in order.iter().enumerate() {
+        if r > 0 && members[order[r - 1]].key() != members[i].key() {
+            g += 1;
+        }
+        group[i] = g;
+    }
+    (group, if members.is_empty() { 0 } else { g + 1 })
+}
+
+/// 1/Σ w'² of the weights w' ∝ w_i e^(a ℓ_i) summed within each group of identical members
+/// (one point, one ℓ), without forming them (the tempering's bisection).
+fn merged_tilted_ess(group: &[usize], groups: usize, w: &[f64], ll: &[f64], a: f64) -> f64 {
     let t = top(w, ll, a);
-    let (mut s1, mut s2) = (0.0, 0.0);
-    for (&w, &l) in w.iter().zip(ll) {
+    let mut sum = vec![0.0; groups];
+    for ((&g, &w), &l) in group.iter().zip(w).zip(ll) {
         if w > 0.0 && l.is_finite() {
-            let x = w * (a * l - t).exp();
-            s1 += x;
-            s2 += x * x;
+            sum[g] += w * (a * l - t).exp();
         }
     }
+    let (s1, s2) = sum.iter().fold((0.0, 0.0), |(s1, s2), x| (s1 + x, s2 + x * x));
     if s2 > 0.0 { s1 * s1 / s2 } else { 0.0 }
 }
 
@@ -414,8 +432,18 @@ fn resample_move<S: Space, E: Movable<S>>(space: &S, pop: Population<S::Point>, 
     // One multiplier of the pCN steps per block: continuous coordinates, joint-draw indices.
     let mut scale = [1.0f64; 2];
     for _ in 0..MAX_STAGES {
-        let target = TEMPERING_ESS * (w.iter().filter(|x| **x > 0.0).count() as f64).min(n as f64);
-        if tilted_ess(&w, &ll_new, 1.0 - phi) >= target {
+        // The ESS with identical members merged, as the result is judged (step 4): counted
+        // member by member, a population of many copies of one point would pass the target and
+        // jump to φ = 1 without resampling or moves, and stay collapsed.
+        let (group, groups) = groups(&members);
+        let kinds = {
+            let mut seen = vec![false; groups];
+            group.iter().zip(&w).filter(|(_, w)| **w > 0.0).for_each(|(&g, _)| seen[g] = true);
+            seen.iter().filter(|s| **s).count()
+        };
+        let target = TEMPERING_ESS * (kinds as f64).min(n as f64);
+        let ess_at = |a: f64| merged_tilted_ess(&group, groups, &w, &ll_new, a);
+        if ess_at(1.0 - phi) >= target {
             w = tilt(&w, &ll_new, 1.0 - phi);
             phi = 1.0;
             break;
@@ -424,7 +452,7 @@ fn resample_move<S: Space, E: Movable<S>>(space: &S, pop: Population<S::Point>, 
         let (mut lo, mut hi) = (0.0, 1.0 - phi);
         for _ in 0..50 {
             let mid = 0.5 * (lo + hi);
-            if tilted_ess(&w, &ll_new, mid) >= target { lo = mid } else { hi = mid }
+            if ess_at(mid) >= target { lo = mid } else { hi = mid }
         }
         let delta = lo.max(1e-12 * (1.0 - phi));
         w = tilt(&w, &ll_new, delta);
@@ -583,4 +611,83 @@ where
     let (draws, next): (Vec<Draw>, Vec<Option<Track<S, E>>>) = out.into_iter().unzip();
     let metrics = Metrics::of(kn, settings, draws)?;
     Ok((metrics, keep.then(|| next.into_iter().flatten().collect())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points on a line, their normal score the coordinate.
+    struct Line(Vec<Vec<f64>>);
+
+    impl Space for Line {
+        type Point = Vec<f64>;
+        fn point(&self, k: usize) -> &Vec<f64> {
+            &self.0[k]
+        }
+        fn scores<'a>(&self, p: &'a Vec<f64>) -> &'a [f64] {
+            p
+        }
+        fn moved(&self, _p: &Vec<f64>, z: Vec<f64>) -> Result<Vec<f64>> {
+            Ok(z)
+        }
+        fn row(&self, p: &Vec<f64>) -> Result<Row> {
+            Ok(Row { loss: vec![-p[0], 0.0], values: vec![p[0]], labels: vec![0] })
+        }
+    }
+
+    /// Data that say nothing: ℓ = 0 everywhere.
+    struct Flat;
+
+    impl Experiment for Flat {
+        type Data = ();
+        fn simulate(&self, _truth: usize, _rng: &mut ChaCha8Rng) {}
+        fn loglik(&self, _data: &(), _k: usize) -> f64 {
+            0.0
+        }
+    }
+
+    impl Movable<Line> for Flat {
+        fn loglik_at(&self, _space: &Line, _data: &(), _p: &Vec<f64>) -> f64 {
+            0.0
+        }
+    }
+
+    /// A carried population of 300 copies of one point and 100 distinct points, equally
+    /// weighted (merged ESS ≈ 1.8), updated by a flat likelihood: the tempering must resample
+    /// and move it (counted member by member its ESS is 400 and it jumped to φ = 1 untouched,
+    /// labelled collapsed).
+    #[test]
+    fn a_population_of_copies_is_resampled_and_moved_not_left_collapsed() {
+        let z = |i: usize| (i as f64 + 0.5) / 101.0 * 4.0 - 2.0;
+        let line = Line((0..=100).map(|i| vec![z(i)]).collect());
+        let kn = Knowledge::new(vec![1.0; 101], 2, (0..=100).flat_map(|i| [-z(i), 0.0]).collect(), 1, (0..=100).map(z).collect(), 1, vec![0; 101]).unwrap();
+        let members: Vec<Member<Vec<f64>>> = (0..300).map(|_| Member::Prior(0)).chain((1..=100).map(Member::Prior)).collect();
+        let pop = Population { members: Some(members), weights: vec![1.0 / 400.0; 400], ll: vec![0.0; 400], reserve_used: true, next_id: 0, truth: 0 };
+        assert!(pop.ess() < 2.0, "merged ESS of the start {}", pop.ess());
+        let earlier = Earlier::<Line, Flat> { tests: &[], data: &[], space: &line };
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let (next, route, ess) = update(&kn, &line, &pop, &earlier, &Flat, &(), 100.0, Some(Moves { particles: 400, sweeps: 2 }), &mut rng).unwrap();
+        assert_eq!(route, Route::Moved, "ESS {ess}");
+        assert!(ess >= 100.0 && next.ess() >= 100.0, "ESS {ess}");
+    }
+
+    /// Merging: the merged tilted ESS of distinct members equals the plain ESS, and copies of
+    /// one member count once.
+    #[test]
+    fn the_merged_tilted_ess_counts_copies_once() {
+        let members: Vec<Member<Vec<f64>>> = vec![Member::Prior(3), Member::Prior(1), Member::Prior(3), Member::Prior(2)];
+        let (group, count) = groups(&members);
+        assert_eq!(count, 3);
+        assert_eq!(group[0], group[2]);
+        let w = [0.25; 4];
+        let ll = [0.0, 1.0, 0.0, -1.0];
+        // Merged weights ∝ (0.5, e, e⁻¹·0.25…): computed by hand.
+        let (a, b, c) = (0.5, 0.25 * 1f64.exp(), 0.25 * (-1f64).exp());
+        let want = (a + b + c).powi(2) / (a * a + b * b + c * c);
+        assert!((merged_tilted_ess(&group, count, &w, &ll, 1.0) - want).abs() < 1e-12);
+        let distinct: Vec<Member<Vec<f64>>> = (0..4).map(Member::Prior).collect();
+        let (g, n) = groups(&distinct);
+        assert!((merged_tilted_ess(&g, n, &w, &ll, 1.0) - ess(&tilt(&w, &ll, 1.0))).abs() < 1e-12);
+    }
 }

@@ -309,12 +309,17 @@ impl State {
     /// floor: [`log_width`]). The two materials' widths come from the same simulated
     /// datasets, so the error is that of the per-draw sum.
     pub fn band_narrowing(&self, m: &Metrics, width: &dyn Fn((f64, f64)) -> f64) -> (f64, f64) {
+        let e = super::preposterior::Estimate::of(&self.band_narrowing_per_draw(m, width));
+        (e.mean, e.se)
+    }
+
+    /// Per outer draw of `m`, the prior's summed band width less the draw's posterior's (the
+    /// values [`State::band_narrowing`] averages).
+    pub fn band_narrowing_per_draw(&self, m: &Metrics, width: &dyn Fn((f64, f64)) -> f64) -> Vec<f64> {
         let h = self.years.len() - 1;
         let q = [self.p_quantity(0, h), self.p_quantity(1, h)];
         let prior: f64 = q.iter().map(|&q| width(m.prior.band90[q])).sum();
-        let per_draw: Vec<f64> = m.draws.iter().map(|d| q.iter().map(|&q| width(d.posterior.band90[q])).sum()).collect();
-        let e = super::preposterior::Estimate::of(&per_draw);
-        (prior - e.mean, e.se)
+        m.draws.iter().map(|d| prior - q.iter().map(|&q| width(d.posterior.band90[q])).sum::<f64>()).collect()
     }
 
     /// Index of the quantity P_break of material j at horizon h.

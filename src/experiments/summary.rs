@@ -47,6 +47,20 @@ fn plan_phrase(s: &ExperimentsStudy, e: &Evaluated) -> String {
         .join(" + ")
 }
 
+/// ("raises", "0.333 → 0.703 ± 0.015"): the verb of `words` (up, down, neither) that the change
+/// from `from` (exact: the prior's) to `to` takes beyond two Monte Carlo standard errors, and
+/// the two values.
+fn changed<'a>(from: f64, to: super::preposterior::Estimate, words: (&'a str, &'a str, &'a str)) -> (&'a str, String) {
+    let verb = if to.mean - from > 2.0 * to.se && to.mean > from {
+        words.0
+    } else if from - to.mean > 2.0 * to.se && to.mean < from {
+        words.1
+    } else {
+        words.2
+    };
+    (verb, format!("{} → {}", prob(from), pm(to.mean, to.se)))
+}
+
 /// "1 year" or "10 years".
 fn years(y: f64) -> String {
     if y == 1.0 { "1 year".into() } else { format!("{y} years") }
@@ -120,8 +134,31 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         crate::intake::synthetic_sentence("crush data", &state.forms[0].setup.materials.iter().map(|m| (m.model.label.as_str(), m.path.as_path())).collect::<Vec<_>>())
     ));
     md.push_str("## Today\n\n");
+    // Per damage model, P(candidate breaks more) over the active samples: the main study's
+    // headline is under its first damage model alone; here the models are averaged.
+    let kn = &state.knowledge;
+    let per_damage: Vec<(&str, f64, f64)> = state
+        .damage
+        .iter()
+        .enumerate()
+        .map(|(d, m)| {
+            let (mut w, mut p, mut tie) = (0.0, 0.0, 0.0);
+            for (k, x) in active.iter().enumerate().filter(|(_, x)| x.damage == d) {
+                let v = kn.weights[k];
+                w += v;
+                p += v * kn.values[k * kn.quantities + worse];
+                let at = |j: usize| x.p[j * state.years.len() + state.horizon];
+                if at(0) == at(1) {
+                    tie += v;
+                }
+            }
+            (m.label(), p / w.max(f64::MIN_POSITIVE), tie / w.max(f64::MIN_POSITIVE))
+        })
+        .collect();
+    // The action today's knowledge takes (0: the candidate).
+    let today = labels[prior.prior.action()].clone();
     md.push_str(&format!(
-        "P({} breaks more than {} in {}) = {:.3}; choosing the better particle today is right with probability {:.3}. The 90 % band of P_break over {} is [{}, {}] for {} and [{}, {}] for {}; P_break is exactly 0 in {:.0} % and {:.0} % of the samples{}. The prior weight of the true damage model is {:.3} on average.\n\n",
+        "P({} breaks more than {} in {}) = {:.3}; choosing {today}, the particle today's knowledge favours, is right with probability {:.3}. The 90 % band of P_break over {} is [{}, {}] for {} and [{}, {}] for {}; P_break is exactly 0 in {:.0} % and {:.0} % of the samples{}. The prior weight of the true damage model is {:.3} on average.\n\n",
         labels[0],
         labels[1],
         years(state.years[state.horizon]),
@@ -139,6 +176,19 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         zero_note,
         prior.prior_true_label_weight[0]
     ));
+    if per_damage.len() > 1 {
+        let ties: Vec<String> = per_damage.iter().filter(|d| d.2 >= 0.005).map(|(m, _, t)| format!("{:.0} % of the samples under {m}", 100.0 * t)).collect();
+        md.push_str(&format!(
+            "That P averages the damage models with the prior weights above; under each alone it is {}.{} The main study's headline P is under {} alone, so the two differ.\n\n",
+            per_damage.iter().map(|(m, p, _)| format!("{p:.3} ({m})")).collect::<Vec<_>>().join(", "),
+            if ties.is_empty() {
+                String::new()
+            } else {
+                format!(" A tie — both particles breaking with the same probability, typically neither at all — counts as not breaking more: ties are {}.", ties.join(", "))
+            },
+            per_damage[0].0
+        ));
+    }
 
     md.push_str(&format!("## Candidates ranked by {} per cost\n\n", s.decision.objective.describe()));
     md.push_str(&format!("| rank | candidate | size | cost ({cur}) | objective | P(correct choice) | EVSI ({cur}) | width90 P {} | width90 P {} | weight of true damage model |\n|---|---|---|---|---|---|---|---|---|---|\n", labels[0], labels[1]));
@@ -188,36 +238,40 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         }
         Some(first) => {
             let m = &first.metrics;
+            // Each change worded by its direction (beyond two Monte Carlo standard errors).
+            let (pcs, pcs_v) = changed(m.prior_pcs, m.pcs, ("raises", "lowers", "leaves unchanged"));
+            let (weight, weight_v) = changed(m.prior_true_label_weight[0], m.true_label_weight[0], ("raises", "lowers", "leaves unchanged"));
+            let bands: Vec<String> = (0..2)
+                .map(|j| {
+                    let (verb, v) = changed(m.prior.width90[qs[j]], m.width90[qs[j]], ("widens", "narrows", "leaves unchanged"));
+                    format!("{verb} the 90 % band of P_break of {} over {} (width {v})", labels[j], years(last))
+                })
+                .collect();
             let line = format!(
-                "With a budget of {} {cur}, the most informative next step is {} for {:.0} {cur}: it raises the probability of choosing the better particle from {:.3} to {}, the expected weight of the true damage model from {:.3} to {}, and narrows the 90 % band of P_break over {} from a width of {} to {} ({}) and from {} to {} ({}); its expected value of information is {} {cur}.",
+                "With a budget of {} {cur}, the most informative next step is {} for {:.0} {cur}: it {pcs} the probability of choosing the better particle ({pcs_v}), {weight} the expected weight of the true damage model ({weight_v}), {} and {}; its expected value of information is {} {cur}.",
                 s.budget.total,
                 plan_phrase(s, first),
                 first.cost,
-                m.prior_pcs,
-                pm(m.pcs.mean, m.pcs.se),
-                m.prior_true_label_weight[0],
-                pm(m.true_label_weight[0].mean, m.true_label_weight[0].se),
-                years(last),
-                prob(m.prior.width90[qs[0]]),
-                prob(m.width90[qs[0]].mean),
-                labels[0],
-                prob(m.prior.width90[qs[1]]),
-                prob(m.width90[qs[1]].mean),
-                labels[1],
+                bands[0],
+                bands[1],
                 pm(m.evsi.mean, m.evsi.se)
             );
             md.push_str(&format!("{line}\n\n"));
             headlines.push(line);
-            let row = |k: String, e: &Evaluated| format!("| {k} | {} | {:.0} | {} | {} | {} |\n", plan_phrase(s, e), e.cost, pm(e.objective.0, e.objective.1), pm(e.metrics.pcs.mean, e.metrics.pcs.se), pm(e.metrics.true_label_weight[0].mean, e.metrics.true_label_weight[0].se));
-            let head = |k: &str| format!("| {k} | plan | cost | objective | P(correct choice) | weight of true damage model |\n|---|---|---|---|---|---|\n");
+            let compared = |e: &Evaluated| e.compared.map_or("–".to_string(), |(d, se)| pm(d, se));
+            let row = |k: String, e: &Evaluated| format!("| {k} | {} | {:.0} | {} | {} | {} | {} |\n", plan_phrase(s, e), e.cost, pm(e.objective.0, e.objective.1), compared(e), pm(e.metrics.pcs.mean, e.metrics.pcs.se), pm(e.metrics.true_label_weight[0].mean, e.metrics.true_label_weight[0].se));
+            let head = |k: &str, c: &str| format!("| {k} | plan | cost | objective | {c} | P(correct choice) | weight of true damage model |\n|---|---|---|---|---|---|---|\n");
             match allocated {
                 Allocated::Greedy(steps) => {
-                    md.push_str(&head("step"));
+                    md.push_str(&head("step", "gain over the step before (paired se)"));
                     for (k, e) in steps.iter().enumerate() {
                         md.push_str(&row(format!("{}", k + 1), e));
                     }
                     let total = steps.last().map_or(0.0, |e| e.cost);
-                    md.push_str(&format!("\nThe plan spends {total:.0} of {} {cur}; the rule (largest gain per cost, stop below two standard errors) is stated in `partlife::experiments::run`.\n", s.budget.total));
+                    md.push_str(&format!(
+                        "\nThe plan spends {total:.0} of {} {cur}. The rule: each step adds the test with the largest gain per cost among those that fit the budget, and the plan stops when nothing fits or no addition gains more than two standard errors of its gain; every step's additions are scored on the same simulated truths and data as the plan before them, so the gain's error is that of the paired difference (stated in `partlife::experiments::run`).\n",
+                        s.budget.total
+                    ));
                     // Steps whose reweighting degenerated: their numbers are not reliable.
                     let weak: Vec<String> = steps
                         .iter()
@@ -237,7 +291,7 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
                     }
                 }
                 Allocated::Exhaustive { plans, chosen } => {
-                    md.push_str(&head("rank"));
+                    md.push_str(&head("rank", "below the largest (paired se)"));
                     for (k, e) in plans.iter().enumerate().take(10) {
                         md.push_str(&row(format!("{}{}", k + 1, if Some(k) == *chosen { " (recommended)" } else { "" }), e));
                     }
@@ -247,12 +301,17 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
                     if let Some(i) = *chosen {
                         let (c, best) = (&plans[i], &plans[0]);
                         md.push_str(&format!(
-                            "\nRecommended: {} for {:.0} of {} {cur}, objective {} — {}. The rule (every affordable plan on the same simulated truths; the cheapest within two standard errors of the largest objective) is stated in `partlife::experiments::run`.\n",
+                            "\nRecommended: {} for {:.0} of {} {cur}, objective {} — {}. The rule (every affordable plan on the same simulated truths; the cheapest within two standard errors of the largest objective, the errors those of the paired differences) is stated in `partlife::experiments::run`.\n",
                             plan_phrase(s, c),
                             c.cost,
                             s.budget.total,
                             pm(c.objective.0, c.objective.1),
-                            if i == 0 { "the largest of every plan".to_string() } else { format!("within two standard errors of the largest, {} for {:.0} {cur}", pm(best.objective.0, best.objective.1), best.cost) }
+                            if i == 0 {
+                                "the largest of every plan".to_string()
+                            } else {
+                                let (d, se) = c.compared.unwrap_or((f64::NAN, f64::NAN));
+                                format!("{} below the largest, {} for {:.0} {cur}: within two standard errors of the paired difference", pm(d, se), pm(best.objective.0, best.objective.1), best.cost)
+                            }
                         ));
                     }
                 }
@@ -356,4 +415,24 @@ fn naming_section(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize
         ));
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiments::preposterior::Estimate;
+
+    /// A narrower band is "narrows", a fall is "lowers", a change within two standard errors
+    /// "leaves unchanged" (before: "raises … from 0.334 to 0.3337", "narrows … from 1.000 to
+    /// 1.000").
+    #[test]
+    fn each_change_is_worded_by_its_direction() {
+        let band = ("widens", "narrows", "leaves unchanged");
+        assert_eq!(changed(0.987, Estimate { mean: 0.215, se: 0.014 }, band), ("narrows", "0.987 → 0.215 ± 0.014".to_string()));
+        assert_eq!(changed(0.2, Estimate { mean: 0.5, se: 0.01 }, band).0, "widens");
+        let up = ("raises", "lowers", "leaves unchanged");
+        assert_eq!(changed(0.334, Estimate { mean: 0.3337, se: 0.0001 }, up).0, "lowers");
+        assert_eq!(changed(1.0, Estimate { mean: 1.0, se: 0.0 }, up).0, "leaves unchanged");
+        assert_eq!(changed(0.72, Estimate { mean: 0.70, se: 0.02 }, up).0, "leaves unchanged");
+    }
 }

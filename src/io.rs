@@ -368,6 +368,8 @@ impl InputFile {
 pub struct Manifest {
     /// Crate version.
     pub partlife_version: String,
+    /// The git commit partlife was built from (None: built outside a git clone).
+    pub partlife_revision: Option<String>,
     /// Study name (file stem).
     pub study: String,
     /// Study file path.
@@ -382,7 +384,8 @@ pub struct Manifest {
     pub seed: u64,
     /// Worker threads (rayon).
     pub threads: usize,
-    /// Git revision of the working tree the study lives in, when known.
+    /// Git revision of the working tree the study lives in, when known (the study's, not the
+    /// tool's: `partlife_revision`).
     pub git_revision: Option<String>,
     /// True when that working tree had uncommitted changes.
     pub git_dirty: Option<bool>,

@@ -168,6 +168,7 @@ pub fn commit_with_manifest(mut dir: ReportDir, loaded: &StudyFile, study_resolv
     }
     let mut manifest = Manifest {
         partlife_version: env!("CARGO_PKG_VERSION").into(),
+        partlife_revision: option_env!("PARTLIFE_REVISION").map(String::from),
         study: loaded.name.clone(),
         study_file: loaded.path.display().to_string(),
         study_toml: loaded.text.clone(),

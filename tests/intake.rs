@@ -254,8 +254,8 @@ fn the_examples_give_the_si_tables_through_the_main_study() {
         assert!(n >= 10, "{other}: {n} tables");
     }
     // The shape hypothesis only where the study states it (before: in every main study).
-    assert!(s.read("reports/gen4_vs_bl/summary.md").contains("The deliverable expected that accounting for the particles' shape"));
-    assert!(!s.read("reports/main_csv/summary.md").contains("The deliverable expected"));
+    assert!(s.read("reports/gen4_vs_bl/summary.md").contains("The study tests the hypothesis that accounting for the particles' shape"));
+    assert!(!s.read("reports/main_csv/summary.md").contains("The study tests the hypothesis"));
     // The synthetic label comes with the data (the generator's settings beside the SI files,
     // the export manifest beside the examples), not from the sentence: this scratch has no
     // generator settings, so nothing is labelled; with them, the SI files and the exports are.

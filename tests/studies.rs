@@ -83,6 +83,11 @@ fn lifetime_study_writes_every_output() {
     assert_eq!(m["study_toml"].as_str().unwrap(), s.read("studies/lifetime.toml"));
     assert_eq!(m["study_resolved"]["impact"]["energy_fraction"], 0.1);
     assert!(m["evaluations"]["lifetime_chain"].as_u64().unwrap() == 2 * 201);
+    // The tool's revision is embedded at build time: named although the scratch study lies
+    // outside any git tree (this test builds from a clone), and the study's own is unknown.
+    let rev = m["partlife_revision"].as_str().unwrap_or_default();
+    assert!(rev.len() == 40 && rev.chars().all(|c| c.is_ascii_hexdigit()), "{}", m["partlife_revision"]);
+    assert!(m["git_revision"].is_null(), "{}", m["git_revision"]);
     // Tables, figures in three formats, manifest.json, summary.md, report.pdf and report.html.
     assert_eq!(m["outputs"].as_array().unwrap().len(), TABLES.len() + 3 * FIGURES.len() + 4);
     // No temporary directory left behind.
@@ -241,8 +246,21 @@ fn main_uq_study_writes_the_headline_deterministically() {
             assert!(all.contains(&common::one_space(line)), "report.pdf lacks the headline \"{line}\"");
         }
         let first = common::pdf_text(&t, &pdf, Some((1, 1)));
-        assert!(first.contains("In a plant engineer's units") && first.contains("Vogel–Peukert breaks nothing"), "page 1: {first}");
+        assert!(first.contains("BL 16/30 breaks less than Gen 4") && first.contains("broken in year 1") && first.contains("Distribution of the breaking probability"), "page 1: {first}");
+        assert!(!first.contains("Vogel–Peukert breaks nothing"), "the full attrition table has its own section: {first}");
     }
+    // The document opens with the answer in one sentence generated from the numbers: which
+    // particle breaks less, by how much in the plant's units (attrition.csv's model-averaged
+    // row under independent trials) and how sure, then the headline model's attrition.
+    let summary = a.read(&format!("{dir}/summary.md"));
+    let (att, sm, model, mat, first_med) = {
+        let p = a.path(&format!("{dir}/attrition.csv"));
+        (p.clone(), common::table_text(&p, "strength_model"), common::table_text(&p, "model"), common::table_text(&p, "material"), common::table_f64(&p, "first_year_median"))
+    };
+    let share = |label: &str| partlife::report::captions::percent(first_med[(0..sm.len()).find(|&i| sm[i] == "model-averaged" && model[i] == "independent" && mat[i] == label).unwrap_or_else(|| panic!("{}: no row for {label}", att.display()))]);
+    let answer = format!("## Answer\n\n**BL 16/30 breaks less than Gen 4**: in the first year of operation (730 impacts per particle) a median {} of its inventory breaks against {} of Gen 4's", share("BL 16/30"), share("Gen 4"));
+    assert!(summary.contains(&answer), "{answer}\n{summary}");
+    assert!(summary.find("## Answer").unwrap() < summary.find("## Headline").unwrap(), "{summary}");
     let attrition = a.read(&format!("{dir}/summary.md"));
     assert!(attrition.contains("| diagnosed | independent trials | Gen 4 |"), "summary.md lacks the attrition table");
     // Every damage model of the study is in the table, Tavares–King included, and each row's
@@ -266,6 +284,21 @@ fn main_uq_study_writes_the_headline_deterministically() {
     }
     let sobol_svg = a.read(&format!("{dir}/uq_sobol.svg"));
     assert!(sobol_svg.contains("Index of log₁₀ P Gen 4") && sobol_svg.contains("P after 10 years") && !sobol_svg.contains("log10 p gen4"), "uq_sobol.svg output names");
+    // The Sobol' intervals' level is the study's, alike in the table, the legend and the caption
+    // (before: a legend of 95 % beside a caption of 90 %).
+    let level = common::table_f64(&a.path(&format!("{dir}/sobol.csv")), "level");
+    assert!(level.iter().all(|l| *l == 0.95), "{level:?}");
+    let captions = common::figure_captions(&a.path(dir));
+    let (_, caption) = captions.iter().find(|(stem, _)| stem == "uq_sobol").expect("a Sobol' caption");
+    // Fig. 1 quotes 5 m/s itself (before: the grid's 4.87 m/s).
+    let (_, velocity) = captions.iter().find(|(stem, _)| stem == "uq_breakage_vs_velocity").expect("a velocity caption");
+    assert!(velocity.contains("At 5 m/s over 10 yr:"), "{velocity}");
+    assert!(sobol_svg.contains("95 % interval") && caption.contains("with their 95 % bootstrap intervals") && !caption.contains("90 %"), "{caption}");
+    // No table prints a negative zero (an empty sum is −0.0 in Rust).
+    for t in ["attrition", "breakage", "comparison", "sobol"] {
+        let text = a.read(&format!("{dir}/{t}.csv"));
+        assert!(!text.lines().any(|l| l.split(',').any(|f| f == "-0.0" || f == "-0")), "{t}.csv prints -0");
+    }
 
     // Golden values (tests/reference/gen4_vs_bl_headline.csv; the rule for regenerating them is
     // written in that file): P(candidate worse) within four Monte Carlo standard errors (floor

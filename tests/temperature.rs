@@ -401,6 +401,22 @@ fn coverage_of(s: &Scratch, study: &str) -> Vec<f64> {
         .collect()
 }
 
+/// Per source of `study`, the log score of its held-out observations as `validation.csv` sums
+/// it; the summary's verdict must follow it (not the coverage, which a wider interval wins).
+fn log_scores_of(s: &Scratch, study: &str) -> Vec<f64> {
+    let v = s.path("reports/temperature/validation.csv");
+    let (studies, source, lpd) = (table_text(&v, "study"), table_text(&v, "source"), table_f64(&v, "log_predictive_density"));
+    let scores: Vec<f64> = SOURCES.iter().map(|src| (0..source.len()).filter(|&i| source[i] == *src && studies[i] == study).map(|i| lpd[i]).sum()).collect();
+    let summary = s.read("reports/temperature/summary.md");
+    let para = summary.split("\n\n").find(|p| p.contains(&format!("`{study}`"))).unwrap();
+    for (src, v) in SOURCES.iter().zip(&scores) {
+        assert!(para.contains(&format!("{src}: {v:.1}")), "{study}: no log score of {src} ({v:.1}) in {para}");
+    }
+    let said = if scores[0] > scores[1].max(scores[2]) { "the laws predict these data better than either calibrated state as it is" } else { "a calibrated state as it is predicts these data better than the laws" };
+    assert!(para.contains(said), "{study}: scores {scores:?}, but {para}");
+    scores
+}
+
 /// Whether each parameter's truth of `file` lies inside the laws' band at 950 °C for `study`.
 fn truths_inside(s: &Scratch, study: &str, file: &str) -> Vec<(String, bool)> {
     let p = s.path("reports/temperature/validation_parameters.csv");
@@ -425,6 +441,8 @@ fn judge_held_out(s: &Scratch) -> Vec<f64> {
         assert!(inside, "{n}: the truth at 950 °C lies outside the laws' band there");
     }
     let coverage = coverage_of(s, study);
+    let scores = log_scores_of(s, study);
+    assert!(scores[0] > scores[1].max(scores[2]), "on data of their own form the laws score worse than a calibrated state as it is: {scores:?}");
     assert!(coverage[0] >= 0.8, "the laws cover {:.2} of the held-out observations", coverage[0]);
     assert!(coverage[1] <= 0.5 && coverage[1] < coverage[0], "the room-temperature state as it is covers {:.2}: the check cannot tell a temperature model from none", coverage[1]);
     let dir = s.path("reports/temperature");
@@ -447,6 +465,8 @@ fn laws_fitted_at_two_temperatures_predict_held_out_curves_at_a_third() {
     let same = judge_held_out(&s);
     let (study, file, _) = HELD_OUT[1];
     let other = coverage_of(&s, study);
+    let other_scores = log_scores_of(&s, study);
+    eprintln!("log scores on the other form's data (laws, 20 °C, 800 °C): {other_scores:?}");
     let inside = truths_inside(&s, study, file);
     eprintln!("held-out coverage (laws, 20 °C as is, 800 °C as is): laws' form {same:?}; another form {other:?}; its truths inside the laws' bands: {inside:?}");
     assert!(inside.iter().any(|(_, i)| !i), "every truth of another form lies inside the laws' bands: {inside:?}");

@@ -357,9 +357,10 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         if b.findings.is_empty() {
             md.push_str("\nThe file records no factor to diagnose the residuals against: G is 0 by construction and says nothing here.\n\n");
         } else {
+            let levels = if r.sample.levels.is_empty() { "" } else { "; per categorical factor of L levels, L − 1 for the location and again for the scatter of its levels of 3 or more specimens" };
             md.push_str(&format!(
-                "\nWith nothing missing, G of the base model would be about {df} (one per numeric covariate diagnosed; per categorical factor of L levels, L − 1 for the location and again for the scatter of its levels of 3 or more specimens); the column \"G, nothing missing\" gives each model's own expectation, G's mean over that round's parametric bootstrap ({:.1} for the base model): a covariate whose effect a model fits leaves its term near 0, so the expectation falls as effects are named.\n\n",
-                b.gap_expected
+                "\nWith nothing missing, G of the base model would be about {df} (one per numeric covariate diagnosed{levels}). The column \"G, nothing missing\" gives each model's own expectation, G's mean over that round's parametric bootstrap: a covariate whose effect a model fits leaves its term near 0, so it falls as effects are named. The final model's G is {:.1} against {:.1}.\n\n",
+                a.gap, a.gap_expected
             ));
         }
         if r.outcome.evidence.is_empty() {

@@ -98,10 +98,23 @@ pub fn read_sheet(path: &Path, bytes: Vec<u8>, opts: &Source) -> Result<RawTable
         && let Ok(merged) = x.merge_cells_by_sheet_name(&name)
         && let Some(m) = merged.iter().find(|m| m.start.0 <= header_row && header_row <= m.end.0)
     {
+        // A merged title above the header (the header row not given): the first row below it
+        // that no merge covers and that names every column is most likely the header.
+        let named = |r: u32| (c0..=c1).all(|c| matches!(range.get_value((r, c)), Some(Data::String(v)) if !v.trim().is_empty()));
+        let later = (opts.header_row.is_none()).then(|| (m.end.0 + 1..=r1).find(|&r| named(r) && !merged.iter().any(|k| k.start.0 <= r && r <= k.end.0))).flatten();
+        let advice = match later {
+            Some(r) => format!(
+                ": give each column its own header cell, or, if the header is sheet row {} under a title, say so — header_row = {} in the study's data entry (`--header-row {}` for `datasets check`)",
+                r + 1,
+                r + 1,
+                r + 1
+            ),
+            None => ": give each column its own header cell".to_string(),
+        };
         return Err(Error::data_file(
             path,
             at(format!(", header (sheet row {})", header_row + 1)),
-            format!("merged cells {}{}:{}{} in the header row: give each column its own header cell", column_letters(m.start.1 as usize), m.start.0 + 1, column_letters(m.end.1 as usize), m.end.0 + 1),
+            format!("merged cells {}{}:{}{} in the header row{advice}", column_letters(m.start.1 as usize), m.start.0 + 1, column_letters(m.end.1 as usize), m.end.0 + 1),
         ));
     }
     let value = |r: u32, c: u32| range.get_value((r, c)).cloned().unwrap_or(Data::Empty);
@@ -298,6 +311,15 @@ mod tests {
         let merged = Sheet { name: "M".into(), rows: vec![vec![t("id"), t("size"), Value::Empty], vec![t("x"), Value::Number(1.0), Value::Number(2.0)]], merged: vec!["B1:C1".into()] };
         let e = read(xlsx(&[merged]).unwrap(), "xlsx", Source::default()).unwrap_err().to_string();
         assert!(e.contains("merged cells B1:C1") && e.contains("sheet row 1"), "{e}");
+        assert!(e.ends_with("give each column its own header cell"), "no later header row to suggest: {e}");
+        // A merged title above the header on sheet row 3: the message points at header_row.
+        let titled = Sheet {
+            name: "T".into(),
+            rows: vec![vec![t("Druckversuch Charge 7"), Value::Empty], vec![Value::Empty, Value::Empty], vec![t("id"), t("F [N]")], vec![t("x"), Value::Number(1.0)]],
+            merged: vec!["A1:B1".into()],
+        };
+        let e = read(xlsx(&[titled]).unwrap(), "xlsx", Source::default()).unwrap_err().to_string();
+        assert!(e.contains("merged cells A1:B1") && e.contains("if the header is sheet row 3 under a title, say so — header_row = 3 in the study's data entry (`--header-row 3` for `datasets check`)"), "{e}");
         let uncached = sheet("U", vec![vec![t("id"), t("F [N]")], vec![t("x"), Value::Formula("1+1".into(), None)]]);
         let e = read(xlsx(&[uncached]).unwrap(), "xlsx", Source::default()).unwrap_err().to_string();
         assert!(e.contains("row 1 (sheet row 2), column B") && e.contains("formula without a saved value"), "{e}");

@@ -4,9 +4,9 @@
 //! * **first page** — the question (the study file's opening comment; without one, the question
 //!   its kind answers, said as such), the summary's lead paragraphs and its `Headline` (or
 //!   `Verdict`, `Answer`) section, then the summary sections its kind moves up
-//!   ([`super::captions::first_page`]: the answer in a plant engineer's units of the main and
-//!   lifetime studies, what drives the main study's answer, the experiments study's state of
-//!   knowledge today and its plan for the budget);
+//!   ([`super::captions::first_page`]: the main study's figure of both particles'
+//!   distributions beside its answer, the lifetime study's answer in a plant engineer's units,
+//!   the experiments study's state of knowledge today and its plan for the budget);
 //! * the summary's other sections (`summary.md`, whose sentences the run generated from its
 //!   numbers);
 //! * **one section per figure** (every `*.svg` the manifest lists, in order) with a caption
@@ -241,8 +241,8 @@ pub fn document(dir: &Path) -> Result<Document> {
     }
     let extra = super::captions::first_page(&kind, dir)?;
     first.extend(extra.blocks);
-    for heading in extra.move_up {
-        if let Some(k) = sections.iter().position(|s| s.heading.starts_with(&heading)) {
+    for heading in &extra.move_up {
+        if let Some(k) = sections.iter().position(|s| s.heading.starts_with(heading.as_str())) {
             let sct = sections.remove(k);
             first.push(Block::Subheading(sct.heading));
             first.extend(sct.blocks);
@@ -258,6 +258,11 @@ pub fn document(dir: &Path) -> Result<Document> {
         let title = note.title.unwrap_or_else(|| title_of(&stem));
         let mut blocks = vec![Block::Figure { stem: stem.clone(), svg, caption: note.caption }];
         blocks.extend(note.blocks);
+        if extra.figure.as_deref() == Some(stem.as_str()) {
+            first.push(Block::Subheading(title));
+            first.extend(blocks);
+            continue;
+        }
         let mut sct = Section::new(title, blocks);
         sct.anchor = stem;
         figure_sections.push(sct);

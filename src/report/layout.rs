@@ -345,11 +345,14 @@ impl Layout {
         let (vw, vh, natural_w) = figure_size(svg)?;
         let w = natural_w.min(WIDTH);
         let h = w * vh / vw;
-        let cap: Text = std::iter::once(Span::bold(format!("Figure {number}. "))).chain(caption.iter().cloned()).collect();
-        let cap_lines = wrap(&cap, 8.5, WIDTH);
+        let cap_lines = wrap(&figure_caption(caption, number), 8.5, WIDTH);
         let cap_h = cap_lines.len() as f64 * 8.5 * LEAD;
-        let avail = Self::bottom() - TOP;
-        let (w, h) = if h + cap_h + 8.0 > avail { let s = (avail - cap_h - 8.0) / h; (w * s, h * s) } else { (w, h) };
+        // A figure taller than a page is scaled to one; right under a heading at the top of a
+        // page, to the room below the heading — else it would leave the heading alone on that
+        // page.
+        let under_heading = self.y < TOP + HEADING_ROOM;
+        let avail = if under_heading { Self::bottom() - self.y } else { Self::bottom() - TOP } - 1.0; // (a point to spare: rounding)
+        let (w, h) = if h + cap_h + 8.0 > avail { let s = ((avail - cap_h - 8.0) / h).max(0.1); (w * s, h * s) } else { (w, h) };
         self.need(h + cap_h + 8.0);
         let x = LEFT + 0.5 * (WIDTH - w);
         let y = self.y + 4.0;
@@ -456,6 +459,15 @@ pub(crate) fn escape(s: &str) -> String {
 }
 
 /// Lays out the document into pages of elements, with the figures' SVGs.
+/// Room a section heading takes at the top of a page (points), and more than it: a figure
+/// right under it is sized to the rest of the page.
+const HEADING_ROOM: f64 = 60.0;
+
+/// "Figure n. " and the caption, as the figure prints it.
+fn figure_caption(caption: &[Span], number: usize) -> Text {
+    std::iter::once(Span::bold(format!("Figure {number}. "))).chain(caption.iter().cloned()).collect()
+}
+
 pub(super) fn layout(doc: &Document) -> Result<Layout> {
     let mut lay = Layout::new();
     let mut fig = 0;
@@ -470,9 +482,13 @@ pub(super) fn layout(doc: &Document) -> Result<Layout> {
         if s.new_page {
             lay.new_page();
         }
-        // A section that opens with a figure keeps its heading with the figure.
+        // A section that opens with a figure keeps its heading with the figure and its caption
+        // (one that needs more than a page starts the page, scaled to fit under the heading).
         let keep = match s.blocks.first() {
-            Some(Block::Figure { svg, .. }) => figure_size(svg).map_or(0.0, |(vw, vh, w)| w.min(WIDTH) * vh / vw + 30.0).min(Layout::bottom() - TOP - 40.0),
+            Some(Block::Figure { svg, caption, .. }) => {
+                let cap_h = wrap(&figure_caption(caption, fig + 1), 8.5, WIDTH).len() as f64 * 8.5 * LEAD;
+                figure_size(svg).map_or(0.0, |(vw, vh, w)| w.min(WIDTH) * vh / vw + cap_h + 12.0).min(Layout::bottom() - TOP - HEADING_ROOM)
+            }
             _ => 3.0 * BODY * LEAD,
         };
         lay.heading(&s.heading, 13.0, keep);
@@ -502,6 +518,36 @@ mod tests {
         // A word longer than the line is cut by characters.
         let long = wrap(&[Span::plain("a".repeat(200))], 10.0, 50.0);
         assert!(long.len() > 3 && long.iter().all(|(_, w)| *w <= 50.0));
+    }
+
+    #[test]
+    fn no_page_holds_only_a_heading() {
+        use super::super::document::Section;
+        // Figures of every height up to well over a page, each opening its section under a
+        // long caption, after paragraphs that leave the page at every depth.
+        let caption: Text = vec![Span::plain("A caption of several lines. ".repeat(12))];
+        let mut sections = Vec::new();
+        for k in 0..12 {
+            let h = 4.0 + 3.0 * k as f64;
+            let svg = format!("<svg width=\"8.5cm\" height=\"{h}cm\" viewBox=\"0 0 850 {}\" xmlns=\"x\"></svg>", h * 100.0);
+            sections.push(Section::new(format!("Residuals against covariate {k}"), vec![Block::Figure { stem: format!("f{k}"), svg, caption: caption.clone() }]));
+            sections.push(Section::new(format!("Text {k}"), vec![Block::Paragraph(vec![Span::plain("Words. ".repeat(40 * k + 10))])]));
+        }
+        let doc = Document { title: "T".into(), running: "r".into(), first: vec![], sections };
+        let lay = layout(&doc).unwrap();
+        for (i, page) in lay.pages.iter().enumerate() {
+            let texts = page.iter().filter(|e| matches!(e, El::Text { .. })).count();
+            let other = page.iter().filter(|e| !matches!(e, El::Text { .. } | El::Rule { .. })).count();
+            assert!(other > 0 || texts > 1, "page {} holds only a heading: {:?}", i + 1, page.iter().filter_map(|e| match e { El::Text { runs, .. } => Some(runs.iter().map(|r| r.1.clone()).collect::<String>()), _ => None }).collect::<Vec<_>>());
+        }
+        // Every figure sits on the page of its heading: a figure element on each page that a
+        // "Residuals" heading ends.
+        for page in &lay.pages {
+            let headed = page.iter().rev().find_map(|e| match e { El::Text { runs, .. } => Some(runs.iter().any(|r| r.1.starts_with("Residuals against"))), _ => None });
+            if headed == Some(true) {
+                panic!("a page ends with a figure's heading, its figure on the next");
+            }
+        }
     }
 
     #[test]

@@ -183,6 +183,10 @@ fn sobol(dir: &Path, width_cm: f64, shown: &str) -> Result<Drawn> {
     let (s1, s1l, s1h, st, stl, sth) = (t.f("s1")?, t.f("s1_lo")?, t.f("s1_hi")?, t.f("st")?, t.f("st_lo")?, t.f("st_hi")?);
     let nmax = n.iter().cloned().fold(0.0, f64::max);
     let outputs = distinct(&out);
+    // The intervals' level as the table states it (reports before it was written: 95 %, the
+    // default then as now).
+    let level = t.f("level").ok().and_then(|l| l.first().copied()).unwrap_or(0.95);
+    let interval = format!("{} interval", crate::report::captions::percent(level));
     let mut panels = Vec::new();
     for (oi, o) in outputs.iter().enumerate() {
         let rows: Vec<usize> = (0..out.len()).filter(|&i| &out[i] == o && n[i] == nmax).collect();
@@ -192,7 +196,7 @@ fn sobol(dir: &Path, width_cm: f64, shown: &str) -> Result<Drawn> {
             let lab = |s: &str| if k == 0 { Some(s.to_string()) } else { None };
             series.push(Series { label: lab("first order S"), points: vec![(x - 0.3, 0.0), (x - 0.02, 0.0)], colour: colour(0), kind: Kind::Band(vec![s1[i]; 2], 0.8) });
             series.push(Series { label: lab("total S_T"), points: vec![(x + 0.02, 0.0), (x + 0.3, 0.0)], colour: colour(1), kind: Kind::Band(vec![st[i]; 2], 0.8) });
-            series.push(Series::line(lab("95 % interval"), vec![(x - 0.16, s1l[i]), (x - 0.16, s1h[i])], plotters::style::BLACK, 0.8));
+            series.push(Series::line(lab(&interval), vec![(x - 0.16, s1l[i]), (x - 0.16, s1h[i])], plotters::style::BLACK, 0.8));
             series.push(Series::line(None, vec![(x + 0.16, stl[i]), (x + 0.16, sth[i])], plotters::style::BLACK, 0.8));
         }
         let hi = rows.iter().map(|&i| sth[i].max(st[i]).max(s1h[i])).fold(0.0, f64::max).max(0.05);
@@ -346,7 +350,9 @@ fn strength_models(dir: &Path, width_cm: f64, labels: &[String; 2], keys: &[Stri
     let top_panel = Panel {
         x_categories: categories.clone(),
         x_desc: String::new(),
-        y_desc: format!("P({} breaks more)", labels[0]),
+        // Short enough for the low panel's height (before: "P(Gen 4 breaks more)" ran past its
+        // top edge): the candidate by name while it is short, else "candidate".
+        y_desc: format!("P({} worse)", if labels[0].chars().count() <= 8 { labels[0].as_str() } else { "candidate" }),
         x_range: (0.5, models.len() as f64 + 1.5),
         y_range: (lo.max(0.0), 1.0),
         y_log: false,

@@ -72,6 +72,18 @@ struct Row {
     lo: f64,
     hi: f64,
     inside: u64,
+    /// Σ over the row's observations of the log predictive density.
+    lpd: f64,
+}
+
+/// ln of the normal predictive density, mean `centre` and sd `half`/z (the interval
+/// centre ± half is its central interval at z), at `y`. Summed over held-out observations it is
+/// the log score, a proper scoring rule: unlike coverage, a wider predictive does not score
+/// better by covering more (Gneiting & Raftery 2007). Differences between sources on the same
+/// observations are free of the observations' units.
+pub fn log_predictive_density(y: f64, centre: f64, half: f64, z: f64) -> f64 {
+    let sd = half / z;
+    -0.5 * ((y - centre) / sd).powi(2) - sd.ln() - 0.5 * (2.0 * std::f64::consts::PI).ln()
 }
 
 /// Predicts every `[[validation]]` data set; `tick` after each source. With `slurm` (the reports
@@ -155,7 +167,7 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
             None => None,
         };
         let mut lines = vec![format!("| source | inside its {pct} % interval | peak force: observed mean; predicted [{pct} % interval] (N) |"), "|---|---|---|".into()];
-        let (mut coverage, mut inside_counts) = (Vec::new(), Vec::new());
+        let (mut coverage, mut inside_counts, mut scores) = (Vec::new(), Vec::new(), Vec::new());
         for (label, kind, ts, thetas) in &sources {
             let (runs, runner_failures) = match &slurm {
                 None => {
@@ -179,6 +191,7 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
                 return Err(Error::numerical("validation", format!("{key} ({label}): {} of {} crush runs failed ({why}): widen the parameter bounds of {}", thetas.len() - ok.len(), thetas.len(), path.display())));
             }
             let (mut inside_all, mut peak) = (0u64, String::from("(no fracture observed)"));
+            let mut lpd_all = 0.0;
             // One row per output and scatter σ (a reduction of crush curves has one σ per
             // output; an observation file may give each row its own): the interval a row
             // prints is the one its observations are counted against.
@@ -188,6 +201,8 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
                 let (centre, half) = predictive_interval(&y, sigma, model_error, z);
                 let inside = idx.iter().filter(|&&i| (obs.values[i] - centre).abs() <= half).count() as u64;
                 inside_all += inside;
+                let lpd: f64 = idx.iter().map(|&i| log_predictive_density(obs.values[i], centre, half, z)).sum();
+                lpd_all += lpd;
                 let observed_mean = idx.iter().map(|&i| obs.values[i]).sum::<f64>() / idx.len() as f64;
                 if spec.name == "peak_force" {
                     peak = format!("{observed_mean:.1}; {centre:.1} [{:.1}, {:.1}]", centre - half, centre + half);
@@ -208,6 +223,7 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
                     lo: centre - half,
                     hi: centre + half,
                     inside,
+                    lpd,
                 });
             }
             let failed = thetas.len() - ok.len();
@@ -215,20 +231,28 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
             lines.push(format!("| {label} | {inside_all} of {} ({:.0} %){runs_failed} | {peak} |", obs.len(), 100.0 * inside_all as f64 / obs.len() as f64));
             coverage.push((label.clone(), inside_all as f64 / obs.len() as f64));
             inside_counts.push(inside_all);
+            scores.push((label.clone(), lpd_all));
         }
         if let Some((_, driver)) = &slurm {
             events.extend(driver.log().events.iter().map(|e| format!("slurm ({}): {e}", v.study.display())));
         }
         let particles = red.curves.len();
         let k = red.grid.len();
+        // Which source predicts the held-out data better is judged by the log score (proper),
+        // not by coverage, which a wider interval wins; coverage is judged apart, against its
+        // nominal level.
         let verdict = {
-            let (law, states) = (coverage[0].1, &coverage[1..]);
+            let (law, states) = (scores[0].1, &scores[1..]);
             let best = states.iter().map(|c| c.1).fold(f64::NEG_INFINITY, f64::max);
-            if law > best { "the laws predict these data better than either calibrated state as it is" } else if law < best { "a calibrated state as it is predicts these data better than the laws" } else { "the laws and the better calibrated state predict these data equally well" }
+            let which = if law > best { "the laws predict these data better than either calibrated state as it is" } else if law < best { "a calibrated state as it is predicts these data better than the laws" } else { "the laws and the better calibrated state predict these data equally well" };
+            format!(
+                "By the log predictive density of the held-out observations (a proper score: a wider interval does not win by covering more; {}), {which}",
+                scores.iter().map(|(l, v)| format!("{l}: {v:.1}")).collect::<Vec<_>>().join("; ")
+            )
         };
         let nominal = nominal_coverage(inside_counts[0], obs.len() as u64, level)?;
         md.push(format!(
-            "The crush curves of `{}` ({}) at {t} °C ({particles} particles; {} observations: the force at {k} displacements, the peak force and the fracture displacement, normalised to D₀ = {:.3} mm) are held out: no law was fitted to them.{synthetic} They are predicted through the crush FE of that study (its mesh, its constants without a law, its model error {model_error}) at {draws} joint draws of each source; an observation is inside when it lies within the runs' mean ± {z:.3}·√(var of the runs + σ² + (model error·mean)²), σ the scatter between particles (`validation.csv`). The laws at {t} °C give {} ({pct} % bands; `validation_parameters.csv`). Observations inside their {pct} % interval: {}; {verdict}. {nominal}\n\n{}",
+            "The crush curves of `{}` ({}) at {t} °C ({particles} particles; {} observations: the force at {k} displacements, the peak force and the fracture displacement, normalised to D₀ = {:.3} mm) are held out: no law was fitted to them.{synthetic} They are predicted through the crush FE of that study (its mesh, its constants without a law, its model error {model_error}) at {draws} joint draws of each source; an observation is inside when it lies within the runs' mean ± {z:.3}·√(var of the runs + σ² + (model error·mean)²), σ the scatter between particles (`validation.csv`). The laws at {t} °C give {} ({pct} % bands; `validation_parameters.csv`). {verdict}. Observations inside their {pct} % interval: {}. {nominal}\n\n{}",
             v.study.display(),
             cs.label,
             obs.len(),
@@ -255,6 +279,8 @@ pub(super) fn write_validation(dir: &mut ReportDir, file: &str, vs: &[Validation
         fcol("hi", rows.iter().map(|r| r.hi).collect()),
         fcol("level", vec![level; rows.len()]),
         ucol("inside", rows.iter().map(|r| r.inside).collect()),
+        // Σ ln predictive density of the row's observations (the log score the verdict ranks by).
+        fcol("log_predictive_density", rows.iter().map(|r| r.lpd).collect()),
     ])?;
     dir.write_table("validation", &mut t)?;
     let mut t = table(vec![
@@ -290,7 +316,7 @@ fn nominal_coverage(inside: u64, n: u64, level: f64) -> Result<String> {
     Ok(if p < 0.01 {
         format!("**The laws cover fewer observations than their {pct} % intervals claim** ({how}): at this temperature the laws' form or their bands miss something, and the bands do not include the error of the form itself.")
     } else {
-        format!("That is consistent with the nominal {pct} % ({how}).")
+        format!("The laws' coverage is consistent with the nominal {pct} % ({how}).")
     })
 }
 
@@ -311,6 +337,21 @@ fn by_output_and_sigma(output: &[usize], sigma: &[f64]) -> Vec<(usize, f64, Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Data from N(0, 1) at their quantiles: the honest 90 % interval (±1.645) covers 90 %, an
+    /// interval ten times wider covers all of them — coverage would prefer it — while the log
+    /// score prefers the honest one.
+    #[test]
+    fn the_log_score_does_not_reward_a_wider_interval() {
+        use statrs::distribution::{ContinuousCDF, Normal};
+        let z = 1.6448536269514722;
+        let y: Vec<f64> = (0..200).map(|i| Normal::standard().inverse_cdf((i as f64 + 0.5) / 200.0)).collect();
+        let cover = |half: f64| y.iter().filter(|v| v.abs() <= half).count();
+        let score = |half: f64| y.iter().map(|&v| log_predictive_density(v, 0.0, half, z)).sum::<f64>();
+        assert!(cover(10.0 * z) > cover(z) && score(z) > score(10.0 * z) && score(z) > score(0.5 * z), "{} {} {}", score(z), score(10.0 * z), score(0.5 * z));
+        // The density itself: N(0, 1) at 0.
+        assert!((log_predictive_density(0.0, 0.0, z, z) + 0.5 * (2.0 * std::f64::consts::PI).ln()).abs() < 1e-12);
+    }
 
     #[test]
     fn observations_with_their_own_scatter_get_their_own_interval() {

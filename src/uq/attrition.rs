@@ -163,7 +163,8 @@ pub fn write(dir: &mut ReportDir, forms: &[Form]) -> Result<Vec<Row>> {
         cols.3.push(band(pts.iter().map(|(p, w)| (p.first_year, *w)).collect()));
         cols.4.push(band(pts.iter().map(|(p, w)| (p.years[0], *w)).collect()));
         cols.5.push(band(pts.iter().map(|(p, w)| (p.years[1], *w)).collect()));
-        cols.6.push(pts.iter().filter(|(p, _)| p.never).map(|p| p.1).sum::<f64>() / total);
+        // (A fold from +0: the sum of no weights is −0.0, which the table would print.)
+        cols.6.push(pts.iter().filter(|(p, _)| p.never).fold(0.0, |a, p| a + p.1) / total);
         cols.7.push(pts.len() as f64);
     };
     for (f, pf) in forms.iter().zip(&per_form) {

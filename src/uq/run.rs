@@ -112,7 +112,8 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
         dir.adopt(b);
     }
     let varying = primary.setup.varying(Mode::Split);
-    let mut md = summary(s, &forms, &final_indices, &varying, &outputs, &headline, &averaging);
+    let per_year = impacts_per_year_text(&primary.setup);
+    let mut md = summary(s, &forms, &final_indices, &varying, &outputs, &headline, &averaging, &attrition, &per_year);
     // Materials tested at different temperatures, or one material's tests pooled across several.
     let temps: Vec<Vec<f64>> = primary.setup.materials.iter().map(|m| m.temperatures_c()).collect();
     let tested: Vec<_> = primary.setup.materials.iter().zip(&temps).map(|(m, t)| m.tested(t)).collect();
@@ -122,7 +123,7 @@ pub fn run_uq(loaded: &StudyFile, s: &UqStudy, opts: &RunOptions) -> Result<RunS
         crate::intake::warn(w);
     }
     md = crate::lifetime::tested::with_warnings(&md, &warnings);
-    md.push_str(&super::attrition::markdown(&attrition, &impacts_per_year_text(&primary.setup), &primary.setup.materials[0].model.label));
+    md.push_str(&super::attrition::markdown(&attrition, &per_year, &primary.setup.materials[0].model.label));
     let notes: Vec<(&str, Vec<String>)> = primary.setup.materials.iter().map(|m| (m.model.label.as_str(), m.read.summary_notes())).collect();
     md.push_str(&crate::lifetime::tested::read_section(&notes));
     dir.write_bytes("summary.md", md.as_bytes())?;
@@ -224,17 +225,18 @@ fn write_headline(dir: &mut ReportDir, forms: &[Form]) -> Result<Headline> {
     for &years in &st.years {
         let of = |name: &str| rows.iter().find(|r| r.strength == name && r.damage == primary && r.years == years);
         let title = format!("P({} breaks more than {} in {} yr)", names[0], names[1], years);
-        let n = forms[0].prop.count();
+        // The samples a row counts: its model's, or every model's for the average.
+        let all: usize = forms.iter().map(|f| f.prop.count()).sum();
         if forms.len() == 1 {
             if let Some(r) = of(&forms[0].setup.spec.name()) {
-                lines.push(format!("{title} = {} (Monte Carlo se; strength model: {})", pm(r.worse, r.se, n), r.strength));
+                lines.push(format!("{title} = {} (Monte Carlo se; strength model: {})", pm(r.worse, r.se, forms[0].prop.count()), r.strength));
             }
         } else {
             if let Some(r) = of(AVERAGED) {
                 let w: Vec<String> = forms.iter().map(|f| format!("{} {:.3}", f.setup.spec.name(), f.weight)).collect();
-                lines.push(format!("{title} = {} (Monte Carlo se; averaged over the strength models with stacking weights {})", pm(r.worse, r.se, n), w.join(", ")));
+                lines.push(format!("{title} = {} (Monte Carlo se; averaged over the strength models with stacking weights {})", pm(r.worse, r.se, all), w.join(", ")));
             }
-            let per: Vec<String> = forms.iter().filter_map(|f| of(&f.setup.spec.name()).map(|r| format!("{} {}", r.strength, pm(r.worse, r.se, n)))).collect();
+            let per: Vec<String> = forms.iter().filter_map(|f| of(&f.setup.spec.name()).map(|r| format!("{} {}", r.strength, pm(r.worse, r.se, f.prop.count())))).collect();
             lines.push(format!("    per strength model: {}", per.join("; ")));
         }
     }
@@ -425,7 +427,14 @@ fn write_breakage_vs_velocity(dir: &mut ReportDir, st: &Setup, prop: &Propagated
     let per_block = (4000 / prop.blocks.len()).max(1);
     let xs: Vec<&[f64]> = (0..prop.blocks.len()).flat_map(|b| (0..per_block.min(prop.blocks[b].n)).map(move |i| prop.x(b, i))).collect();
     let vi = st.velocity_input();
-    let grid: Vec<f64> = (0..48).map(|i| vlo * (vhi / vlo).powf(i as f64 / 47.0)).collect();
+    let mut grid: Vec<f64> = (0..48).map(|i| vlo * (vhi / vlo).powf(i as f64 / 47.0)).collect();
+    // And 5 m/s exactly, the deliverable's largest velocity after the receiver, which the
+    // figure's caption quotes.
+    let five = crate::report::captions::REFERENCE_VELOCITY;
+    if (vlo..=vhi).contains(&five) && !grid.contains(&five) {
+        grid.push(five);
+        grid.sort_by(f64::total_cmp);
+    }
     // Per velocity, every sample's P (all slots).
     let per_v: Vec<Vec<Vec<f64>>> = grid
         .par_iter()
@@ -490,7 +499,13 @@ fn write_sobol(dir: &mut ReportDir, st: &Setup, s: &UqStudy, sizes: &[usize], ti
                 sob.6.push(si.total[k]);
                 sob.7.push(si.total_ci[k].0);
                 sob.8.push(si.total_ci[k].1);
-                sob.9.push(if si.first[k] < 0.0 || si.total[k] < 0.0 { "negative: zero within MC error".into() } else { String::new() });
+                sob.9.push(if si.first[k] < 0.0 || si.total[k] < 0.0 {
+                    "negative: zero within MC error".into()
+                } else if si.first[k] > 1.0 || si.total[k] > 1.0 {
+                    "above 1: an index is at most 1, Monte Carlo error".into()
+                } else {
+                    String::new()
+                });
             }
         }
         if n == s.sensitivity.n {
@@ -512,6 +527,8 @@ fn write_sobol(dir: &mut ReportDir, st: &Setup, s: &UqStudy, sizes: &[usize], ti
             fcol("st_lo", sob.7),
             fcol("st_hi", sob.8),
             scol("flag", sob.9),
+            // The level of the bootstrap intervals s1_lo … st_hi.
+            fcol("level", vec![s.sensitivity.level; rows]),
             scol("output_label", sob_labels),
             // The horizon of the breaking probabilities the outputs are of.
             fcol("years", vec![st.years[h]; rows]),

@@ -36,7 +36,22 @@ pub(super) fn verdict(p: f64, names: [&str; 2]) -> String {
     } else {
         "but the answer is close to a coin toss"
     };
-    format!("{better} is the better particle, {sure} ({q:.3})")
+    // Four decimals where three would round to 1.000 and contradict the P beside it.
+    let shown = if q >= 0.9995 && q < 1.0 { format!("{q:.4}") } else { format!("{q:.3}") };
+    format!("{better} is the better particle, {sure} ({shown})")
+}
+
+/// How sure a probability `q` ≥ 0.5 of one answer makes it, in words (the scale of [`verdict`]).
+fn certainty(q: f64) -> &'static str {
+    if q >= 0.99 {
+        "near certainty"
+    } else if q >= 0.9 {
+        "high probability"
+    } else if q >= 0.7 {
+        "more likely than not"
+    } else {
+        "close to a coin toss"
+    }
 }
 
 /// The effects each material carries under a model, in words.
@@ -96,7 +111,7 @@ pub(super) fn origins_paragraph(forms: &[Form]) -> String {
 
 /// The plain-language summary; every sentence with a number is built from the numbers it
 /// states.
-pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying: &[usize], outputs: &[String], headline: &Headline, averaging: &[AveragingRow]) -> String {
+pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying: &[usize], outputs: &[String], headline: &Headline, averaging: &[AveragingRow], attrition: &[super::attrition::Row], per_year: &str) -> String {
     let st = &forms[0].setup;
     let [a, b] = [&st.materials[0].model.label, &st.materials[1].model.label];
     let names = [a.as_str(), b.as_str()];
@@ -147,6 +162,34 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
         md.push_str(&paragraph(&tested, &at));
         md.push_str("\n\n");
     }
+    // The answer first, in words and the plant's units, for the headline model.
+    let strength = if forms.len() > 1 { AVERAGED.to_string() } else { forms[0].setup.spec.name() };
+    if let Some(r) = row(&strength, primary_damage, first_h) {
+        let of = |label: &str| attrition.iter().find(|x| x.strength == strength && x.model == primary_damage.name() && x.material == label);
+        if let (Some(ra), Some(rb)) = (of(a), of(b)) {
+            let all: usize = forms.iter().map(|f| f.prop.count()).sum();
+            let n = if forms.len() > 1 { all } else { forms[0].prop.count() };
+            // How much the margin rests on the models: the first year under each strength model
+            // alone (the headline damage model), and P under each other damage model.
+            let firsts: Vec<String> = forms
+                .iter()
+                .filter_map(|f| {
+                    let name = f.setup.spec.name();
+                    let at = |label: &str| attrition.iter().find(|x| x.strength == name && x.model == primary_damage.name() && x.material == label);
+                    Some(format!("`{name}` {} against {}", crate::report::captions::percent(at(a)?.first_year[1]), crate::report::captions::percent(at(b)?.first_year[1])))
+                })
+                .collect();
+            let others: Vec<String> = st.models.iter().skip(1).filter_map(|&d| row(&strength, d, first_h).map(|x| format!("{} {}", d.label(), if x.ties > 0.5 { format!("leaves both unbroken in {:.0} % of the samples (a tie)", 100.0 * x.ties) } else { format!("gives P = {:.3}", x.worse) }))).collect();
+            let mut spread = String::new();
+            if forms.len() > 1 {
+                spread.push_str(&format!(" The margin rests on the strength models: the median share broken in year 1 ({a} against {b}) is {}.", firsts.join(", ")));
+            }
+            if !others.is_empty() {
+                spread.push_str(&format!(" Among the other damage models, {}.", others.join("; ")));
+            }
+            md.push_str(&answer(names, (r.worse, r.se, n), [ra, rb], &strength, primary_damage.label(), per_year, first_h, &spread));
+        }
+    }
     md.push_str("## Headline\n\n");
     for l in &headline.lines {
         md.push_str(&format!("* {}\n", l.trim()));
@@ -154,11 +197,13 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
     md.push_str(&format!("\n| strength model | effects | weight (stacking) | {} |\n|---|---|---|{}\n", st.years.iter().map(|y| format!("P({a} worse), {y} yr")).collect::<Vec<_>>().join(" | "), "---|".repeat(st.years.len())));
     let n = forms[0].prop.count();
     for f in forms {
-        let cells: Vec<String> = st.years.iter().map(|&y| row(&f.setup.spec.name(), primary_damage, y).map_or("–".into(), |r| pm(r.worse, r.se, n))).collect();
+        let cells: Vec<String> = st.years.iter().map(|&y| row(&f.setup.spec.name(), primary_damage, y).map_or("–".into(), |r| pm(r.worse, r.se, f.prop.count()))).collect();
         md.push_str(&format!("| {} | {} | {:.3} | {} |\n", f.setup.spec.name(), effects_phrase(f), f.weight, cells.join(" | ")));
     }
     if forms.len() > 1 {
-        let cells: Vec<String> = st.years.iter().map(|&y| row(AVERAGED, primary_damage, y).map_or("–".into(), |r| pm(r.worse, r.se, n))).collect();
+        // The average agrees in every sample only where every model's samples do.
+        let all: usize = forms.iter().map(|f| f.prop.count()).sum();
+        let cells: Vec<String> = st.years.iter().map(|&y| row(AVERAGED, primary_damage, y).map_or("–".into(), |r| pm(r.worse, r.se, all))).collect();
         md.push_str(&format!("| {AVERAGED} | | 1 | {} |\n", cells.join(" | ")));
     }
 
@@ -186,13 +231,18 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
                 ));
             }
             if let Some(r) = row(AVERAGED, primary_damage, first_h) {
-                let best = forms.iter().max_by(|x, y| x.weight.total_cmp(&y.weight)).map(|f| (model_phrase(f), f.weight)).unwrap_or_default();
+                // The largest weight, and every model that carries it as printed (a tie is said).
+                let top = forms.iter().map(|f| f.weight).fold(f64::NEG_INFINITY, f64::max);
+                let tied: Vec<String> = forms.iter().filter(|f| format!("{:.3}", f.weight) == format!("{top:.3}")).map(|f| model_phrase(f)).collect();
+                let put = match tied.as_slice() {
+                    [one] => format!("put {top:.3} on {one}"),
+                    many => format!("put {top:.3} each on {}", many.join(" and ")),
+                };
+                let all: usize = forms.iter().map(|f| f.prop.count()).sum();
                 md.push_str(&format!(
-                    "\nThe stacking weights (from the cross-validated log density of the {} crush tests) put {:.3} on {}. Averaged over the strength models, P({a} breaks more) = {}: {}.\n",
+                    "\nThe stacking weights (from the cross-validated log density of the {} crush tests) {put}. Averaged over the strength models, P({a} breaks more) = {}: {}.\n",
                     forms[0].lpd[0].len() + forms[0].lpd[1].len(),
-                    best.1,
-                    best.0,
-                    pm(r.worse, r.se, n),
+                    pm(r.worse, r.se, all),
                     verdict(r.worse, names)
                 ));
             }
@@ -201,19 +251,8 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
             // both materials' data (which needs their roundness or sphericity columns).
             let shape: Vec<&Form> = forms.iter().filter(|f| f.setup.materials.iter().all(|m| m.model.fit.effects().iter().any(|e| e.is_contact_geometry()))).collect();
             if s.model_form.shape_hypothesis && !shape.is_empty() {
-                md.push_str(&format!("\nThe deliverable expected that accounting for the particles' shape (roundness, non-sphericity) would make the lifetime model favour {a}. "));
-                let parts: Vec<String> = shape
-                    .iter()
-                    .filter_map(|f| row(&f.setup.spec.name(), primary_damage, first_h).map(|r| (f, r)))
-                    .map(|(f, r)| format!("under {} P({a} breaks less than {b}) = {:.3}", model_phrase(f), 1.0 - r.worse))
-                    .collect();
-                let favoured = shape.iter().filter_map(|f| row(&f.setup.spec.name(), primary_damage, first_h)).any(|r| r.worse < 0.5);
-                md.push_str(&format!(
-                    "With shape effects fitted to these data, {}, against {:.3} under the deliverable's model: the hypothesis is {}.\n",
-                    parts.join(", "),
-                    1.0 - r0.worse,
-                    if favoured { format!("supported ({a} is favoured)") } else if shape.iter().filter_map(|f| row(&f.setup.spec.name(), primary_damage, first_h)).all(|r| r.worse > r0.worse) { format!("not supported: the shape effects make {b} look even better") } else { format!("not supported: {b} stays the better particle") }
-                ));
+                let with: Vec<(String, f64, f64)> = shape.iter().filter_map(|f| row(&f.setup.spec.name(), primary_damage, first_h).map(|r| (model_phrase(f), r.worse, r.se))).collect();
+                md.push_str(&shape_hypothesis(names, (r0.worse, r0.se), &with));
             }
         }
     }
@@ -336,6 +375,93 @@ pub(super) fn damage_sentences(last: f64, rows: &[&Row], names: [&str; 2]) -> St
     out
 }
 
+/// The `## Answer` section: which particle breaks less, by how much in the plant's units and how
+/// sure, in one sentence generated from the numbers, and the headline model's attrition.
+/// `p`: P(candidate breaks more) at horizon `years`, its Monte Carlo se and the samples behind
+/// it; `rows`: the headline model's attrition of candidate and reference.
+/// `spread`: what the margin looks like under each strength model and each other damage model
+/// alone (a sentence, or empty).
+#[allow(clippy::too_many_arguments)]
+fn answer(names: [&str; 2], p: (f64, f64, usize), rows: [&super::attrition::Row; 2], strength: &str, damage: &str, per_year: &str, years: f64, spread: &str) -> String {
+    use crate::report::captions::{percent, with_band, years_text};
+    let (worse, se, n) = p;
+    // The better particle is the one that breaks less in most samples.
+    let (better, other) = if worse > 0.5 { (1, 0) } else { (0, 1) };
+    let sure = certainty(worse.max(1.0 - worse));
+    let share = |r: &super::attrition::Row| percent(r.first_year[1]);
+    let to_1 = |r: &super::attrition::Row| if r.to_1pct[1].is_infinite() { "more than 100 years".to_string() } else { format!("{} years", years_text(r.to_1pct[1])) };
+    let (rb, ro) = (rows[better], rows[other]);
+    // How many times less, to two figures (beyond a thousand, the power of ten it rounds to).
+    let ratio = match ro.first_year[1] / rb.first_year[1] {
+        q if rb.first_year[1] > 0.0 && q.is_finite() && q >= 1000.0 => format!(", about {} times less", crate::report::canvas::power_of_ten(&10f64.powf(q.log10().round()))),
+        q if rb.first_year[1] > 0.0 && q.is_finite() && q > 1.0 => format!(", {} times less", crate::report::captions::sig2(q)),
+        _ => String::new(),
+    };
+    let head = if worse == 0.5 {
+        format!("**Neither particle breaks less than the other**: in the first year of operation a median {} of the {} inventory breaks and {} of the {}.", share(rows[0]), names[0], share(rows[1]), names[1])
+    } else {
+        format!(
+            "**{} breaks less than {}**: in the first year of operation ({per_year} impacts per particle) a median {} of its inventory breaks against {} of {}'s{ratio}, and 1 % of it is broken after {} against {}.",
+            names[better],
+            names[other],
+            share(rb),
+            share(ro),
+            names[other],
+            to_1(rb),
+            to_1(ro)
+        )
+    };
+    let models = if strength == AVERAGED { "averaged over the strength models with their stacking weights".to_string() } else { format!("under the strength model `{strength}`") };
+    let how_sure = format!(
+        "How sure: P({} breaks more than {} over {}) = {}, {models}, with {damage} — {sure}",
+        names[0],
+        names[1],
+        if years == 1.0 { "1 year".to_string() } else { format!("{years} years") },
+        pm(worse, se, n)
+    );
+    let mut md = format!("## Answer\n\n{head} {how_sure}.{}\n\n", spread);
+    let b3 = |b: &[f64; 3], f: &dyn Fn(f64) -> String| with_band(&f(b[1]), &f(b[0]), &f(b[2]));
+    let y = |v: f64| if v.is_infinite() { "> 100".to_string() } else { years_text(v) };
+    md.push_str("| material | broken in year 1 | years to 1 % broken | years to 10 % broken |\n|---|---|---|---|\n");
+    for r in rows {
+        md.push_str(&format!("| {} | {} | {} | {} |\n", r.material, b3(&r.first_year, &percent), b3(&r.to_1pct, &y), b3(&r.to_10pct, &y)));
+    }
+    md.push_str(&format!("\n(Median and 90 % band over the uncertain inputs, from {} of the Monte Carlo samples; every strength and damage model in \"In a plant engineer's units\" below.)\n\n", rows[0].samples));
+    md
+}
+
+/// The shape hypothesis (`model_form.shape_hypothesis`): accounting for the particles' shape
+/// moves the answer toward the candidate `names[0]`. Judged by the direction of the change of
+/// P(candidate breaks more) from the model without shape effects (`base`: value, Monte Carlo
+/// se) to each model with them (`with`: phrase, value, se) — beyond two standard errors of the
+/// difference (taken as independent) — not by which particle ends up better.
+fn shape_hypothesis(names: [&str; 2], base: (f64, f64), with: &[(String, f64, f64)]) -> String {
+    let [a, b] = names;
+    let mut md = format!(
+        "\nThe study tests the hypothesis that accounting for the particles' shape (roundness, non-sphericity) moves the answer toward its candidate, {a} (the deliverable expected this of its granulated particle). "
+    );
+    let parts: Vec<String> = with.iter().map(|(phrase, w, _)| format!("under {phrase} P({a} breaks more than {b}) = {w:.3}")).collect();
+    // +1 toward the candidate, −1 away, 0 within the noise.
+    let direction: Vec<i8> = with.iter().map(|(_, w, se)| if (base.0 - w).abs() <= 2.0 * se.hypot(base.1) { 0 } else if *w < base.0 { 1 } else { -1 }).collect();
+    let better = |w: f64| if w < 0.5 { a } else { b };
+    let end = with.iter().map(|(_, w, _)| better(*w)).collect::<std::collections::BTreeSet<_>>();
+    let ending = match end.iter().next() {
+        Some(p) if end.len() == 1 => format!(" ({p} {} the better particle)", if better(base.0) == *p { "stays" } else { "becomes" }),
+        _ => String::new(),
+    };
+    let judged = if direction.iter().all(|&d| d == 1) {
+        format!("supported — accounting for shape moves the answer toward {a}{ending}")
+    } else if direction.iter().all(|&d| d == -1) {
+        format!("not supported — accounting for shape moves the answer away from {a}, toward {b}{ending}")
+    } else if direction.iter().all(|&d| d == 0) {
+        "not supported — accounting for shape changes the answer by less than two Monte Carlo standard errors".to_string()
+    } else {
+        "not settled — the models with shape effects move the answer in different directions".to_string()
+    };
+    md.push_str(&format!("With shape effects fitted to these data, {}, against {:.3} without them. The hypothesis is {judged}.\n", parts.join(", "), base.0));
+    md
+}
+
 #[cfg(test)]
 mod tests {
     //! The summary's sentences and the averaged headline against hand-made rows: a wrong
@@ -350,11 +476,28 @@ mod tests {
     #[test]
     fn verdict_names_the_better_particle_and_how_sure() {
         let n = ["Gen 4", "BL 16/30"];
-        assert_eq!(verdict(0.9999, n), "BL 16/30 is the better particle, with near certainty (1.000)");
+        assert_eq!(verdict(0.9999, n), "BL 16/30 is the better particle, with near certainty (0.9999)");
         assert_eq!(verdict(0.05, n), "Gen 4 is the better particle, with high probability (0.950)");
         assert_eq!(verdict(0.75, n), "BL 16/30 is the better particle, more likely than not (0.750)");
         assert_eq!(verdict(0.4, n), "Gen 4 is the better particle, but the answer is close to a coin toss (0.600)");
         assert_eq!(verdict(0.5, n), "neither particle is better");
+    }
+
+    /// A user's own candidate at 0.977 without shape effects and 0.768 with them: accounting for
+    /// shape moved the answer away from it, although it stays the better particle — the
+    /// hypothesis is not supported (it used to read "supported (… is favoured)").
+    #[test]
+    fn the_shape_hypothesis_is_judged_by_the_direction_of_change() {
+        let n = ["Kandidat K7", "BL 16/30"];
+        let away = shape_hypothesis(n, (0.023, 0.002), &[("the model `shape`".into(), 0.232, 0.004)]);
+        assert!(away.contains("moves the answer toward its candidate, Kandidat K7"), "{away}");
+        assert!(away.ends_with("under the model `shape` P(Kandidat K7 breaks more than BL 16/30) = 0.232, against 0.023 without them. The hypothesis is not supported — accounting for shape moves the answer away from Kandidat K7, toward BL 16/30 (Kandidat K7 stays the better particle).\n"), "{away}");
+        let toward = shape_hypothesis(n, (0.6, 0.01), &[("m".into(), 0.3, 0.01)]);
+        assert!(toward.ends_with("The hypothesis is supported — accounting for shape moves the answer toward Kandidat K7 (Kandidat K7 becomes the better particle).\n"), "{toward}");
+        let noise = shape_hypothesis(n, (0.6, 0.01), &[("m".into(), 0.59, 0.01)]);
+        assert!(noise.ends_with("not supported — accounting for shape changes the answer by less than two Monte Carlo standard errors.\n"), "{noise}");
+        let mixed = shape_hypothesis(n, (0.6, 0.01), &[("m".into(), 0.3, 0.01), ("k".into(), 0.9, 0.01)]);
+        assert!(mixed.ends_with("not settled — the models with shape effects move the answer in different directions.\n"), "{mixed}");
     }
 
     #[test]

@@ -18,6 +18,11 @@ mod discrepancy;
 mod micro;
 mod temperature;
 
+/// The velocity the main study's breakage-against-velocity figure quotes (m/s): the
+/// deliverable's largest impact velocity after the receiver (the run puts it on the figure's
+/// velocity grid).
+pub const REFERENCE_VELOCITY: f64 = 5.0;
+
 /// Blocks for the first page, and summary sections (by heading prefix) to move up to it.
 #[derive(Default)]
 pub struct FirstPage {
@@ -25,6 +30,9 @@ pub struct FirstPage {
     pub blocks: Vec<Block>,
     /// Headings of summary sections to move onto the first page.
     pub move_up: Vec<String>,
+    /// The figure (file stem) that shows the answer: on the first page, with its caption,
+    /// instead of in a section of its own.
+    pub figure: Option<String>,
 }
 
 /// What a figure's section says.
@@ -64,7 +72,7 @@ pub fn with_band(value: &str, low: &str, high: &str) -> String {
 }
 
 /// Two significant figures, no exponent from 0.001 up ("0.036", "5.3", "49", "1234").
-fn sig2(v: f64) -> String {
+pub fn sig2(v: f64) -> String {
     if v >= 10.0 {
         format!("{v:.0}")
     } else {
@@ -89,7 +97,9 @@ pub fn years_text(y: f64) -> String {
 /// First-page blocks of a study kind.
 pub fn first_page(kind: &str, _dir: &Path) -> Result<FirstPage> {
     Ok(match kind {
-        "uq" => FirstPage { move_up: vec!["In a plant engineer's units".into(), "What drives it".into()], ..FirstPage::default() },
+        // The answer (a sentence and the headline model's attrition) and the distributions of
+        // both particles' P: the full attrition table and the drivers keep their sections.
+        "uq" => FirstPage { figure: Some("uq_distributions".into()), ..FirstPage::default() },
         "lifetime" => FirstPage { move_up: vec!["In a plant engineer's units".into()], ..FirstPage::default() },
         "experiments" => FirstPage { move_up: vec!["Today".into(), "The budget".into()], ..FirstPage::default() },
         _ => FirstPage::default(),
@@ -139,8 +149,11 @@ fn uq(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
             let (mat, years, v, med, lo, hi) = (t.s("material")?, t.f("years")?, t.f("velocity_m_s")?, t.f("median")?, t.f("q05")?, t.f("q95")?);
             let last = years.iter().cloned().fold(f64::MIN, f64::max);
             let vmax = v.iter().cloned().fold(f64::MIN, f64::max);
-            // The grid velocity nearest 5 m/s, the deliverable's maximum after the receiver.
-            let v5 = v.iter().cloned().min_by(|a, b| (a - 5.0).abs().total_cmp(&(b - 5.0).abs())).unwrap_or(5.0);
+            // 5 m/s, the deliverable's maximum after the receiver (on the grid since the
+            // runs put it there; older reports: the grid velocity nearest it, said so).
+            let five = REFERENCE_VELOCITY;
+            let v5 = v.iter().cloned().min_by(|a, b| (a - five).abs().total_cmp(&(b - five).abs())).unwrap_or(five);
+            let at_v5 = if v5 == five { format!("{five} m/s") } else { format!("{v5:.2} m/s (the velocity nearest {five} m/s)") };
             let at = |k: &str, vv: f64| (0..mat.len()).find(|&i| mat[i] == k && years[i] == last && v[i] == vv);
             let mut parts = Vec::new();
             for k in &keys {
@@ -151,7 +164,7 @@ fn uq(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
             FigureNote {
                 title: Some("Breaking probability against impact velocity".into()),
                 caption: p(&format!(
-                    "P_break of {cand} and {refr} against the impact velocity (0 – {vmax:.0} m/s), median and 90 % band over every uncertain input except the velocity, under the `{primary}` strength model and {damage}, one panel per horizon. At {v5:.2} m/s over {}: {}.",
+                    "P_break of {cand} and {refr} against the impact velocity (0 – {vmax:.0} m/s), median and 90 % band over every uncertain input except the velocity, under the `{primary}` strength model and {damage}, one panel per horizon. At {at_v5} over {}: {}.",
                     yr(last),
                     parts.join(", ")
                 )),
@@ -184,14 +197,19 @@ fn uq(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
             let t = Table::load(dir, "sobol")?;
             let (out, n, input, s1, s1l, s1h, st, stl, sth, ol) = (t.s("output")?, t.f("n")?, t.s("input")?, t.f("s1")?, t.f("s1_lo")?, t.f("s1_hi")?, t.f("st")?, t.f("st_lo")?, t.f("st_hi")?, t.s("output_label")?);
             let nmax = n.iter().cloned().fold(0.0, f64::max);
+            // The intervals' level as the table states it (older reports: the default, 95 %).
+            let level = percent(t.f("level").ok().and_then(|l| l.first().copied()).unwrap_or(0.95));
             let mut rows = Vec::new();
             let mut lead = Vec::new();
+            // Indices above 1 at the largest size: Monte Carlo error, said so.
+            let mut above = Vec::new();
             for o in super::distinct(&out) {
                 let mut idx: Vec<usize> = (0..out.len()).filter(|&i| out[i] == o && n[i] == nmax).collect();
                 idx.sort_by(|&a, &b| st[b].total_cmp(&st[a]));
                 if let Some(&i) = idx.first() {
-                    lead.push(format!("{}: {} (S_T = {:.2}, 90 % {:.2} – {:.2})", ol[i], input[i], st[i], stl[i], sth[i]));
+                    lead.push(format!("{}: {} (S_T = {:.2}, {level} {:.2} – {:.2})", ol[i], input[i], st[i], stl[i], sth[i]));
                 }
+                above.extend(idx.iter().filter(|&&i| st[i] > 1.0 || s1[i] > 1.0).map(|&i| format!("{} of {} ({:.2})", input[i], ol[i], st[i].max(s1[i]))));
                 for &i in idx.iter().take(3) {
                     rows.push(vec![ol[i].clone(), input[i].clone(), format!("{:.2} [{:.2}, {:.2}]", s1[i], s1l[i], s1h[i]), format!("{:.2} [{:.2}, {:.2}]", st[i], stl[i], sth[i])]);
                 }
@@ -199,8 +217,12 @@ fn uq(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
             if stem == "uq_sobol" {
                 FigureNote {
                     title: Some("What drives it: Sobol' indices".into()),
-                    caption: p(&format!("First-order (S) and total (S_T) Sobol' indices with their 90 % bootstrap intervals, Saltelli base sample {nmax:.0}, `{primary}` strength model, one panel per output. The largest total index per output: {}.", lead.join("; "))),
-                    blocks: vec![Block::Table { header: vec!["output".into(), "input".into(), "S (90 %)".into(), "S_T (90 %)".into()], rows }],
+                    caption: p(&format!(
+                        "First-order (S) and total (S_T) Sobol' indices with their {level} bootstrap intervals, Saltelli base sample {nmax:.0}, `{primary}` strength model, one panel per output. The largest total index per output: {}.{}",
+                        lead.join("; "),
+                        if above.is_empty() { String::new() } else { format!(" An index is at most 1: the estimates above it — {} — are Monte Carlo error at this sample size (`flag` in `sobol.csv`).", above.join(", ")) }
+                    )),
+                    blocks: vec![Block::Table { header: vec!["output".into(), "input".into(), format!("S ({level})"), format!("S_T ({level})")], rows }],
                 }
             } else {
                 let sizes: Vec<f64> = super::distinct(&n);
@@ -550,7 +572,7 @@ fn experiments(dir: &Path) -> Result<FigureNote> {
     Ok(FigureNote {
         title: Some("What each candidate experiment would teach".into()),
         caption: p(&format!(
-            "Each metric against the number of tests, one line per candidate experiment ({} candidates): probability of choosing the better particle, expected posterior weight of the true damage model, expected width of the 90 % bands of P_break, and the expected value of sample information (EVSI, {currency}). The largest EVSI is {} with {}.",
+            "Each metric against the number of tests, one line per candidate experiment ({} candidates): probability of choosing the better particle, expected posterior weight of the true damage model, expected width of the 90 % bands of P_break, and the expected value of sample information (EVSI, {currency}); bars: ±2 Monte Carlo standard errors (the summed band widths have none). The largest EVSI is {} with {}.",
             cands.len(),
             best.map_or("—".into(), |i| format!("{:.3} {currency}", evsi[i])),
             best.map_or("—".into(), |i| format!("{} × {:.0}", cand[i], size[i]))

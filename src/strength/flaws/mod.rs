@@ -24,8 +24,12 @@
 //! two-parameter law, so the threshold law nests it with one extra parameter.
 //!
 //! (Jiang & Murthy 1995, *Reliability Engineering & System Safety* 47, 187–198 for the mixture;
-//! the competing-risks form is the weakest link of two independent flaw populations, as in
-//! ASTM C1239 §8 for concurrent flaw distributions.)
+//! the competing-risks form is the weakest link of two independent flaw populations whose
+//! origins are not observed — the latent two-fold competing-risk Weibull model of Murthy, Xie &
+//! Jiang 2004, *Weibull Models*, Wiley, ch. 9. ASTM C1239's concurrent flaw distributions are
+//! the same law with each specimen's origin known from fractography, each population fitted
+//! with the others' breaks censored: that is [`crate::strength::origins`], where a study
+//! declares the origin column, not this fit.)
 //!
 //! The likelihood is maximised over unconstrained coordinates — logit p, ln σ_j, ln m_j, with x
 //! scaled by its median — by a box-constrained BFGS with the analytic gradient (below) from

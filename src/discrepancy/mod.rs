@@ -7,7 +7,9 @@
 //!   regression that fits them are the strength model's ([`crate::strength::effects`],
 //!   [`crate::strength::regress`]): the fits before and after naming are instances of it.
 //! * [`workflow`]: the name → add → diagnose-again loop with the bootstrap-calibrated
-//!   false-discovery guard and the gap measure.
+//!   false-discovery guard and the gap measure; [`guard`]: the guard's arithmetic (one-parameter
+//!   scale, family-wise maxima with failed refits as exceeding, the critical value, no verdict
+//!   above a share of failures).
 //! * [`specs`]: what a strength specification means on one material's data (an explicit list, or
 //!   what the loop names) and its cross-validated evidence for the main study's stacking weights.
 //! * [`run`]: the study (`kind = "discrepancy"`, `partlife discrepancy`): lifetime before and
@@ -21,6 +23,7 @@
 
 pub mod curves;
 pub mod gof;
+pub mod guard;
 pub mod koh;
 mod report;
 mod tables;

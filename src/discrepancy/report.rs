@@ -197,8 +197,8 @@ fn evidence_row(e: &super::workflow::Evidence) -> String {
         "passed, weaker".to_string()
     } else if let Some(why) = unidentified(e) {
         format!("not identified: {why}")
-    } else if e.skipped.is_none() && !super::workflow::decided(e.failures, e.replicates) {
-        format!("no verdict: {} of {} bootstrap refits failed (more than {:.0} %)", e.failures, e.replicates, 100.0 * super::workflow::MAX_FAILED_SHARE)
+    } else if e.skipped.is_none() && !super::guard::decided(e.failures, e.replicates) {
+        format!("no verdict: {} of {} bootstrap refits failed (more than {:.0} %)", e.failures, e.replicates, 100.0 * super::guard::MAX_FAILED_SHARE)
     } else {
         "not supported".to_string()
     };
@@ -232,7 +232,7 @@ fn failures_sentence(evidence: &[super::workflow::Evidence]) -> String {
     format!(
         "\nBootstrap refits that failed — {}. Each counts as a replicate exceeding the observed Λ (so failures can only raise p); a candidate with more than {:.0} % of its refits failed gets no verdict.\n",
         failed.join("; "),
-        100.0 * super::workflow::MAX_FAILED_SHARE
+        100.0 * super::guard::MAX_FAILED_SHARE
     )
 }
 

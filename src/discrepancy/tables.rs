@@ -56,7 +56,7 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         scol("band", ev.iter().map(|(_, e)| e.band.map_or("", |_| if e.band_pivotal { "pivotal" } else { "profile likelihood" }).to_string()).collect()),
         fcol("weibull_modulus", ev.iter().map(|(_, e)| e.shape).collect()),
         // Replicates whose refit failed, each counted as exceeding Λ; above the stated share
-        // (`discrepancy::workflow::MAX_FAILED_SHARE`) no verdict.
+        // (`discrepancy::guard::MAX_FAILED_SHARE`) no verdict.
         ucol("bootstrap_failures", ev.iter().map(|(_, e)| e.failures as u64).collect()),
         ucol("bootstrap_replicates", ev.iter().map(|(_, e)| e.replicates as u64).collect()),
         scol("passed_guard", ev.iter().map(|(_, e)| e.passed.to_string()).collect()),

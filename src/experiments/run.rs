@@ -53,13 +53,7 @@ use crate::runkit::{RunClock, RunOptions, RunRecord, RunSummary, commit_with_man
 use crate::schema::StudyFile;
 use crate::uq::study::UqStudy;
 
-/// The objective of metrics `m` on `state` (value, Monte Carlo se).
-pub fn objective(o: Objective, state: &State, m: &Metrics) -> (f64, f64) {
-    let e = Estimate::of(&objective_per_draw(o, state, m));
-    (e.mean, e.se)
-}
-
-/// The objective's value per outer draw of `m` (its mean is [`objective`]), in the order of
+/// The objective's value per outer draw of `m` (its mean is the plan's objective), in the order of
 /// `m.draws`: what a paired comparison of two plans on the same draws differences.
 pub fn objective_per_draw(o: Objective, state: &State, m: &Metrics) -> Vec<f64> {
     let minus = |v: &[f64], c: f64| v.iter().map(|x| x - c).collect();

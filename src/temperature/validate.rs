@@ -82,8 +82,8 @@ struct Row {
 /// better by covering more (Gneiting & Raftery 2007). Differences between sources on the same
 /// observations are free of the observations' units.
 pub fn log_predictive_density(y: f64, centre: f64, half: f64, z: f64) -> f64 {
-    let sd = half / z;
-    -0.5 * ((y - centre) / sd).powi(2) - sd.ln() - 0.5 * (2.0 * std::f64::consts::PI).ln()
+    use statrs::distribution::{Continuous, Normal};
+    Normal::new(centre, half / z).map_or(f64::NAN, |n| n.ln_pdf(y))
 }
 
 /// Predicts every `[[validation]]` data set; `tick` after each source. With `slurm` (the reports

@@ -441,6 +441,24 @@ fn dem_calibration_recovers_the_wall_restitution() {
     assert!(w < 0.5, "the profile determines e_pw: posterior/prior sd {w}");
     let manifest = s.read(&format!("{dir}/manifest.json"));
     assert!(manifest.contains("dem_rig_profile.csv") && manifest.contains("dem_rig.toml") && !manifest.contains("synth_dem"), "{manifest}");
+    // The document opens with the answer, counted from parameters.csv's identifiability column,
+    // each identified parameter with its posterior mean and interval and each other with its note,
+    // and the fit figure on its first page.
+    let summary = s.read(&format!("{dir}/summary.md"));
+    let answer = summary.split("## Answer\n\n").nth(1).and_then(|t| t.split("\n\n").next()).unwrap_or_else(|| panic!("no answer in\n{summary}"));
+    let notes = column(&params, "identifiability");
+    let identified = notes.iter().filter(|n| n.is_empty() || *n == "\"\"").count();
+    let head = match identified {
+        i if i == names.len() => format!("**Every one of the {} parameters is identified by these data**", names.len()),
+        0 => format!("**None of the {} parameters is identified by these data**", names.len()),
+        i => format!("**{i} of the {} parameters {} identified by these data**", names.len(), if i == 1 { "is" } else { "are" }),
+    };
+    assert!(answer.starts_with(&head), "{answer}");
+    let mean: f64 = column(&params, "posterior_mean")[k].parse().unwrap();
+    assert_eq!(answer.contains(&format!("`restitution_pw` = {mean:.3e} [{lo:.3e}, {hi:.3e}]")), notes[k].is_empty() || notes[k] == "\"\"", "{answer}");
+    assert!(answer.ends_with("observations lie inside their 90 % posterior-predictive interval."), "{answer}");
+    let (_, figures) = common::first_page(&s.path(dir));
+    assert_eq!(figures, ["calibration_fit"]);
 }
 
 #[test]

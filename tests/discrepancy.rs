@@ -263,6 +263,34 @@ fn shipped_crush_data_reveal_the_generators_hidden_effects() {
     }
     let manifest: serde_json::Value = serde_json::from_str(&s.read("reports/discrepancy_crush/manifest.json")).unwrap();
     assert_eq!(manifest["failures"].as_array().map(|f| f.len()), Some(0), "{}", manifest["failures"]);
+    // The report opens with the answer — per material, the effects named with the family-wise p
+    // that named each (at its floor 1/(B + 1) written "≤"), and whether the Weibull law fits
+    // once they are in (the final stage's AD and KS p) — and shows the evidence figure.
+    let summary = s.read("reports/discrepancy_crush/summary.md");
+    let ev = s.path("reports/discrepancy_crush/evidence.csv");
+    let (mat, cand, pf, reps, named) = (common::table_text(&ev, "material"), common::table_text(&ev, "candidate"), common::table_f64(&ev, "p_family"), common::table_f64(&ev, "bootstrap_replicates"), common::table_text(&ev, "named"));
+    let st = s.path("reports/discrepancy_crush/stages.csv");
+    let (st_mat, p_ad, p_ks) = (common::table_text(&st, "material"), common::table_f64(&st, "p_anderson_darling"), common::table_f64(&st, "p_kolmogorov_smirnov"));
+    for (key, label, n) in [("bl1630", "BL 16/30", 50), ("gen4", "Gen 4", 45)] {
+        let parts: Vec<String> = (0..mat.len())
+            .filter(|&i| mat[i] == key && named[i] == "true")
+            .map(|i| {
+                let p = if pf[i] <= 1.0 / (reps[i] + 1.0) + 1e-12 { format!("≤ {:.3}", pf[i]) } else { format!("{:.3}", pf[i]) };
+                format!("`{}` (family-wise p {p})", cand[i])
+            })
+            .collect();
+        let last = (0..st_mat.len()).rfind(|&i| st_mat[i] == key).unwrap();
+        let below = |p: f64| if p < 0.05 { " (below 0.05)" } else { "" };
+        let fits = if p_ad[last] < 0.05 || p_ks[last] < 0.05 { "still fits these data poorly" } else { "fits these data" };
+        let with = if parts.len() == 1 { "with it" } else { "with them" };
+        let sentence = format!("**{label}** ({n} particles): the Weibull–Hertz model misses {}; {with} the Weibull law {fits} (Anderson–Darling p = {:.3}{}, Kolmogorov–Smirnov p = {:.3}{}", parts.join(", then "), p_ad[last], below(p_ad[last]), p_ks[last], below(p_ks[last]));
+        assert!(summary.contains(&format!("## Answer\n\n* **BL 16/30**")) && summary.contains(&sentence), "{sentence}\n{summary}");
+    }
+    let (page, figures) = common::first_page(&s.path("reports/discrepancy_crush"));
+    assert!(page.contains("BL 16/30 (50 particles): the Weibull–Hertz model misses size (family-wise p ≤ 0.002)"), "{page}");
+    // The answer comes before the method's paragraphs, which have their own section.
+    assert!(summary.find("## Answer").unwrap() < summary.find("## How the workflow decides").unwrap(), "{summary}");
+    assert_eq!(figures, ["discrepancy_evidence"]);
     // The gap's expectation with nothing missing is each round's own (its bootstrap mean): near
     // Σ df for the base model, which fits no covariate, and below it once effects are fitted
     // (a fitted covariate's term falls near 0; before, Σ df was written for every round).

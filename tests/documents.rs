@@ -51,8 +51,13 @@ fn every_run_writes_both_documents_and_report_rewrites_them_byte_identically() {
     let figs = figures(&s);
     assert_eq!(figs.len(), 6);
     assert_eq!(html.matches("<figure ").count(), figs.len());
+    // The figure that shows the answer sits on the first page, under its own subheading; every
+    // other figure has a section.
+    let (_, on_first) = common::first_page(&s.path("reports/lifetime"));
+    assert_eq!(on_first, ["fig16_breakage"]);
     for (k, f) in figs.iter().enumerate() {
-        assert!(html.contains(&format!("<figure id=\"fig-{f}\">")) && html.contains(&format!("<h2 id=\"{f}\">")) && html.contains(&format!("<strong>Figure {}.</strong>", k + 1)), "{f}");
+        let headed = on_first.contains(f) || html.contains(&format!("<h2 id=\"{f}\">"));
+        assert!(html.contains(&format!("<figure id=\"fig-{f}\">")) && headed && html.contains(&format!("<strong>Figure {}.</strong>", k + 1)), "{f}");
     }
     // The plant engineer's units on the first page, from this run's attrition table.
     let first = html.split("<nav id=\"contents\">").next().unwrap();
@@ -126,8 +131,13 @@ fn pdf_reads_in_poppler() {
     for k in 1..=pages {
         assert!(all.contains(&format!("page {k} of {pages}")), "page {k} of {pages}");
     }
+    // σ is dropped from the extracted text on a page whose text also holds σ̄ (σ and a combining
+    // macron): svg2pdf writes one ToUnicode string per glyph, and σ's glyph keeps the empty text
+    // of its cluster in "σ̄". The glyphs drawn are right; the headlines' numbers are compared
+    // with σ left out of both.
+    let all_no_sigma = all.replace('σ', "");
     for h in headlines(&stdout) {
-        assert!(all.contains(&h), "the PDF lacks the headline \"{h}\"");
+        assert!(all_no_sigma.contains(&h.replace('σ', "")), "the PDF lacks the headline \"{h}\"");
     }
     for k in 1..=figures(&s).len() {
         assert!(all.contains(&format!("Figure {k}.")), "Figure {k}");

@@ -88,6 +88,18 @@ fn experiments_study_writes_ranked_plans_allocation_summary_and_figure() {
     // The bands' change is worded by its direction (before: "narrows … from 1.000 to 1.000").
     let (w0, w1) = (prior_of("p_gen4_10yr"), partlife::io::col_f64(&alloc, &a, "width90_p_gen4_10yr").unwrap()[0]);
     assert!(w1 < w0 && line.contains("narrows the 90 % band of P_break of Gen 4 over 10 years"), "{line}");
+    // The document opens with the answer: the plan of the last greedy step, its cost, and what it
+    // changes, read from allocation.csv; the first page holds it, today's state and the metrics
+    // figure.
+    let (cost, wg_plan) = (partlife::io::col_f64(&alloc, &a, "cost").unwrap(), partlife::io::col_f64(&alloc, &a, "width90_p_gen4_10yr").unwrap());
+    let k = added.len() - 1;
+    let answer = summary.split("## Answer\n\n").nth(1).and_then(|t| t.split("\n\n").next()).unwrap_or_else(|| panic!("no answer in\n{summary}"));
+    assert!(answer.starts_with(&format!("**Spend {:.0} of the 15000 EUR on {}", cost[k], added[0])), "{answer}");
+    assert!(answer.contains("Today's knowledge favours BL 16/30 (right with probability") && answer.contains(&format!("narrows the 90 % band of P_break of Gen 4 over 10 years (width {:.3} → {:.3}", w0, wg_plan[k])), "{answer}");
+    assert!(summary.find("## Answer").unwrap() < summary.find("## Today").unwrap());
+    let (page, figures) = common::first_page(&dir);
+    assert!(page.contains("Spend ") && page.contains("Today") && !page.contains("allocated greedily"), "{page}");
+    assert_eq!(figures, ["experiments_metrics"]);
     // The particle today's knowledge favours is named, and why the averaged P differs from the
     // main study's headline.
     assert!(summary.contains("choosing BL 16/30, the particle today's knowledge favours, is right with probability") && summary.contains("The main study's headline P is under independent trials alone"), "{summary}");

@@ -529,14 +529,19 @@ fn a_curve_workbook_is_read_from_its_sheet_and_header_row() {
     assert!(out.stderr.contains("data.sheet") && out.stderr.contains("one sheet"), "{}", out.stderr);
 }
 
-/// Two materials tested at different temperatures: the warning heads the summary's headline
-/// section (it went to stderr and the Warnings page only), and is absent where they agree.
+/// Two materials tested at different temperatures: the warning heads the summary's answer on
+/// the report's first page (it went to stderr and the Warnings page only), and is absent where
+/// they agree. The first page opens with the answer in one sentence and shows the breakage
+/// curves.
 #[test]
 fn materials_tested_at_different_temperatures_are_warned_of_in_the_summary_s_headline() {
     let s = Scratch::new();
     let out = s.run(&["run", "studies/lifetime.toml", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     assert!(!s.read("reports/lifetime/summary.md").contains("**Warning**"));
+    let (page, figures) = common::first_page(&s.path("reports/lifetime"));
+    assert!(page.contains("Answer") && page.contains("On the estimates, BL 16/30 breaks less at 5 m/s: in the first year of operation (730 impacts per particle)"), "{page}");
+    assert_eq!(figures, ["fig16_breakage"]);
     let gen4 = s.read("datasets/crush_gen4.csv");
     let hot: String = gen4.lines().map(|l| if l.ends_with(",20") { format!("{}800\n", &l[..l.len() - 2]) } else { format!("{l}\n") }).collect();
     assert_ne!(hot, gen4);
@@ -544,6 +549,8 @@ fn materials_tested_at_different_temperatures_are_warned_of_in_the_summary_s_hea
     let out = s.run(&["run", "studies/lifetime.toml", "--quiet"]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     let summary = s.read("reports/lifetime/summary.md");
-    let warning = "## Headline\n\n**Warning**: the two materials were tested at different temperatures (BL 16/30 at 20 °C, Gen 4 at 800 °C): the comparison sets a strength measured at one temperature against one measured at another.\n\n* BL 16/30:";
+    let warning = "## Answer\n\n**Warning**: the two materials were tested at different temperatures (BL 16/30 at 20 °C, Gen 4 at 800 °C): the comparison sets a strength measured at one temperature against one measured at another.\n\nOn the estimates, BL 16/30 breaks less";
     assert!(summary.contains(warning), "{summary}");
+    let (page, _) = common::first_page(&s.path("reports/lifetime"));
+    assert!(page.contains("the two materials were tested at different temperatures (BL 16/30 at 20 °C, Gen 4 at 800 °C)"), "{page}");
 }

@@ -203,6 +203,27 @@ fn temperature_study_writes_the_laws_the_softening_comparison_and_breakage_again
     let (am, at) = (table_f64(&a, "p_mean"), table_f64(&a, "temperature_c"));
     assert_eq!(at.len(), 3 * 2 * 2);
     assert!(summary.contains(&format!("{:.3e}", am[0])), "{summary}");
+    // The document opens with the answer at the reported temperatures, generated from
+    // lifetime_at.csv at its longest horizon, and the breakage figure on its first page.
+    let answer = summary.split("## Answer\n\n").nth(1).and_then(|t| t.split("\n\n").next()).unwrap_or_else(|| panic!("no answer in\n{summary}"));
+    let (al, ay, aq, alo, ahi) = (table_text(&a, "material"), table_f64(&a, "years"), table_f64(&a, "p_q50"), table_f64(&a, "p_lo"), table_f64(&a, "p_hi"));
+    let last = ay.iter().cloned().fold(0.0, f64::max);
+    let mut less = Vec::new();
+    for i in (0..al.len()).filter(|&i| ay[i] == last) {
+        let p = partlife::report::prob_text;
+        assert!(answer.contains(&format!("{} [{}, {}] at {} °C", p(aq[i]), p(alo[i]), p(ahi[i]), at[i])), "{answer}");
+        if let Some(j) = (0..al.len()).find(|&j| j != i && ay[j] == last && at[j] == at[i] && aq[i] < aq[j]) {
+            less.push((at[i], al[i].clone(), al[j].clone()));
+        }
+    }
+    less.sort_by(|x, y| x.0.total_cmp(&y.0));
+    if less.len() == 3 && less.iter().all(|l| l.1 == less[0].1) {
+        assert!(answer.starts_with(&format!("**{} breaks less than {} at every reported temperature**", less[0].1, less[0].2)), "{answer}");
+    } else {
+        assert!(answer.starts_with("**Which particle breaks less depends on the temperature**") || answer.starts_with("**Neither"), "{answer}");
+    }
+    let (_, figures) = common::first_page(&dir);
+    assert_eq!(figures, ["breakage_vs_temperature"]);
     // The tables do not depend on the thread count.
     let one = scratch();
     let out = one.run(&["run", "studies/temperature.toml", "--quiet", "--threads", "1"]);

@@ -481,6 +481,7 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
         cal.failures.len(),
         cal.emulator_evaluations
     ));
+    md.push_str(&answer(&names, &params.iter().map(|q| q.unit.as_str()).collect::<Vec<_>>(), &stats.iter().map(|s| (s.0, s.2[0], s.2[2])).collect::<Vec<_>>(), &notes, inside, obs.len()));
     md.push_str("| parameter | unit | least squares ± se | posterior mean | 90 % interval | R̂ | ESS bulk | identifiability |\n|---|---|---|---|---|---|---|---|\n");
     for k in 0..p {
         md.push_str(&format!(
@@ -555,4 +556,22 @@ fn write_tables(dir: &mut ReportDir, s: &CalibrateStudy, prep: &Prepared, cal: &
         headlines.push(l);
     }
     Ok(headlines)
+}
+
+/// The `## Answer` section: how many parameters the data identify, each identified one's
+/// posterior mean and 90 % interval, why the others are not (their identifiability notes), and
+/// how many observations lie inside their 90 % posterior-predictive interval — one sentence
+/// from the posterior table's numbers (`post`: mean, 5 % and 95 % quantiles).
+fn answer(names: &[String], units: &[&str], post: &[(f64, f64, f64)], notes: &[String], inside: usize, observations: usize) -> String {
+    let unit = |k: usize| if units[k].is_empty() || units[k] == "-" { String::new() } else { format!(" {}", units[k]) };
+    let identified: Vec<String> = (0..names.len()).filter(|&k| notes[k].is_empty()).map(|k| format!("`{}` = {:.3e}{} [{:.3e}, {:.3e}]", names[k], post[k].0, unit(k), post[k].1, post[k].2)).collect();
+    let others: Vec<String> = (0..names.len()).filter(|&k| !notes[k].is_empty()).map(|k| format!("`{}` is {}", names[k], notes[k])).collect();
+    let head = match (identified.len(), names.len()) {
+        (i, n) if i == n => format!("**Every one of the {n} parameters is identified by these data**"),
+        (0, n) => format!("**None of the {n} parameters is identified by these data**"),
+        (i, n) => format!("**{i} of the {n} parameters {} identified by these data**", if i == 1 { "is" } else { "are" }),
+    };
+    let listed = if identified.is_empty() { String::new() } else { format!(" (posterior mean and 90 % interval: {})", identified.join(", ")) };
+    let rest = if others.is_empty() { String::new() } else { format!("; {}", others.join("; ")) };
+    format!("## Answer\n\n{head}{listed}{rest}. {inside} of {observations} observations lie inside their 90 % posterior-predictive interval.\n\n")
 }

@@ -5,6 +5,7 @@ use super::study::{DiscrepancyStudy, LifetimeBand, MaterialResult, PowerRow};
 use super::workflow::GAP_MEASURE;
 use crate::schema::StudyFile;
 use crate::strength::Effect;
+use crate::report::bootstrap_p_text as p_text;
 
 /// Wilson score interval of k successes in n at the two-sided level 90 %.
 pub fn wilson90(k: usize, n: usize) -> (f64, f64) {
@@ -22,6 +23,47 @@ pub fn wilson90(k: usize, n: usize) -> (f64, f64) {
 
 pub(super) fn names(c: &[Effect]) -> String {
     if c.is_empty() { "none".into() } else { c.iter().map(|c| c.name()).collect::<Vec<_>>().join(" then ") }
+}
+
+/// The `## Answer` section: per material, one sentence generated from its outcome — what the
+/// model misses (the effects named, with the family-wise p that named each), or that nothing
+/// passed the guard (with the smallest p tried); and whether the Weibull law fits the data once
+/// they are in (the final model's Anderson–Darling and Kolmogorov–Smirnov bootstrap p against α).
+pub(super) fn answer(s: &DiscrepancyStudy, results: &[MaterialResult]) -> String {
+    let alpha = s.discrepancy.alpha;
+    let model = if results.iter().any(|r| r.crush.is_some()) { "Weibull–Hertz" } else { "Weibull" };
+    let lines: Vec<String> = results
+        .iter()
+        .map(|r| {
+            let a = r.outcome.after();
+            let what = if r.crush.is_some() { "particles" } else { "specimens" };
+            let ev = &r.outcome.evidence;
+            let misses = if r.outcome.named.is_empty() {
+                match ev.iter().filter(|e| e.skipped.is_none() && e.p_family.is_finite()).min_by(|x, y| x.p_family.total_cmp(&y.p_family)) {
+                    Some(e) => format!("the loop names no effect the {model} model misses — no candidate passes the guard (the smallest family-wise p, `{}`, is {})", e.candidate.name(), p_text(e.p_family, e.replicates)),
+                    None => format!("the loop names no effect the {model} model misses — there was no candidate effect to try"),
+                }
+            } else {
+                let named: Vec<String> = r.outcome.named.iter().filter_map(|c| ev.iter().find(|e| e.named && &e.candidate == c)).map(|e| format!("`{}` (family-wise p {})", e.candidate.name(), p_text(e.p_family, e.replicates))).collect();
+                format!("the {model} model misses {}", named.join(", then "))
+            };
+            let below = |p: f64| if p < alpha { format!(" (below {alpha})") } else { String::new() };
+            let ad_ks = format!("Anderson–Darling p = {:.3}{}, Kolmogorov–Smirnov p = {:.3}{}", a.p_ad, below(a.p_ad), a.p_ks, below(a.p_ks));
+            let (with, still) = match r.outcome.named.len() {
+                0 => ("", ""),
+                1 => ("with it ", "still "),
+                _ => ("with them ", "still "),
+            };
+            let fit = if a.p_ad < alpha || a.p_ks < alpha {
+                format!("{with}the Weibull law {still}fits these data poorly ({ad_ks}): a departure in the shape of the distribution that no recorded factor explains")
+            } else {
+                format!("{with}the Weibull law fits these data ({ad_ks}, neither below {alpha})")
+            };
+            format!("**{}** ({} {what}): {misses}; {fit}.", r.label, r.sample.strength.len())
+        })
+        .collect();
+    let body = if lines.len() == 1 { lines[0].clone() } else { lines.iter().map(|l| format!("* {l}")).collect::<Vec<_>>().join("\n") };
+    format!("## Answer\n\n{body}\n")
 }
 
 pub(super) fn headline(r: &MaterialResult) -> String {
@@ -202,7 +244,7 @@ fn evidence_row(e: &super::workflow::Evidence) -> String {
     } else {
         "not supported".to_string()
     };
-    format!("| {} | {} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {} | {} |\n", e.round, e.candidate.name(), e.lr, e.lr_critical, e.p_family, e.delta_bic, e.delta_cv, par, verdict)
+    format!("| {} | {} | {:.2} | {:.2} | {} | {:.2} | {:.2} | {} | {} |\n", e.round, e.candidate.name(), e.lr, e.lr_critical, p_text(e.p_family, e.replicates), e.delta_bic, e.delta_cv, par, verdict)
 }
 
 /// For a named temperature softening (strength × r per 100 °C) in a crush material with an
@@ -292,8 +334,9 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
     if files {
         how.push("Each strength file's specimen strengths are fitted with one two-parameter Weibull law; its candidate effects are the recorded factors and size measure its study declares.".to_string());
     }
+    md.push_str(&answer(s, results));
     md.push_str(&format!(
-        "{} The workflow then looks for structure the model misses, names the missing effect only when it passes the guard (family-wise bootstrap p < {} over every candidate and factor tried, ΔBIC < 0, better {}-fold cross-validated log score), adds it and diagnoses again.\n\nGap measure: {}.\n",
+        "\n## How the workflow decides\n\n{} The workflow then looks for structure the model misses, names the missing effect only when it passes the guard (family-wise bootstrap p < {} over every candidate and factor tried, ΔBIC < 0, better {}-fold cross-validated log score), adds it and diagnoses again.\n\nGap measure: {}.\n",
         how.join(" "),
         s.discrepancy.alpha,
         s.discrepancy.cv_folds,
@@ -613,7 +656,7 @@ mod tests {
             loglik: -10.0,
             lr: 12.3456,
             p_bootstrap: 0.001,
-            p_family: 0.0042,
+            p_family: 0.01,
             lr_critical: 6.5,
             delta_bic: -8.1304,
             delta_cv: 0.3751,
@@ -637,7 +680,7 @@ mod tests {
         let mut e = evidence(false, false, None, 0.125);
         assert_eq!(failures_sentence(std::slice::from_ref(&e)), "");
         e.failures = 25;
-        assert_eq!(evidence_row(&e), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 ± 0.125 | no verdict: 25 of 199 bootstrap refits failed (more than 10 %) |\n"));
+        assert_eq!(evidence_row(&e), format!("| 2 | {name} | 12.35 | 6.50 | 0.010 | -8.13 | 0.38 | β = 0.500 ± 0.125 | no verdict: 25 of 199 bootstrap refits failed (more than 10 %) |\n"));
         assert!(failures_sentence(std::slice::from_ref(&e)).contains(&format!("`{name}` in round 2: 25 of 199")));
         e.failures = 19;
         assert!(evidence_row(&e).ends_with("| not supported |\n"));
@@ -646,12 +689,18 @@ mod tests {
     #[test]
     fn evidence_rows_carry_the_guard_numbers_and_their_verdict() {
         let name = Effect::Roundness.name();
-        assert_eq!(evidence_row(&evidence(true, true, None, 0.125)), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 ± 0.125 | **named** |\n"));
-        assert_eq!(evidence_row(&evidence(false, true, None, f64::NAN)), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 | passed, weaker |\n"));
-        assert_eq!(evidence_row(&evidence(false, false, None, 0.125)), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 ± 0.125 | not supported |\n"));
+        assert_eq!(evidence_row(&evidence(true, true, None, 0.125)), format!("| 2 | {name} | 12.35 | 6.50 | 0.010 | -8.13 | 0.38 | β = 0.500 ± 0.125 | **named** |\n"));
+        assert_eq!(evidence_row(&evidence(false, true, None, f64::NAN)), format!("| 2 | {name} | 12.35 | 6.50 | 0.010 | -8.13 | 0.38 | β = 0.500 | passed, weaker |\n"));
+        assert_eq!(evidence_row(&evidence(false, false, None, 0.125)), format!("| 2 | {name} | 12.35 | 6.50 | 0.010 | -8.13 | 0.38 | β = 0.500 ± 0.125 | not supported |\n"));
         assert_eq!(evidence_row(&evidence(false, false, Some("no roundness column"), 0.125)), format!("| 2 | {name} | | | | | | | skipped: no roundness column |\n"));
         // A two-population law's parameter has a profile band but no standard error.
         let law = Evidence { band: Some((0.2, 0.8)), ..evidence(false, false, None, f64::NAN) };
-        assert_eq!(evidence_row(&law), format!("| 2 | {name} | 12.35 | 6.50 | 0.004 | -8.13 | 0.38 | β = 0.500 (90 % profile 0.200–0.800) | not supported |\n"));
+        assert_eq!(evidence_row(&law), format!("| 2 | {name} | 12.35 | 6.50 | 0.010 | -8.13 | 0.38 | β = 0.500 (90 % profile 0.200–0.800) | not supported |\n"));
+        // No replicate reached the observed Λ: p is at its floor 1/(B + 1), which B replicates
+        // cannot resolve below.
+        let floor = Evidence { p_family: 1.0 / 200.0, ..evidence(true, true, None, 0.125) };
+        assert!(evidence_row(&floor).contains("| ≤ 0.005 |"), "{}", evidence_row(&floor));
+        assert_eq!(p_text(0.01, 199), "0.010");
+        assert_eq!(p_text(0.002, 499), "≤ 0.002");
     }
 }

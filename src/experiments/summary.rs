@@ -61,6 +61,29 @@ fn changed<'a>(from: f64, to: super::preposterior::Estimate, words: (&'a str, &'
     (verb, format!("{} → {}", prob(from), pm(to.mean, to.se)))
 }
 
+/// What a plan changes from today, each worded by its direction beyond two Monte Carlo standard
+/// errors ([`changed`]): the probability of the right choice, the weight of the true damage
+/// model, and each material's 90 % band of P_break at horizon `last` (quantities `qs`).
+struct Changes {
+    pcs: (&'static str, String),
+    weight: (&'static str, String),
+    bands: Vec<String>,
+}
+
+fn changes(m: &Metrics, labels: &[String], qs: [usize; 2], last: f64) -> Changes {
+    let bands = (0..2)
+        .map(|j| {
+            let (verb, v) = changed(m.prior.width90[qs[j]], m.width90[qs[j]], ("widens", "narrows", "leaves unchanged"));
+            format!("{verb} the 90 % band of P_break of {} over {} (width {v})", labels[j], years(last))
+        })
+        .collect();
+    Changes {
+        pcs: changed(m.prior_pcs, m.pcs, ("raises", "lowers", "leaves unchanged")),
+        weight: changed(m.prior_true_label_weight[0], m.true_label_weight[0], ("raises", "lowers", "leaves unchanged")),
+        bands,
+    }
+}
+
 /// "1 year" or "10 years".
 fn years(y: f64) -> String {
     if y == 1.0 { "1 year".into() } else { format!("{y} years") }
@@ -238,15 +261,7 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         }
         Some(first) => {
             let m = &first.metrics;
-            // Each change worded by its direction (beyond two Monte Carlo standard errors).
-            let (pcs, pcs_v) = changed(m.prior_pcs, m.pcs, ("raises", "lowers", "leaves unchanged"));
-            let (weight, weight_v) = changed(m.prior_true_label_weight[0], m.true_label_weight[0], ("raises", "lowers", "leaves unchanged"));
-            let bands: Vec<String> = (0..2)
-                .map(|j| {
-                    let (verb, v) = changed(m.prior.width90[qs[j]], m.width90[qs[j]], ("widens", "narrows", "leaves unchanged"));
-                    format!("{verb} the 90 % band of P_break of {} over {} (width {v})", labels[j], years(last))
-                })
-                .collect();
+            let Changes { pcs: (pcs, pcs_v), weight: (weight, weight_v), bands } = changes(m, &labels, qs, last);
             let line = format!(
                 "With a budget of {} {cur}, the most informative next step is {} for {:.0} {cur}: it {pcs} the probability of choosing the better particle ({pcs_v}), {weight} the expected weight of the true damage model ({weight_v}), {} and {}; its expected value of information is {} {cur}.",
                 s.budget.total,
@@ -356,6 +371,14 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
             if beyond.is_empty() { ": every one lies within two standard errors of 0".to_string() } else { format!("; beyond two standard errors — {} — it is not noise but a sign that the reweighting did not represent the posterior (see `median_ess` and `collapsed` in `plans.csv`), and those rows are not reliable", beyond.join(", ")) }
         ));
     }
+    // The answer opens the document (and heads its first page): the recommended plan and what it
+    // changes, from the same numbers as the sections below.
+    let plan = match allocated {
+        _ if first_step(s, singles).is_none() => None,
+        Allocated::Greedy(steps) => steps.last(),
+        Allocated::Exhaustive { plans, chosen } => chosen.map(|i| &plans[i]),
+    };
+    md = md.replacen("## Today\n\n", &format!("{}## Today\n\n", answer(s, plan, prior, &labels, &today, qs, last)), 1);
     md.push_str(&naming_section(s, state, singles));
     let plans: Vec<&Metrics> = singles.iter().map(|(_, e)| &e.metrics).chain(allocated.plans().iter().map(|e| &e.metrics)).collect();
     let count = |f: &dyn Fn(&Metrics) -> usize| plans.iter().map(|m| f(m)).sum::<usize>();
@@ -372,6 +395,42 @@ pub fn summary(s: &ExperimentsStudy, state: &State, singles: &[((usize, usize), 
         },
     ));
     Summary { text: md, headlines }
+}
+
+/// The `## Answer` section: the plan to spend the budget on (`plan`; None when no test gains
+/// more than two Monte Carlo standard errors), the particle today's knowledge favours, and what
+/// the plan changes — the probability of the right choice, each material's 90 % band of P_break
+/// at horizon `last` (quantities `qs`) and the weight of the true damage model — each worded by
+/// its direction beyond two standard errors ([`changed`]), from the metrics of `prior` (today)
+/// and of the plan.
+fn answer(s: &ExperimentsStudy, plan: Option<&Evaluated>, prior: &Metrics, labels: &[String], today: &str, qs: [usize; 2], last: f64) -> String {
+    let cur = &s.decision.currency;
+    let favours = format!("today's knowledge favours {today} (right with probability {:.3})", prior.prior_pcs);
+    let sentence = match plan {
+        None => format!(
+            "**No further test is worth its cost on these numbers**: with {} {cur} to spend, no candidate gains more than two Monte Carlo standard errors of the objective ({}); {favours}.",
+            s.budget.total,
+            s.decision.objective.describe()
+        ),
+        Some(e) => {
+            let Changes { pcs: (pcs, pcs_v), weight: (weight, weight_v), bands } = changes(&e.metrics, labels, qs, last);
+            format!(
+                "**Spend {:.0} of the {} {cur} on {}.** {}; the plan {pcs} the probability of that choice being right ({pcs_v}), {}, {}, and {weight} the expected weight of the true damage model ({weight_v}).",
+                e.cost,
+                s.budget.total,
+                plan_phrase(s, e),
+                capitalised(&favours),
+                bands[0],
+                bands[1]
+            )
+        }
+    };
+    format!("## Answer\n\n{sentence}\n\n")
+}
+
+fn capitalised(t: &str) -> String {
+    let mut c = t.chars();
+    c.next().map_or(String::new(), |f| f.to_uppercase().collect::<String>() + c.as_str())
 }
 
 /// The naming loop's verdict beside the reweighting's, for the crush candidates that ran it

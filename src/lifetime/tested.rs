@@ -142,16 +142,16 @@ pub fn warnings(materials: &[Tested]) -> Vec<String> {
     out
 }
 
-/// `md` with each of `warnings` stated at the head of its headline section (after the line
-/// `## Headline`), so that a comparison or lifetime is not read without them (they also go to
-/// stderr and the report's Warnings page); where there is no such section, before the first
-/// section (`## `), else at the end.
+/// `md` with each of `warnings` stated at the head of the section the report's first page
+/// opens with (after the line `## Answer`, else `## Headline`), so that a comparison or lifetime
+/// is not read without them (they also go to stderr and the report's Warnings page); where
+/// there is no such section, before the first section (`## `), else at the end.
 pub fn with_warnings(md: &str, warnings: &[String]) -> String {
     if warnings.is_empty() {
         return md.to_string();
     }
     let block: String = warnings.iter().map(|w| format!("**Warning**: {w}.\n\n")).collect();
-    let head = "## Headline\n";
+    let head = if md.contains("## Answer\n") { "## Answer\n" } else { "## Headline\n" };
     match md.find(head) {
         Some(i) => {
             let j = i + head.len();
@@ -194,6 +194,9 @@ mod tests {
         assert_eq!(with_warnings(md, &w), "# T\n\nlead\n\n## Headline\n\n**Warning**: the two materials were tested at different temperatures (A at 800 °C, B at 20 °C).\n\n* A is better\n");
         assert_eq!(with_warnings(md, &[]), md);
         assert!(with_warnings("# T\n", &w).ends_with("**Warning**: the two materials were tested at different temperatures (A at 800 °C, B at 20 °C).\n\n"));
+        // An answer section comes first on the report's first page: the warnings head it.
+        let md = "# T\n\nlead\n\n## Answer\n\nA breaks less.\n\n## Headline\n\n* A is better\n";
+        assert_eq!(with_warnings(md, &w), "# T\n\nlead\n\n## Answer\n\n**Warning**: the two materials were tested at different temperatures (A at 800 °C, B at 20 °C).\n\nA breaks less.\n\n## Headline\n\n* A is better\n");
         // Without a headline, before the first section.
         assert_eq!(with_warnings("# T\n\nlead\n\n## A\n\nx\n", &w), "# T\n\nlead\n\n**Warning**: the two materials were tested at different temperatures (A at 800 °C, B at 20 °C).\n\n## A\n\nx\n");
     }

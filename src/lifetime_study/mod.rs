@@ -369,7 +369,7 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
         pb.inc(1);
     }
     write_force_time(&mut dir, &runs, s)?;
-    let tables::Summary { headlines, attrition } = write_summary(&mut dir, &runs, s)?;
+    let tables::Summary { headlines, attrition, answer } = write_summary(&mut dir, &runs, s)?;
     // At which temperature each material was tested, and what the lifetimes hold at.
     let temperatures: Vec<Vec<f64>> = runs.iter().map(|r| r.data.records.iter().filter_map(|x| x.temperature_c).collect()).collect();
     let tested: Vec<crate::lifetime::tested::Tested> = runs
@@ -389,7 +389,7 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
         crate::intake::warn(w);
     }
     let lead = crate::lifetime::tested::paragraph(&tested, &crate::lifetime::tested::named_or_tests(&tested, &predicted));
-    let md = crate::runkit::headline_summary("Breaking probability after repeated impacts (the deliverable's chain)", &headlines).replacen("\n## Headline", &format!("\n{lead}\n\n## Headline"), 1);
+    let md = crate::runkit::headline_summary("Breaking probability after repeated impacts (the deliverable's chain)", &headlines).replacen("\n## Headline", &format!("\n{lead}\n\n{answer}## Headline"), 1);
     let notes: Vec<(&str, Vec<String>)> = runs.iter().map(|r| (r.label.as_str(), r.data.provenance.summary_notes())).collect();
     let md = crate::lifetime::tested::with_warnings(&md, &warnings) + &attrition + &crate::lifetime::tested::read_section(&notes);
     dir.write_bytes("summary.md", md.as_bytes())?;

@@ -353,6 +353,9 @@ pub(super) struct Summary {
     pub headlines: Vec<String>,
     /// Markdown section: share broken in the first year, years to 1 % and 10 % broken.
     pub attrition: String,
+    /// Markdown section `## Answer`: which material breaks least, by how much and how sure
+    /// ([`answer`]).
+    pub answer: String,
 }
 
 pub(super) fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &LifetimeStudy) -> Result<Summary> {
@@ -430,6 +433,8 @@ pub(super) fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &Lifet
     }
     let q = |v: &[[f64; 3]], i: usize| v.iter().map(|b| b[i]).collect::<Vec<f64>>();
     let na = a.0.len();
+    let rows: Vec<Attrition> = a.0.iter().zip(&a.1).zip(&a.2).map(|((label, first), to_1pct)| Attrition { label, first_year: *first, to_1pct: *to_1pct }).collect();
+    let answer_text = answer(&rows, v, s.impact.impacts_per_year, s.weibull.confidence);
     dir.write_table(
         "attrition",
         &mut table(vec![
@@ -460,7 +465,116 @@ pub(super) fn write_summary(dir: &mut ReportDir, runs: &[MaterialRun], s: &Lifet
         fcol("confidence", vec![s.weibull.confidence; m]),
     ])?;
     dir.write_table("lifetime_summary", &mut df)?;
-    Ok(Summary { headlines, attrition: att })
+    Ok(Summary { headlines, attrition: att, answer: answer_text })
+}
+
+/// One material's attrition at the reference velocity: share broken in the first year and
+/// years to 1 % broken, each [lower, estimate, upper] of the confidence band.
+pub(super) struct Attrition<'a> {
+    pub label: &'a str,
+    pub first_year: [f64; 3],
+    pub to_1pct: [f64; 3],
+}
+
+/// The `## Answer` section, one sentence generated from the attrition rows: which material
+/// breaks least in its first year at velocity `v` (ranked by the estimate), by how much, when 1 %
+/// of it is broken, and how sure — whether the confidence bands of the first-year share
+/// overlap. This study fits each material's strength law on its own; it gives no probability
+/// that one breaks more than another (the main study does), and the sentence says so when the
+/// bands overlap.
+pub(super) fn answer(rows: &[Attrition], v: f64, per_year: f64, confidence: f64) -> String {
+    use crate::report::captions::{percent, sig2, with_band, years_text};
+    let band = |b: &[f64; 3], f: &dyn Fn(f64) -> String| with_band(&f(b[1]), &f(b[0]), &f(b[2]));
+    let years = |y: f64| if y.is_infinite() { "more than 100 years".to_string() } else { format!("{} years", years_text(y)) };
+    let years_band = |b: &[f64; 3]| {
+        let y = |v: f64| if v.is_infinite() { "> 100".to_string() } else { years_text(v) };
+        format!("{} (band {} – {})", years(b[1]), y(b[0]), y(b[2]))
+    };
+    let conf = format!("{:.0} %", 100.0 * confidence);
+    let mut order: Vec<&Attrition> = rows.iter().collect();
+    order.sort_by(|a, b| a.first_year[1].total_cmp(&b.first_year[1]));
+    let per = format!("{per_year:.0} impacts per particle");
+    let sentence = match order.as_slice() {
+        [] => return String::new(),
+        [one] => format!(
+            "**At {v} m/s, {} of {}'s particle inventory breaks in the first year of operation** ({per}; {conf} confidence band {} – {}), and 1 % of it is broken after {}.",
+            percent(one.first_year[1]),
+            one.label,
+            percent(one.first_year[0]),
+            percent(one.first_year[2]),
+            years_band(&one.to_1pct)
+        ),
+        [best, next, ..] if best.first_year[1] == next.first_year[1] => {
+            format!("**At {v} m/s neither {} nor {} breaks less**: in the first year of operation ({per}) {} of each inventory breaks.", best.label, next.label, percent(best.first_year[1]))
+        }
+        [best, next, rest @ ..] => {
+            let ratio = match next.first_year[1] / best.first_year[1] {
+                q if best.first_year[1] > 0.0 && q.is_finite() && q > 1.0 => format!(", {} times less", sig2(q)),
+                _ => String::new(),
+            };
+            let others: String = rest.iter().map(|r| format!(", {} of {}'s", percent(r.first_year[1]), r.label)).collect();
+            let overlap = best.first_year[2] >= next.first_year[0];
+            let less = if rest.is_empty() { "less" } else { "least" };
+            // A verdict in bold only where the bands settle it; else what the estimates say.
+            let head = if overlap {
+                format!("On the estimates, {} breaks {less} at {v} m/s", best.label)
+            } else {
+                format!("**{} breaks {less} at {v} m/s**", best.label)
+            };
+            let (verb, then) = if overlap {
+                ("overlap", ": this study does not say how sure the order is — the main study (`kind = \"uq\"`) gives the probability that one breaks more than the other")
+            } else {
+                ("do not overlap", ", so the order stands within that uncertainty")
+            };
+            let sure = format!(
+                "the {conf} confidence bands of the first-year share, from each strength law's uncertainty, {verb} ({} {}, {} {}){then}",
+                best.label,
+                band(&best.first_year, &percent),
+                next.label,
+                band(&next.first_year, &percent)
+            );
+            format!(
+                "{head}: in the first year of operation ({per}) {} of its inventory breaks against {} of {}'s{ratio}{others}, and 1 % of it is broken after {} against {}. How sure: {sure}.",
+                percent(best.first_year[1]),
+                percent(next.first_year[1]),
+                next.label,
+                years(best.to_1pct[1]),
+                years(next.to_1pct[1])
+            )
+        }
+    };
+    format!("## Answer\n\n{sentence}\n\n")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(label: &str, first: [f64; 3], to_1: [f64; 3]) -> Attrition<'_> {
+        Attrition { label, first_year: first, to_1pct: to_1 }
+    }
+
+    #[test]
+    fn the_answer_ranks_by_the_first_year_and_says_whether_the_bands_overlap() {
+        // The shipped lifetime study's rows: BL 16/30 breaks less, the bands overlap (2.1 % > 1.5 %).
+        let rows = [row("Gen 4", [0.015, 0.11, 0.44], [0.017, 0.087, 0.65]), row("BL 16/30", [0.00014, 0.0022, 0.021], [0.48, 4.5, 70.0])];
+        let a = answer(&rows, 5.0, 730.0, 0.9);
+        assert!(a.starts_with("## Answer\n\nOn the estimates, BL 16/30 breaks less at 5 m/s: in the first year of operation (730 impacts per particle) 0.22 % of its inventory breaks against 11 % of Gen 4's, 50 times less, and 1 % of it is broken after 4.5 years against 0.087 years."), "{a}");
+        assert!(a.contains("overlap (BL 16/30 0.22 % (0.014 % – 2.1 %), Gen 4 11 % (1.5 % – 44 %)): this study does not say how sure"), "{a}");
+        // Apart: the order stands.
+        let rows = [row("A", [0.001, 0.002, 0.004], [4.0, 5.0, 9.0]), row("B", [0.01, 0.02, 0.04], [0.3, 0.5, 0.9])];
+        let a = answer(&rows, 5.0, 730.0, 0.9);
+        assert!(a.contains("**A breaks less at 5 m/s**") && a.contains("10 times less") && a.contains("do not overlap") && a.contains("the order stands"), "{a}");
+        // Three materials: "least", and the third's share is given too.
+        let rows3 = [row("A", [0.001, 0.002, 0.004], [4.0, 5.0, 9.0]), row("B", [0.01, 0.02, 0.04], [0.3, 0.5, 0.9]), row("C", [0.05, 0.1, 0.2], [0.05, 0.1, 0.2])];
+        let a = answer(&rows3, 5.0, 730.0, 0.9);
+        assert!(a.contains("**A breaks least at 5 m/s**") && a.contains("2.0 % of B's, 10 times less, 10 % of C's"), "{a}");
+        // A tie names neither; one material gives its own numbers, a share never reached says so.
+        let rows = [row("A", [0.0, 0.0, 0.0], [f64::INFINITY; 3]), row("B", [0.0, 0.0, 0.0], [f64::INFINITY; 3])];
+        assert!(answer(&rows, 5.0, 730.0, 0.9).contains("neither A nor B breaks less"));
+        let a = answer(&rows[..1], 5.0, 730.0, 0.9);
+        assert!(a.contains("**At 5 m/s, 0 % of A's particle inventory breaks in the first year") && a.contains("more than 100 years"), "{a}");
+    }
 }
 
 /// The strength model of every material: its effects, population, and each parameter's

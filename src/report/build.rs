@@ -2,11 +2,15 @@
 //! same way for every study kind:
 //!
 //! * **first page** — the question (the study file's opening comment; without one, the question
-//!   its kind answers, said as such), the summary's lead paragraphs and its `Headline` (or
-//!   `Verdict`, `Answer`) section, then the summary sections its kind moves up
-//!   ([`super::captions::first_page`]: the main study's figure of both particles'
-//!   distributions beside its answer, the lifetime study's answer in a plant engineer's units,
-//!   the experiments study's state of knowledge today and its plan for the budget);
+//!   its kind answers, said as such), the summary's lead paragraphs and its first `Answer`,
+//!   `Headline` or `Verdict` section (the answer in one sentence generated from the numbers, for
+//!   the main, lifetime, experiments, discrepancy, temperature and calibration kinds), then the
+//!   summary sections its kind moves up and the one figure that shows the answer
+//!   ([`super::captions::first_page`]: both particles' distributions for the main study, the
+//!   attrition table and breakage curves for the lifetime study, today's state of knowledge and
+//!   the candidates' metrics for the experiments, the evidence of every round for the
+//!   discrepancy workflow, breakage against temperature, the calibration's fit, the crush
+//!   curves, the impact spectra, the microstructures' comparison);
 //! * the summary's other sections (`summary.md`, whose sentences the run generated from its
 //!   numbers);
 //! * **one section per figure** (every `*.svg` the manifest lists, in order) with a caption

@@ -473,7 +473,9 @@ fn evidence(dir: &Path, width_cm: f64, keys: &[String], labels: &[String]) -> Re
                 series.push(Series { label, points: vec![(x - 0.4, crit[i]), (x + 0.4, crit[i])], colour: c, kind: Kind::Dashed(0.8, 3.0, 2.0) });
             }
         }
-        let top = rows.iter().map(|&i| lr[i]).filter(|v| v.is_finite()).fold(1.0, f64::max);
+        // The axis holds every Λ and every critical value (a small Λ under a larger critical
+        // value would put the critical dash on the frame, where it reads as the axis' top).
+        let top = rows.iter().flat_map(|&i| [lr[i], crit[i]]).filter(|v| v.is_finite()).fold(1.0, f64::max);
         panels.push((
             Panel {
                 x_categories: if numbered { (1..=cats.len()).map(|j| j.to_string()).collect() } else { cats.clone() },

@@ -468,6 +468,19 @@ fn figure_caption(caption: &[Span], number: usize) -> Text {
     std::iter::once(Span::bold(format!("Figure {number}. "))).chain(caption.iter().cloned()).collect()
 }
 
+/// The room (points) a heading keeps below it on its page for the block `next` after it: a
+/// figure (number `fig` + 1) with its caption — at most a page less the heading's room, since a
+/// taller one starts the page, scaled to fit under the heading — or three lines of text.
+fn keep_with(next: Option<&Block>, fig: usize) -> f64 {
+    match next {
+        Some(Block::Figure { svg, caption, .. }) => {
+            let cap_h = wrap(&figure_caption(caption, fig + 1), 8.5, WIDTH).len() as f64 * 8.5 * LEAD;
+            figure_size(svg).map_or(0.0, |(vw, vh, w)| w.min(WIDTH) * vh / vw + cap_h + 12.0).min(Layout::bottom() - TOP - HEADING_ROOM)
+        }
+        _ => 3.0 * BODY * LEAD,
+    }
+}
+
 pub(super) fn layout(doc: &Document) -> Result<Layout> {
     let mut lay = Layout::new();
     let mut fig = 0;
@@ -475,23 +488,19 @@ pub(super) fn layout(doc: &Document) -> Result<Layout> {
     let title = wrap(&[Span::bold(&doc.title)], 16.0, WIDTH);
     lay.lines(&title, LEFT, 16.0, title.len());
     lay.y += 8.0;
-    for b in &doc.first {
-        lay.block(b, &mut fig)?;
+    // A first-page subheading right above a figure (the figure that shows the answer) is kept
+    // with it, as a section's heading is.
+    for (i, b) in doc.first.iter().enumerate() {
+        match (b, doc.first.get(i + 1)) {
+            (Block::Subheading(h), next @ Some(Block::Figure { .. })) => lay.heading(h, 10.5, keep_with(next, fig)),
+            _ => lay.block(b, &mut fig)?,
+        }
     }
     for s in &doc.sections {
         if s.new_page {
             lay.new_page();
         }
-        // A section that opens with a figure keeps its heading with the figure and its caption
-        // (one that needs more than a page starts the page, scaled to fit under the heading).
-        let keep = match s.blocks.first() {
-            Some(Block::Figure { svg, caption, .. }) => {
-                let cap_h = wrap(&figure_caption(caption, fig + 1), 8.5, WIDTH).len() as f64 * 8.5 * LEAD;
-                figure_size(svg).map_or(0.0, |(vw, vh, w)| w.min(WIDTH) * vh / vw + cap_h + 12.0).min(Layout::bottom() - TOP - HEADING_ROOM)
-            }
-            _ => 3.0 * BODY * LEAD,
-        };
-        lay.heading(&s.heading, 13.0, keep);
+        lay.heading(&s.heading, 13.0, keep_with(s.blocks.first(), fig));
         for b in &s.blocks {
             lay.block(b, &mut fig)?;
         }
@@ -546,6 +555,26 @@ mod tests {
             let headed = page.iter().rev().find_map(|e| match e { El::Text { runs, .. } => Some(runs.iter().any(|r| r.1.starts_with("Residuals against"))), _ => None });
             if headed == Some(true) {
                 panic!("a page ends with a figure's heading, its figure on the next");
+            }
+        }
+    }
+
+    #[test]
+    fn a_first_page_subheading_stays_with_its_figure() {
+        // Paragraphs that fill the first page to every depth, then the answer's figure under a
+        // subheading: the subheading is never the last line of a page.
+        let svg = "<svg width=\"8.5cm\" height=\"8cm\" viewBox=\"0 0 850 800\" xmlns=\"x\"></svg>".to_string();
+        for k in 0..30 {
+            let first = vec![
+                Block::Paragraph(vec![Span::plain("Words of the answer. ".repeat(20 + 12 * k))]),
+                Block::Subheading("The figure of the answer".into()),
+                Block::Figure { stem: "f".into(), svg: svg.clone(), caption: vec![Span::plain("A caption.")] },
+            ];
+            let lay = layout(&Document { title: "T".into(), running: "r".into(), first, sections: vec![] }).unwrap();
+            for page in &lay.pages {
+                let last = page.iter().rev().find_map(|e| match e { El::Text { runs, .. } => Some(runs.iter().map(|r| r.1.as_str()).collect::<String>()), _ => None });
+                let has_figure = page.iter().any(|e| matches!(e, El::Figure { .. }));
+                assert!(has_figure || last.as_deref().map(str::trim) != Some("The figure of the answer"), "k = {k}: a page ends with the subheading, its figure on the next");
             }
         }
     }

@@ -167,6 +167,13 @@ pub fn prob_text(p: f64) -> String {
     }
 }
 
+/// A bootstrap p-value of `replicates` replicates: at its floor 1/(B + 1) — no replicate reached
+/// the observed statistic — "≤ floor", since B replicates resolve nothing smaller; else to three
+/// decimals.
+pub fn bootstrap_p_text(p: f64, replicates: usize) -> String {
+    if replicates > 0 && p <= 1.0 / (replicates as f64 + 1.0) * (1.0 + 1e-9) { format!("≤ {p:.3}") } else { format!("{p:.3}") }
+}
+
 /// Value ± error, to the error's precision (at most 4 decimals: "1.0000 ± 0.0000" is a
 /// probability within 0.00005 of 1); the value alone, to 4 decimals, without an error.
 pub fn pm_text(v: f64, se: f64) -> String {

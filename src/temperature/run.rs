@@ -224,7 +224,7 @@ fn softening_marks(file: &str, l: &LifetimeOptions, resolve: &dyn Fn(&Path) -> P
 
 /// Breakage against temperature. Returns the summary's paragraph and the inputs read.
 #[allow(clippy::too_many_arguments)]
-fn write_lifetime(dir: &mut ReportDir, file: &str, l: &LifetimeOptions, laws: &ParameterLaws, grid: &[f64], at: &[f64], level: f64, seed: u64, resolve: &dyn Fn(&Path) -> PathBuf, reports_root: &Path, tick: &(dyn Fn() + Sync)) -> Result<(String, Vec<PathBuf>)> {
+fn write_lifetime(dir: &mut ReportDir, file: &str, l: &LifetimeOptions, laws: &ParameterLaws, grid: &[f64], at: &[f64], level: f64, seed: u64, resolve: &dyn Fn(&Path) -> PathBuf, reports_root: &Path, tick: &(dyn Fn() + Sync)) -> Result<(String, Vec<PathBuf>, Option<String>)> {
     let main_path = resolve(&l.main);
     if !main_path.is_file() {
         return Err(Error::config(file, "lifetime.main", format!("{} does not exist", main_path.display())));
@@ -315,16 +315,52 @@ fn write_lifetime(dir: &mut ReportDir, file: &str, l: &LifetimeOptions, laws: &P
     if !marks.is_empty() {
         md.push_str(&format!(" Table 1's softening temperatures are marked: {}.", marks.iter().map(|m| format!("{} °C ({})", m.3, m.1)).collect::<Vec<_>>().join(", ")));
     }
+    let mut answer_text = None;
     if !at.is_empty() {
         let rows = columns(at, &|| {})?;
         write(dir, "lifetime_at", &rows)?;
+        let last = years[years.len() - 1];
+        let at_last: Vec<(usize, f64, f64, (f64, f64, f64))> = rows.iter().filter(|r| r.2 == last).map(|r| (usize::from(r.0 != keys[0]), r.3, r.2, r.5)).collect();
+        answer_text = Some(answer(&labels, &at_last, last, level));
         let mut lines = vec![format!("| material | years | temperature (°C) | mean P | median P [{pct} % band] |"), "|---|---|---|---|---|".into()];
         for r in &rows {
             lines.push(format!("| {} | {} | {} | {:.3e} | {:.3e} [{:.3e}, {:.3e}] |", r.1, r.2, r.3, r.4, r.5.0, r.5.1, r.5.2));
         }
         md.push_str(&format!("\n\nAt the reported temperatures (`lifetime_at.csv`):\n\n{}", lines.join("\n")));
     }
-    Ok((md, inputs))
+    Ok((md, inputs, answer_text))
+}
+
+/// The answer at the reported temperatures, one sentence from `rows` — (material index,
+/// temperature (°C), years, (median, low, high) of P_break) at horizon `years`: which particle
+/// breaks less (by the median) at each temperature, and each one's median and `level` band there.
+fn answer(labels: &[String; 2], rows: &[(usize, f64, f64, (f64, f64, f64))], years: f64, level: f64) -> String {
+    use crate::report::prob_text as prob;
+    let mut temps: Vec<f64> = rows.iter().map(|r| r.1).collect();
+    temps.sort_by(f64::total_cmp);
+    temps.dedup();
+    let at = |j: usize, t: f64| rows.iter().find(|r| r.0 == j && r.1 == t).map(|r| r.3);
+    let less: Vec<Option<usize>> = temps
+        .iter()
+        .map(|&t| match (at(0, t), at(1, t)) {
+            (Some(a), Some(b)) if a.0 < b.0 => Some(0),
+            (Some(a), Some(b)) if b.0 < a.0 => Some(1),
+            _ => None,
+        })
+        .collect();
+    let over = if years == 1.0 { "1 year".to_string() } else { format!("{years} years") };
+    let head = match less.first() {
+        Some(Some(j)) if less.iter().all(|l| *l == Some(*j)) => format!("**{} breaks less than {} at every reported temperature**", labels[*j], labels[1 - j]),
+        _ if less.iter().all(|l| l.is_none()) => format!("**Neither {} nor {} breaks less at any reported temperature**", labels[0], labels[1]),
+        _ => format!(
+            "**Which particle breaks less depends on the temperature**: {}",
+            temps.iter().zip(&less).map(|(t, l)| format!("{} at {t} °C", l.map_or("neither".to_string(), |j| labels[j].clone()))).collect::<Vec<_>>().join(", ")
+        ),
+    };
+    let each: Vec<String> = (0..2)
+        .map(|j| format!("{}: {}", labels[j], temps.iter().filter_map(|&t| at(j, t).map(|(m, lo, hi)| format!("{} [{}, {}] at {t} °C", prob(m), prob(lo), prob(hi)))).collect::<Vec<_>>().join(", ")))
+        .collect();
+    format!("{head} (median P_break over {over} and its {:.0} % band; the laws' joint draws and the main study's samples): {}.", 100.0 * level, each.join("; "))
 }
 
 /// Runs the study.
@@ -398,8 +434,11 @@ pub fn run_temperature(loaded: &StudyFile, s: &TemperatureStudy, opts: &RunOptio
     if let (Some(laws), Some(l)) = (&laws, &s.lifetime) {
         pb.set_message("breakage against temperature");
         let tick = || pb.inc(1);
-        let (text, read) = write_lifetime(&mut dir, &file, l, laws, &grid, &at, s.level, s.seed, &resolve, &opts.reports_root, &tick)?;
+        let (text, read, answer) = write_lifetime(&mut dir, &file, l, laws, &grid, &at, s.level, s.seed, &resolve, &opts.reports_root, &tick)?;
         md.push_str(&format!("\n## Breakage against temperature\n\n{text}\n"));
+        if let Some(a) = answer {
+            md = md.replacen("\n## Phases\n", &format!("\n## Answer\n\n{a}\n\n## Phases\n"), 1);
+        }
         for p in read {
             inputs.push(InputFile::hash(&p)?);
         }

@@ -203,6 +203,33 @@ pub fn one_space(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
+/// The first page of `report.html` in report directory `dir` as text (tags dropped, the
+/// entities of [`figure_captions`] read back): everything before the contents list, the same
+/// blocks the PDF's first page holds; and the file stems of the figures on it.
+#[allow(dead_code)]
+pub fn first_page(dir: &Path) -> (String, Vec<String>) {
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let head = html.split("<nav id=\"contents\">").next().unwrap();
+    let figures = head.split("id=\"fig-").skip(1).filter_map(|r| r.split('"').next()).map(String::from).collect();
+    (html_text(head), figures)
+}
+
+#[allow(dead_code)]
+/// HTML as text: the tags dropped, `&amp;`, `&lt;`, `&gt;`, `&quot;` and `&#39;` read back.
+fn html_text(html: &str) -> String {
+    let mut text = String::new();
+    let mut tag = false;
+    for c in html.chars() {
+        match c {
+            '<' => tag = true,
+            '>' => tag = false,
+            c if !tag => text.push(c),
+            _ => {}
+        }
+    }
+    text.replace("&lt;", "<").replace("&gt;", ">").replace("&quot;", "\"").replace("&#39;", "'").replace("&amp;", "&")
+}
+
 /// The caption of each figure of `report.html` in report directory `dir`, by file stem (text
 /// with the tags dropped, `&amp;`, `&lt;`, `&gt;`, `&quot;` and `&#39;` read back); asserts that
 /// every figure has one and that none is the generic caption of a figure whose numbers the
@@ -214,17 +241,7 @@ pub fn figure_captions(dir: &Path) -> Vec<(String, String)> {
     for part in html.split("<figure ").skip(1) {
         let stem = part.split("id=\"fig-").nth(1).and_then(|r| r.split('"').next()).unwrap_or("").to_string();
         let cap = part.split("<figcaption>").nth(1).and_then(|r| r.split("</figcaption>").next()).unwrap_or_else(|| panic!("{}: figure {stem} has no caption", dir.display()));
-        let mut text = String::new();
-        let mut tag = false;
-        for c in cap.chars() {
-            match c {
-                '<' => tag = true,
-                '>' => tag = false,
-                c if !tag => text.push(c),
-                _ => {}
-            }
-        }
-        let text = text.replace("&lt;", "<").replace("&gt;", ">").replace("&quot;", "\"").replace("&#39;", "'").replace("&amp;", "&");
+        let text = html_text(cap);
         assert!(!text.contains("Drawn from this report's tables"), "{}: figure {stem} has the generic caption", dir.display());
         out.push((stem, text));
     }

@@ -29,7 +29,7 @@ pub(super) fn figure(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
     if stem == "discrepancy_evidence" {
         let t = Table::load(dir, "evidence")?;
         let (mat, round, cand, lr, crit, pf, dbic, named) = (t.s("material")?, t.f("round")?, t.s("candidate")?, t.f("likelihood_ratio")?, t.f("likelihood_ratio_critical")?, t.f("p_family")?, t.f("delta_bic")?, t.s("named")?);
-        let skipped = t.s("skipped")?;
+        let (skipped, replicates) = (t.s("skipped")?, t.f("bootstrap_replicates")?);
         let labels = material_labels(dir)?;
         let mut rows = Vec::new();
         let mut said = Vec::new();
@@ -55,7 +55,8 @@ pub(super) fn figure(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
                 };
                 said.push(format!("{}, round {r}: strongest {} (Λ = {:.1} against {:.1}), {verdict}", labels(&m), cand[top], lr[top], crit[top]));
                 for &i in idx.iter().take(3) {
-                    rows.push(vec![labels(&m), format!("{r}"), cand[i].clone(), format!("{:.1}", lr[i]), format!("{:.1}", crit[i]), prob_text(pf[i]), format!("{:.1}", dbic[i]), named[i].clone()]);
+                    let yes = if named[i] == "true" { "yes" } else { "" };
+                    rows.push(vec![labels(&m), format!("{r}"), cand[i].clone(), format!("{:.1}", lr[i]), format!("{:.1}", crit[i]), crate::report::bootstrap_p_text(pf[i], replicates[i] as usize), format!("{:.1}", dbic[i]), yes.to_string()]);
                 }
             }
         }

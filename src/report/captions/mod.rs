@@ -94,14 +94,28 @@ pub fn years_text(y: f64) -> String {
     }
 }
 
-/// First-page blocks of a study kind.
-pub fn first_page(kind: &str, _dir: &Path) -> Result<FirstPage> {
+/// First-page blocks of a study kind (and, for a kind whose figures depend on what the study
+/// asks, the one its report in `dir` holds).
+pub fn first_page(kind: &str, dir: &Path) -> Result<FirstPage> {
+    let first_of = |stems: &[&str]| stems.iter().find(|s| dir.join(format!("{s}.svg")).is_file()).map(|s| s.to_string());
     Ok(match kind {
         // The answer (a sentence and the headline model's attrition) and the distributions of
         // both particles' P: the full attrition table and the drivers keep their sections.
         "uq" => FirstPage { figure: Some("uq_distributions".into()), ..FirstPage::default() },
-        "lifetime" => FirstPage { move_up: vec!["In a plant engineer's units".into()], ..FirstPage::default() },
-        "experiments" => FirstPage { move_up: vec!["Today".into(), "The budget".into()], ..FirstPage::default() },
+        // The answer, the attrition table it is read from and the breakage curves.
+        "lifetime" => FirstPage { move_up: vec!["In a plant engineer's units".into()], figure: Some("fig16_breakage".into()), ..FirstPage::default() },
+        // The answer (the plan and what it changes), today's state of knowledge and the
+        // candidates' metrics; the budget's steps keep their section.
+        "experiments" => FirstPage { move_up: vec!["Today".into()], figure: Some("experiments_metrics".into()), ..FirstPage::default() },
+        // The answer (what the model misses, per material) and the evidence of every round.
+        "discrepancy" => FirstPage { figure: Some("discrepancy_evidence".into()), ..FirstPage::default() },
+        // Breakage against temperature where the study carries it to the lifetime, else the
+        // parameters' laws, else the phases.
+        "temperature" => FirstPage { figure: first_of(&["breakage_vs_temperature", "parameters_vs_temperature", "phase_fractions"]), ..FirstPage::default() },
+        "calibrate" => FirstPage { figure: first_of(&["calibration_fit"]), ..FirstPage::default() },
+        "crush" => FirstPage { figure: first_of(&["crush_force_displacement"]), ..FirstPage::default() },
+        "dem" => FirstPage { figure: first_of(&["dem_impact_spectra"]), ..FirstPage::default() },
+        "microstructure" => FirstPage { figure: first_of(&["comparison"]), ..FirstPage::default() },
         _ => FirstPage::default(),
     })
 }

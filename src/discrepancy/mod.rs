@@ -14,7 +14,7 @@
 //!   what the loop names) and its cross-validated evidence for the main study's stacking weights.
 //! * [`run`]: the study (`kind = "discrepancy"`, `partlife discrepancy`): lifetime before and
 //!   after, detection power vs number of particles; its tables, `verdict.json` and `summary.md`
-//!   are written by the private `report` module.
+//!   are written by the private modules `tables`, `verdict` and `report`.
 //! * [`koh`]: Kennedy–O'Hagan calibration with a GP discrepancy δ(x) and the name → add →
 //!   shrink comparison of candidate model terms, verified on the simple machine and the ball drop.
 //! * [`curves`]: the same loop at the force–displacement level (`kind = "discrepancy_curves"`):
@@ -27,6 +27,7 @@ pub mod guard;
 pub mod koh;
 mod report;
 mod tables;
+mod verdict;
 pub mod run;
 pub mod study;
 pub mod specs;

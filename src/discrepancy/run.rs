@@ -49,7 +49,8 @@ use rayon::prelude::*;
 
 pub use super::study::{DiscrepancyStudy, LifetimeBand, LifetimeOptions, MaterialResult, PowerOptions, PowerRow};
 pub use super::report::wilson90;
-use super::report::{headline, summary, verdict_json};
+use super::report::{headline, summary};
+use super::verdict::verdict_json;
 use super::tables::write_tables;
 use super::workflow::{Outcome, analyse, names, validate};
 use crate::data::CrushData;

@@ -543,16 +543,34 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             out!("machine: {} threads available to rayon", rayon::current_num_threads());
             let d = partlife::bench::discrepancy_speed(&partlife::bench::repo_path("datasets/synth_crush.toml"))?;
             out!(
-                "discrepancy workflow, {} particles (named: {}): naming loop with every candidate, 499 bootstrap replicates per round and 999 permutations per trend {:.3} s; whole report with lifetime bands, 320-dataset power study and figures {:.2} s (goal < 30 s)",
+                "discrepancy workflow, {} particles (named: {}): naming loop with every candidate, at most 499 bootstrap replicates per round and 999 permutations per trend {:.3} s; whole report with lifetime bands, 320-dataset power study and figures {:.2} s (goal < 30 s)",
                 d.particles,
                 d.named.join(", "),
                 d.loop_s,
                 d.report_s
             );
-            let (secs, named, candidates) = partlife::bench::strength_factors_speed(500, 0.0)?;
-            out!("naming loop on a strength file of 500 specimens with 6 recorded factors (size, 2 numeric, 3 categorical) and both two-population laws ({candidates} candidates; named: {}), 499 bootstrap replicates per round and 999 permutations per residual test: {secs:.2} s (goal < 10 s)", named.join(", "));
-            let (secs, named, _) = partlife::bench::strength_factors_speed(500, 0.2)?;
-            out!("the same with the strongest 20 % not broken by the rig's limit (right-censored; named: {}): {secs:.2} s (goal < 15 s)", named.join(", "));
+            let rounds = |r: &[usize]| r.iter().map(|b| b.to_string()).collect::<Vec<_>>().join(", ");
+            let a = partlife::bench::strength_factors_speed(500, 0.0)?;
+            out!(
+                "naming loop on a strength file of 500 specimens with 6 recorded factors (size, 2 numeric, 3 categorical) and both two-population laws ({} candidates; named: {}), at most 499 bootstrap replicates per round (sequential: the rounds drew {}) and 999 permutations per residual test: {:.2} s (goal < 10 s); drawing every replicate {:.2} s ({:.1}×), same names: {}",
+                a.candidates,
+                a.named.join(", "),
+                rounds(&a.replicates),
+                a.seconds,
+                a.seconds_every,
+                a.seconds_every / a.seconds,
+                if a.same_names { "yes" } else { "NO" }
+            );
+            let c = partlife::bench::strength_factors_speed(500, 0.2)?;
+            out!(
+                "the same with the strongest 20 % not broken by the rig's limit (right-censored; named: {}; the rounds drew {}): {:.2} s (goal < 15 s); drawing every replicate {:.2} s ({:.1}×), same names: {}",
+                c.named.join(", "),
+                rounds(&c.replicates),
+                c.seconds,
+                c.seconds_every,
+                c.seconds_every / c.seconds,
+                if c.same_names { "yes" } else { "NO" }
+            );
             let (complete, censored) = partlife::bench::censored_fit_speed()?;
             out!("one two-parameter fit of 500 strengths: complete {:.1} µs, 20 % censored {:.1} µs ({:.2}×; goal ≤ 2×)", complete * 1e6, censored * 1e6, censored / complete);
             // The curve level needs the calibration's report (its emulator runs).

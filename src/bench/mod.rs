@@ -340,11 +340,11 @@ pub fn uq_speed(study: &Path) -> Result<UqSpeed> {
 /// Times the naming loop on a strength file of `n` specimens with six recorded factors — a
 /// size measure (effective volume, two values), two numeric (a loading rate, log-uniform over
 /// two decades; an irrelevant number) and three categorical (batch of three with batch B 15 %
-/// weaker, furnace of two, operator of four) — and the two flaw-population laws, at the shipped settings (499 bootstrap
-/// replicates per round, 999 permutations per residual test, ten folds): (seconds, named,
-/// number of candidates). With `censored` > 0 that share of the specimens, the strongest, did not
+/// weaker, furnace of two, operator of four) — and the two flaw-population laws, at the
+/// shipped settings (at most 499 bootstrap replicates per round, 999 permutations per residual
+/// test, ten folds), with the sequential bootstrap and again drawing every replicate. With `censored` > 0 that share of the specimens, the strongest, did not
 /// break by the rig's limit (right-censored there, type I).
-pub fn strength_factors_speed(n: usize, censored: f64) -> Result<(f64, Vec<String>, usize)> {
+pub fn strength_factors_speed(n: usize, censored: f64) -> Result<NamingSpeed> {
     use crate::strength::factors::{Factor, FactorType, Form, SizeMeasure, candidates_of};
     let mut rng = ChaCha8Rng::seed_from_u64(33);
     let mut s = Sample { source: "bench".into(), ..Sample::default() };
@@ -382,9 +382,32 @@ pub fn strength_factors_speed(n: usize, censored: f64) -> Result<(f64, Vec<Strin
     if censored > 0.0 {
         s.strength = censored_at_quantile(&s.strength.x, censored);
     }
-    let start = Instant::now();
-    let outcome = crate::discrepancy::workflow::analyse(&s, &crate::strength::NamingSettings::default(), true)?;
-    Ok((start.elapsed().as_secs_f64(), outcome.named.iter().map(|e| e.name()).collect(), s.factors.len() + s.populations.len()))
+    let time = |sequential: bool| -> Result<(f64, Vec<String>, Vec<usize>)> {
+        let start = Instant::now();
+        let outcome = crate::discrepancy::workflow::analyse(&s, &crate::strength::NamingSettings { sequential, ..Default::default() }, true)?;
+        Ok((start.elapsed().as_secs_f64(), outcome.named.iter().map(|e| e.name()).collect(), outcome.stages.iter().map(|st| st.replicates).collect()))
+    };
+    let (seconds, named, replicates) = time(true)?;
+    let (seconds_every, named_every, _) = time(false)?;
+    Ok(NamingSpeed { seconds, same_names: named == named_every, named, replicates, seconds_every, candidates: s.factors.len() + s.populations.len() })
+}
+
+/// The naming loop's speed on one strength file, with the sequential bootstrap (the default)
+/// and drawing every replicate.
+#[derive(Debug, Clone)]
+pub struct NamingSpeed {
+    /// Wall time with the sequential bootstrap (s).
+    pub seconds: f64,
+    /// Effects named.
+    pub named: Vec<String>,
+    /// Replicates each round drew (sequential).
+    pub replicates: Vec<usize>,
+    /// Wall time drawing every replicate of every round (s).
+    pub seconds_every: f64,
+    /// Whether both named the same effects.
+    pub same_names: bool,
+    /// Candidates offered.
+    pub candidates: usize,
 }
 
 /// `x` right-censored at its (1 − `share`) sample quantile, the rig's limit: the values above it
@@ -425,7 +448,7 @@ pub struct DiscrepancySpeed {
     pub particles: usize,
     /// Effects the loop named.
     pub named: Vec<String>,
-    /// Wall time of the naming loop alone: every candidate, 499 bootstrap replicates per round,
+    /// Wall time of the naming loop alone: every candidate, at most 499 bootstrap replicates per round,
     /// 999 permutations per residual trend (s).
     pub loop_s: f64,
     /// Wall time of the whole `partlife discrepancy --data` run: loop, lifetime bands, the

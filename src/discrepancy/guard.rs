@@ -1,8 +1,21 @@
 //! The false-discovery guard's arithmetic (the loop in [`super::workflow`] computes the
 //! likelihood ratios and their bootstrap; this module turns them into decisions): candidates
 //! compared on the one-parameter scale, the family-wise maxima of the bootstrap replicates with
-//! failed refits counted as exceeding, the critical value the decision uses, and the share of
-//! failed refits above which a candidate gets no verdict.
+//! failed refits counted as exceeding, the critical value the decision uses, the share of
+//! failed refits above which a candidate gets no verdict, and when a round's bootstrap may stop.
+//!
+//! **Sequential bootstrap** (Davidson & MacKinnon 2000, "Bootstrap tests: how many
+//! bootstraps?", Econometric Reviews 19: 55–68, their pretest procedure). A round draws its
+//! replicates in stages — 99, 199, 499, 999, 1999, 4999, 9999, up to the study's `bootstrap` —
+//! and stops at the first stage where every decision the round makes is settled: each count c of
+//! B replicates whose decision compares c/B with a level π₀ (a p-value with α, a failure share
+//! with [`MAX_FAILED_SHARE`]) is settled when the exact binomial test of π = π₀ rejects at
+//! β = [`PRETEST_LEVEL`] in either direction, P(C ≤ c) < β/2 or P(C ≥ c) < β/2 with
+//! C ~ Bin(B, π₀). A candidate with no replicate reaching its Λ is settled at 199 (0.95¹⁹⁹ =
+//! 3.7·10⁻⁵), one far from α — most candidates of a round that names nothing — at 99; a decision
+//! near α draws them all. Every replicate keeps its own random stream, so the first B replicates
+//! are the same whether the round stops there or draws more, and the decisions equal those of
+//! drawing every replicate except where a count sits within the pretest's error of α.
 
 use statrs::distribution::{ChiSquared, ContinuousCDF, Normal};
 
@@ -41,6 +54,30 @@ pub const MAX_FAILED_SHARE: f64 = 0.10;
 /// ([`MAX_FAILED_SHARE`]).
 pub fn decided(failures: usize, replicates: usize) -> bool {
     failures as f64 <= MAX_FAILED_SHARE * replicates as f64
+}
+
+/// The pretest's level β ([module docs](self)): a count is settled when the binomial test of its
+/// level rejects at β.
+pub const PRETEST_LEVEL: f64 = 0.001;
+
+/// The stages at which a round's bootstrap looks whether its decisions are settled, ending at
+/// `most` (every replicate); `[most]` alone when the bootstrap is not `sequential`.
+pub fn stages(most: usize, sequential: bool) -> Vec<usize> {
+    let mut v: Vec<usize> = if sequential { [99, 199, 499, 999, 1999, 4999, 9999].into_iter().filter(|&b| b < most).collect() } else { Vec::new() };
+    v.push(most);
+    v
+}
+
+/// Whether `count` of `replicates`, judged against the level `level` (α for a p-value, the
+/// failure share for a verdict), is settled: the exact binomial test of π = level rejects at
+/// [`PRETEST_LEVEL`] in either direction.
+pub fn settled(count: usize, replicates: usize, level: f64) -> bool {
+    use statrs::distribution::{Binomial, DiscreteCDF};
+    let Ok(bin) = Binomial::new(level, replicates as u64) else { return false };
+    let c = count as u64;
+    let below = bin.cdf(c);
+    let above = if c == 0 { 1.0 } else { bin.sf(c - 1) };
+    below < PRETEST_LEVEL / 2.0 || above < PRETEST_LEVEL / 2.0
 }
 
 /// Per bootstrap replicate, max_c Λ*_c on the one-parameter scale (candidate c with `df[c]`
@@ -93,6 +130,24 @@ mod tests {
         assert_eq!(critical_value(&max_star, 0.05), 191.0);
         // Too few replicates for α: nothing passes.
         assert_eq!(critical_value(&[1.0; 19], 0.05), f64::INFINITY);
+    }
+
+    #[test]
+    fn a_count_is_settled_only_far_from_its_level() {
+        // No replicate above Λ: P(C = 0) = 0.95^B is 6.2e-3 at 99, 3.7e-5 at 199 (β/2 = 5e-4).
+        assert!(!settled(0, 99, 0.05) && settled(0, 199, 0.05));
+        // A p far above α settles at once: P(C ≥ 30 | 99, 0.05) = 4.6e-15; one at α never does.
+        assert!(settled(30, 99, 0.05) && !settled(5, 99, 0.05) && !settled(25, 499, 0.05));
+        // The edges: at B = 199, P(C ≤ 1) = 4.2e-4 < 5e-4 ≤ P(C ≤ 2) = 2.4e-3; P(C ≥ 22) =
+        // 4.5e-4 < 5e-4 ≤ P(C ≥ 21) = 1.1e-3 (exact sums of the binomial terms, by hand).
+        assert!(settled(1, 199, 0.05) && !settled(2, 199, 0.05));
+        assert!(settled(22, 199, 0.05) && !settled(21, 199, 0.05));
+        // Failure shares: none of 99 is settled against 10 % (0.9^99 = 3e-5).
+        assert!(settled(0, 99, MAX_FAILED_SHARE));
+        assert_eq!(stages(499, true), vec![99, 199, 499]);
+        assert_eq!(stages(200, true), vec![99, 199, 200]);
+        assert_eq!(stages(99, true), vec![99]);
+        assert_eq!(stages(499, false), vec![499]);
     }
 
     /// A replicate whose candidate refit failed counts as exceeding: with 15 of 199 failed and

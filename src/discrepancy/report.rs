@@ -238,6 +238,22 @@ pub(super) fn known_against_one_law(o: &crate::strength::origins::Origins, one_m
     format!("{why}{support}")
 }
 
+/// How many parametric-bootstrap replicates a round draws, and why fewer than the most (each
+/// material's table of models gives each round's count).
+fn bootstrap_sentence(n: &crate::strength::NamingSettings) -> String {
+    let stages = super::guard::stages(n.bootstrap, n.sequential);
+    if stages.len() == 1 {
+        return format!("Each round draws {} parametric-bootstrap replicates.", n.bootstrap);
+    }
+    let looks = stages[..stages.len() - 1].iter().map(|b| b.to_string()).collect::<Vec<_>>().join(", ");
+    format!(
+        "Each round draws its parametric-bootstrap replicates in stages ({looks}, then {}) and stops at the first stage where every decision it makes is settled: each p-value it decides by, and each share of failed refits, lies far enough from its level that the exact binomial test of that level rejects at β = {} (the pretest of Davidson & MacKinnon 2000). So a round draws all {} only where a decision lies near α (the table of models gives each round's count); `sequential = false` draws them all.",
+        n.bootstrap,
+        super::guard::PRETEST_LEVEL,
+        n.bootstrap
+    )
+}
+
 pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> String {
     let crush = results.iter().any(|r| r.crush.is_some());
     let files = results.iter().any(|r| r.crush.is_none());
@@ -251,10 +267,11 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
     }
     md.push_str(&answer(s, results));
     md.push_str(&format!(
-        "\n## How the workflow decides\n\n{} The workflow then looks for structure the model misses, names the missing effect only when it passes the guard (family-wise bootstrap p < {} over every candidate and factor tried, ΔBIC < 0, better {}-fold cross-validated log score), adds it and diagnoses again.\n\nGap measure: {}.\n",
+        "\n## How the workflow decides\n\n{} The workflow then looks for structure the model misses, names the missing effect only when it passes the guard (family-wise bootstrap p < {} over every candidate and factor tried, ΔBIC < 0, better {}-fold cross-validated log score), adds it and diagnoses again. {}\n\nGap measure: {}.\n",
         how.join(" "),
         s.discrepancy.alpha,
         s.discrepancy.cv_folds,
+        bootstrap_sentence(&s.discrepancy),
         GAP_MEASURE
     ));
     for r in results {
@@ -296,10 +313,10 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
             ));
         }
         md.push_str(&format!("**Effects named, in order: {}.**\n\n", names(&r.outcome.named)));
-        md.push_str("| model | Weibull m | AD (p) | KS (p) | gap G | G, nothing missing |\n|---|---|---|---|---|---|\n");
+        md.push_str("| model | Weibull m | AD (p) | KS (p) | gap G | G, nothing missing | bootstrap replicates |\n|---|---|---|---|---|---|---|\n");
         for (i, st) in r.outcome.stages.iter().enumerate() {
             md.push_str(&format!(
-                "| {}{} | {} | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.1} | {:.1} |\n",
+                "| {}{} | {} | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.1} | {:.1} | {} |\n",
                 if i == 0 { "base" } else { "+ " },
                 if i == 0 { String::new() } else { names(&st.model.effects) },
                 modulus_text(&st.model),
@@ -308,7 +325,8 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                 st.ks,
                 st.p_ks,
                 st.gap,
-                st.gap_expected
+                st.gap_expected,
+                st.replicates
             ));
         }
         let df: usize = b.findings.iter().map(|f| f.df).sum();

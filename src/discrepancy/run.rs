@@ -381,7 +381,7 @@ pub fn run_discrepancy(loaded: &StudyFile, s: &DiscrepancyStudy, opts: &RunOptio
     let rendered = crate::report::discrepancy::render(dir.path(), s.figures.width_cm)?;
     record_figures(&mut dir, rendered, &mut failures);
     let mut evaluations = BTreeMap::new();
-    evaluations.insert("naming_bootstrap_replicates".to_string(), results.iter().map(|r| (r.outcome.stages.len() * s.discrepancy.bootstrap) as u64).sum());
+    evaluations.insert("naming_bootstrap_replicates".to_string(), results.iter().map(|r| r.outcome.stages.iter().map(|st| st.replicates as u64).sum::<u64>()).sum());
     evaluations.insert("power_datasets".to_string(), results.iter().map(|r| r.power.iter().map(|p| p.replicates as u64).sum::<u64>()).sum());
     let study_resolved = serde_json::to_value(s).map_err(|e| Error::numerical("manifest", e.to_string()))?;
     let report_dir = commit_with_manifest(dir, loaded, study_resolved, RunRecord { inputs, seed: s.seed, clock, evaluations, failures, warnings })?;

@@ -86,6 +86,7 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         // fitting); the naive Σ df beside it, which counts every covariate as unfitted.
         fcol("gap_expected", st.iter().map(|(_, _, s)| s.gap_expected).collect()),
         fcol("gap_degrees_of_freedom", st.iter().map(|(_, _, s)| 0.0 + s.findings.iter().map(|f| f.df as f64).sum::<f64>()).collect()),
+        ucol("bootstrap_replicates", st.iter().map(|(_, _, s)| s.replicates as u64).collect()),
     ])?;
     dir.write_table("stages", &mut t)?;
 

@@ -59,7 +59,7 @@ pub(super) fn verdict_json(loaded: &StudyFile, s: &DiscrepancyStudy, results: &[
                 "weibull_modulus_max": st.model.modulus_range().1,
                 "log_likelihood": st.model.loglik(),
                 "anderson_darling": st.ad, "p_anderson_darling": st.p_ad,
-                "kolmogorov_smirnov": st.ks, "p_kolmogorov_smirnov": st.p_ks,
+                "kolmogorov_smirnov": st.ks, "p_kolmogorov_smirnov": st.p_ks, "bootstrap_replicates": st.replicates,
                 "gap": st.gap,
             })
         };

@@ -21,7 +21,10 @@
 //!      whose refit fails (the current model's, or the candidate's) counts as Λ* = +∞ — as
 //!      exceeding, so failures can only raise p — and a candidate with more than
 //!      [`super::guard::MAX_FAILED_SHARE`] of its replicates failed gets no verdict (neither named nor
-//!      rejected; evidence.csv and the report give the count);
+//!      rejected; evidence.csv and the report give the count). The bootstrap is drawn in
+//!      stages (99, 199, 499 … up to `bootstrap`) and stops once every decision of the round is
+//!      settled ([`super::guard`]'s sequential pretest; [`round_settled`] lists the decisions),
+//!      so B — each stage's and evidence row's `replicates` — varies by round;
 //!    * ΔBIC = −Λ + k ln n, k the candidate's extra parameters (1 for a particle effect or a
 //!      numeric factor, L − 1 for a scale or a modulus per level, 3 or 2 for a two-population
 //!      law; a partially pooled factor's effective degrees of freedom, between 0 and L − 1);
@@ -54,7 +57,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 
-use super::guard::{critical_value, decided, family_maxima, from_one_df_scale, one_df_scale};
+use super::guard::{MAX_FAILED_SHARE, critical_value, decided, family_maxima, from_one_df_scale, one_df_scale, settled, stages as stages_of};
 use super::gof::{CovariateFinding, ad_ks_of_u, covariate_findings, level_findings, normal_scores};
 use crate::strength::factors::{Factor, Form, WeakestLink, weakest_link};
 use crate::error::{Error, Result};
@@ -144,6 +147,9 @@ pub struct Stage {
     /// replicates (drawn from this model and refitted), so a term whose effect the model fits
     /// counts what it is after fitting (module docs). NaN when no replicate computed it.
     pub gap_expected: f64,
+    /// Bootstrap replicates the round drew: the study's `bootstrap`, or fewer where the
+    /// sequential bootstrap found every decision settled ([`super::guard`]).
+    pub replicates: usize,
 }
 
 /// G of residuals `res` ([`GAP_MEASURE`]): numeric covariates `covs`, categorical `levels`.
@@ -265,6 +271,26 @@ fn cv_log_score(x: Obs, terms: &[(Effect, Term)], folds: &[usize], k: usize) -> 
     cv_pointwise(x, terms, folds, k).map(|v| v.iter().sum())
 }
 
+/// Whether every decision a round makes from its bootstrap replicates `reps` so far is settled
+/// ([`super::guard::settled`]): for every candidate that ΔBIC, the cross-validated score and
+/// identifiability leave `open`, its family-wise p against α (its Λ on the one-parameter scale
+/// in `l1`) and its share of failed refits against the no-verdict share; and when the round then
+/// names nothing — its model is the final one — that model's AD and KS p-values against α
+/// (`observed` holds its statistics), which the verdict "the Weibull law fits" reads. A round
+/// that names an effect reports its model's AD and KS p-values but decides nothing by them.
+fn round_settled(reps: &[Replicate], observed: (f64, f64), l1: &[f64], df: &[usize], open: &[bool], alpha: f64) -> bool {
+    let b = reps.len();
+    let max_star = family_maxima(&reps.iter().map(|r| r.2.as_slice()).collect::<Vec<_>>(), df);
+    let count = |j: usize| max_star.iter().filter(|&&s| s >= l1[j]).count();
+    let failed = |j: usize| reps.iter().filter(|r| r.2[j].is_infinite()).count();
+    let open: Vec<usize> = (0..l1.len()).filter(|&j| open[j]).collect();
+    if !open.iter().all(|&j| settled(count(j), b, alpha) && settled(failed(j), b, MAX_FAILED_SHARE)) {
+        return false;
+    }
+    let names = open.iter().any(|&j| (1 + count(j)) as f64 / (b as f64 + 1.0) < alpha && decided(failed(j), b));
+    names || (settled(reps.iter().filter(|r| r.0 >= observed.0).count(), b, alpha) && settled(reps.iter().filter(|r| r.1 >= observed.1).count(), b, alpha))
+}
+
 /// Quantile residuals and probability-integral transforms of `x` under a fitted model; a
 /// censored or interval row's transform randomised within what the row allows
 /// ([`Obs::pit`], V from a ChaCha8 stream of `seed`; a complete sample draws nothing).
@@ -360,39 +386,76 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
             .collect();
         let lr: Vec<f64> = ext.iter().map(|e| e.as_ref().map_or(f64::NAN, |m| (2.0 * (m.loglik() - model.loglik())).max(0.0))).collect();
 
-        // Parametric bootstrap from the current model.
+        // What decides besides the bootstrap: ΔBIC, the cross-validated log score, whether a law
+        // is identified. A candidate failing one of them is not named whatever its p, so its
+        // p does not hold the sequential bootstrap back.
+        let cv0 = cv_log_score(x, &current, &fold, folds_k);
+        // A partially pooled factor is charged its effective degrees of freedom (df[j] exactly
+        // for every other candidate).
+        let dbic: Vec<f64> = ext.iter().zip(&lr).map(|(e, l)| e.as_ref().map_or(f64::NAN, |m| -l + (m.effective_parameters() - model.effective_parameters()) * (n as f64).ln())).collect();
+        let dcv: Vec<f64> = remaining
+            .iter()
+            .zip(&ext)
+            .map(|((c, t), e)| {
+                if e.is_none() {
+                    return f64::NAN;
+                }
+                let mut terms = current.clone();
+                terms.push((c.clone(), t.clone()));
+                match (cv_log_score(x, &terms, &fold, folds_k), cv0) {
+                    (Some(a), Some(b0)) => a - b0,
+                    _ => f64::NAN,
+                }
+            })
+            .collect();
+        // A two-population law the data do not identify is never named.
+        let identified: Vec<bool> = ext.iter().map(|e| e.as_ref().is_some_and(|m| m.law.as_ref().is_none_or(|l| l.identifiable.is_ok()))).collect();
+        let open: Vec<bool> = (0..remaining.len()).map(|j| identified[j] && dbic[j] < 0.0 && dcv[j] > 0.0).collect();
+        let l1: Vec<f64> = lr.iter().zip(&df).map(|(l, d)| one_df_scale(*l, *d)).collect();
+
+        // Diagnosis of the current model: its residuals' AD and KS statistics.
+        let (res, u) = residuals(&model, x, settings.seed ^ RESIDUAL_SEED);
+        let (ad, ks) = ad_ks_of_u(u);
+
+        // Parametric bootstrap from the current model, in stages until every decision of the
+        // round is settled (`guard`'s sequential pretest).
         let seed = settings.seed.wrapping_add(1_000_003 * round as u64);
         // A replicate whose refit fails counts as exceeding every observed statistic (Λ* = AD*
         // = KS* = +∞): dropped or counted as not exceeding, failures would lower the p-values
         // and the critical value (module docs).
-        let reps: Vec<Replicate> = (0..settings.bootstrap)
-            .into_par_iter()
-            .map(|r| {
-                let Some((xs, m0)) = model.bootstrap_refit(x, &current, seed, r) else {
-                    return (f64::INFINITY, f64::INFINITY, vec![f64::INFINITY; remaining.len()], f64::NAN);
-                };
-                let (res, u) = residuals(&m0, xs.view(), settings.seed ^ RESIDUAL_SEED ^ ((r as u64 + 1) << 20));
-                let g = gap_of(&res, &covs, &level_cols);
-                let xs = xs.view();
-                let (ad, ks) = ad_ks_of_u(u);
-                let l: Vec<f64> = remaining
-                    .iter()
-                    .zip(&ext)
-                    .map(|((c, t), e)| {
-                        if e.is_none() {
-                            return f64::NAN;
-                        }
-                        let mut terms = current.clone();
-                        terms.push((c.clone(), t.clone()));
-                        fit_model_near(xs, &terms, e.as_ref()).map_or(f64::INFINITY, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0))
-                    })
-                    .collect();
-                (ad, ks, l, g)
-            })
-            .collect();
+        let replicate = |r: usize| -> Replicate {
+            let Some((xs, m0)) = model.bootstrap_refit(x, &current, seed, r) else {
+                return (f64::INFINITY, f64::INFINITY, vec![f64::INFINITY; remaining.len()], f64::NAN);
+            };
+            let (res, u) = residuals(&m0, xs.view(), settings.seed ^ RESIDUAL_SEED ^ ((r as u64 + 1) << 20));
+            let g = gap_of(&res, &covs, &level_cols);
+            let xs = xs.view();
+            let (ad, ks) = ad_ks_of_u(u);
+            let l: Vec<f64> = remaining
+                .iter()
+                .zip(&ext)
+                .map(|((c, t), e)| {
+                    if e.is_none() {
+                        return f64::NAN;
+                    }
+                    let mut terms = current.clone();
+                    terms.push((c.clone(), t.clone()));
+                    fit_model_near(xs, &terms, e.as_ref()).map_or(f64::INFINITY, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0))
+                })
+                .collect();
+            (ad, ks, l, g)
+        };
+        let mut reps: Vec<Replicate> = Vec::new();
+        for upto in stages_of(settings.bootstrap, settings.sequential) {
+            let more: Vec<Replicate> = (reps.len()..upto).into_par_iter().map(replicate).collect();
+            reps.extend(more);
+            if round_settled(&reps, (ad, ks), &l1, &df, &open, settings.alpha) {
+                break;
+            }
+        }
         let null_failed = reps.iter().filter(|r| r.0.is_infinite()).count();
-        if reps.is_empty() || 2 * null_failed > settings.bootstrap {
-            return Err(Error::numerical("discrepancy bootstrap", format!("only {} of {} refits of the current model converged", settings.bootstrap - null_failed, settings.bootstrap)));
+        if reps.is_empty() || 2 * null_failed > reps.len() {
+            return Err(Error::numerical("discrepancy bootstrap", format!("only {} of {} refits of the current model converged", reps.len() - null_failed, reps.len())));
         }
         let b = reps.len() as f64;
         let p_of = |count: usize| (1 + count) as f64 / (b + 1.0);
@@ -400,9 +463,6 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
         // current model's failed).
         let failures: Vec<usize> = (0..remaining.len()).map(|j| reps.iter().filter(|r| r.2[j].is_infinite()).count()).collect();
 
-        // Diagnosis of the current model.
-        let (res, u) = residuals(&model, x, settings.seed ^ RESIDUAL_SEED);
-        let (ad, ks) = ad_ks_of_u(u);
         let p_ad = p_of(reps.iter().filter(|r| r.0 >= ad).count());
         let p_ks = p_of(reps.iter().filter(|r| r.1 >= ks).count());
         let findings = if diagnose {
@@ -418,10 +478,9 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
             let g: Vec<f64> = reps.iter().map(|r| r.3).filter(|g| g.is_finite()).collect();
             if g.is_empty() { f64::NAN } else { g.iter().sum::<f64>() / g.len() as f64 }
         };
-        stages.push(Stage { model: model.clone(), residuals: res, ad, ks, p_ad, p_ks, findings, gap, gap_expected });
+        stages.push(Stage { model: model.clone(), residuals: res, ad, ks, p_ad, p_ks, findings, gap, gap_expected, replicates: reps.len() });
 
         // Evidence: the family-wise guard on the one-parameter scale of every candidate.
-        let cv0 = cv_log_score(x, &current, &fold, folds_k);
         let max_star = family_maxima(&reps.iter().map(|r| r.2.as_slice()).collect::<Vec<_>>(), &df);
         let critical_1 = critical_value(&max_star, settings.alpha);
         let mut round_ev: Vec<(Evidence, f64)> = Vec::new();
@@ -430,22 +489,10 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
                 round_ev.push((skipped_evidence(round, c.clone(), "the extended model did not converge".into()), f64::NAN));
                 continue;
             };
-            let l = lr[j];
-            let l1 = one_df_scale(l, df[j]);
+            let (l, l1, dbic, dcv) = (lr[j], l1[j], dbic[j], dcv[j]);
             let p_b = p_of(reps.iter().filter(|r| r.2[j] >= l).count());
             let p_f = p_of(max_star.iter().filter(|&&s| s >= l1).count());
-            // A partially pooled factor is charged its effective degrees of freedom (df[j]
-            // exactly for every other candidate).
-            let dbic = -l + (m.effective_parameters() - model.effective_parameters()) * (n as f64).ln();
-            let mut terms = current.clone();
-            terms.push((c.clone(), t.clone()));
-            let dcv = match (cv_log_score(x, &terms, &fold, folds_k), cv0) {
-                (Some(a), Some(b0)) => a - b0,
-                _ => f64::NAN,
-            };
             let (parameter, meaning, weakest_link) = if report { describe(c, t, m, x) } else { ((String::new(), f64::NAN, f64::NAN), String::new(), None) };
-            // A two-population law the data do not identify is never named.
-            let identified = m.law.as_ref().is_none_or(|l| l.identifiable.is_ok());
             round_ev.push((
                 Evidence {
                     round,
@@ -468,7 +515,7 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
                     band_pivotal: false,
                     meaning,
                     shape: m.shape(),
-                    passed: p_f < settings.alpha && dbic < 0.0 && dcv > 0.0 && identified && decided(failures[j], reps.len()),
+                    passed: p_f < settings.alpha && open[j] && decided(failures[j], reps.len()),
                     named: false,
                     parameters: df[j],
                     weakest_link,

@@ -24,6 +24,52 @@ const OUTCOME_HEADERS: [&str; 14] = ["broken", "gebrochen", "bruch", "failed", "
 /// Header words of a count column.
 const COUNT_HEADERS: [&str; 18] = ["count", "counts", "n", "anzahl", "number", "numberof", "frequency", "freq", "häufigkeit", "haeufigkeit", "stückzahl", "stueckzahl", "stück", "stk", "specimens", "nspecimens", "quantity", "qty"];
 
+/// Outcome words that say the specimen broke, and that it did not (folded), whatever the header.
+const BROKE_WORDS: [&str; 4] = ["broken", "gebrochen", "bruch", "failed"];
+const NOT_BROKEN_WORDS: [&str; 12] = ["unbroken", "notbroken", "intact", "nichtgebrochen", "ungebrochen", "heil", "survived", "runout", "censored", "durchläufer", "durchlaeufer", "keinbruch"];
+
+/// Affirmative and negative words (folded): their meaning is the header's.
+const AFFIRMATIVE: [&str; 15] = ["yes", "y", "true", "t", "ja", "j", "oui", "si", "sí", "vero", "wahr", "x", "✓", "1", "ok"];
+const NEGATIVE: [&str; 13] = ["no", "n", "false", "f", "nein", "non", "falso", "nee", "nej", "✗", "falsch", "0", "nok"];
+
+/// Which of a yes/no column's `values` says a specimen broke and which that it did not, as the
+/// declaration `broken = { yes, no }` needs them; None where the header (`header`, folded) and
+/// the values leave it open. An outcome word says it alone (`intact`, `gebrochen`); a yes/no
+/// word means what the header asks: yes under `gebrochen` or `failed` broke, yes under
+/// `Durchläufer`, `runout`, `survived` or `censored` did not. `ok`/`nok` count as yes/no only
+/// under such a header.
+fn broke_and_not(header: &str, values: &[String]) -> Option<(String, String)> {
+    // The header's question: +1 "did it break?", −1 "did it survive?" (checked first: the
+    // words of survival hold those of breaking, `nichtgebrochen`).
+    let asks = if NOT_BROKEN_WORDS.iter().chain(&["suspended", "survival"]).any(|w| header.contains(w)) {
+        Some(false)
+    } else if BROKE_WORDS.iter().chain(&["failure", "fracture", "break"]).any(|w| header.contains(w)) {
+        Some(true)
+    } else {
+        None
+    };
+    let broke = |v: &String| -> Option<bool> {
+        let f = fold(v);
+        if BROKE_WORDS.contains(&f.as_str()) {
+            Some(true)
+        } else if NOT_BROKEN_WORDS.contains(&f.as_str()) {
+            Some(false)
+        } else if AFFIRMATIVE.contains(&f.as_str()) {
+            asks
+        } else if NEGATIVE.contains(&f.as_str()) {
+            asks.map(|a| !a)
+        } else {
+            None
+        }
+    };
+    let [a, b] = values else { return None };
+    match (broke(a), broke(b)) {
+        (Some(true), Some(false)) => Some((a.clone(), b.clone())),
+        (Some(false), Some(true)) => Some((b.clone(), a.clone())),
+        _ => None,
+    }
+}
+
 /// The distinct non-empty values of column `c` over `rows`, as text, in order of appearance.
 fn distinct_cells(table: &RawTable, rows: &[usize], c: usize) -> Vec<String> {
     let mut distinct: Vec<String> = Vec::new();
@@ -80,10 +126,13 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
         let zero_one = folded_values.iter().all(|v| v == "0" || v == "1") && OUTCOME_HEADERS.contains(&name.as_str());
         if (words || zero_one) && distinct.len() <= 3 {
             let shown = distinct.iter().map(|v| format!("\"{v}\"")).collect::<Vec<_>>().join(", ");
-            let (yes, no) = (distinct.first().cloned().unwrap_or_default(), distinct.get(1).cloned().unwrap_or_default());
+            let declare = match broke_and_not(&name, &distinct) {
+                Some((yes, no)) => format!("{key}broken = {{ column = \"{h}\", yes = \"{yes}\", no = \"{no}\" }} (yes: broke at the row's value; no: did not break by it)"),
+                None => format!("{key}broken = {{ column = \"{h}\", yes = …, no = … }} with yes the value of a specimen that broke at the row's value and no that of one that did not break by it (the header and values do not say which is which)"),
+            };
             refused.push((
                 format!("column {h}"),
-                format!("holds yes/no values ({shown}) that nothing declares: if it says which specimens broke, declare it: {key}broken = {{ column = \"{h}\", yes = \"{yes}\", no = \"{no}\" }} (yes: broke at the row's value; no: did not break by it); if it is a recorded factor, declare it in `factors`; if it says nothing of the strength, {key}ignore = [\"{h}\"]"),
+                format!("holds yes/no values ({shown}) that nothing declares: if it says which specimens broke, declare it: {declare}; if it is a recorded factor, declare it in `factors`; if it says nothing of the strength, {key}ignore = [\"{h}\"]"),
             ));
             continue;
         }
@@ -119,5 +168,34 @@ pub fn check_unused(table: &RawTable, rows: &[usize], provenance: &mut Provenanc
             let more: String = rest.iter().map(|(l, r)| format!("; and {l}: {r}")).collect();
             Err(Error::data_file(&table.origin.path, location.clone(), format!("{rule}{more}")))
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::broke_and_not;
+
+    fn of(header: &str, values: &[&str]) -> Option<(String, String)> {
+        broke_and_not(&super::fold(header), &values.iter().map(|v| v.to_string()).collect::<Vec<_>>())
+    }
+
+    #[test]
+    fn the_declaration_offered_puts_the_value_of_a_break_under_yes_whatever_its_order() {
+        let pair = |y: &str, n: &str| Some((y.to_string(), n.to_string()));
+        // A new user's file listed "no" first: yes is still the break.
+        assert_eq!(of("broken", &["no", "yes"]), pair("yes", "no"));
+        assert_eq!(of("gebrochen", &["nein", "ja"]), pair("ja", "nein"));
+        assert_eq!(of("Bruch", &["ja", "nein"]), pair("ja", "nein"));
+        // A question of survival: yes did not break.
+        assert_eq!(of("Durchläufer", &["ja", "nein"]), pair("nein", "ja"));
+        assert_eq!(of("runout", &["1", "0"]), pair("0", "1"));
+        assert_eq!(of("nicht gebrochen", &["ja", "nein"]), pair("nein", "ja"));
+        assert_eq!(of("failed", &["0", "1"]), pair("1", "0"));
+        // Outcome words say it under any header.
+        assert_eq!(of("Zustand", &["intact", "broken"]), pair("broken", "intact"));
+        // Open: a header that asks nothing, one value only, two values of one meaning.
+        assert_eq!(of("status", &["ok", "nok"]), None);
+        assert_eq!(of("gebrochen", &["ja"]), None);
+        assert_eq!(of("Zustand", &["yes", "no"]), None);
     }
 }

@@ -9,7 +9,8 @@
 //! uncertainty = "bootstrap"           # or "bayesian"
 //! draws = 4000
 //! [strength.naming]                   # the loop's settings (only read for "diagnosed")
-//! bootstrap = 499
+//! bootstrap = 499                     # replicates per round at most
+//! sequential = true                   # stop a round at 99, 199, … once its decisions are settled
 //! ```
 
 use std::fmt;
@@ -134,8 +135,12 @@ pub enum Uncertainty {
 pub struct NamingSettings {
     /// Candidates to consider (default: all).
     pub candidates: Vec<Effect>,
-    /// Bootstrap replicates per round: LR calibration and AD/KS p-values (default 499).
+    /// Bootstrap replicates per round at most: LR calibration and AD/KS p-values (default 499).
     pub bootstrap: usize,
+    /// Stop a round's bootstrap at 99, 199, … replicates once every decision of the round is
+    /// settled (default true; `crate::discrepancy::guard`'s sequential pretest); false draws
+    /// all `bootstrap` replicates in every round.
+    pub sequential: bool,
     /// Permutations of each residual-trend test (default 999).
     pub permutations: usize,
     /// Family-wise error rate of the guard (default 0.05).
@@ -154,7 +159,7 @@ pub struct NamingSettings {
 
 impl Default for NamingSettings {
     fn default() -> Self {
-        NamingSettings { candidates: ALL.to_vec(), bootstrap: 499, permutations: 999, alpha: 0.05, cv_folds: 10, max_effects: 3, gamma: 5.0, seed: 20261122 }
+        NamingSettings { candidates: ALL.to_vec(), bootstrap: 499, sequential: true, permutations: 999, alpha: 0.05, cv_folds: 10, max_effects: 3, gamma: 5.0, seed: 20261122 }
     }
 }
 

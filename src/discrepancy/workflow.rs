@@ -376,14 +376,16 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
             Vec::new()
         };
         let df: Vec<usize> = remaining.iter().map(|(_, t)| Effect::extra_parameters(t)).collect();
-        let ext: Vec<Option<ModelFit>> = remaining
+        // Each candidate's model: the current terms and the candidate's.
+        let extended: Vec<Vec<(Effect, Term)>> = remaining
             .iter()
             .map(|(c, t)| {
                 let mut terms = current.clone();
                 terms.push((c.clone(), t.clone()));
-                fit_model(x, &terms).ok()
+                terms
             })
             .collect();
+        let ext: Vec<Option<ModelFit>> = extended.iter().map(|terms| fit_model(x, terms).ok()).collect();
         let lr: Vec<f64> = ext.iter().map(|e| e.as_ref().map_or(f64::NAN, |m| (2.0 * (m.loglik() - model.loglik())).max(0.0))).collect();
 
         // What decides besides the bootstrap: ΔBIC, the cross-validated log score, whether a law
@@ -393,19 +395,12 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
         // A partially pooled factor is charged its effective degrees of freedom (df[j] exactly
         // for every other candidate).
         let dbic: Vec<f64> = ext.iter().zip(&lr).map(|(e, l)| e.as_ref().map_or(f64::NAN, |m| -l + (m.effective_parameters() - model.effective_parameters()) * (n as f64).ln())).collect();
-        let dcv: Vec<f64> = remaining
+        let dcv: Vec<f64> = extended
             .iter()
             .zip(&ext)
-            .map(|((c, t), e)| {
-                if e.is_none() {
-                    return f64::NAN;
-                }
-                let mut terms = current.clone();
-                terms.push((c.clone(), t.clone()));
-                match (cv_log_score(x, &terms, &fold, folds_k), cv0) {
-                    (Some(a), Some(b0)) => a - b0,
-                    _ => f64::NAN,
-                }
+            .map(|(terms, e)| match (e, cv0) {
+                (Some(_), Some(b0)) => cv_log_score(x, terms, &fold, folds_k).map_or(f64::NAN, |a| a - b0),
+                _ => f64::NAN,
             })
             .collect();
         // A two-population law the data do not identify is never named.
@@ -431,16 +426,12 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
             let g = gap_of(&res, &covs, &level_cols);
             let xs = xs.view();
             let (ad, ks) = ad_ks_of_u(u);
-            let l: Vec<f64> = remaining
+            let l: Vec<f64> = extended
                 .iter()
                 .zip(&ext)
-                .map(|((c, t), e)| {
-                    if e.is_none() {
-                        return f64::NAN;
-                    }
-                    let mut terms = current.clone();
-                    terms.push((c.clone(), t.clone()));
-                    fit_model_near(xs, &terms, e.as_ref()).map_or(f64::INFINITY, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0))
+                .map(|(terms, e)| match e {
+                    None => f64::NAN,
+                    Some(_) => fit_model_near(xs, terms, e.as_ref()).map_or(f64::INFINITY, |m| (2.0 * (m.loglik() - m0.loglik())).max(0.0)),
                 })
                 .collect();
             (ad, ks, l, g)

@@ -95,6 +95,10 @@ enum Command {
         /// softening (required when the file's tests span several temperatures).
         #[arg(long, requires = "data", value_name = "CELSIUS")]
         operating_temperature_c: Option<f64>,
+        /// With --data: the material's name in the report (default: the file's material
+        /// column, else its file name without extension).
+        #[arg(long, requires = "data")]
+        label: Option<String>,
         /// Root directory of the reports (as for `run`): the report goes to
         /// <root>/<study name>/ (<root>/discrepancy-<file stem>/ with --data), and a curve-level
         /// study finds its calibration's report under the same root.
@@ -318,14 +322,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             out!("wrote {} in {:.2} s", summary.report_dir.display(), summary.wall_time_s);
         }
-        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, youngs_modulus_pa, poisson_ratio, density_kg_m3, temperature_c, operating_temperature_c, reports_dir, quiet, no_deps, no_document } => {
+        Command::Discrepancy { study, data, model: DiscrepancyModel::WeibullHertz, youngs_modulus_pa, poisson_ratio, density_kg_m3, temperature_c, operating_temperature_c, label, reports_dir, quiet, no_deps, no_document } => {
             let loaded = match (&study, &data) {
                 (_, Some(d)) => {
                     let (Some(e), Some(nu), Some(rho)) = (youngs_modulus_pa, poisson_ratio, density_kg_m3) else {
                         let missing: Vec<&str> = [("--youngs-modulus-pa", youngs_modulus_pa), ("--poisson-ratio", poisson_ratio), ("--density-kg-m3", density_kg_m3)].iter().filter(|(_, v)| v.is_none()).map(|(k, _)| *k).collect();
                         return Err(partlife::Error::config("--data", missing.join(", "), "the lifetime needs the particles' elastic constants and density, which set the impact stress (no material is assumed): give --youngs-modulus-pa, --poisson-ratio and --density-kg-m3 (the deliverable's Gen 4: 112e9, 0.25, 3600)").into());
                     };
-                    let (file, s) = partlife::discrepancy::run::quick_study(d, partlife::contact::Elastic { youngs_modulus_pa: e, poisson_ratio: nu }, rho, temperature_c, operating_temperature_c)?;
+                    let (file, s) = partlife::discrepancy::run::quick_study(d, partlife::contact::Elastic { youngs_modulus_pa: e, poisson_ratio: nu }, rho, temperature_c, operating_temperature_c, label.as_deref())?;
                     partlife::study::LoadedStudy { file, study: partlife::study::Study::Discrepancy(Box::new(s)) }
                 }
                 (Some(s), None) => partlife::study::load(s)?,

@@ -468,7 +468,7 @@ pub fn discrepancy_speed(settings: &Path) -> Result<DiscrepancySpeed> {
     crate::synth::synthesize(&gen_settings, dir)?;
     let data = dir.join("bench_crush_100.csv");
     // The generator's elastic constants; the density of the lifetime study's particles.
-    let (file, s) = crate::discrepancy::run::quick_study(&data, gen_settings.material[0].elastic, 3600.0, None, None)?;
+    let (file, s) = crate::discrepancy::run::quick_study(&data, gen_settings.material[0].elastic, 3600.0, None, None, None)?;
     let crush = crate::data::read_crush(&data)?;
     let sample = crate::strength::sample_of(&crush, &s.material[0].elastic, &s.contact)?;
     let settings = crate::strength::NamingSettings { seed: s.seed, ..Default::default() };

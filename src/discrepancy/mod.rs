@@ -7,9 +7,10 @@
 //!   regression that fits them are the strength model's ([`crate::strength::effects`],
 //!   [`crate::strength::regress`]): the fits before and after naming are instances of it.
 //! * [`workflow`]: the name → add → diagnose-again loop with the bootstrap-calibrated
-//!   false-discovery guard and the gap measure; [`guard`]: the guard's arithmetic (one-parameter
-//!   scale, family-wise maxima with failed refits as exceeding, the critical value, no verdict
-//!   above a share of failures).
+//!   false-discovery guard and the gap measure; [`guard`]: the guard's arithmetic (the
+//!   family-wise p by Westfall–Young min-P or max-T with failed refits counting against naming,
+//!   each candidate's critical value, no verdict above a share of failures, the sequential
+//!   bootstrap's pretest).
 //! * [`specs`]: what a strength specification means on one material's data (an explicit list, or
 //!   what the loop names) and its cross-validated evidence for the main study's stacking weights.
 //! * [`run`]: the study (`kind = "discrepancy"`, `partlife discrepancy`): lifetime before and

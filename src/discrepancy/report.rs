@@ -6,6 +6,12 @@ use super::workflow::GAP_MEASURE;
 use crate::strength::Effect;
 use crate::report::bootstrap_p_text as p_text;
 
+/// "= 0.123", or "≤ 0.005" for a bootstrap p at its floor 1/(B + 1).
+fn eq_p(p: f64, replicates: usize) -> String {
+    let t = p_text(p, replicates);
+    if t.starts_with('≤') { t } else { format!("= {t}") }
+}
+
 /// Wilson score interval of k successes in n at the two-sided level 90 %.
 pub fn wilson90(k: usize, n: usize) -> (f64, f64) {
     if n == 0 {
@@ -38,8 +44,12 @@ pub(super) fn answer(s: &DiscrepancyStudy, results: &[MaterialResult]) -> String
             let what = if r.crush.is_some() { "particles" } else { "specimens" };
             let ev = &r.outcome.evidence;
             let misses = if r.outcome.named.is_empty() {
-                match ev.iter().filter(|e| e.skipped.is_none() && e.p_family.is_finite()).min_by(|x, y| x.p_family.total_cmp(&y.p_family)) {
-                    Some(e) => format!("the loop names no effect the {model} model misses — no candidate passes the guard (the smallest family-wise p, `{}`, is {})", e.candidate.name(), p_text(e.p_family, e.replicates)),
+                // The nearest candidate among those the data identify (a law whose fit is not
+                // identified is no candidate whatever its p).
+                let tried = || ev.iter().filter(|e| e.skipped.is_none() && e.p_family.is_finite());
+                match tried().filter(|e| unidentified(e).is_none()).min_by(|x, y| x.p_family.total_cmp(&y.p_family)) {
+                    Some(e) => format!("no candidate effect passes the guard, so the data show no effect the {model} model misses at α = {alpha} — which does not show that none is there (the smallest family-wise p, `{}`, is {})", e.candidate.name(), p_text(e.p_family, e.replicates)),
+                    None if tried().next().is_some() => format!("no candidate effect passes the guard, so the data show no effect the {model} model misses at α = {alpha} (no candidate law is identified by these data)"),
                     None => format!("the loop names no effect the {model} model misses — there was no candidate effect to try"),
                 }
             } else {
@@ -47,16 +57,27 @@ pub(super) fn answer(s: &DiscrepancyStudy, results: &[MaterialResult]) -> String
                 format!("the {model} model misses {}", named.join(", then "))
             };
             let below = |p: f64| if p < alpha { format!(" (below {alpha})") } else { String::new() };
-            let ad_ks = format!("Anderson–Darling p = {:.3}{}, Kolmogorov–Smirnov p = {:.3}{}", a.p_ad, below(a.p_ad), a.p_ks, below(a.p_ks));
-            let (with, still) = match r.outcome.named.len() {
-                0 => ("", ""),
-                1 => ("with it ", "still "),
-                _ => ("with them ", "still "),
+            let ad_ks = format!("Anderson–Darling p {}{}, Kolmogorov–Smirnov p {}{}", eq_p(a.p_ad, a.replicates), below(a.p_ad), eq_p(a.p_ks, a.replicates), below(a.p_ks));
+            let fits = |st: &super::workflow::Stage| st.p_ad >= alpha && st.p_ks >= alpha;
+            let base_fits = fits(r.outcome.before());
+            let with = match r.outcome.named.len() {
+                0 => "",
+                1 if base_fits == fits(a) => "with it, as without, ",
+                1 => "with it ",
+                _ if base_fits == fits(a) => "with them, as without, ",
+                _ => "with them ",
             };
-            let fit = if a.p_ad < alpha || a.p_ks < alpha {
-                format!("{with}the Weibull law {still}fits these data poorly ({ad_ks}): a departure in the shape of the distribution that no recorded factor explains")
+            // A p within a factor 2 of α: the verdict "fits" is a narrow one.
+            let near = match (a.p_ad < 2.0 * alpha, a.p_ks < 2.0 * alpha) {
+                (true, true) => ", though both lie near it",
+                (true, false) => ", though the Anderson–Darling p lies near it",
+                (false, true) => ", though the Kolmogorov–Smirnov p lies near it",
+                _ => "",
+            };
+            let fit = if !fits(a) {
+                format!("{with}the Weibull law fits these data poorly ({ad_ks}): a departure in the shape of the distribution that no recorded factor explains")
             } else {
-                format!("{with}the Weibull law fits these data ({ad_ks}, neither below {alpha})")
+                format!("{with}the Weibull law fits these data ({ad_ks}, neither below {alpha}{near})")
             };
             format!("**{}** ({} {what}): {misses}; {fit}.", r.label, r.sample.strength.len())
         })
@@ -148,18 +169,33 @@ fn evidence_row(e: &super::workflow::Evidence) -> String {
             if se.is_finite() { format!("{k} = {:.d$} ± {:.d$}{unit}{band}", v * scale, se * scale) } else { format!("{k} = {:.d$}{unit}{band}", v * scale) }
         })
         .unwrap_or_default();
-    let verdict = if e.named {
-        "**named**".to_string()
+    // A law the data do not identify has no estimate to report: its optimum is one of several,
+    // or on the edge of the parameter space (the verdict says which).
+    let par = if unidentified(e).is_some() { "–".to_string() } else { par };
+    let verdict = match verdict(e) {
+        v if v == "named" => "**named**".to_string(),
+        v => v,
+    };
+    format!("| {} | {} | {:.2} | {:.2} | {} | {:.2} | {:.2} | {} | {} |\n", e.round, e.candidate.name(), e.lr, e.lr_critical, p_text(e.p_family, e.replicates), e.delta_bic, e.delta_cv, par, verdict)
+}
+
+/// A candidate's verdict in words (evidence.csv's `verdict`, the report's tables): named,
+/// passed (a weaker candidate was named), not identified (why), skipped (why), no verdict (too
+/// many failed refits), or not supported.
+pub(super) fn verdict(e: &super::workflow::Evidence) -> String {
+    if let Some(reason) = &e.skipped {
+        format!("skipped: {reason}")
+    } else if e.named {
+        "named".to_string()
     } else if e.passed {
         "passed, weaker".to_string()
     } else if let Some(why) = unidentified(e) {
         format!("not identified: {why}")
-    } else if e.skipped.is_none() && !super::guard::decided(e.failures, e.replicates) {
+    } else if !super::guard::decided(e.failures, e.replicates) {
         format!("no verdict: {} of {} bootstrap refits failed (more than {:.0} %)", e.failures, e.replicates, 100.0 * super::guard::MAX_FAILED_SHARE)
     } else {
         "not supported".to_string()
-    };
-    format!("| {} | {} | {:.2} | {:.2} | {} | {:.2} | {:.2} | {} | {} |\n", e.round, e.candidate.name(), e.lr, e.lr_critical, p_text(e.p_family, e.replicates), e.delta_bic, e.delta_cv, par, verdict)
+    }
 }
 
 /// For a named temperature softening (strength × r per 100 °C) in a crush material with an
@@ -238,6 +274,16 @@ pub(super) fn known_against_one_law(o: &crate::strength::origins::Origins, one_m
     format!("{why}{support}")
 }
 
+/// How the family-wise p is made (the study's `guard`), and what a p at its floor means.
+fn guard_sentence(n: &crate::strength::NamingSettings) -> String {
+    let how = match n.guard {
+        crate::strength::FamilyGuard::MinP => "A candidate's family-wise p is Westfall & Young's single-step min-P: each candidate's likelihood ratio Λ is first turned into its own p-value, from the null law of its Λ fitted to its bootstrap replicates (a scaled χ²), and the family-wise p is the share of replicates whose smallest such p lies at or below it. Each candidate is so judged against its own null distribution — a two-population law, whose Λ has a heavier null tail than Wilks' χ², does not raise the bar of the others — while the chance of naming any effect when none is there stays α. Each candidate's \"Λ critical\" is the value above which its family-wise p falls below α; candidates with as many parameters may have different ones, each from its own fitted null law.",
+        crate::strength::FamilyGuard::MaxT => "A candidate's family-wise p is the max-T p: the share of replicates whose largest likelihood ratio Λ*, every candidate on Wilks' one-degree-of-freedom scale, reaches the candidate's Λ on that scale; the candidates share one critical value on that scale (\"Λ critical\" gives it on each candidate's own; `guard = \"min-p\"` judges each against its own null distribution instead).",
+    };
+    let floors: Vec<String> = super::guard::stages(n.bootstrap, n.sequential).iter().map(|b| format!("≤ {:.3} at B = {b}", 1.0 / (*b as f64 + 1.0))).collect();
+    format!("{how} The tables give the family-wise p; `evidence.csv` gives each candidate's own bootstrap p beside it (`p_bootstrap`: the share of replicates whose Λ* reaches its Λ, which no decision reads alone). A p printed as \"≤ 1/(B + 1)\" ({}) means no replicate reached the data's Λ: it is the smallest p B replicates can give.", floors.join(", "))
+}
+
 /// How many parametric-bootstrap replicates a round draws, and why fewer than the most (each
 /// material's table of models gives each round's count).
 fn bootstrap_sentence(n: &crate::strength::NamingSettings) -> String {
@@ -267,10 +313,11 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
     }
     md.push_str(&answer(s, results));
     md.push_str(&format!(
-        "\n## How the workflow decides\n\n{} The workflow then looks for structure the model misses, names the missing effect only when it passes the guard (family-wise bootstrap p < {} over every candidate and factor tried, ΔBIC < 0, better {}-fold cross-validated log score), adds it and diagnoses again. {}\n\nGap measure: {}.\n",
+        "\n## How the workflow decides\n\n{} The workflow then looks for structure the model misses, names the missing effect only when it passes the guard (family-wise bootstrap p < {} over every candidate and factor tried, ΔBIC < 0, better {}-fold cross-validated log score), adds it and diagnoses again. {} {}\n\nGap measure: {}.\n",
         how.join(" "),
         s.discrepancy.alpha,
         s.discrepancy.cv_folds,
+        guard_sentence(&s.discrepancy),
         bootstrap_sentence(&s.discrepancy),
         GAP_MEASURE
     ));
@@ -316,17 +363,20 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         md.push_str("| model | Weibull m | AD (p) | KS (p) | gap G | G, nothing missing | bootstrap replicates |\n|---|---|---|---|---|---|---|\n");
         for (i, st) in r.outcome.stages.iter().enumerate() {
             md.push_str(&format!(
-                "| {}{} | {} | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.1} | {:.1} | {} |\n",
+                "| {}{} | {} | {:.3} ({}) | {:.3} ({}) | {:.1} | {:.1} | {} |\n",
                 if i == 0 { "base" } else { "+ " },
                 if i == 0 { String::new() } else { names(&st.model.effects) },
                 modulus_text(&st.model),
                 st.ad,
-                st.p_ad,
+                p_text(st.p_ad, st.replicates),
                 st.ks,
-                st.p_ks,
+                p_text(st.p_ks, st.replicates),
                 st.gap,
                 st.gap_expected,
-                st.replicates
+                match &st.unsettled {
+                    Some(why) => format!("{} (all: {why})", st.replicates),
+                    None => st.replicates.to_string(),
+                }
             ));
         }
         let df: usize = b.findings.iter().map(|f| f.df).sum();
@@ -342,7 +392,7 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         if r.outcome.evidence.is_empty() {
             md.push_str("The data record no factor and no size measure and no two-population law was asked for: there is no candidate effect to name, and the workflow can only diagnose the Weibull law itself (below).\n");
         } else {
-            md.push_str("| round | candidate | Λ | Λ critical | p (family) | ΔBIC | ΔCV log score | parameter | verdict |\n|---|---|---|---|---|---|---|---|---|\n");
+            md.push_str("| round | candidate | Λ | Λ critical | p (family) | ΔBIC (< 0 favours it) | ΔCV log score (> 0 favours it) | parameter | verdict |\n|---|---|---|---|---|---|---|---|---|\n");
             for e in &r.outcome.evidence {
                 md.push_str(&evidence_row(e));
             }
@@ -406,9 +456,9 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         if a.p_ad < s.discrepancy.alpha || a.p_ks < s.discrepancy.alpha {
             let (ad, ks) = (a.p_ad < s.discrepancy.alpha, a.p_ks < s.discrepancy.alpha);
             let tests = match (ad, ks) {
-                (true, true) => format!("Anderson–Darling p = {:.3} and Kolmogorov–Smirnov p = {:.3}", a.p_ad, a.p_ks),
-                (true, false) => format!("Anderson–Darling p = {:.3}", a.p_ad),
-                _ => format!("Kolmogorov–Smirnov p = {:.3}", a.p_ks),
+                (true, true) => format!("Anderson–Darling p {} and Kolmogorov–Smirnov p {}", eq_p(a.p_ad, a.replicates), eq_p(a.p_ks, a.replicates)),
+                (true, false) => format!("Anderson–Darling p {}", eq_p(a.p_ad, a.replicates)),
+                _ => format!("Kolmogorov–Smirnov p {}", eq_p(a.p_ks, a.replicates)),
             };
             let tests = if tally.complete() { tests } else { format!("{tests} of the randomised quantile residuals") };
             let kinds = |round: Option<usize>| -> Vec<crate::strength::flaws::Populations> {
@@ -492,6 +542,9 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                 md.push_str(&format!("\n{few}\n"));
             }
         }
+        if r.crush.is_none() && r.origins.is_none() {
+            md.push_str("\nNo lifetime is computed from a strength file (`lifetime.csv` holds no rows for it): its specimens carry no contact geometry that would carry their strength to an impact.\n");
+        }
         if let Some(spec) = &r.crush {
         let known = r.lifetime.iter().find(|(st, _)| st == "origins").map(|(_, v)| v);
         let how = match (r.outcome.before().model.pivotal(), r.outcome.after().model.pivotal(), r.outcome.after().model.location_scale()) {
@@ -521,6 +574,12 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
         if let (Some(k), Some(o)) = (known, &r.origins) {
             md.push_str(&format!("\n{}\n", known_against_one_law(o, b.model.shape(), &lb[0], &k[0], s.discrepancy.alpha)));
         }
+        // The same file in a lifetime study gives another base-model estimate: say why.
+        md.push_str(&format!(
+            "\nBoth models predict with their maximum-likelihood fit (base model m = {:.2}). A lifetime study of the same file predicts by default with ASTM C1239's unbiased modulus (`[weibull] shape_estimate = \"unbiased\"`, smaller than the maximum-likelihood m for {} particles), so in the lower tail, where the impacts lie, its breaking probability is larger than the base model's here; `shape_estimate = \"mle\"` there gives this one.\n",
+            b.model.shape(),
+            r.sample.strength.len()
+        ));
         }
         if r.crush.is_some() && !r.outcome.named.is_empty() {
             md.push_str(&format!(
@@ -542,9 +601,40 @@ pub(super) fn summary(s: &DiscrepancyStudy, results: &[MaterialResult]) -> Strin
                 let f = |p: Option<&PowerRow>| p.map(|p| format!("{}/{}", p.all, p.replicates)).unwrap_or_else(|| "–".into());
                 md.push_str(&format!("| {n} | {} | {} |\n", f(pe), f(pn)));
             }
+            md.push_str(&power_comment(r, s.discrepancy.alpha));
         }
     }
     md
+}
+
+/// What the power table's numbers say: why the power column is empty when nothing was named,
+/// and whether the false positives over every size agree with the guard's α (their 90 % Wilson
+/// band against α).
+fn power_comment(r: &MaterialResult, alpha: f64) -> String {
+    let mut out = String::new();
+    if r.outcome.named.is_empty() {
+        out.push_str("\nNothing was named on these data, so there is no effect whose detection power to measure (\"–\").");
+    }
+    let none: Vec<&PowerRow> = r.power.iter().filter(|p| p.scenario == "none").collect();
+    let (k, n) = (none.iter().map(|p| p.all).sum::<usize>(), none.iter().map(|p| p.replicates).sum::<usize>());
+    if n > 0 {
+        let (lo, hi) = wilson90(k, n);
+        let verdict = if lo > alpha {
+            format!("more often than the guard's α = {alpha}: at these sizes the guard names effects that are not there more often than it should")
+        } else if hi < alpha {
+            format!("less often than the guard's α = {alpha}: at these sizes it is conservative")
+        } else {
+            format!("consistent with the guard's α = {alpha}")
+        };
+        out.push_str(&format!(
+            "{}With no effect in the data the loop named one in {k} of {n} datasets over all sizes ({}; 90 % band {}–{}): {verdict}.",
+            if out.is_empty() { "\n" } else { " " },
+            crate::report::captions::percent(k as f64 / n as f64),
+            crate::report::captions::percent(lo),
+            crate::report::captions::percent(hi)
+        ));
+    }
+    if out.is_empty() { out } else { format!("{out}\n") }
 }
 
 #[cfg(test)]

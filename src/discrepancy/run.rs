@@ -71,7 +71,7 @@ pub const QUICK_DECLARES_NOTHING: &str = " — `--data` declares nothing: write 
 /// `density_kg_m3`: the command's options, which it requires — they set the lifetime: with a
 /// bauxite's constants instead of Gen 4's the 1-year breakage differs by an order of
 /// magnitude; they shift σ̄ by a common factor and do not change the naming verdict).
-pub fn quick_study(data: &Path, elastic: crate::contact::Elastic, density_kg_m3: f64, temperature_c: Option<f64>, operating_c: Option<f64>) -> Result<(StudyFile, DiscrepancyStudy)> {
+pub fn quick_study(data: &Path, elastic: crate::contact::Elastic, density_kg_m3: f64, temperature_c: Option<f64>, operating_c: Option<f64>, label: Option<&str>) -> Result<(StudyFile, DiscrepancyStudy)> {
     let source = crate::intake::Source { temperature_c, ..crate::intake::Source::file(data) };
     if let Some(t) = temperature_c
         && !crate::data::TEMPERATURE.contains(t)
@@ -99,7 +99,12 @@ pub fn quick_study(data: &Path, elastic: crate::contact::Elastic, density_kg_m3:
     let file_name = data.file_name().map(PathBuf::from).unwrap_or_else(|| data.to_path_buf());
     let material = MaterialSpec {
         key,
-        label: if crush.material().is_empty() { stem.clone() } else { crush.material().to_string() },
+        // The label given, else the file's material column, else the file's stem.
+        label: match label {
+            Some(l) => l.to_string(),
+            None if crush.material().is_empty() => stem.clone(),
+            None => crush.material().to_string(),
+        },
         data: crate::intake::DataRef(crate::intake::Source { temperature_c, ..crate::intake::Source::file(file_name) }),
         elastic,
         density_kg_m3,

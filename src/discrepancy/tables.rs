@@ -61,6 +61,7 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         ucol("bootstrap_replicates", ev.iter().map(|(_, e)| e.replicates as u64).collect()),
         scol("passed_guard", ev.iter().map(|(_, e)| e.passed.to_string()).collect()),
         scol("named", ev.iter().map(|(_, e)| e.named.to_string()).collect()),
+        scol("verdict", ev.iter().map(|(_, e)| super::report::verdict(e)).collect()),
     ])?;
     dir.write_table("evidence", &mut t)?;
 
@@ -87,6 +88,8 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         fcol("gap_expected", st.iter().map(|(_, _, s)| s.gap_expected).collect()),
         fcol("gap_degrees_of_freedom", st.iter().map(|(_, _, s)| 0.0 + s.findings.iter().map(|f| f.df as f64).sum::<f64>()).collect()),
         ucol("bootstrap_replicates", st.iter().map(|(_, _, s)| s.replicates as u64).collect()),
+        // Why a sequential round drew every replicate: the decision still near its level.
+        scol("bootstrap_all_drawn_for", st.iter().map(|(_, _, s)| s.unsettled.clone().unwrap_or_default()).collect()),
     ])?;
     dir.write_table("stages", &mut t)?;
 

@@ -78,7 +78,7 @@ pub(super) fn verdict_json(loaded: &StudyFile, s: &DiscrepancyStudy, results: &[
     json!({
         "study": loaded.name,
         "gap_measure": GAP_MEASURE,
-        "guard": format!("family-wise (max-T) bootstrap p < {} with ΔBIC < 0 and a better {}-fold cross-validated log score", s.discrepancy.alpha, s.discrepancy.cv_folds),
+        "guard": format!("family-wise ({}) bootstrap p < {} with ΔBIC < 0 and a better {}-fold cross-validated log score", s.discrepancy.guard.name(), s.discrepancy.alpha, s.discrepancy.cv_folds),
         "effects_named": named,
         "gap_before": before,
         "gap_after": after,

@@ -14,10 +14,11 @@
 //!    * the likelihood ratio Λ = 2(ℓ_cand − ℓ_current), calibrated by the same bootstrap:
 //!      B samples drawn from the fitted current model at the observed covariates, each
 //!      refitted with and without every candidate. The marginal p-value counts Λ*_c ≥ Λ_c; the
-//!      **false-discovery guard** uses the family-wise (max-T) p-value, which counts
-//!      max_c Λ*_c ≥ Λ_c, so the chance of naming any effect when none is there is α whatever
-//!      the number of candidates. The critical Λ reported is the order statistic of the maxima
-//!      that decision uses ([`critical_value`]: p < α exactly when Λ > critical). A replicate
+//!      **false-discovery guard** uses a family-wise p-value over every candidate of the round
+//!      ([`super::guard::family`]: Westfall–Young's min-P by default, max-T on Wilks' one-df
+//!      scale with `guard = "max-t"`), so the chance of naming any effect when none is there is
+//!      α whatever the number of candidates. The critical Λ reported for each candidate is the
+//!      order statistic that decision uses (p < α exactly when Λ > critical). A replicate
 //!      whose refit fails (the current model's, or the candidate's) counts as Λ* = +∞ — as
 //!      exceeding, so failures can only raise p — and a candidate with more than
 //!      [`super::guard::MAX_FAILED_SHARE`] of its replicates failed gets no verdict (neither named nor
@@ -32,8 +33,8 @@
 //!      stratified by the levels of the categorical factors (`strength::fit::folds_stratified`),
 //!      so no level of two or more specimens falls wholly in one fold and leaves a training
 //!      set without it;
-//! 3. **names** the candidate with the largest Λ among those passing the guard — max-T
-//!    p < α, ΔBIC < 0 and a better cross-validated log score — adds it and starts the next
+//! 3. **names** the candidate with the largest Λ (on Wilks' one-df scale) among those passing
+//!    the guard — family-wise p < α, ΔBIC < 0 and a better cross-validated log score — adds it and starts the next
 //!    round; otherwise it says no (further) missing effect was found. Where that candidate is a
 //!    two-population law and the other law passes too, the one with the lower BIC is named
 //!    (the two are rival descriptions of one departure from the single Weibull law).
@@ -57,7 +58,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 
-use super::guard::{MAX_FAILED_SHARE, critical_value, decided, family_maxima, from_one_df_scale, one_df_scale, settled, stages as stages_of};
+use super::guard::{MAX_FAILED_SHARE, decided, family, one_df_scale, settled, stages as stages_of};
+use crate::strength::FamilyGuard;
 use super::gof::{CovariateFinding, ad_ks_of_u, covariate_findings, level_findings, normal_scores};
 use crate::strength::factors::{Factor, Form, WeakestLink, weakest_link};
 use crate::error::{Error, Result};
@@ -86,11 +88,12 @@ pub struct Evidence {
     pub lr: f64,
     /// Bootstrap p-value of Λ for this candidate alone.
     pub p_bootstrap: f64,
-    /// Family-wise (max-T) bootstrap p-value: the guard.
+    /// Family-wise bootstrap p-value over the round's candidates (the study's `guard`, min-P
+    /// or max-T): what the guard decides by.
     pub p_family: f64,
-    /// The round's critical Λ on this candidate's scale: the order statistic of max_c Λ*_c
-    /// over the bootstrap that the guard's decision uses, so p_family < α exactly when
-    /// Λ > lr_critical ([`critical_value`]).
+    /// The candidate's critical Λ in the round: the order statistic of the bootstrap that the
+    /// guard's decision uses, so p_family < α exactly when Λ > lr_critical
+    /// ([`super::guard::Family::critical`]).
     pub lr_critical: f64,
     /// ΔBIC (negative favours the candidate).
     pub delta_bic: f64,
@@ -150,6 +153,10 @@ pub struct Stage {
     /// Bootstrap replicates the round drew: the study's `bootstrap`, or fewer where the
     /// sequential bootstrap found every decision settled ([`super::guard`]).
     pub replicates: usize,
+    /// Where the sequential bootstrap drew every replicate, the decision that made it draw the
+    /// last stage (e.g. "at 199 replicates `moduli(batch)`'s family-wise p 0.090 lay near
+    /// α = 0.05"); None otherwise.
+    pub unsettled: Option<String>,
 }
 
 /// G of residuals `res` ([`GAP_MEASURE`]): numeric covariates `covs`, categorical `levels`.
@@ -271,24 +278,40 @@ fn cv_log_score(x: Obs, terms: &[(Effect, Term)], folds: &[usize], k: usize) -> 
     cv_pointwise(x, terms, folds, k).map(|v| v.iter().sum())
 }
 
-/// Whether every decision a round makes from its bootstrap replicates `reps` so far is settled
-/// ([`super::guard::settled`]): for every candidate that ΔBIC, the cross-validated score and
-/// identifiability leave `open`, its family-wise p against α (its Λ on the one-parameter scale
-/// in `l1`) and its share of failed refits against the no-verdict share; and when the round then
-/// names nothing — its model is the final one — that model's AD and KS p-values against α
-/// (`observed` holds its statistics), which the verdict "the Weibull law fits" reads. A round
-/// that names an effect reports its model's AD and KS p-values but decides nothing by them.
-fn round_settled(reps: &[Replicate], observed: (f64, f64), l1: &[f64], df: &[usize], open: &[bool], alpha: f64) -> bool {
+/// The first decision a round makes from its bootstrap replicates `reps` so far that is not yet
+/// settled ([`super::guard::settled`]), in words; None when every one is: for every candidate
+/// (named `names`) that ΔBIC, the cross-validated score and identifiability leave `open`, its
+/// family-wise p against α (its Λ in `lr`, made by the study's `guard`) and its share of failed
+/// refits against the no-verdict share; and when the round then names nothing — its model is
+/// the final one — that model's AD and KS p-values against α (`observed` holds its
+/// statistics), which the verdict "the Weibull law fits" reads. A round that names an effect
+/// reports its model's AD and KS p-values but decides nothing by them.
+fn unsettled(reps: &[Replicate], observed: (f64, f64), lr: &[f64], df: &[usize], open: &[bool], names: &[String], guard: FamilyGuard, alpha: f64) -> Option<String> {
     let b = reps.len();
-    let max_star = family_maxima(&reps.iter().map(|r| r.2.as_slice()).collect::<Vec<_>>(), df);
-    let count = |j: usize| max_star.iter().filter(|&&s| s >= l1[j]).count();
+    let fam = family(&reps.iter().map(|r| r.2.as_slice()).collect::<Vec<_>>(), lr, df, guard, alpha);
     let failed = |j: usize| reps.iter().filter(|r| r.2[j].is_infinite()).count();
-    let open: Vec<usize> = (0..l1.len()).filter(|&j| open[j]).collect();
-    if !open.iter().all(|&j| settled(count(j), b, alpha) && settled(failed(j), b, MAX_FAILED_SHARE)) {
-        return false;
+    let open: Vec<usize> = (0..lr.len()).filter(|&j| open[j]).collect();
+    for &j in &open {
+        if !settled(fam.count[j], b, alpha) {
+            return Some(format!("at {b} replicates `{}`'s family-wise p {:.3} lay near α = {alpha}", names[j], fam.p[j]));
+        }
+        if !settled(failed(j), b, MAX_FAILED_SHARE) {
+            return Some(format!("at {b} replicates `{}`'s share of failed refits {:.3} lay near the {} % above which it gets no verdict", names[j], failed(j) as f64 / b as f64, MAX_FAILED_SHARE * 100.0));
+        }
     }
-    let names = open.iter().any(|&j| (1 + count(j)) as f64 / (b as f64 + 1.0) < alpha && decided(failed(j), b));
-    names || (settled(reps.iter().filter(|r| r.0 >= observed.0).count(), b, alpha) && settled(reps.iter().filter(|r| r.1 >= observed.1).count(), b, alpha))
+    if open.iter().any(|&j| fam.p[j] < alpha && decided(failed(j), b)) {
+        return None;
+    }
+    let p = |count: usize| (1 + count) as f64 / (b as f64 + 1.0);
+    let ad = reps.iter().filter(|r| r.0 >= observed.0).count();
+    let ks = reps.iter().filter(|r| r.1 >= observed.1).count();
+    if !settled(ad, b, alpha) {
+        return Some(format!("at {b} replicates the final model's Anderson–Darling p {:.3} lay near α = {alpha}", p(ad)));
+    }
+    if !settled(ks, b, alpha) {
+        return Some(format!("at {b} replicates the final model's Kolmogorov–Smirnov p {:.3} lay near α = {alpha}", p(ks)));
+    }
+    None
 }
 
 /// Quantile residuals and probability-integral transforms of `x` under a fitted model; a
@@ -437,13 +460,21 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
             (ad, ks, l, g)
         };
         let mut reps: Vec<Replicate> = Vec::new();
-        for upto in stages_of(settings.bootstrap, settings.sequential) {
+        let looks = stages_of(settings.bootstrap, settings.sequential);
+        let candidate_names: Vec<String> = remaining.iter().map(|(c, _)| c.name()).collect();
+        // The decision that made the round draw its last stage: the one unsettled at the look
+        // before it (or still unsettled at the last).
+        let mut why_all = None;
+        for &upto in &looks {
             let more: Vec<Replicate> = (reps.len()..upto).into_par_iter().map(replicate).collect();
             reps.extend(more);
-            if round_settled(&reps, (ad, ks), &l1, &df, &open, settings.alpha) {
-                break;
+            match unsettled(&reps, (ad, ks), &lr, &df, &open, &candidate_names, settings.guard, settings.alpha) {
+                None => break,
+                why => why_all = why,
             }
         }
+        // Only a sequential bootstrap that drew every replicate has a reason to report.
+        let why_all = why_all.filter(|_| looks.len() > 1 && reps.len() == settings.bootstrap);
         let null_failed = reps.iter().filter(|r| r.0.is_infinite()).count();
         if reps.is_empty() || 2 * null_failed > reps.len() {
             return Err(Error::numerical("discrepancy bootstrap", format!("only {} of {} refits of the current model converged", reps.len() - null_failed, reps.len())));
@@ -469,11 +500,10 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
             let g: Vec<f64> = reps.iter().map(|r| r.3).filter(|g| g.is_finite()).collect();
             if g.is_empty() { f64::NAN } else { g.iter().sum::<f64>() / g.len() as f64 }
         };
-        stages.push(Stage { model: model.clone(), residuals: res, ad, ks, p_ad, p_ks, findings, gap, gap_expected, replicates: reps.len() });
+        stages.push(Stage { model: model.clone(), residuals: res, ad, ks, p_ad, p_ks, findings, gap, gap_expected, replicates: reps.len(), unsettled: why_all });
 
-        // Evidence: the family-wise guard on the one-parameter scale of every candidate.
-        let max_star = family_maxima(&reps.iter().map(|r| r.2.as_slice()).collect::<Vec<_>>(), &df);
-        let critical_1 = critical_value(&max_star, settings.alpha);
+        // Evidence: the family-wise guard over every candidate.
+        let fam = family(&reps.iter().map(|r| r.2.as_slice()).collect::<Vec<_>>(), &lr, &df, settings.guard, settings.alpha);
         let mut round_ev: Vec<(Evidence, f64)> = Vec::new();
         for (j, ((c, t), e)) in remaining.iter().zip(&ext).enumerate() {
             let Some(m) = e else {
@@ -482,7 +512,7 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
             };
             let (l, l1, dbic, dcv) = (lr[j], l1[j], dbic[j], dcv[j]);
             let p_b = p_of(reps.iter().filter(|r| r.2[j] >= l).count());
-            let p_f = p_of(max_star.iter().filter(|&&s| s >= l1).count());
+            let p_f = fam.p[j];
             let (parameter, meaning, weakest_link) = if report { describe(c, t, m, x) } else { ((String::new(), f64::NAN, f64::NAN), String::new(), None) };
             round_ev.push((
                 Evidence {
@@ -493,7 +523,7 @@ fn walk(sample: &Sample, settings: &NamingSettings, diagnose: bool, report: bool
                     lr: l,
                     p_bootstrap: p_b,
                     p_family: p_f,
-                    lr_critical: from_one_df_scale(critical_1, df[j]),
+                    lr_critical: fam.critical[j],
                     delta_bic: dbic,
                     delta_cv: dcv,
                     parameter: report.then_some(parameter),
@@ -598,7 +628,7 @@ fn describe(c: &Effect, t: &Term, m: &ModelFit, x: Obs) -> ((String, f64, f64), 
         scales.extend(others.zip(&beta).map(|(l, b)| (l.clone(), b.exp())));
         let (lo, hi) = scales.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, s)| (lo.min(*s), hi.max(*s)));
         let list: Vec<String> = scales.iter().map(|(l, s)| format!("{l} ×{s:.3}")).collect();
-        let meaning = format!("σ_θ of each level of `{}` relative to \"{reference}\": {}", c.covariate(), list.join(", "));
+        let meaning = format!("σ_θ of each level of `{}` relative to \"{reference}\" (the level with the most specimens; among equals the first in the file): {}", c.covariate(), list.join(", "));
         // Two levels: the one ratio, whose band the evidence gives (`scale_B/A`); more: the
         // spread of the levels' scales (no band).
         if let [_, (other, ratio)] = scales.as_slice() {

@@ -63,6 +63,6 @@ pub use draws::{MAX_LINEAR, ParameterSummary, Params, summarise};
 pub use effects::{ALL, Effect, Term};
 pub use fit::{ModelFit, Sample, StrengthFit, contact_at_break, crush_contact, fit_model, fit_model_near, sample_of};
 pub use model::{Horizon, LifetimeChain, LifetimeModel};
-pub use options::{NamingSettings, StrengthOptions, StrengthSpec, Uncertainty};
+pub use options::{FamilyGuard, NamingSettings, StrengthOptions, StrengthSpec, Uncertainty};
 pub use crate::dist::PopulationSpec;
 pub use population::{Particle, Population};

@@ -11,6 +11,7 @@
 //! [strength.naming]                   # the loop's settings (only read for "diagnosed")
 //! bootstrap = 499                     # replicates per round at most
 //! sequential = true                   # stop a round at 99, 199, … once its decisions are settled
+//! guard = "min-p"                     # family-wise p: Westfall–Young min-P, or "max-t"
 //! ```
 
 use std::fmt;
@@ -127,6 +128,33 @@ pub enum Uncertainty {
     Bayesian,
 }
 
+/// How the naming loop's guard makes one family-wise p-value of a round's candidates
+/// ([`crate::discrepancy::guard`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FamilyGuard {
+    /// Westfall–Young single-step min-P: each candidate's Λ is first turned into its own
+    /// p-value (from its likelihood ratio's null law, fitted to its bootstrap replicates), and
+    /// the family-wise p counts the replicates whose smallest such p lies at or below it. A
+    /// candidate whose likelihood ratio has a heavy null tail (a two-population law) then no
+    /// longer raises every other candidate's critical value.
+    #[default]
+    MinP,
+    /// max-T: the family-wise p counts the replicates whose largest Λ*, on the one-parameter
+    /// (Wilks χ²₁) scale, reaches the candidate's Λ on that scale.
+    MaxT,
+}
+
+impl FamilyGuard {
+    /// The name a study file and the reports use.
+    pub fn name(self) -> &'static str {
+        match self {
+            FamilyGuard::MinP => "min-P",
+            FamilyGuard::MaxT => "max-T",
+        }
+    }
+}
+
 /// Settings of the name → add → diagnose loop (the `[discrepancy]` section of a discrepancy
 /// study, `[strength.naming]` of a study whose strength model is `"diagnosed"`); the seed is
 /// the study's.
@@ -141,6 +169,8 @@ pub struct NamingSettings {
     /// settled (default true; `crate::discrepancy::guard`'s sequential pretest); false draws
     /// all `bootstrap` replicates in every round.
     pub sequential: bool,
+    /// How the family-wise p is made (default `"min-p"`, Westfall–Young; `"max-t"`).
+    pub guard: FamilyGuard,
     /// Permutations of each residual-trend test (default 999).
     pub permutations: usize,
     /// Family-wise error rate of the guard (default 0.05).
@@ -159,7 +189,7 @@ pub struct NamingSettings {
 
 impl Default for NamingSettings {
     fn default() -> Self {
-        NamingSettings { candidates: ALL.to_vec(), bootstrap: 499, sequential: true, permutations: 999, alpha: 0.05, cv_folds: 10, max_effects: 3, gamma: 5.0, seed: 20261122 }
+        NamingSettings { candidates: ALL.to_vec(), bootstrap: 499, sequential: true, guard: FamilyGuard::MinP, permutations: 999, alpha: 0.05, cv_folds: 10, max_effects: 3, gamma: 5.0, seed: 20261122 }
     }
 }
 

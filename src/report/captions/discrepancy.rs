@@ -29,7 +29,9 @@ pub(super) fn figure(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
     if stem == "discrepancy_evidence" {
         let t = Table::load(dir, "evidence")?;
         let (mat, round, cand, lr, crit, pf, dbic, named) = (t.s("material")?, t.f("round")?, t.s("candidate")?, t.f("likelihood_ratio")?, t.f("likelihood_ratio_critical")?, t.f("p_family")?, t.f("delta_bic")?, t.s("named")?);
-        let (skipped, replicates) = (t.s("skipped")?, t.f("bootstrap_replicates")?);
+        let (skipped, replicates, verdict) = (t.s("skipped")?, t.f("bootstrap_replicates")?, t.s("verdict")?);
+        // The verdict's first words ("not identified", not its reason).
+        let short = |i: usize| verdict[i].split(':').next().unwrap_or("").to_string();
         let labels = material_labels(dir)?;
         let mut rows = Vec::new();
         let mut said = Vec::new();
@@ -53,21 +55,21 @@ pub(super) fn figure(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
                     Some(&i) => format!("named {}", cand[i]),
                     None => "nothing named".into(),
                 };
-                said.push(format!("{}, round {r}: strongest {} (Λ = {:.1} against {:.1}), {verdict}", labels(&m), cand[top], lr[top], crit[top]));
+                let top_verdict = if named[top] == "true" { String::new() } else { format!(", {}", short(top)) };
+                said.push(format!("{}, round {r}: largest Λ {} (Λ = {:.1} against its critical {:.1}{top_verdict}), {verdict}", labels(&m), cand[top], lr[top], crit[top]));
                 for &i in idx.iter().take(3) {
-                    let yes = if named[i] == "true" { "yes" } else { "" };
-                    rows.push(vec![labels(&m), format!("{r}"), cand[i].clone(), format!("{:.1}", lr[i]), format!("{:.1}", crit[i]), crate::report::bootstrap_p_text(pf[i], replicates[i] as usize), format!("{:.1}", dbic[i]), yes.to_string()]);
+                    rows.push(vec![labels(&m), format!("{r}"), cand[i].clone(), format!("{:.1}", lr[i]), format!("{:.1}", crit[i]), crate::report::bootstrap_p_text(pf[i], replicates[i] as usize), format!("{:.1}", dbic[i]), short(i)]);
                 }
             }
         }
         return Ok(Some(FigureNote {
             title: Some("Evidence for each candidate effect".into()),
             caption: p(&format!(
-                "Likelihood ratio Λ of every candidate effect per round of the naming loop (round 0: against the base model), against the round's critical value for the whole family of candidates: {}.{} The three strongest candidates of each round are in the table below.",
+                "Likelihood ratio Λ of every candidate effect per round of the naming loop (round 0: against the base model), against its critical value in the round (the family-wise guard over every candidate of the round): {}.{} The three candidates of each round with the largest Λ are in the table below.",
                 said.join("; "),
                 if keyed.is_empty() { String::new() } else { format!(" Candidates by number on the axis — {}.", keyed.join("; ")) }
             )),
-            blocks: vec![Block::Table { header: vec!["material".into(), "round".into(), "candidate".into(), "Λ".into(), "critical".into(), "p (family)".into(), "ΔBIC".into(), "named".into()], rows }],
+            blocks: vec![Block::Table { header: vec!["material".into(), "round".into(), "candidate".into(), "Λ".into(), "critical".into(), "p (family)".into(), "ΔBIC".into(), "verdict".into()], rows }],
         }));
     }
     if stem == "discrepancy_gap" {

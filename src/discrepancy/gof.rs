@@ -341,9 +341,14 @@ pub fn covariate_findings(r: &[f64], covariates: &[(&str, Vec<f64>)], permutatio
         let (rho, p) = covariate_trend(r, x, permutations, seed ^ (k as u64 + 1))?;
         let mut idx: Vec<usize> = (0..x.len()).collect();
         idx.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
-        // Tertiles of the covariate; the one whose mean residual is farthest from 0.
-        let worst = idx
-            .chunks(idx.len().div_ceil(3))
+        // Tertiles of the covariate — or, where it takes at most six values (test temperatures,
+        // gauge lengths), one group per value, so no group straddles two of them and its range
+        // is not the whole data's; the group whose mean residual is farthest from 0.
+        let mut distinct: Vec<f64> = idx.iter().map(|&i| x[i]).collect();
+        distinct.dedup();
+        let groups: Vec<&[usize]> = if distinct.len() <= 6 { idx.chunk_by(|&a, &b| x[a] == x[b]).collect() } else { idx.chunks(idx.len().div_ceil(3)).collect() };
+        let worst = groups
+            .into_iter()
             .map(|g| (x[g[0]], x[g[g.len() - 1]], g.iter().map(|&i| r[i]).sum::<f64>() / g.len() as f64))
             .fold((f64::NAN, f64::NAN, 0.0f64), |b, c| if c.2.abs() > b.2.abs() { c } else { b });
         found.push(CovariateFinding { covariate: name.to_string(), rho, p, worst_range: worst, statistic: x.len() as f64 * rho * rho, df: 1, worst_level: None, scatter: false });
@@ -355,6 +360,22 @@ pub fn covariate_findings(r: &[f64], covariates: &[(&str, Vec<f64>)], permutatio
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A covariate with two values (tests at 20 and 800 °C, 35 and 10 particles): the group
+    /// that departs is one temperature, not a tertile spanning both (it used to read "the
+    /// residuals depart most for 20–800").
+    #[test]
+    fn a_covariate_with_few_values_departs_at_one_of_them() {
+        let t: Vec<f64> = (0..45).map(|i| if i < 35 { 20.0 } else { 800.0 }).collect();
+        let r: Vec<f64> = (0..45).map(|i| if i < 35 { 0.3 + 0.01 * (i % 5) as f64 } else { -0.9 + 0.01 * (i % 3) as f64 }).collect();
+        let (f, _) = covariate_findings(&r, &[("temperature_c", t)], 99, 1).unwrap();
+        assert_eq!((f[0].worst_range.0, f[0].worst_range.1), (800.0, 800.0), "{:?}", f[0].worst_range);
+        // Many values: tertiles still.
+        let d: Vec<f64> = (0..45).map(f64::from).collect();
+        let (f, _) = covariate_findings(&r, &[("diameter_m", d)], 99, 1).unwrap();
+        assert_eq!((f[0].worst_range.0, f[0].worst_range.1), (30.0, 44.0), "{:?}", f[0].worst_range);
+        assert!(f[0].worst_range.2 < -0.4, "{:?}", f[0].worst_range);
+    }
 
     #[test]
     fn the_scatter_statistic_sees_spread_and_not_location() {

@@ -236,8 +236,14 @@ impl Provenance {
         for c in &self.columns {
             let mut s = if c.source == c.field { format!("`{}`", c.source) } else { format!("`{}` → {}", c.source, c.field) };
             if !c.conversion.is_empty() {
-                let said: Vec<&str> = [c.unit.as_str(), c.conversion.as_str()].into_iter().filter(|t| !t.is_empty()).collect();
-                s.push_str(&format!(" ({})", said.join(" ")));
+                // A unit symbol precedes its conversion ("mm × 1e-3"); a phrase ("as in the
+                // file") follows it.
+                let said = match c.unit.as_str() {
+                    "" => c.conversion.clone(),
+                    u if u.contains(' ') => format!("{}, unit {u}", c.conversion),
+                    u => format!("{u} {}", c.conversion),
+                };
+                s.push_str(&format!(" ({said})"));
             }
             if c.found_by == "study" {
                 s.push_str(" [mapped by the study]");

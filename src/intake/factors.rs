@@ -176,16 +176,17 @@ pub fn read_factors(table: &RawTable, rows: &[usize], factors: &Factors, provena
                 FactorType::Numeric
             }
         };
-        let record = |what: &str| ColumnRecord { source: table.headers[c].clone(), field: name.clone(), unit: "as in the file".into(), conversion: what.to_string(), found_by: "study".into() };
+        // A numeric factor keeps the file's unit; a categorical one's levels have none.
+        let record = |unit: &str, what: &str| ColumnRecord { source: table.headers[c].clone(), field: name.clone(), unit: unit.into(), conversion: what.to_string(), found_by: "study".into() };
         match kind {
             FactorType::Numeric => {
                 let v: Vec<f64> = rows.iter().map(|&row| table.need_number(row, c)).collect::<Result<_>>()?;
-                provenance.columns.push(record("numeric factor"));
+                provenance.columns.push(record("as in the file", "numeric factor"));
                 out.push((name, FactorValues::Numeric(v)));
             }
             FactorType::Categorical => {
                 let v: Vec<String> = texts.into_iter().map(|t| t.unwrap_or_default().trim().to_string()).collect();
-                provenance.columns.push(record("categorical factor"));
+                provenance.columns.push(record("", "categorical factor"));
                 out.push((name, FactorValues::Levels(v)));
             }
         }

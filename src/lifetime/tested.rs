@@ -111,11 +111,22 @@ pub fn paragraph(materials: &[Tested], at: &LifetimeAt) -> String {
         LifetimeAt::Tests => {
             let one = materials.iter().all(|m| m.distinct().len() == 1);
             let held = if one && same {
-                format!("The lifetimes hold at {}, the tests' temperature", describe_temperatures(materials[0].temperatures_c))
+                format!("The lifetimes hold at {}, the tests' temperature, not at a plant's operating temperature", describe_temperatures(materials[0].temperatures_c))
+            } else if one {
+                "Each lifetime holds at its own material's test temperature, not at a plant's operating temperature".to_string()
             } else {
-                "Each lifetime holds at its own material's test temperature".to_string()
+                // A material whose tests span several temperatures, fitted as one population:
+                // its lifetime holds at none of them.
+                let each: Vec<String> = materials
+                    .iter()
+                    .map(|m| match m.distinct().len() {
+                        1 => format!("{}'s at {}", m.label, describe_temperatures(m.temperatures_c)),
+                        _ => format!("{}'s pools its tests at {} into one population and holds at none of these temperatures alone", m.label, describe_temperatures(m.temperatures_c)),
+                    })
+                    .collect();
+                format!("No lifetime is at a plant's operating temperature: {}", each.join("; "))
             };
-            format!("**Test temperature**: {tested}. {held}, not at a plant's operating temperature: nothing in this study carries the strength to another temperature.")
+            format!("**Test temperature**: {tested}. {held}. Nothing in this study carries the strength to another temperature.")
         }
         LifetimeAt::Operating { per_material, by } => {
             let ops: Vec<String> = materials.iter().zip(per_material).map(|(m, t)| format!("{} at {t}", m.label)).collect();
@@ -232,6 +243,11 @@ mod tests {
         let m = Tested { label: "Gen 4", temperatures_c: &mixed, temperature_term: false };
         assert!(warnings(&[m])[0].contains("span 20 °C (2) and 800 °C (1), fitted as one population"), "{:?}", warnings(&[m]));
         assert!(warnings(&[Tested { temperature_term: true, ..m }]).is_empty());
+        // Its lifetime holds at neither temperature (it used to read "holds at its own test
+        // temperature").
+        let p = paragraph(&[m, b], &LifetimeAt::Tests);
+        assert!(p.contains("No lifetime is at a plant's operating temperature: Gen 4's pools its tests at 20 °C (2) and 800 °C (1) into one population and holds at none of these temperatures alone; BL 16/30's at 20 °C."), "{p}");
+        assert!(!p.contains("its own material's test temperature"), "{p}");
         // A batch tested at one temperature each: confounded; a batch at both: not.
         let l = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
         assert!(confounded("Gen 4", "Charge", &l(&["K1", "K2", "K1"]), &mixed).is_none());

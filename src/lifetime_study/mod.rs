@@ -389,7 +389,7 @@ pub fn run_lifetime(loaded: &StudyFile, s: &LifetimeStudy, opts: &RunOptions) ->
         crate::intake::warn(w);
     }
     let lead = crate::lifetime::tested::paragraph(&tested, &crate::lifetime::tested::named_or_tests(&tested, &predicted));
-    let md = crate::runkit::headline_summary("Breaking probability after repeated impacts (the deliverable's chain)", &headlines).replacen("\n## Headline", &format!("\n{lead}\n\n{answer}## Headline"), 1);
+    let md = crate::runkit::headline_summary("Breaking probability after repeated impacts", &headlines).replacen("\n## Headline", &format!("\n{lead}\n\n{answer}## Headline"), 1);
     let notes: Vec<(&str, Vec<String>)> = runs.iter().map(|r| (r.label.as_str(), r.data.provenance.summary_notes())).collect();
     let md = crate::lifetime::tested::with_warnings(&md, &warnings) + &attrition + &crate::lifetime::tested::read_section(&notes);
     dir.write_bytes("summary.md", md.as_bytes())?;

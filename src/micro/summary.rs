@@ -185,6 +185,7 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
         }
     }
 
+    let mut argument = None;
     if let Some(c) = &s.comparison {
         let (ic, id) = (s.structure.iter().position(|x| x.name == c.continuous).unwrap_or(0), s.structure.iter().position(|x| x.name == c.discontinuous).unwrap_or(0));
         let (vc, vd) = (&by[ic], &by[id]);
@@ -269,6 +270,11 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
             md.push_str(&format!("| {} | {} | {verdict} |\n", test.name(), cells.join(" | ")));
         }
         let sentence = |v: &str| if v.starts_with("mixed") { "are mixed (measures for the argument and against it)".to_string() } else { v.to_string() };
+        argument = Some(format!(
+            "For the deliverable's §6.1 argument — a continuous soft matrix ({lab_c}) fails later than soft pockets ({lab_d}) — the numbers in tension {}; in compression they {}.",
+            sentence(verdicts[0].1),
+            sentence(verdicts[1].1)
+        ));
         md.push_str(&format!(
             "\nIn tension the numbers {}; in compression they {}. {}\n",
             sentence(verdicts[0].1),
@@ -338,5 +344,36 @@ pub fn summary(loaded: &StudyFile, s: &MicroStudy, phases: &[Phase], built: &[Bu
         "\n## Figures\n\nPer structure (first realisation): `phases_<structure>` (the phase map), `sigma1_tension_<structure>` and `sigma1_compression_<structure>` (σ₁ at s = {} MPa), `shear_strain_<structure>` (γ_max in tension, the deformation bands of the deliverable's Fig. 11a); `exceedance` (the share of each phase's area whose σ₁ exceeds a multiple of the phase's tensile strength, both tests; at 1, the share above strength); `comparison` (E with its HS bounds, the area above strength, the first-failure stress and, with `[failure]`, the strength of every structure); with `[failure]`, `failure_curves` (the applied stress at each crack against the pixels cracked so far) and `cracks_<test>_<structure>` (the cracked pixels of the first realisation in their order). The first realisation's fields are in `<structure>.vtu` for ParaView.\n",
         mpa(sv)
     ));
+    // The answer opens the document, after the title and what was solved.
+    let answer = answer(s, by, argument);
+    let at = md.find("\n## Phases").unwrap_or(md.len());
+    md.insert_str(at, &answer);
     (md, headlines)
+}
+
+/// The `## Answer`: which structure's first pixel fails at the highest applied stress in virtual
+/// tension (the mean over its realisations, with the others'), and with `[comparison]` what the
+/// numbers say of the deliverable's §6.1 argument (`argument`, the verdict sentence of that
+/// section).
+fn answer(s: &MicroStudy, by: &[Vec<&Solved>], argument: Option<String>) -> String {
+    let values = |i: usize| by[i].iter().map(|r| r.first_failure(0)).collect::<Vec<_>>();
+    let tension = |i: usize| mean_and_sd(&values(i)).0;
+    let order: Vec<usize> = {
+        let mut o: Vec<usize> = (0..s.structure.len()).filter(|&i| !by[i].is_empty() && tension(i).is_finite()).collect();
+        o.sort_by(|&a, &b| tension(b).total_cmp(&tension(a)));
+        o
+    };
+    let each = |i: usize| format!("{} {} MPa", s.structure[i].label, pm(&values(i), mpa));
+    let first = match order.as_slice() {
+        [] => "No structure has a pixel reaching its phase's tensile strength in virtual tension.".to_string(),
+        [i] => format!("In virtual tension the first pixel of {} fails at an applied stress of {} MPa (mean{} over its {} realisation{}).", s.structure[*i].label, pm(&values(*i), mpa), if by[*i].len() > 1 { " ± sd" } else { "" }, by[*i].len(), if by[*i].len() == 1 { "" } else { "s" }),
+        [i, rest @ ..] => format!(
+            "In virtual tension the first pixel fails at the highest applied stress in {}, {} MPa, against {} (mean ± sd over the realisations).",
+            s.structure[*i].label,
+            pm(&values(*i), mpa),
+            rest.iter().map(|&j| each(j)).collect::<Vec<_>>().join(", ")
+        ),
+    };
+    let argument = argument.map(|a| format!(" {a} Each measure's difference and its standard error are in the section on the §6.1 argument.")).unwrap_or_default();
+    format!("\n## Answer\n\n{first}{argument}\n")
 }

@@ -180,6 +180,15 @@ pub fn warnings(m: &Value) -> Vec<String> {
     out
 }
 
+/// A manifest's evaluation counter in words, where its key alone would not say what it counts.
+fn evaluation_label(key: &str) -> String {
+    match key {
+        "naming_bootstrap_replicates" => "bootstrap replicates the naming loop drew (every round of every material; each table of models gives a round's)".into(),
+        "power_datasets" => "synthetic datasets of the detection-power study".into(),
+        other => other.replace('_', " "),
+    }
+}
+
 fn provenance(m: &Value) -> Block {
     let git = match (m.get("git_revision").and_then(Value::as_str), m.get("git_dirty").and_then(Value::as_bool)) {
         (Some(r), Some(true)) => format!("{r} (with uncommitted changes)"),
@@ -189,7 +198,7 @@ fn provenance(m: &Value) -> Block {
     let evals: Vec<String> = m
         .get("evaluations")
         .and_then(Value::as_object)
-        .map(|o| o.iter().map(|(k, v)| format!("{k}: {v}")).collect())
+        .map(|o| o.iter().map(|(k, v)| format!("{}: {v}", evaluation_label(k))).collect())
         .unwrap_or_default();
     let wall = m.get("wall_time_s").and_then(Value::as_f64).map_or("—".into(), |w| format!("{w:.2} s"));
     let failures = m.get("failures").and_then(Value::as_array).map_or(0, Vec::len);
@@ -203,7 +212,7 @@ fn provenance(m: &Value) -> Block {
         ("started (Unix time, s)".into(), s(m, "started_unix_s")),
         ("wall time".into(), wall),
         ("model evaluations".into(), if evals.is_empty() { "none recorded".into() } else { evals.join("; ") }),
-        ("failures".into(), format!("{failures} (listed under Warnings)")),
+        ("failures".into(), if failures == 0 { "none".into() } else { format!("{failures} (listed under Warnings)") }),
     ])
 }
 

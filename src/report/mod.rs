@@ -560,6 +560,26 @@ fn fig16_breakage(dir: &Path, mats: &Materials, w: f64) -> Result<Drawn> {
         }
         series.push(Series::line(Some(mats.label(key)), vec![], c, 1.0));
     }
+    // The lifetimes the caption and the answer quote: each horizon's breaking probability at
+    // the reference velocity with its confidence band (a bar), so the figure shows the numbers
+    // the text gives. The caption names them; the legend, which the curves leave little room
+    // for, does not.
+    let (sv, sp, slo, shi) = (summary.f("velocity_m_s")?, summary.f("p_break")?, summary.f("p_break_lower")?, summary.f("p_break_upper")?);
+    let shown = |x: f64| x.max(10f64.powf(floor)).log10();
+    let groups = summary.groups()?;
+    let slots = groups.iter().map(|(_, idx)| idx.len()).sum::<usize>().max(1);
+    let mut slot = 0;
+    for (key, idx) in groups {
+        let c = mats.colour(&key);
+        for &i in &idx {
+            // Each material and horizon side by side at the one velocity, so that no bar hides
+            // another (materials in their order, horizons ascending within each).
+            let dx = (slot as f64 - 0.5 * (slots - 1) as f64) * 0.012 * vmax;
+            slot += 1;
+            series.push(Series { label: None, points: vec![(sv[i] + dx, shown(slo[i])), (sv[i] + dx, shown(shi[i]))], colour: c, kind: Kind::Line(0.8) });
+            series.push(Series { label: None, points: vec![(sv[i] + dx, shown(sp[i]))], colour: c, kind: Kind::Markers(Marker::Circle, 1.6) });
+        }
+    }
     for (ci, &cnt) in counts.iter().enumerate() {
         let years = per_year.map(|py| cnt / py).filter(|y| *y >= 0.999 && (y - y.round()).abs() < 1e-9);
         let label = match years {

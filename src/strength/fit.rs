@@ -452,7 +452,11 @@ impl StrengthFit {
                     j += 1;
                     let v = if e.is_contact_geometry() { 1.0 } else { r };
                     if v.is_finite() && !out.iter().any(|w| w.starts_with(&format!("{} =", e.covariate()))) {
-                        out.push(format!("{} = {}", e.covariate(), four_significant(v)));
+                        // A recorded column's reference is the data's mean (a temperature mean
+                        // may lie where no particle was tested); the contact geometry's is 1.
+                        let unit = if e.covariate() == "temperature_c" { " °C" } else { "" };
+                        let mean = if e.is_contact_geometry() { "" } else { " (the data's mean)" };
+                        out.push(format!("{} = {}{unit}{mean}", e.covariate(), four_significant(v)));
                     }
                 }
                 Term::Levels { levels, reference, .. } => {

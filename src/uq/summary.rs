@@ -339,7 +339,7 @@ pub(super) fn summary(s: &UqStudy, forms: &[Form], ind: &[SobolIndices], varying
     md.push_str("The spread between the damage models is model-form uncertainty that more crush data cannot remove: it needs repeated-impact tests.\n");
 
     if averaging.len() > st.years.len() {
-        md.push_str("\n## Averaging domain of σ̄ (deliverable's strength model, independent trials)\n\n| domain | horizon | P(candidate worse) | median P candidate | median P reference |\n|---|---|---|---|---|\n");
+        md.push_str(&format!("\n## Averaging domain of σ̄ (deliverable's strength model, independent trials)\n\nEach domain starts at s0·a, where the radial surface stress turns tensile inside the contact of radius a (0 < s0 < 1, set by Poisson's ratio), and ends at a multiple of a or at the particle radius R.\n\n| domain | horizon | P({a} worse) | median P {a} | median P {b} |\n|---|---|---|---|---|\n"));
         for (d, years, worse, se, pa, pb) in averaging {
             md.push_str(&format!("| {d} | {years} yr | {worse:.4} ± {se:.4} | {pa:.2e} | {pb:.2e} |\n"));
         }
@@ -370,7 +370,10 @@ pub(super) fn damage_sentences(last: f64, rows: &[&Row], names: [&str; 2]) -> St
                 format!("for {} {cmp}", names[j])
             })
             .collect();
-        out.push_str(&format!("Over {last} years {} gives, compared with independent trials, {}; under it P({} breaks more) = {:.3}.\n", r.damage.label(), parts.join(", and "), names[0], r.worse));
+        // Where most samples tie (under a threshold model: neither breaks), P(… breaks more)
+        // alone would read as a verdict.
+        let tie = if r.ties >= 0.005 { format!(", and in {} of the samples the two tie (equal P_break{})", crate::report::captions::percent(r.ties), if r.median == [0.0, 0.0] { ": neither breaks" } else { "" }) } else { String::new() };
+        out.push_str(&format!("Over {last} years {} gives, compared with independent trials, {}; under it P({} breaks more) = {:.3}{tie}.\n", r.damage.label(), parts.join(", and "), names[0], r.worse));
     }
     out
 }
@@ -533,5 +536,10 @@ mod tests {
         );
         // Without an independent-trials row there is nothing to compare with.
         assert_eq!(damage_sentences(10.0, &refs[1..], names), "");
+        // Neither breaks under the threshold model in most samples: P(A breaks more) = 0 is a
+        // tie, and the sentence says so (it used to end at "= 0.000").
+        let rows = [row(DamageModel::Independent, 1.0, 0.9, 0.0, 0.0, [1e-3, 2e-4]), row(DamageModel::VogelPeukert, 1.0, 0.0, 0.0, 0.97, [0.0, 0.0])];
+        let text = damage_sentences(1.0, &rows.iter().collect::<Vec<_>>(), names);
+        assert!(text.trim_end().ends_with("under it P(A breaks more) = 0.000, and in 97 % of the samples the two tie (equal P_break: neither breaks)."), "{text}");
     }
 }

@@ -376,7 +376,7 @@ fn lifetime(dir: &Path, stem: &str) -> Result<Option<FigureNote>> {
         "fig16_breakage" => note(
             "Breaking probability after repeated impacts (deliverable Fig. 16)",
             format!(
-                "Breaking probability after N impacts against the impact velocity (independent trials); at the reference velocity, {} m/s: {}.",
+                "Breaking probability after N impacts against the impact velocity (independent trials, lines); the dots with bars at the reference velocity, {} m/s, are the lifetimes the study reports (each material's horizons side by side, shortest first), with their bands: {}.",
                 Table::load(dir, "lifetime_summary")?.f("velocity_m_s")?.first().copied().unwrap_or(f64::NAN),
                 per_material(dir, "lifetime_summary", &|t, i| Ok(format!(
                     "{} yr ({:.0} impacts) {} ({:.0} % band {} – {})",

@@ -245,6 +245,21 @@ impl Effect {
         }
     }
 
+    /// What [`Self::reference`] is, in words for a report ("the data's median"); empty where
+    /// the reference is a fixed value (0, or 1 for the contact geometry).
+    pub fn reference_said(&self) -> &'static str {
+        match self {
+            Effect::Size => "the data's median",
+            Effect::Temperature => "the data's mean",
+            Effect::Factor(f) => match f.form {
+                Form::Linear => "the data's mean",
+                Form::Power | Form::Size(_) => "the data's median",
+                Form::Levels | Form::Moduli => "",
+            },
+            _ => "",
+        }
+    }
+
     /// The regression column z of a covariate value, given the reference.
     pub fn z(&self, value: f64, reference: f64) -> f64 {
         match self {
@@ -425,6 +440,22 @@ pub(crate) fn damage_offset(x0: f64, gamma: f64, n: u64) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The words a report gives for a reference say what [`Effect::reference`] computes: on
+    /// values whose median (2) and mean (13/3) differ.
+    #[test]
+    fn a_reference_is_said_as_it_is_computed() {
+        let v = [1.0, 2.0, 10.0];
+        let linear = Effect::Factor(Factor { column: "rate".into(), form: Form::Linear });
+        let power = Effect::Factor(Factor { column: "rate".into(), form: Form::Power });
+        for e in [Effect::Size, Effect::Temperature, linear, power] {
+            let r = e.reference(&v);
+            let said = e.reference_said();
+            assert_eq!(said == "the data's median", r == 2.0, "{e:?}: {r}, \"{said}\"");
+            assert_eq!(said == "the data's mean", (r - 13.0 / 3.0).abs() < 1e-12, "{e:?}: {r}, \"{said}\"");
+        }
+        assert_eq!(Effect::Damage.reference_said(), "");
+    }
 
     fn cov(name: &str, v: Vec<f64>) -> (String, Vec<Option<f64>>) {
         (name.to_string(), v.into_iter().map(Some).collect())

@@ -452,11 +452,14 @@ impl StrengthFit {
                     j += 1;
                     let v = if e.is_contact_geometry() { 1.0 } else { r };
                     if v.is_finite() && !out.iter().any(|w| w.starts_with(&format!("{} =", e.covariate()))) {
-                        // A recorded column's reference is the data's mean (a temperature mean
-                        // may lie where no particle was tested); the contact geometry's is 1.
+                        // A recorded column's reference is the data's mean or median (a
+                        // temperature mean may lie where no particle was tested): said so.
                         let unit = if e.covariate() == "temperature_c" { " °C" } else { "" };
-                        let mean = if e.is_contact_geometry() { "" } else { " (the data's mean)" };
-                        out.push(format!("{} = {}{unit}{mean}", e.covariate(), four_significant(v)));
+                        let said = match e.reference_said() {
+                            "" => String::new(),
+                            w => format!(" ({w})"),
+                        };
+                        out.push(format!("{} = {}{unit}{said}", e.covariate(), four_significant(v)));
                     }
                 }
                 Term::Levels { levels, reference, .. } => {

@@ -553,28 +553,26 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 d.loop_s,
                 d.report_s
             );
-            let rounds = |r: &[usize]| r.iter().map(|b| b.to_string()).collect::<Vec<_>>().join(", ");
+            // Named effects, the replicates each round drew, and both timings against the goal.
+            let speed = |x: &partlife::bench::NamingSpeed, goal: &str| {
+                format!(
+                    "named: {}; the rounds drew {}: {:.2} s (goal < {goal}); drawing every replicate {:.2} s ({:.1}×), same names: {}",
+                    x.named.join(", "),
+                    x.replicates.iter().map(|b| b.to_string()).collect::<Vec<_>>().join(", "),
+                    x.seconds,
+                    x.seconds_every,
+                    x.seconds_every / x.seconds,
+                    if x.same_names { "yes" } else { "NO" }
+                )
+            };
             let a = partlife::bench::strength_factors_speed(500, 0.0)?;
             out!(
-                "naming loop on a strength file of 500 specimens with 6 recorded factors (size, 2 numeric, 3 categorical) and both two-population laws ({} candidates; named: {}), at most 499 bootstrap replicates per round (sequential: the rounds drew {}) and 999 permutations per residual test: {:.2} s (goal < 10 s); drawing every replicate {:.2} s ({:.1}×), same names: {}",
+                "naming loop on a strength file of 500 specimens with 6 recorded factors (size, 2 numeric, 3 categorical) and both two-population laws ({} candidates), at most 499 bootstrap replicates per round, sequential, and 999 permutations per residual test — {}",
                 a.candidates,
-                a.named.join(", "),
-                rounds(&a.replicates),
-                a.seconds,
-                a.seconds_every,
-                a.seconds_every / a.seconds,
-                if a.same_names { "yes" } else { "NO" }
+                speed(&a, "10 s")
             );
             let c = partlife::bench::strength_factors_speed(500, 0.2)?;
-            out!(
-                "the same with the strongest 20 % not broken by the rig's limit (right-censored; named: {}; the rounds drew {}): {:.2} s (goal < 15 s); drawing every replicate {:.2} s ({:.1}×), same names: {}",
-                c.named.join(", "),
-                rounds(&c.replicates),
-                c.seconds,
-                c.seconds_every,
-                c.seconds_every / c.seconds,
-                if c.same_names { "yes" } else { "NO" }
-            );
+            out!("the same with the strongest 20 % not broken by the rig's limit (right-censored) — {}", speed(&c, "15 s"));
             let (complete, censored) = partlife::bench::censored_fit_speed()?;
             out!("one two-parameter fit of 500 strengths: complete {:.1} µs, 20 % censored {:.1} µs ({:.2}×; goal ≤ 2×)", complete * 1e6, censored * 1e6, censored / complete);
             // The curve level needs the calibration's report (its emulator runs).

@@ -175,10 +175,10 @@ pub fn family(lstar: &[&[f64]], lr: &[f64], df: &[usize], guard: FamilyGuard, al
             let null: Vec<Option<NullLaw>> = (0..n).map(|c| fitted[c].then(|| NullLaw::fit(lstar.iter().map(|r| r[c]).filter(|v| v.is_finite()), df[c]))).collect();
             let p_at = |c: usize, x: f64| null[c].as_ref().map_or(f64::NAN, |l| l.p(x));
             // q*_r: the replicate's smallest p over the candidates; 0 when any refit failed.
+            let live: Vec<usize> = (0..n).filter(|&c| fitted[c]).collect();
             let q: Vec<f64> = lstar
                 .iter()
                 .map(|r| {
-                    let live: Vec<usize> = (0..n).filter(|&c| fitted[c]).collect();
                     if live.iter().any(|&c| !r[c].is_finite()) {
                         return 0.0;
                     }

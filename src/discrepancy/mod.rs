@@ -6,6 +6,7 @@
 //! * the candidate effects, their equations and covariate signatures, and the Weibull
 //!   regression that fits them are the strength model's ([`crate::strength::effects`],
 //!   [`crate::strength::regress`]): the fits before and after naming are instances of it.
+//! * `meaning` (private): what a fitted candidate's parameter means, in a report's units.
 //! * [`workflow`]: the name → add → diagnose-again loop with the bootstrap-calibrated
 //!   false-discovery guard and the gap measure; [`guard`]: the guard's arithmetic (the
 //!   family-wise p by Westfall–Young min-P or max-T with failed refits counting against naming,
@@ -15,7 +16,7 @@
 //!   what the loop names) and its cross-validated evidence for the main study's stacking weights.
 //! * [`run`]: the study (`kind = "discrepancy"`, `partlife discrepancy`): lifetime before and
 //!   after, detection power vs number of particles; its tables, `verdict.json` and `summary.md`
-//!   are written by the private modules `tables`, `verdict` and `report`.
+//!   are written by the private modules `tables`, `verdict` and `report` (each candidate's evidence in words: `verdicts`).
 //! * [`koh`]: Kennedy–O'Hagan calibration with a GP discrepancy δ(x) and the name → add →
 //!   shrink comparison of candidate model terms, verified on the simple machine and the ball drop.
 //! * [`curves`]: the same loop at the force–displacement level (`kind = "discrepancy_curves"`):
@@ -26,9 +27,11 @@ pub mod curves;
 pub mod gof;
 pub mod guard;
 pub mod koh;
+mod meaning;
 mod report;
 mod tables;
 mod verdict;
+mod verdicts;
 pub mod run;
 pub mod study;
 pub mod specs;

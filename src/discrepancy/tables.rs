@@ -61,7 +61,7 @@ pub(super) fn write_tables(dir: &mut ReportDir, results: &[MaterialResult]) -> R
         ucol("bootstrap_replicates", ev.iter().map(|(_, e)| e.replicates as u64).collect()),
         scol("passed_guard", ev.iter().map(|(_, e)| e.passed.to_string()).collect()),
         scol("named", ev.iter().map(|(_, e)| e.named.to_string()).collect()),
-        scol("verdict", ev.iter().map(|(_, e)| super::report::verdict(e)).collect()),
+        scol("verdict", ev.iter().map(|(_, e)| super::verdicts::verdict(e)).collect()),
     ])?;
     dir.write_table("evidence", &mut t)?;
 
